@@ -1,0 +1,1 @@
+//! The centred L2 discrepancy of a point set (Hickernell 1998).

@@ -1,0 +1,12 @@
+//! demsweep: parameter sweeps of LIGGGHTS powder-spreading simulations.
+//!
+//! The pipeline (DESIGN §2), one module per stage, data flowing one way:
+//! sweep file → [`sweep`] → [`space`] + [`design`] → [`scene`] → deck → engine → dump → metrics.
+
+pub mod design;
+pub mod error;
+pub mod scene;
+pub mod space;
+pub mod sweep;
+
+pub use error::{Error, Result};

@@ -1,0 +1,227 @@
+//! The `sweep` command line: parse arguments, call the library, map errors to exit codes.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
+use demsweep::error::{exit, Error};
+use demsweep::sweep::{Scrambling, Sweep};
+
+/// Parameter sweeps of LIGGGHTS powder-spreading simulations.
+///
+/// Turns a sweep file (TOML) into a design — a regular lattice or scrambled Halton points —,
+/// renders one LIGGGHTS deck per point, runs them as a job pool, and reads the mass flow rate
+/// (MFR) and the v_x profile in front of the blade from the dumps.
+///
+/// Exit codes: 0 success; 1 a sweep finished but some runs failed; 2 bad input (nothing on disk
+/// changed); 3 engine failure; 4 internal error; 130 interrupted (the directory is resumable).
+#[derive(Parser)]
+#[command(name = "sweep", version, max_term_width = 100)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run nested lattices (e.g. 5^d, 6^d, ...) and check convergence level to level.
+    Lattice(LatticeArgs),
+    /// Run scrambled-Halton points in batches of --step up to --max.
+    Lds(LdsArgs),
+    /// Finish an interrupted sweep; every completed run is reused.
+    Resume(ResumeArgs),
+    /// Counts of a sweep directory: done, failed, running, pending.
+    Status(DirArgs),
+    /// (Re)write results.csv, convergence.csv, summary.json and plots of a sweep directory.
+    Report(DirArgs),
+    /// Print a design as CSV (header = swept parameter names, values in their units).
+    Points(PointsArgs),
+    /// Write the deck (and blade mesh) of one point without running it.
+    Render(RenderArgs),
+    /// Run one point through LIGGGHTS and print its result.
+    Run(RunArgs),
+    /// The four statistics (mean, std, skewness, kurtosis) of a CSV column, as JSON.
+    Stats(StatsArgs),
+    /// One single-contact case on the Hertz–Mindlin reference solver, as JSON.
+    Contact,
+    /// Single-contact cases through LIGGGHTS, compared with the reference solver.
+    ContactCheck,
+    /// Write (and optionally submit) a PBS or Slurm array script for a sweep directory.
+    Submit,
+    /// Run-time-against-error and overhead benchmarks.
+    Bench,
+}
+
+#[derive(Args)]
+struct LatticeArgs {
+    sweep: PathBuf,
+    /// Lattice levels (values per dimension), e.g. 5,6,7,9,10; default from the sweep file.
+    #[arg(long, value_delimiter = ',')]
+    levels: Option<Vec<usize>>,
+    /// Concurrent LIGGGHTS runs (default: the machine's cores).
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Sweep directory (default: runs/<sweep name>).
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+#[derive(Args)]
+struct LdsArgs {
+    sweep: PathBuf,
+    /// Points per batch (one nested space per batch).
+    #[arg(long)]
+    step: Option<usize>,
+    /// Most points to run.
+    #[arg(long)]
+    max: Option<usize>,
+    #[arg(long)]
+    jobs: Option<usize>,
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+#[derive(Args)]
+struct ResumeArgs {
+    dir: PathBuf,
+    /// Also re-run runs that failed.
+    #[arg(long)]
+    retry_failed: bool,
+    /// Resume even if templates, mesh or engine changed since the manifest.
+    #[arg(long)]
+    force: bool,
+    #[arg(long)]
+    jobs: Option<usize>,
+}
+
+#[derive(Args)]
+struct DirArgs {
+    dir: PathBuf,
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Args)]
+struct PointsArgs {
+    sweep: PathBuf,
+    /// A lattice with L values per dimension (L^d points).
+    #[arg(long, conflicts_with = "lds", required_unless_present = "lds")]
+    lattice: Option<usize>,
+    /// The first N points of the Halton sequence. Index 0 (the origin of plain Halton) is
+    /// skipped, so point 1 is the first row.
+    #[arg(long)]
+    lds: Option<usize>,
+    /// Plain Halton, no digit scrambling (overrides design.lds.scrambling).
+    #[arg(long, requires = "lds")]
+    no_scramble: bool,
+    /// Also print the design's centred L2 discrepancy (in unit coordinates) to stderr.
+    #[arg(long)]
+    discrepancy: bool,
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    sweep: PathBuf,
+    /// Parameter values, e.g. --set diameter=2,gap=4 (units of the sweep file).
+    #[arg(long, value_delimiter = ',')]
+    set: Vec<String>,
+    #[arg(long)]
+    out: PathBuf,
+}
+
+#[derive(Args)]
+struct RunArgs {
+    sweep: PathBuf,
+    #[arg(long, value_delimiter = ',')]
+    set: Vec<String>,
+    /// Print result.json instead of a summary.
+    #[arg(long)]
+    json: bool,
+    /// Keep the run directory here (default: a temporary directory, removed afterwards).
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+#[derive(Args)]
+struct StatsArgs {
+    file: PathBuf,
+    #[arg(long)]
+    column: String,
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let code = match run(cli) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e}");
+            e.code()
+        }
+    };
+    std::process::exit(code);
+}
+
+fn run(cli: Cli) -> Result<i32, Error> {
+    match cli.command {
+        Command::Points(a) => points(a),
+        Command::Lattice(_) => Err(Error::NotYet("lattice")),
+        Command::Lds(_) => Err(Error::NotYet("lds")),
+        Command::Resume(_) => Err(Error::NotYet("resume")),
+        Command::Status(_) => Err(Error::NotYet("status")),
+        Command::Report(_) => Err(Error::NotYet("report")),
+        Command::Render(_) => Err(Error::NotYet("render")),
+        Command::Run(_) => Err(Error::NotYet("run")),
+        Command::Stats(_) => Err(Error::NotYet("stats")),
+        Command::Contact => Err(Error::NotYet("contact")),
+        Command::ContactCheck => Err(Error::NotYet("contact-check")),
+        Command::Submit => Err(Error::NotYet("submit")),
+        Command::Bench => Err(Error::NotYet("bench")),
+    }
+}
+
+fn points(a: PointsArgs) -> Result<i32, Error> {
+    let sweep = Sweep::load(&a.sweep)?;
+    let unit = match (a.lattice, a.lds) {
+        (Some(l), _) => {
+            if l < 2 {
+                return Err(Error::input(format!(
+                    "--lattice {l}: expected at least 2 values per dimension"
+                )));
+            }
+            demsweep::design::lattice::lattice(sweep.dim(), l)
+        }
+        (None, Some(n)) => {
+            if n == 0 {
+                return Err(Error::input(
+                    "--lds 0: expected a positive number of points",
+                ));
+            }
+            let lds = &sweep.file.design.lds;
+            let scrambling = if a.no_scramble {
+                Scrambling::None
+            } else {
+                lds.scrambling
+            };
+            demsweep::design::halton::halton(sweep.dim(), n, scrambling, lds.seed)
+        }
+        (None, None) => unreachable!("clap requires --lattice or --lds"),
+    };
+    let stdout = std::io::stdout();
+    let mut out = std::io::BufWriter::new(stdout.lock());
+    let write = |out: &mut dyn Write| -> std::io::Result<()> {
+        writeln!(out, "{}", sweep.names().join(","))?;
+        for p in &unit {
+            let row: Vec<String> = demsweep::space::scale_point(&sweep, p)
+                .iter()
+                .map(|v| format!("{v}"))
+                .collect();
+            writeln!(out, "{}", row.join(","))?;
+        }
+        out.flush()
+    };
+    match write(&mut out) {
+        Ok(()) => Ok(exit::SUCCESS),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(exit::SUCCESS),
+        Err(e) => Err(e.into()),
+    }
+}
