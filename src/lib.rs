@@ -5,6 +5,8 @@
 
 pub mod design;
 pub mod error;
+pub mod outcome;
+pub mod process;
 pub mod scene;
 pub mod space;
 pub mod sweep;

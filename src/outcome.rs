@@ -1,0 +1,122 @@
+//! What one run produced: a result, a classified failure, or a cancellation.
+//!
+//! These are the records the pool, the store and the reports exchange. A failure is never turned
+//! into a number: it carries its class (which decides the retry policy) and a one-line reason.
+
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+/// Version of `result.json` / `failure.json`.
+pub const RESULT_FORMAT: u32 = 1;
+
+/// Number of v_x layers in front of the blade (thesis Appendix A).
+pub const VX_LAYERS: usize = 12;
+
+/// The result of a completed run: `result.json`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct RunResult {
+    pub format: u32,
+    /// Content hash of the run (deck, mesh, engine identity).
+    pub hash: String,
+    /// Every scene parameter, swept and fixed, in the sweep file's units.
+    pub parameters: BTreeMap<String, f64>,
+    /// Mass flow rate from the deposited layer (DESIGN §5, thesis Eq. 15–17), dimensionless.
+    pub mfr: f64,
+    /// The same from the flux of particles past the blade's front face (cross-check).
+    pub mfr_flux: f64,
+    /// MFR over consecutive sub-windows of the measurement window.
+    pub mfr_windows: Vec<f64>,
+    /// False when the sub-window MFRs show the flow had not reached a steady state.
+    pub steady: bool,
+    /// Mean v_x (m/s) per layer k = 1..12 at z = gap + k·D/2; `None` for an empty layer.
+    pub vx: Vec<Option<f64>>,
+    /// Particles in the pile.
+    pub particles: usize,
+    /// Timesteps run.
+    pub steps: u64,
+    /// Simulated time, s.
+    pub simulated_time: f64,
+    /// Wall-clock time of the LIGGGHTS process, s.
+    pub wall_time: f64,
+    pub engine_version: String,
+    pub warnings: Vec<String>,
+}
+
+/// Why a run failed. The class decides whether the pool retries it.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[serde(rename_all = "kebab-case")]
+pub enum FailureClass {
+    /// The engine could not be started.
+    CouldNotStart,
+    /// Killed by a signal we did not send.
+    Signalled,
+    /// Ran past its timeout.
+    TimedOut,
+    /// LIGGGHTS printed an ERROR or exited non-zero.
+    EngineError,
+    /// The atom count dropped where nothing is meant to remove atoms.
+    LostAtoms,
+    /// Non-finite or exploding kinetic energy.
+    Unstable,
+    /// The output (log or dump) could not be read.
+    Unparsable,
+}
+
+impl FailureClass {
+    /// Transient failures may succeed on a retry; physics failures never will.
+    pub fn is_transient(self) -> bool {
+        matches!(self, FailureClass::CouldNotStart | FailureClass::Signalled | FailureClass::TimedOut)
+    }
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            FailureClass::CouldNotStart => "could-not-start",
+            FailureClass::Signalled => "signalled",
+            FailureClass::TimedOut => "timed-out",
+            FailureClass::EngineError => "engine-error",
+            FailureClass::LostAtoms => "lost-atoms",
+            FailureClass::Unstable => "unstable",
+            FailureClass::Unparsable => "unparsable",
+        }
+    }
+}
+
+/// A failed run: `failure.json`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct RunFailure {
+    pub format: u32,
+    pub hash: String,
+    pub class: FailureClass,
+    /// One line saying what went wrong.
+    pub reason: String,
+    /// The last lines of the LIGGGHTS log, for diagnosis.
+    pub log_tail: String,
+    pub wall_time: f64,
+}
+
+/// How one attempt at a run ended.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RunOutcome {
+    Done(RunResult),
+    Failed(RunFailure),
+    /// Stopped by Ctrl-C / SIGTERM; the run dir is incomplete and will be re-run on resume.
+    Cancelled,
+}
+
+/// Write `value` as JSON to `path` atomically: a temporary file in the same directory, fsynced,
+/// then renamed, so a reader sees the whole file or none.
+pub fn write_json_atomic<T: Serialize>(path: &Path, value: &T) -> std::io::Result<()> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out.json");
+    let tmp = dir.join(format!(".{name}.tmp.{}", std::process::id()));
+    {
+        let mut f = std::fs::File::create(&tmp)?;
+        serde_json::to_writer_pretty(&mut f, value)?;
+        f.write_all(b"\n")?;
+        f.sync_all()?;
+    }
+    std::fs::rename(&tmp, path)
+}
