@@ -4,6 +4,7 @@
 //! sweep file → [`sweep`] → [`space`] + [`design`] → [`scene`] → deck → engine → dump → metrics.
 
 pub mod design;
+pub mod dump;
 pub mod error;
 pub mod outcome;
 pub mod process;
