@@ -146,8 +146,6 @@ pub struct SceneSettings {
     pub rayleigh_fraction: f64,
     /// Domain depth across the blade (periodic y), in particle diameters.
     pub depth_diameters: f64,
-    /// Number of particles in the pile, before it is spread.
-    pub particles: usize,
     /// Size distribution of the particles.
     pub size_distribution: SizeDistributionSpec,
     /// Half-height of each v_x layer, in diameters (0.25 = ±D/4); `thesis_band` overrides it
@@ -165,7 +163,6 @@ impl Default for SceneSettings {
             fidelity: "fast".into(),
             rayleigh_fraction: 0.2,
             depth_diameters: 4.0,
-            particles: 600,
             size_distribution: SizeDistributionSpec::default(),
             vx_band_diameters: 0.25,
             thesis_band: false,
@@ -495,12 +492,6 @@ fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>, Vec<Parame
         return Err(bad(
             "scene.rayleigh_fraction",
             format!("{}: expected at most 1", s.rayleigh_fraction),
-        ));
-    }
-    if s.particles == 0 {
-        return Err(bad(
-            "scene.particles",
-            "expected a positive number of particles".into(),
         ));
     }
     match &s.size_distribution {
