@@ -3,8 +3,10 @@
 //! The pipeline (DESIGN §2), one module per stage, data flowing one way:
 //! sweep file → [`sweep`] → [`space`] + [`design`] → [`scene`] → deck → engine → dump → metrics.
 
+pub mod deck;
 pub mod design;
 pub mod dump;
+pub mod engine;
 pub mod error;
 pub mod outcome;
 pub mod process;

@@ -105,6 +105,8 @@ pub struct Scene {
     pub approach_steps: u64,
     /// Steps between snapshots; the window is SUB_WINDOWS of them.
     pub dump_every: u64,
+    /// Steps of the measurement window: SUB_WINDOWS × dump_every.
+    pub window_length_steps: u64,
     pub tail_steps: u64,
     pub thermo_every: u64,
     // Measurement.
@@ -281,6 +283,7 @@ impl Scene {
             settle_steps,
             approach_steps,
             dump_every,
+            window_length_steps: SUB_WINDOWS as u64 * dump_every,
             tail_steps,
             thermo_every: (total_steps / 40).max(1),
             vx_band,
@@ -297,7 +300,7 @@ impl Scene {
     /// Timestep of the window's start (t1) and end (t2).
     pub fn window_steps(&self) -> (u64, u64) {
         let t1 = self.settle_steps + self.approach_steps;
-        (t1, t1 + SUB_WINDOWS as u64 * self.dump_every)
+        (t1, t1 + self.window_length_steps)
     }
 
     pub fn total_steps(&self) -> u64 {

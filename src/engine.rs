@@ -1,0 +1,424 @@
+//! The real engine: find LIGGGHTS, identify it, run one deck in its own directory, and read its
+//! log for what went wrong.
+//!
+//! A run fails — with a class and a one-line reason, the log's tail kept — on a LIGGGHTS
+//! `ERROR`, a non-zero exit, a drop in the atom count (nothing in our scenes removes atoms, so a
+//! drop is lost atoms), or a non-finite or exploding kinetic energy. None of these is ever turned
+//! into a number. Not responsible for dumps or metrics.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+use sha2::{Digest, Sha256};
+
+use crate::outcome::FailureClass;
+use crate::process::{self, CancelToken, ProcessOutcome};
+
+/// Log file name in the run directory.
+pub const LOG: &str = "log.liggghts";
+/// Screen output (LIGGGHTS crashes when told `-screen none` while reading a mesh, so keep it).
+pub const SCREEN: &str = "screen.txt";
+/// Lines of the log kept with a failure.
+const TAIL_LINES: usize = 20;
+
+#[derive(Debug, thiserror::Error)]
+pub enum EngineError {
+    #[error("LIGGGHTS not found: {0} (install it with `bash scripts/setup.sh`, or set run.engine in the sweep file)")]
+    NotFound(String),
+    #[error("cannot identify LIGGGHTS at {path}: {reason}")]
+    Identify { path: String, reason: String },
+}
+
+/// A located LIGGGHTS executable and what it says it is.
+#[derive(Debug, Clone)]
+pub struct Engine {
+    pub path: PathBuf,
+    /// First line of `liggghts -h`, e.g. "LIGGGHTS (Version LIGGGHTS-PUBLIC 3.8.0, ...)".
+    pub version: String,
+    /// sha256 of the executable: a rebuilt engine is a different engine.
+    pub binary_hash: String,
+}
+
+impl Engine {
+    /// Find LIGGGHTS: the given path, else `liggghts` on PATH.
+    pub fn locate(setting: Option<&Path>) -> Result<Engine, EngineError> {
+        let path = match setting {
+            Some(p) => {
+                if !p.is_file() {
+                    return Err(EngineError::NotFound(format!(
+                        "{} is not a file",
+                        p.display()
+                    )));
+                }
+                p.to_path_buf()
+            }
+            None => find_on_path("liggghts")
+                .ok_or_else(|| EngineError::NotFound("`liggghts` is not on PATH".into()))?,
+        };
+        let identify = |reason: String| EngineError::Identify {
+            path: path.display().to_string(),
+            reason,
+        };
+        let out = Command::new(&path)
+            .arg("-h")
+            .stdin(Stdio::null())
+            .output()
+            .map_err(|e| identify(e.to_string()))?;
+        let text = String::from_utf8_lossy(&out.stdout);
+        let version = text
+            .lines()
+            .find(|l| l.contains("LIGGGHTS"))
+            .map(|l| l.trim().to_string())
+            .ok_or_else(|| identify("`-h` did not print a LIGGGHTS version".into()))?;
+        // The Debian binary is a small launcher around libliggghts; hash both when we can see the
+        // library, so an updated library is a different engine too.
+        let mut h = Sha256::new();
+        h.update(std::fs::read(&path).map_err(|e| identify(e.to_string()))?);
+        for lib in [
+            "/usr/lib/x86_64-linux-gnu/libliggghts.so.3",
+            "/usr/lib/libliggghts.so.3",
+        ] {
+            if let Ok(bytes) = std::fs::read(lib) {
+                h.update(bytes);
+            }
+        }
+        Ok(Engine {
+            path,
+            version,
+            binary_hash: crate::deck::hex(&h.finalize()),
+        })
+    }
+
+    /// What identifies this engine in a run's hash.
+    pub fn identity(&self) -> String {
+        format!("{} sha256:{}", self.version, self.binary_hash)
+    }
+
+    /// Run `deck` (a file name inside `dir`) in `dir` with a timeout, then read the log.
+    pub fn run(
+        &self,
+        dir: &Path,
+        deck: &str,
+        limits: &LogLimits,
+        timeout: Duration,
+        cancel: &CancelToken,
+    ) -> EngineRun {
+        let screen = match std::fs::File::create(dir.join(SCREEN)) {
+            Ok(f) => f,
+            Err(e) => {
+                return EngineRun::failed(
+                    FailureClass::CouldNotStart,
+                    format!("cannot create {SCREEN}: {e}"),
+                    String::new(),
+                    0.0,
+                )
+            }
+        };
+        let screen_err = match screen.try_clone() {
+            Ok(f) => f,
+            Err(e) => {
+                return EngineRun::failed(
+                    FailureClass::CouldNotStart,
+                    e.to_string(),
+                    String::new(),
+                    0.0,
+                )
+            }
+        };
+        let mut cmd = Command::new(&self.path);
+        cmd.args(["-in", deck, "-log", LOG, "-echo", "none", "-nocite"])
+            .current_dir(dir)
+            .stdin(Stdio::null())
+            .stdout(screen)
+            .stderr(screen_err);
+        let (outcome, took) = process::run(cmd, timeout, cancel);
+        let wall = took.as_secs_f64();
+        let log = std::fs::read_to_string(dir.join(LOG)).unwrap_or_default();
+        let tail = tail(&log, TAIL_LINES);
+        let fail = |class, reason: String| EngineRun::failed(class, reason, tail.clone(), wall);
+        match outcome {
+            ProcessOutcome::SpawnFailed(e) => {
+                return fail(
+                    FailureClass::CouldNotStart,
+                    format!("cannot start {}: {e}", self.path.display()),
+                )
+            }
+            ProcessOutcome::TimedOut => {
+                return fail(
+                    FailureClass::TimedOut,
+                    format!("timed out after {:.0} s", timeout.as_secs_f64()),
+                )
+            }
+            ProcessOutcome::Cancelled => {
+                return EngineRun {
+                    wall_time: wall,
+                    status: RunStatus::Cancelled,
+                    thermo: Vec::new(),
+                    warnings: Vec::new(),
+                }
+            }
+            ProcessOutcome::Signalled(sig) => {
+                // LIGGGHTS may have printed an ERROR before dying.
+                if let Some(e) = first_error(&log) {
+                    return fail(FailureClass::EngineError, e);
+                }
+                return fail(FailureClass::Signalled, format!("killed by signal {sig}"));
+            }
+            ProcessOutcome::Exited(code) => {
+                if let Some(e) = first_error(&log) {
+                    return fail(FailureClass::EngineError, e);
+                }
+                if code != 0 {
+                    let screen = std::fs::read_to_string(dir.join(SCREEN)).unwrap_or_default();
+                    let why =
+                        first_error(&screen).unwrap_or_else(|| format!("exited with code {code}"));
+                    return fail(FailureClass::EngineError, why);
+                }
+            }
+        }
+        let analysis = analyse_log(&log, limits);
+        match analysis.failure {
+            Some((class, reason)) => fail(class, reason),
+            None => EngineRun {
+                wall_time: wall,
+                status: RunStatus::Ok,
+                thermo: analysis.thermo,
+                warnings: analysis.warnings,
+            },
+        }
+    }
+}
+
+fn find_on_path(name: &str) -> Option<PathBuf> {
+    std::env::var_os("PATH")?
+        .to_str()?
+        .split(':')
+        .map(|d| Path::new(d).join(name))
+        .find(|p| p.is_file())
+}
+
+/// What the log must respect for a run to count.
+#[derive(Debug, Clone, Copy)]
+pub struct LogLimits {
+    /// Kinetic energy above which the run is unstable, J.
+    pub ke_limit: f64,
+    /// Atoms expected once inserted; fewer at the end is lost atoms.
+    pub atoms: u64,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum RunStatus {
+    Ok,
+    Failed {
+        class: FailureClass,
+        reason: String,
+        log_tail: String,
+    },
+    Cancelled,
+}
+
+/// What one LIGGGHTS process did.
+#[derive(Debug, Clone)]
+pub struct EngineRun {
+    pub status: RunStatus,
+    pub wall_time: f64,
+    /// (step, atoms, kinetic energy) rows of the thermo output.
+    pub thermo: Vec<ThermoRow>,
+    /// Distinct LIGGGHTS warnings, in order.
+    pub warnings: Vec<String>,
+}
+
+impl EngineRun {
+    fn failed(class: FailureClass, reason: String, log_tail: String, wall_time: f64) -> Self {
+        EngineRun {
+            status: RunStatus::Failed {
+                class,
+                reason,
+                log_tail,
+            },
+            wall_time,
+            thermo: Vec::new(),
+            warnings: Vec::new(),
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ThermoRow {
+    pub step: u64,
+    pub atoms: u64,
+    pub ke: f64,
+}
+
+#[derive(Debug, Default)]
+struct LogAnalysis {
+    thermo: Vec<ThermoRow>,
+    warnings: Vec<String>,
+    failure: Option<(FailureClass, String)>,
+}
+
+/// The first LIGGGHTS error line ("ERROR: ..." or "ERROR on proc N: ..."), trimmed.
+fn first_error(log: &str) -> Option<String> {
+    log.lines()
+        .find(|l| l.trim_start().starts_with("ERROR"))
+        .map(|l| l.trim().to_string())
+}
+
+fn tail(log: &str, n: usize) -> String {
+    let lines: Vec<&str> = log.lines().collect();
+    lines[lines.len().saturating_sub(n)..].join("\n")
+}
+
+/// Read the thermo blocks (`thermo_style custom step atoms ke`) and warnings of a log.
+fn analyse_log(log: &str, limits: &LogLimits) -> LogAnalysis {
+    let mut a = LogAnalysis::default();
+    let mut in_block = false;
+    let mut max_atoms = 0u64;
+    for line in log.lines() {
+        let t = line.trim();
+        if t.starts_with("WARNING") {
+            if !a.warnings.iter().any(|w| w == t) {
+                a.warnings.push(t.to_string());
+            }
+            continue;
+        }
+        if t.starts_with("Step") && t.contains("Atoms") {
+            in_block = true;
+            continue;
+        }
+        if !in_block {
+            continue;
+        }
+        let mut it = t.split_whitespace();
+        let (Some(s), Some(n), Some(k)) = (it.next(), it.next(), it.next()) else {
+            in_block = !t.is_empty() && !t.starts_with("Loop time");
+            continue;
+        };
+        let (Ok(step), Ok(atoms)) = (s.parse::<u64>(), n.parse::<u64>()) else {
+            // Informational lines (INFO: ...) may interleave with a block.
+            in_block = !t.starts_with("Loop time");
+            continue;
+        };
+        let ke: f64 = k.parse().unwrap_or(f64::NAN);
+        a.thermo.push(ThermoRow { step, atoms, ke });
+        if a.failure.is_none() {
+            if !ke.is_finite() {
+                a.failure = Some((
+                    FailureClass::Unstable,
+                    format!("kinetic energy is {k} at step {step}"),
+                ));
+            } else if ke > limits.ke_limit {
+                a.failure = Some((
+                    FailureClass::Unstable,
+                    format!(
+                        "kinetic energy {ke:.3e} J at step {step} exceeds {:.3e} J",
+                        limits.ke_limit
+                    ),
+                ));
+            } else if atoms < max_atoms {
+                a.failure = Some((
+                    FailureClass::LostAtoms,
+                    format!(
+                        "atom count fell from {max_atoms} to {atoms} by step {step} (lost atoms)"
+                    ),
+                ));
+            }
+        }
+        max_atoms = max_atoms.max(atoms);
+    }
+    if a.failure.is_none() {
+        match a.thermo.last() {
+            None => {
+                a.failure = Some((
+                    FailureClass::Unparsable,
+                    "no thermo output in the log".into(),
+                ))
+            }
+            Some(last) if last.atoms != limits.atoms => {
+                a.failure = Some((
+                    if last.atoms < limits.atoms {
+                        FailureClass::LostAtoms
+                    } else {
+                        FailureClass::Unparsable
+                    },
+                    format!("{} atoms at the end, expected {}", last.atoms, limits.atoms),
+                ))
+            }
+            _ => {}
+        }
+    }
+    a
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const LIMITS: LogLimits = LogLimits {
+        ke_limit: 1.0,
+        atoms: 700,
+    };
+
+    fn log(rows: &str) -> String {
+        format!("LIGGGHTS (Version LIGGGHTS-PUBLIC 3.8.0)\n    Step    Atoms         KinEng \nINFO: inserted\n{rows}Loop time of 2.8 on 1 procs\n")
+    }
+
+    #[test]
+    fn a_clean_log_passes_and_keeps_its_thermo() {
+        let a = analyse_log(
+            &log("       0        0              0 \n    1000      700  9.7e-05 \n"),
+            &LIMITS,
+        );
+        assert_eq!(a.failure, None);
+        assert_eq!(a.thermo.len(), 2);
+        assert_eq!(
+            a.thermo[1],
+            ThermoRow {
+                step: 1000,
+                atoms: 700,
+                ke: 9.7e-5
+            }
+        );
+    }
+
+    #[test]
+    fn a_drop_in_atoms_is_lost_atoms() {
+        let a = analyse_log(
+            &log("1000 700 1e-4\n2000 698 1e-4\n3000 700 1e-4\n"),
+            &LIMITS,
+        );
+        let (class, reason) = a.failure.unwrap();
+        assert_eq!(class, FailureClass::LostAtoms);
+        assert!(reason.contains("700 to 698"), "{reason}");
+    }
+
+    #[test]
+    fn nan_or_exploding_energy_is_unstable() {
+        let a = analyse_log(&log("1000 700 nan\n"), &LIMITS);
+        assert_eq!(a.failure.unwrap().0, FailureClass::Unstable);
+        let a = analyse_log(&log("1000 700 5.0\n"), &LIMITS);
+        assert_eq!(a.failure.unwrap().0, FailureClass::Unstable);
+    }
+
+    #[test]
+    fn no_thermo_is_unparsable() {
+        assert_eq!(
+            analyse_log("nothing here\n", &LIMITS).failure.unwrap().0,
+            FailureClass::Unparsable
+        );
+    }
+
+    #[test]
+    fn errors_are_found_in_either_form() {
+        assert_eq!(
+            first_error("x\nERROR on proc 0: Mesh elements have been lost\n").unwrap(),
+            "ERROR on proc 0: Mesh elements have been lost"
+        );
+        assert_eq!(
+            first_error("ERROR: Unknown command\n").unwrap(),
+            "ERROR: Unknown command"
+        );
+        assert_eq!(first_error("all good\n"), None);
+    }
+}
