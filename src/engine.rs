@@ -126,7 +126,16 @@ impl Engine {
                 )
             }
         };
-        let mut cmd = Command::new(&self.path);
+        // LIGGGHTS aborts through MPI_Abort without flushing its log or a redirected stdout, so
+        // the ERROR line would be lost; line-buffer stdout with coreutils' stdbuf when we can.
+        let mut cmd = match find_on_path("stdbuf") {
+            Some(stdbuf) => {
+                let mut c = Command::new(stdbuf);
+                c.args(["-oL", "-eL"]).arg(&self.path);
+                c
+            }
+            None => Command::new(&self.path),
+        };
         cmd.args(["-in", deck, "-log", LOG, "-echo", "none", "-nocite"])
             .current_dir(dir)
             .stdin(Stdio::null())
@@ -160,7 +169,8 @@ impl Engine {
             }
             ProcessOutcome::Signalled(sig) => {
                 // LIGGGHTS may have printed an ERROR before dying.
-                if let Some(e) = first_error(&log) {
+                let screen = std::fs::read_to_string(dir.join(SCREEN)).unwrap_or_default();
+                if let Some(e) = first_error(&log).or_else(|| first_error(&screen)) {
                     return fail(FailureClass::EngineError, e);
                 }
                 return fail(FailureClass::Signalled, format!("killed by signal {sig}"));

@@ -5,6 +5,8 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 use demsweep::error::{exit, Error};
+use demsweep::outcome::RunOutcome;
+use demsweep::point::{self, PointContext};
 use demsweep::sweep::{Scrambling, Sweep};
 
 /// Parameter sweeps of LIGGGHTS powder-spreading simulations.
@@ -169,8 +171,8 @@ fn run(cli: Cli) -> Result<i32, Error> {
         Command::Resume(_) => Err(Error::NotYet("resume")),
         Command::Status(_) => Err(Error::NotYet("status")),
         Command::Report(_) => Err(Error::NotYet("report")),
-        Command::Render(_) => Err(Error::NotYet("render")),
-        Command::Run(_) => Err(Error::NotYet("run")),
+        Command::Render(a) => render(a),
+        Command::Run(a) => run_one(a),
         Command::Stats(_) => Err(Error::NotYet("stats")),
         Command::Contact => Err(Error::NotYet("contact")),
         Command::ContactCheck => Err(Error::NotYet("contact-check")),
@@ -223,5 +225,95 @@ fn points(a: PointsArgs) -> Result<i32, Error> {
         Ok(()) => Ok(exit::SUCCESS),
         Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(exit::SUCCESS),
         Err(e) => Err(e.into()),
+    }
+}
+
+fn render(a: RenderArgs) -> Result<i32, Error> {
+    let sweep = Sweep::load(&a.sweep)?;
+    let ctx = PointContext::new(sweep)?;
+    let values = point::swept_values_from_set(&ctx.sweep, &a.set)?;
+    let prepared = point::prepare(&ctx, &values)?;
+    std::fs::create_dir_all(&a.out)
+        .and_then(|_| prepared.deck.write(&a.out))
+        .map_err(|e| Error::Internal(format!("cannot write to {}: {e}", a.out.display())))?;
+    let s = &prepared.scene;
+    eprintln!(
+        "wrote {}/{{in.liggghts,blade.stl}}: {} particles, dt = {:.3e} s, {} steps, hash {}",
+        a.out.display(),
+        s.particles,
+        s.timestep,
+        s.total_steps(),
+        &prepared.hash[..16]
+    );
+    Ok(exit::SUCCESS)
+}
+
+fn run_one(a: RunArgs) -> Result<i32, Error> {
+    demsweep::process::install_interrupt_handler();
+    let sweep = Sweep::load(&a.sweep)?;
+    let ctx = PointContext::new(sweep)?;
+    let values = point::swept_values_from_set(&ctx.sweep, &a.set)?;
+    let prepared = point::prepare(&ctx, &values)?;
+    let temp;
+    let dir = match &a.out {
+        Some(d) => d.clone(),
+        None => {
+            temp = tempfile::Builder::new().prefix("sweep-run-").tempdir()?;
+            temp.path().to_path_buf()
+        }
+    };
+    if !a.json {
+        eprintln!(
+            "running {} particles, {} steps (dt = {:.3e} s) in {}",
+            prepared.scene.particles,
+            prepared.scene.total_steps(),
+            prepared.scene.timestep,
+            dir.display()
+        );
+    }
+    let cancel = demsweep::process::CancelToken::new();
+    match point::execute(&ctx, &prepared, &dir, &cancel) {
+        RunOutcome::Done(r) => {
+            if a.json {
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&r).map_err(|e| Error::Internal(e.to_string()))?
+                );
+            } else {
+                let vx: Vec<String> =
+                    r.vx.iter()
+                        .map(|v| v.map(|v| format!("{v:.3}")).unwrap_or_else(|| "-".into()))
+                        .collect();
+                println!(
+                    "MFR        {:.4}  (flux cross-check {:.4}, {})",
+                    r.mfr,
+                    r.mfr_flux,
+                    if r.steady { "steady" } else { "NOT steady" }
+                );
+                println!("v_x (m/s)  {}", vx.join(" "));
+                println!(
+                    "particles  {}   steps {}   simulated {:.4} s   wall {:.1} s",
+                    r.particles, r.steps, r.simulated_time, r.wall_time
+                );
+                for w in &r.warnings {
+                    println!("warning    {w}");
+                }
+            }
+            Ok(exit::SUCCESS)
+        }
+        RunOutcome::Failed(f) => {
+            if a.json {
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&f).map_err(|e| Error::Internal(e.to_string()))?
+                );
+            }
+            eprintln!("error: run failed ({}): {}", f.class.as_str(), f.reason);
+            if a.out.is_none() && !f.log_tail.is_empty() {
+                eprintln!("last lines of the log:\n{}", f.log_tail);
+            }
+            Ok(exit::RUNS_FAILED)
+        }
+        RunOutcome::Cancelled => Err(Error::Interrupted),
     }
 }

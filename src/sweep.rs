@@ -162,7 +162,7 @@ impl Default for SceneSettings {
             template: None,
             fidelity: "fast".into(),
             rayleigh_fraction: 0.2,
-            depth_diameters: 4.0,
+            depth_diameters: 6.0,
             size_distribution: SizeDistributionSpec::default(),
             vx_band_diameters: 0.25,
             thesis_band: false,

@@ -5,19 +5,25 @@ use std::fmt::Write;
 use super::Scene;
 
 /// Version of the mesh generator; part of a run's identity (a change re-runs every point).
-pub const MESH_VERSION: u32 = 1;
+pub const MESH_VERSION: u32 = 2;
 
-/// The blade as a closed box of 12 triangles with outward normals: x from the rear face to the
-/// front face, y across the domain inset from the periodic faces, z from the tip (gap) to the top.
+/// The blade as a box open at its two y ends (8 triangles, outward normals): x from the rear
+/// face to the front face, y across the whole periodic depth (inset from the periodic faces, as
+/// a mesh must lie inside the box), z from the tip (gap) to the top.
+///
+/// The y ends are left out on purpose: no particle can reach them (the blade spans the periodic
+/// depth), and LIGGGHTS 3.8 fails with "assertion failed (region_neighbor_list_I.h:165)" for
+/// some depths when two end faces face each other across the periodic boundary.
 pub fn blade_stl(s: &Scene) -> String {
     let (x0, x1) = (s.blade_x0, s.blade_x0 + s.blade_thickness);
     let (y0, y1) = (s.blade_y_inset, s.depth - s.blade_y_inset);
     let (z0, z1) = (s.gap, s.blade_top);
-    box_stl("blade", [x0, y0, z0], [x1, y1, z1])
+    box_stl("blade", [x0, y0, z0], [x1, y1, z1], false)
 }
 
-/// An axis-aligned box [lo, hi] as ASCII STL, triangles wound counter-clockwise seen from outside.
-fn box_stl(name: &str, lo: [f64; 3], hi: [f64; 3]) -> String {
+/// An axis-aligned box [lo, hi] as ASCII STL, triangles wound counter-clockwise seen from
+/// outside; `y_ends` includes the two faces normal to y.
+fn box_stl(name: &str, lo: [f64; 3], hi: [f64; 3], y_ends: bool) -> String {
     let corner =
         |i: usize, j: usize, k: usize| [[lo[0], hi[0]][i], [lo[1], hi[1]][j], [lo[2], hi[2]][k]];
     // Each face: outward normal and its four corners counter-clockwise seen from outside.
@@ -49,6 +55,9 @@ fn box_stl(name: &str, lo: [f64; 3], hi: [f64; 3]) -> String {
     ];
     let mut out = format!("solid {name}\n");
     for (n, q) in faces {
+        if n[1] != 0.0 && !y_ends {
+            continue;
+        }
         for tri in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
             let _ = writeln!(
                 out,
@@ -95,7 +104,7 @@ mod tests {
 
     #[test]
     fn box_is_closed_with_outward_normals_matching_the_winding() {
-        let stl = box_stl("b", [0.0, 0.0, 0.0], [1.0, 2.0, 3.0]);
+        let stl = box_stl("b", [0.0, 0.0, 0.0], [1.0, 2.0, 3.0], true);
         let tris = parse_triangles(&stl);
         assert_eq!(tris.len(), 12);
         let mut area = 0.0;
@@ -113,5 +122,12 @@ mod tests {
         }
         // Surface of a 1×2×3 box: 2(2 + 3 + 6) = 22.
         assert!((area - 22.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_blade_has_no_y_end_faces() {
+        let open = parse_triangles(&box_stl("b", [0.0; 3], [1.0, 2.0, 3.0], false));
+        assert_eq!(open.len(), 8);
+        assert!(open.iter().all(|(n, _)| n[1] == 0.0));
     }
 }
