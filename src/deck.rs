@@ -7,7 +7,7 @@ use std::path::Path;
 
 use sha2::{Digest, Sha256};
 
-use crate::scene::{mesh, Scene};
+use crate::scene::{mesh, pile, Scene};
 
 /// The built-in spreading deck.
 pub const SPREADING_TEMPLATE: &str = include_str!("../templates/spreading.liggghts.tera");
@@ -35,10 +35,8 @@ impl Template {
         match path {
             None => Template::from_source("spreading.liggghts.tera", SPREADING_TEMPLATE),
             Some(p) => {
-                let source = std::fs::read_to_string(p).map_err(|e| DeckError::Read {
-                    path: p.display().to_string(),
-                    reason: e.to_string(),
-                })?;
+                let source = std::fs::read_to_string(p)
+                    .map_err(|e| DeckError::Read { path: p.display().to_string(), reason: e.to_string() })?;
                 Template::from_source(&p.display().to_string(), &source)
             }
         }
@@ -48,15 +46,8 @@ impl Template {
         let mut tera = tera::Tera::default();
         tera.autoescape_on(vec![]);
         tera.add_raw_template(name, source)
-            .map_err(|e| DeckError::Syntax {
-                name: name.into(),
-                reason: chain(&e),
-            })?;
-        Ok(Template {
-            name: name.into(),
-            source: source.into(),
-            tera,
-        })
+            .map_err(|e| DeckError::Syntax { name: name.into(), reason: chain(&e) })?;
+        Ok(Template { name: name.into(), source: source.into(), tera })
     }
 
     /// sha256 of the template source, for the manifest.
@@ -70,10 +61,7 @@ impl Template {
         context.insert("scene", scene);
         self.tera
             .render(&self.name, &context)
-            .map_err(|e| DeckError::Render {
-                name: self.name.clone(),
-                reason: chain(&e),
-            })
+            .map_err(|e| DeckError::Render { name: self.name.clone(), reason: chain(&e) })
     }
 }
 
@@ -94,6 +82,7 @@ fn chain(e: &tera::Error) -> String {
 pub struct Deck {
     pub input: String,
     pub mesh: String,
+    pub pile: String,
     /// sha256 over the deck, the mesh and the engine identity: equal hashes, equal runs.
     pub hash: String,
 }
@@ -102,34 +91,24 @@ impl Deck {
     pub const INPUT: &'static str = "in.liggghts";
     pub const MESH: &'static str = "blade.stl";
 
-    pub fn new(
-        template: &Template,
-        scene: &Scene,
-        engine_identity: &str,
-    ) -> Result<Deck, DeckError> {
+    pub fn new(template: &Template, scene: &Scene, engine_identity: &str) -> Result<Deck, DeckError> {
         let input = template.render(scene)?;
         let mesh = mesh::blade_stl(scene);
+        let pile = pile::pile_data(scene);
         let mut h = Sha256::new();
-        for part in [
-            input.as_bytes(),
-            mesh.as_bytes(),
-            engine_identity.as_bytes(),
-        ] {
-            // Length-prefix each part so no two different triples hash alike.
+        for part in [input.as_bytes(), mesh.as_bytes(), pile.as_bytes(), engine_identity.as_bytes()] {
+            // Length-prefix each part so no two different sets of parts hash alike.
             h.update((part.len() as u64).to_le_bytes());
             h.update(part);
         }
-        Ok(Deck {
-            input,
-            mesh,
-            hash: hex(&h.finalize()),
-        })
+        Ok(Deck { input, mesh, pile, hash: hex(&h.finalize()) })
     }
 
-    /// Write the deck and mesh into `dir`.
+    /// Write the deck, mesh and pile into `dir`.
     pub fn write(&self, dir: &Path) -> std::io::Result<()> {
         std::fs::write(dir.join(Self::INPUT), &self.input)?;
-        std::fs::write(dir.join(Self::MESH), &self.mesh)
+        std::fs::write(dir.join(Self::MESH), &self.mesh)?;
+        std::fs::write(dir.join(pile::PILE_DATA), &self.pile)
     }
 }
 
@@ -144,8 +123,7 @@ mod tests {
     use std::collections::BTreeMap;
 
     fn scene(settings: &SceneSettings, pairs: &[(&str, f64)]) -> Scene {
-        let values: BTreeMap<String, f64> =
-            pairs.iter().map(|(k, v)| (k.to_string(), *v)).collect();
+        let values: BTreeMap<String, f64> = pairs.iter().map(|(k, v)| (k.to_string(), *v)).collect();
         Scene::new(&values, settings).unwrap()
     }
 
@@ -154,40 +132,27 @@ mod tests {
         let t = Template::load(None).unwrap();
         let deck = t.render(&scene(&SceneSettings::default(), &[])).unwrap();
         assert!(!deck.contains("rolling"), "{deck}");
-        assert_eq!(deck.matches("particletemplate/sphere").count(), 1);
         assert!(!deck.contains("vtk"));
-        let rolled = t
-            .render(&scene(
-                &SceneSettings::default(),
-                &[("rolling_friction", 0.1)],
-            ))
-            .unwrap();
+        let rolled = t.render(&scene(&SceneSettings::default(), &[("rolling_friction", 0.1)])).unwrap();
         assert!(rolled.contains("coefficientRollingFriction"));
         assert_eq!(rolled.matches("rolling_friction cdt").count(), 5);
     }
 
     #[test]
-    fn a_size_distribution_gives_one_template_per_class() {
-        let settings = SceneSettings {
-            size_distribution: SizeDistributionSpec::Weibull { bins: 5 },
-            ..SceneSettings::default()
-        };
-        let deck = Template::load(None)
-            .unwrap()
-            .render(&scene(&settings, &[]))
-            .unwrap();
-        assert_eq!(deck.matches("particletemplate/sphere").count(), 5);
-        assert!(deck.contains("numberbased"));
-        assert!(deck.contains(" 5 pts1 "));
+    fn a_size_distribution_puts_every_class_in_the_pile() {
+        let settings =
+            SceneSettings { size_distribution: SizeDistributionSpec::Weibull { bins: 5 }, ..SceneSettings::default() };
+        let s = scene(&settings, &[]);
+        let pile = pile::pile_data(&s);
+        for c in &s.size_classes {
+            assert!(pile.contains(&format!(" 1 {} ", c.diameter)), "class {} missing", c.diameter);
+        }
     }
 
     #[test]
     fn an_undefined_variable_is_an_error_naming_it() {
         let t = Template::from_source("t", "run {{ scene.no_such_thing }}").unwrap();
-        let err = t
-            .render(&scene(&SceneSettings::default(), &[]))
-            .unwrap_err()
-            .to_string();
+        let err = t.render(&scene(&SceneSettings::default(), &[])).unwrap_err().to_string();
         assert!(err.contains("scene.no_such_thing"), "{err}");
         assert!(!err.contains('\n'));
     }

@@ -47,13 +47,7 @@ pub struct Location {
 
 impl fmt::Display for Location {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "{}:{} (snapshot {}",
-            self.file.display(),
-            self.line,
-            self.snapshot
-        )?;
+        write!(f, "{}:{} (snapshot {}", self.file.display(), self.line, self.snapshot)?;
         if let Some(t) = self.timestep {
             write!(f, ", timestep {t}")?;
         }
@@ -65,54 +59,28 @@ impl fmt::Display for Location {
 #[derive(Debug, thiserror::Error)]
 pub enum DumpError {
     #[error("cannot open dump {}: {source}", file.display())]
-    Open {
-        file: PathBuf,
-        source: std::io::Error,
-    },
+    Open { file: PathBuf, source: std::io::Error },
     #[error("cannot read dump at {at}: {source}")]
-    Io {
-        at: Location,
-        source: std::io::Error,
-    },
+    Io { at: Location, source: std::io::Error },
     /// The file ends inside a snapshot, or its last line has no newline (LIGGGHTS ends every
     /// line with one, so a missing one means a cut-off write).
     #[error("dump truncated at {at}: expected {expected}")]
     Truncated { at: Location, expected: String },
     /// A header line is not the `ITEM:` line (or value line) that must come next.
     #[error("bad dump header at {at}: expected {expected}, found `{found}`")]
-    Header {
-        at: Location,
-        expected: String,
-        found: String,
-    },
+    Header { at: Location, expected: String, found: String },
     /// A field that must be a number is not one (or is not finite).
     #[error("non-numeric field at {at}: column `{column}` is `{field}`, expected a finite number")]
-    NotANumber {
-        at: Location,
-        column: String,
-        field: String,
-    },
+    NotANumber { at: Location, column: String, field: String },
     /// An atom row has a different number of fields than the `ITEM: ATOMS` header has columns.
     #[error("wrong field count at {at}: row has {found} fields, the ATOMS header has {expected} columns")]
-    FieldCount {
-        at: Location,
-        expected: usize,
-        found: usize,
-    },
+    FieldCount { at: Location, expected: usize, found: usize },
     /// `ITEM: NUMBER OF ATOMS` does not match the number of atom rows that follow.
     #[error("atom count mismatch at {at}: NUMBER OF ATOMS says {declared}, found {found} rows")]
-    AtomCount {
-        at: Location,
-        declared: u64,
-        found: u64,
-    },
+    AtomCount { at: Location, declared: u64, found: u64 },
     /// A column the caller needs is not in the `ITEM: ATOMS` header.
     #[error("missing column `{column}` at {at}: the dump has columns {available}")]
-    MissingColumn {
-        at: Location,
-        column: String,
-        available: String,
-    },
+    MissingColumn { at: Location, column: String, available: String },
 }
 
 impl DumpError {
@@ -193,12 +161,7 @@ impl Snapshot {
     /// The values of one column, atom by atom.
     pub fn column_values(&self, col: ColumnIdx) -> impl ExactSizeIterator<Item = f64> + '_ {
         let n = self.columns.len().max(1);
-        self.data
-            .iter()
-            .skip(col.0)
-            .step_by(n)
-            .copied()
-            .take(self.natoms)
+        self.data.iter().skip(col.0).step_by(n).copied().take(self.natoms)
     }
 }
 
@@ -221,10 +184,7 @@ impl DumpReader<BufReader<File>> {
     /// Opens the dump at `path` for reading.
     pub fn open(path: impl AsRef<Path>) -> Result<Self, DumpError> {
         let path = path.as_ref();
-        let f = File::open(path).map_err(|source| DumpError::Open {
-            file: path.to_path_buf(),
-            source,
-        })?;
+        let f = File::open(path).map_err(|source| DumpError::Open { file: path.to_path_buf(), source })?;
         // A larger buffer than the 8 KiB default halves the number of read calls on big dumps.
         Ok(DumpReader::new(BufReader::with_capacity(1 << 17, f), path))
     }
@@ -276,10 +236,7 @@ impl<R: BufRead> DumpReader<R> {
         // A number where a snapshot should start: more atom rows than NUMBER OF ATOMS said.
         // The error belongs to the previous snapshot, whose timestep is still in `self.timestep`.
         if self.snapshot > 0 && self.starts_with_number() {
-            let at = Location {
-                snapshot: self.snapshot - 1,
-                ..self.at()
-            };
+            let at = Location { snapshot: self.snapshot - 1, ..self.at() };
             let declared = self.natoms;
             let mut found = declared;
             loop {
@@ -288,11 +245,7 @@ impl<R: BufRead> DumpReader<R> {
                     break;
                 }
             }
-            return Err(DumpError::AtomCount {
-                at,
-                declared,
-                found,
-            });
+            return Err(DumpError::AtomCount { at, declared, found });
         }
         self.timestep = None;
 
@@ -353,8 +306,7 @@ impl<R: BufRead> DumpReader<R> {
         snap.data.clear();
         snap.natoms = 0;
         // Reserve from the declared count, capped so a corrupt count cannot exhaust memory.
-        snap.data
-            .reserve((natoms as usize).saturating_mul(ncols).min(1 << 24));
+        snap.data.reserve((natoms as usize).saturating_mul(ncols).min(1 << 24));
         for row in 0..natoms {
             if !self.next_line()? {
                 return Err(self.truncated(&format!(
@@ -363,27 +315,18 @@ impl<R: BufRead> DumpReader<R> {
             }
             self.require_newline("the rest of an atom row")?;
             if self.text().trim_ascii_start().starts_with(b"ITEM:") {
-                return Err(DumpError::AtomCount {
-                    at: self.at(),
-                    declared: natoms,
-                    found: row,
-                });
+                return Err(DumpError::AtomCount { at: self.at(), declared: natoms, found: row });
             }
             let mut found = 0;
             for field in Fields::new(&self.line) {
                 if found < ncols {
-                    let v = parse_f64(field)
-                        .ok_or_else(|| self.nan_err(field, &snap.columns[found]))?;
+                    let v = parse_f64(field).ok_or_else(|| self.nan_err(field, &snap.columns[found]))?;
                     snap.data.push(v);
                 }
                 found += 1;
             }
             if found != ncols {
-                return Err(DumpError::FieldCount {
-                    at: self.at(),
-                    expected: ncols,
-                    found,
-                });
+                return Err(DumpError::FieldCount { at: self.at(), expected: ncols, found });
             }
             snap.natoms += 1;
         }
@@ -397,10 +340,7 @@ impl<R: BufRead> DumpReader<R> {
         let n = self
             .input
             .read_until(b'\n', &mut self.line)
-            .map_err(|source| DumpError::Io {
-                at: self.at(),
-                source,
-            })?;
+            .map_err(|source| DumpError::Io { at: self.at(), source })?;
         if n == 0 {
             return Ok(false);
         }
@@ -470,17 +410,14 @@ impl<R: BufRead> DumpReader<R> {
         if triclinic {
             for tilt in [&b"xy"[..], b"xz", b"yz"] {
                 if words.next() != Some(tilt) {
-                    return Err(
-                        self.header_err("`BOX BOUNDS xy xz yz` followed by 3 boundary flags")
-                    );
+                    return Err(self.header_err("`BOX BOUNDS xy xz yz` followed by 3 boundary flags"));
                 }
             }
         }
         let mut periodic = [false; 3];
         let mut n = 0;
         for w in words {
-            let valid =
-                w == b"pp" || (w.len() == 2 && w.iter().all(|b| matches!(b, b'f' | b's' | b'm')));
+            let valid = w == b"pp" || (w.len() == 2 && w.iter().all(|b| matches!(b, b'f' | b's' | b'm')));
             if !valid || n == 3 {
                 return Err(self.header_err("3 boundary flags such as `pp pp ff`"));
             }
@@ -501,9 +438,8 @@ impl<R: BufRead> DumpReader<R> {
         }
         snap.columns.clear();
         for name in names {
-            let name = std::str::from_utf8(name)
-                .map_err(|_| self.header_err("column names in ASCII"))?
-                .to_string();
+            let name =
+                std::str::from_utf8(name).map_err(|_| self.header_err("column names in ASCII"))?.to_string();
             if snap.columns.contains(&name) {
                 return Err(self.header_err(&format!("distinct column names (`{name}` twice)")));
             }
@@ -526,26 +462,18 @@ impl<R: BufRead> DumpReader<R> {
 
     /// Whether the current line's first field is a number (an atom row, not a header).
     fn starts_with_number(&self) -> bool {
-        Fields::new(&self.line)
-            .next()
-            .is_some_and(|f| parse_f64(f).is_some())
+        Fields::new(&self.line).next().is_some_and(|f| parse_f64(f).is_some())
     }
 
     fn truncated(&self, expected: &str) -> DumpError {
-        DumpError::Truncated {
-            at: self.at(),
-            expected: expected.to_string(),
-        }
+        DumpError::Truncated { at: self.at(), expected: expected.to_string() }
     }
 
     fn header_err(&self, expected: &str) -> DumpError {
         DumpError::Header {
             at: self.at(),
             expected: expected.to_string(),
-            found: String::from_utf8_lossy(self.text())
-                .chars()
-                .take(80)
-                .collect(),
+            found: String::from_utf8_lossy(self.text()).chars().take(80).collect(),
         }
     }
 
@@ -576,10 +504,7 @@ impl<R: BufRead> Iterator for DumpReader<R> {
 
 /// Reads every snapshot of the dump at `path`; a snapshot without one of `required_columns` is
 /// a [`DumpError::MissingColumn`].
-pub fn read_dump(
-    path: impl AsRef<Path>,
-    required_columns: &[&str],
-) -> Result<Vec<Snapshot>, DumpError> {
+pub fn read_dump(path: impl AsRef<Path>, required_columns: &[&str]) -> Result<Vec<Snapshot>, DumpError> {
     DumpReader::open(path)?.require(required_columns).collect()
 }
 
@@ -608,10 +533,7 @@ impl<'a> Iterator for Fields<'a> {
     fn next(&mut self) -> Option<&'a [u8]> {
         let start = self.rest.iter().position(|b| !b.is_ascii_whitespace())?;
         let rest = &self.rest[start..];
-        let end = rest
-            .iter()
-            .position(|b| b.is_ascii_whitespace())
-            .unwrap_or(rest.len());
+        let end = rest.iter().position(|b| b.is_ascii_whitespace()).unwrap_or(rest.len());
         self.rest = &rest[end..];
         Some(&rest[..end])
     }
@@ -640,16 +562,9 @@ mod tests {
 
     #[test]
     fn location_names_file_line_snapshot_and_timestep() {
-        let mut at = Location {
-            file: "runs/a/dump.spread".into(),
-            snapshot: 3,
-            timestep: Some(42000),
-            line: 17,
-        };
-        assert_eq!(
-            at.to_string(),
-            "runs/a/dump.spread:17 (snapshot 3, timestep 42000)"
-        );
+        let mut at =
+            Location { file: "runs/a/dump.spread".into(), snapshot: 3, timestep: Some(42000), line: 17 };
+        assert_eq!(at.to_string(), "runs/a/dump.spread:17 (snapshot 3, timestep 42000)");
         at.timestep = None;
         assert_eq!(at.to_string(), "runs/a/dump.spread:17 (snapshot 3)");
     }

@@ -46,20 +46,14 @@ impl Engine {
         let path = match setting {
             Some(p) => {
                 if !p.is_file() {
-                    return Err(EngineError::NotFound(format!(
-                        "{} is not a file",
-                        p.display()
-                    )));
+                    return Err(EngineError::NotFound(format!("{} is not a file", p.display())));
                 }
                 p.to_path_buf()
             }
             None => find_on_path("liggghts")
                 .ok_or_else(|| EngineError::NotFound("`liggghts` is not on PATH".into()))?,
         };
-        let identify = |reason: String| EngineError::Identify {
-            path: path.display().to_string(),
-            reason,
-        };
+        let identify = |reason: String| EngineError::Identify { path: path.display().to_string(), reason };
         let out = Command::new(&path)
             .arg("-h")
             .stdin(Stdio::null())
@@ -75,19 +69,12 @@ impl Engine {
         // library, so an updated library is a different engine too.
         let mut h = Sha256::new();
         h.update(std::fs::read(&path).map_err(|e| identify(e.to_string()))?);
-        for lib in [
-            "/usr/lib/x86_64-linux-gnu/libliggghts.so.3",
-            "/usr/lib/libliggghts.so.3",
-        ] {
+        for lib in ["/usr/lib/x86_64-linux-gnu/libliggghts.so.3", "/usr/lib/libliggghts.so.3"] {
             if let Ok(bytes) = std::fs::read(lib) {
                 h.update(bytes);
             }
         }
-        Ok(Engine {
-            path,
-            version,
-            binary_hash: crate::deck::hex(&h.finalize()),
-        })
+        Ok(Engine { path, version, binary_hash: crate::deck::hex(&h.finalize()) })
     }
 
     /// What identifies this engine in a run's hash.
@@ -118,12 +105,7 @@ impl Engine {
         let screen_err = match screen.try_clone() {
             Ok(f) => f,
             Err(e) => {
-                return EngineRun::failed(
-                    FailureClass::CouldNotStart,
-                    e.to_string(),
-                    String::new(),
-                    0.0,
-                )
+                return EngineRun::failed(FailureClass::CouldNotStart, e.to_string(), String::new(), 0.0)
             }
         };
         // LIGGGHTS aborts through MPI_Abort without flushing its log or a redirected stdout, so
@@ -181,8 +163,7 @@ impl Engine {
                 }
                 if code != 0 {
                     let screen = std::fs::read_to_string(dir.join(SCREEN)).unwrap_or_default();
-                    let why =
-                        first_error(&screen).unwrap_or_else(|| format!("exited with code {code}"));
+                    let why = first_error(&screen).unwrap_or_else(|| format!("exited with code {code}"));
                     return fail(FailureClass::EngineError, why);
                 }
             }
@@ -201,11 +182,7 @@ impl Engine {
 }
 
 fn find_on_path(name: &str) -> Option<PathBuf> {
-    std::env::var_os("PATH")?
-        .to_str()?
-        .split(':')
-        .map(|d| Path::new(d).join(name))
-        .find(|p| p.is_file())
+    std::env::var_os("PATH")?.to_str()?.split(':').map(|d| Path::new(d).join(name)).find(|p| p.is_file())
 }
 
 /// What the log must respect for a run to count.
@@ -220,11 +197,7 @@ pub struct LogLimits {
 #[derive(Debug, Clone, PartialEq)]
 pub enum RunStatus {
     Ok,
-    Failed {
-        class: FailureClass,
-        reason: String,
-        log_tail: String,
-    },
+    Failed { class: FailureClass, reason: String, log_tail: String },
     Cancelled,
 }
 
@@ -242,11 +215,7 @@ pub struct EngineRun {
 impl EngineRun {
     fn failed(class: FailureClass, reason: String, log_tail: String, wall_time: f64) -> Self {
         EngineRun {
-            status: RunStatus::Failed {
-                class,
-                reason,
-                log_tail,
-            },
+            status: RunStatus::Failed { class, reason, log_tail },
             wall_time,
             thermo: Vec::new(),
             warnings: Vec::new(),
@@ -270,9 +239,7 @@ struct LogAnalysis {
 
 /// The first LIGGGHTS error line ("ERROR: ..." or "ERROR on proc N: ..."), trimmed.
 fn first_error(log: &str) -> Option<String> {
-    log.lines()
-        .find(|l| l.trim_start().starts_with("ERROR"))
-        .map(|l| l.trim().to_string())
+    log.lines().find(|l| l.trim_start().starts_with("ERROR")).map(|l| l.trim().to_string())
 }
 
 fn tail(log: &str, n: usize) -> String {
@@ -314,24 +281,16 @@ fn analyse_log(log: &str, limits: &LogLimits) -> LogAnalysis {
         a.thermo.push(ThermoRow { step, atoms, ke });
         if a.failure.is_none() {
             if !ke.is_finite() {
-                a.failure = Some((
-                    FailureClass::Unstable,
-                    format!("kinetic energy is {k} at step {step}"),
-                ));
+                a.failure = Some((FailureClass::Unstable, format!("kinetic energy is {k} at step {step}")));
             } else if ke > limits.ke_limit {
                 a.failure = Some((
                     FailureClass::Unstable,
-                    format!(
-                        "kinetic energy {ke:.3e} J at step {step} exceeds {:.3e} J",
-                        limits.ke_limit
-                    ),
+                    format!("kinetic energy {ke:.3e} J at step {step} exceeds {:.3e} J", limits.ke_limit),
                 ));
             } else if atoms < max_atoms {
                 a.failure = Some((
                     FailureClass::LostAtoms,
-                    format!(
-                        "atom count fell from {max_atoms} to {atoms} by step {step} (lost atoms)"
-                    ),
+                    format!("atom count fell from {max_atoms} to {atoms} by step {step} (lost atoms)"),
                 ));
             }
         }
@@ -339,12 +298,7 @@ fn analyse_log(log: &str, limits: &LogLimits) -> LogAnalysis {
     }
     if a.failure.is_none() {
         match a.thermo.last() {
-            None => {
-                a.failure = Some((
-                    FailureClass::Unparsable,
-                    "no thermo output in the log".into(),
-                ))
-            }
+            None => a.failure = Some((FailureClass::Unparsable, "no thermo output in the log".into())),
             Some(last) if last.atoms != limits.atoms => {
                 a.failure = Some((
                     if last.atoms < limits.atoms {
@@ -365,10 +319,7 @@ fn analyse_log(log: &str, limits: &LogLimits) -> LogAnalysis {
 mod tests {
     use super::*;
 
-    const LIMITS: LogLimits = LogLimits {
-        ke_limit: 1.0,
-        atoms: 700,
-    };
+    const LIMITS: LogLimits = LogLimits { ke_limit: 1.0, atoms: 700 };
 
     fn log(rows: &str) -> String {
         format!("LIGGGHTS (Version LIGGGHTS-PUBLIC 3.8.0)\n    Step    Atoms         KinEng \nINFO: inserted\n{rows}Loop time of 2.8 on 1 procs\n")
@@ -376,28 +327,16 @@ mod tests {
 
     #[test]
     fn a_clean_log_passes_and_keeps_its_thermo() {
-        let a = analyse_log(
-            &log("       0        0              0 \n    1000      700  9.7e-05 \n"),
-            &LIMITS,
-        );
+        let a =
+            analyse_log(&log("       0        0              0 \n    1000      700  9.7e-05 \n"), &LIMITS);
         assert_eq!(a.failure, None);
         assert_eq!(a.thermo.len(), 2);
-        assert_eq!(
-            a.thermo[1],
-            ThermoRow {
-                step: 1000,
-                atoms: 700,
-                ke: 9.7e-5
-            }
-        );
+        assert_eq!(a.thermo[1], ThermoRow { step: 1000, atoms: 700, ke: 9.7e-5 });
     }
 
     #[test]
     fn a_drop_in_atoms_is_lost_atoms() {
-        let a = analyse_log(
-            &log("1000 700 1e-4\n2000 698 1e-4\n3000 700 1e-4\n"),
-            &LIMITS,
-        );
+        let a = analyse_log(&log("1000 700 1e-4\n2000 698 1e-4\n3000 700 1e-4\n"), &LIMITS);
         let (class, reason) = a.failure.unwrap();
         assert_eq!(class, FailureClass::LostAtoms);
         assert!(reason.contains("700 to 698"), "{reason}");
@@ -413,10 +352,7 @@ mod tests {
 
     #[test]
     fn no_thermo_is_unparsable() {
-        assert_eq!(
-            analyse_log("nothing here\n", &LIMITS).failure.unwrap().0,
-            FailureClass::Unparsable
-        );
+        assert_eq!(analyse_log("nothing here\n", &LIMITS).failure.unwrap().0, FailureClass::Unparsable);
     }
 
     #[test]
@@ -425,10 +361,7 @@ mod tests {
             first_error("x\nERROR on proc 0: Mesh elements have been lost\n").unwrap(),
             "ERROR on proc 0: Mesh elements have been lost"
         );
-        assert_eq!(
-            first_error("ERROR: Unknown command\n").unwrap(),
-            "ERROR: Unknown command"
-        );
+        assert_eq!(first_error("ERROR: Unknown command\n").unwrap(), "ERROR: Unknown command");
         assert_eq!(first_error("all good\n"), None);
     }
 }

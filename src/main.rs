@@ -186,24 +186,16 @@ fn points(a: PointsArgs) -> Result<i32, Error> {
     let unit = match (a.lattice, a.lds) {
         (Some(l), _) => {
             if l < 2 {
-                return Err(Error::input(format!(
-                    "--lattice {l}: expected at least 2 values per dimension"
-                )));
+                return Err(Error::input(format!("--lattice {l}: expected at least 2 values per dimension")));
             }
             demsweep::design::lattice::lattice(sweep.dim(), l)
         }
         (None, Some(n)) => {
             if n == 0 {
-                return Err(Error::input(
-                    "--lds 0: expected a positive number of points",
-                ));
+                return Err(Error::input("--lds 0: expected a positive number of points"));
             }
             let lds = &sweep.file.design.lds;
-            let scrambling = if a.no_scramble {
-                Scrambling::None
-            } else {
-                lds.scrambling
-            };
+            let scrambling = if a.no_scramble { Scrambling::None } else { lds.scrambling };
             demsweep::design::halton::halton(sweep.dim(), n, scrambling, lds.seed)
         }
         (None, None) => unreachable!("clap requires --lattice or --lds"),
@@ -213,10 +205,8 @@ fn points(a: PointsArgs) -> Result<i32, Error> {
     let write = |out: &mut dyn Write| -> std::io::Result<()> {
         writeln!(out, "{}", sweep.names().join(","))?;
         for p in &unit {
-            let row: Vec<String> = demsweep::space::scale_point(&sweep, p)
-                .iter()
-                .map(|v| format!("{v}"))
-                .collect();
+            let row: Vec<String> =
+                demsweep::space::scale_point(&sweep, p).iter().map(|v| format!("{v}")).collect();
             writeln!(out, "{}", row.join(","))?;
         }
         out.flush()
@@ -238,7 +228,7 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
         .map_err(|e| Error::Internal(format!("cannot write to {}: {e}", a.out.display())))?;
     let s = &prepared.scene;
     eprintln!(
-        "wrote {}/{{in.liggghts,blade.stl}}: {} particles, dt = {:.3e} s, {} steps, hash {}",
+        "wrote {}/{{in.liggghts,blade.stl,pile.data}}: {} particles, dt = {:.3e} s, {} steps, hash {}",
         a.out.display(),
         s.particles,
         s.timestep,
@@ -275,15 +265,10 @@ fn run_one(a: RunArgs) -> Result<i32, Error> {
     match point::execute(&ctx, &prepared, &dir, &cancel) {
         RunOutcome::Done(r) => {
             if a.json {
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&r).map_err(|e| Error::Internal(e.to_string()))?
-                );
+                println!("{}", serde_json::to_string_pretty(&r).map_err(|e| Error::Internal(e.to_string()))?);
             } else {
                 let vx: Vec<String> =
-                    r.vx.iter()
-                        .map(|v| v.map(|v| format!("{v:.3}")).unwrap_or_else(|| "-".into()))
-                        .collect();
+                    r.vx.iter().map(|v| v.map(|v| format!("{v:.3}")).unwrap_or_else(|| "-".into())).collect();
                 println!(
                     "MFR        {:.4}  (flux cross-check {:.4}, {})",
                     r.mfr,
@@ -303,10 +288,7 @@ fn run_one(a: RunArgs) -> Result<i32, Error> {
         }
         RunOutcome::Failed(f) => {
             if a.json {
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&f).map_err(|e| Error::Internal(e.to_string()))?
-                );
+                println!("{}", serde_json::to_string_pretty(&f).map_err(|e| Error::Internal(e.to_string()))?);
             }
             eprintln!("error: run failed ({}): {}", f.class.as_str(), f.reason);
             if a.out.is_none() && !f.log_tail.is_empty() {

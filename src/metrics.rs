@@ -89,23 +89,12 @@ pub fn compute(scene: &Scene, frames: &[Frame]) -> Result<Metrics, MetricsError>
     let steps: Vec<u64> = (t1..=t2).step_by(scene.dump_every as usize).collect();
     let window: Vec<&Frame> = steps
         .iter()
-        .map(|&step| {
-            frames
-                .iter()
-                .find(|f| f.step == step)
-                .ok_or(MetricsError::MissingSnapshot(step))
-        })
+        .map(|&step| frames.iter().find(|f| f.step == step).ok_or(MetricsError::MissingSnapshot(step)))
         .collect::<Result<_, _>>()?;
 
     // Crossings of the rear (deposit) and front (cross-check) faces per snapshot interval.
-    let rear: Vec<Crossing> = window
-        .windows(2)
-        .map(|p| crossing(scene, p[0], p[1], Face::Rear))
-        .collect();
-    let front: Vec<Crossing> = window
-        .windows(2)
-        .map(|p| crossing(scene, p[0], p[1], Face::Front))
-        .collect();
+    let rear: Vec<Crossing> = window.windows(2).map(|p| crossing(scene, p[0], p[1], Face::Rear)).collect();
+    let front: Vec<Crossing> = window.windows(2).map(|p| crossing(scene, p[0], p[1], Face::Front)).collect();
     // Ideal mass per metre of strip: ρ · w · h (thesis Eq. 16 with v·Δt the strip length).
     let ideal_per_length = scene.density * scene.depth * scene.gap;
     let mfr_of = |c: &[Crossing], a: u64, b: u64| -> f64 {
@@ -151,10 +140,7 @@ fn crossing(scene: &Scene, a: &Frame, b: &Frame, face: Face) -> Crossing {
     };
     let (pa, pb) = (plane(a.step), plane(b.step));
     let before: HashMap<u64, usize> = a.id.iter().enumerate().map(|(i, &id)| (id, i)).collect();
-    let mut out = Crossing {
-        mass: 0.0,
-        count: 0,
-    };
+    let mut out = Crossing { mass: 0.0, count: 0 };
     for j in 0..b.len() {
         let Some(&i) = before.get(&b.id[j]) else {
             continue;
@@ -209,9 +195,7 @@ fn vx_profile<'a>(scene: &Scene, frames: impl Iterator<Item = &'a Frame>) -> Vec
             }
         }
     }
-    (0..VX_LAYERS)
-        .map(|k| (count[k] > 0).then(|| sum[k] / count[k] as f64))
-        .collect()
+    (0..VX_LAYERS).map(|k| (count[k] > 0).then(|| sum[k] / count[k] as f64)).collect()
 }
 
 #[cfg(test)]
@@ -241,9 +225,7 @@ mod tests {
         let one = |step| Frame {
             step,
             id: (1..=n as u64).collect(),
-            x: (0..n)
-                .map(|i| (i as f64 + 0.5) * x_end / n as f64)
-                .collect(),
+            x: (0..n).map(|i| (i as f64 + 0.5) * x_end / n as f64).collect(),
             z: vec![z; n],
             vx: vec![0.0; n],
             mass: vec![m; n],
@@ -295,11 +277,7 @@ mod tests {
             frame(b, s.blade_rear_at(b) - 1e-4),
             frame(c, s.blade_rear_at(c) + 1e-4),
         ];
-        frames.extend(
-            steps[3..]
-                .iter()
-                .map(|&t| frame(t, s.blade_rear_at(t) + 1e-4)),
-        );
+        frames.extend(steps[3..].iter().map(|&t| frame(t, s.blade_rear_at(t) + 1e-4)));
         assert_eq!(compute(&s, &frames).unwrap().mfr, 0.0);
     }
 
@@ -324,10 +302,7 @@ mod tests {
             mass: vec![1.0; 4],
         };
         let mut frames = vec![f];
-        frames.extend(steps[1..].iter().map(|&step| Frame {
-            step,
-            ..Frame::default()
-        }));
+        frames.extend(steps[1..].iter().map(|&step| Frame { step, ..Frame::default() }));
         let m = compute(&s, &frames).unwrap();
         assert_eq!(m.vx[0], Some(1.5));
         assert_eq!(m.vx[1], None);
@@ -344,12 +319,7 @@ mod tests {
     #[test]
     fn steadiness_flags_a_trend_beyond_noise() {
         assert!(is_steady(&[(0.5, 100), (0.5, 100), (0.5, 100), (0.5, 100)]));
-        assert!(!is_steady(&[
-            (0.6, 100),
-            (0.6, 100),
-            (0.3, 100),
-            (0.3, 100)
-        ]));
+        assert!(!is_steady(&[(0.6, 100), (0.6, 100), (0.3, 100), (0.3, 100)]));
         // The same trend on 5 particles per window is within counting noise.
         assert!(is_steady(&[(0.6, 5), (0.6, 5), (0.3, 5), (0.3, 5)]));
         assert!(is_steady(&[(0.0, 0); 4]));

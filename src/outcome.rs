@@ -68,10 +68,7 @@ pub enum FailureClass {
 impl FailureClass {
     /// Transient failures may succeed on a retry; physics failures never will.
     pub fn is_transient(self) -> bool {
-        matches!(
-            self,
-            FailureClass::CouldNotStart | FailureClass::Signalled | FailureClass::TimedOut
-        )
+        matches!(self, FailureClass::CouldNotStart | FailureClass::Signalled | FailureClass::TimedOut)
     }
 
     pub fn as_str(self) -> &'static str {
@@ -113,10 +110,7 @@ pub enum RunOutcome {
 /// then renamed, so a reader sees the whole file or none.
 pub fn write_json_atomic<T: Serialize>(path: &Path, value: &T) -> std::io::Result<()> {
     let dir = path.parent().unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .and_then(|n| n.to_str())
-        .unwrap_or("out.json");
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out.json");
     let tmp = dir.join(format!(".{name}.tmp.{}", std::process::id()));
     {
         let mut f = std::fs::File::create(&tmp)?;

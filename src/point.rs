@@ -11,9 +11,7 @@ use crate::deck::{Deck, Template};
 use crate::engine::{Engine, LogLimits, RunStatus};
 use crate::error::{hint, Error, Result};
 use crate::metrics::{self, Frame};
-use crate::outcome::{
-    write_json_atomic, FailureClass, RunFailure, RunOutcome, RunResult, RESULT_FORMAT,
-};
+use crate::outcome::{write_json_atomic, FailureClass, RunFailure, RunOutcome, RunResult, RESULT_FORMAT};
 use crate::process::CancelToken;
 use crate::scene::{mesh, params, Scene};
 use crate::sweep::{ParamKind, Sweep};
@@ -33,17 +31,12 @@ pub struct PointContext {
 
 impl PointContext {
     pub fn new(sweep: Sweep) -> Result<PointContext> {
-        let engine = Engine::locate(sweep.file.run.engine.as_deref())
-            .map_err(|e| Error::Engine(e.to_string()))?;
-        let template = Template::load(sweep.template_path().as_deref())
-            .map_err(|e| Error::input(e.to_string()))?;
+        let engine =
+            Engine::locate(sweep.file.run.engine.as_deref()).map_err(|e| Error::Engine(e.to_string()))?;
+        let template =
+            Template::load(sweep.template_path().as_deref()).map_err(|e| Error::input(e.to_string()))?;
         let timeout = Duration::from_secs_f64(sweep.file.run.timeout_s);
-        Ok(PointContext {
-            sweep,
-            engine,
-            template,
-            timeout,
-        })
+        Ok(PointContext { sweep, engine, template, timeout })
     }
 
     /// What a run's outcome depends on besides its parameters: for the manifest, and for
@@ -72,10 +65,8 @@ pub struct Prepared {
 /// All catalogue parameters for a point: defaults, then the sweep's fixed values, then the
 /// swept values (in file order, sweep units).
 pub fn resolve(sweep: &Sweep, swept_values: &[f64]) -> BTreeMap<String, f64> {
-    let mut values: BTreeMap<String, f64> = params::CATALOGUE
-        .iter()
-        .map(|p| (p.name.to_string(), p.default))
-        .collect();
+    let mut values: BTreeMap<String, f64> =
+        params::CATALOGUE.iter().map(|p| (p.name.to_string(), p.default)).collect();
     for p in &sweep.fixed {
         if let ParamKind::Fixed(v) = p.kind {
             values.insert(p.name.clone(), v);
@@ -92,15 +83,12 @@ pub fn resolve(sweep: &Sweep, swept_values: &[f64]) -> BTreeMap<String, f64> {
 pub fn swept_values_from_set(sweep: &Sweep, sets: &[String]) -> Result<Vec<f64>> {
     let mut values: Vec<Option<f64>> = vec![None; sweep.dim()];
     for item in sets.iter().filter(|s| !s.trim().is_empty()) {
-        let (name, value) = item
-            .split_once('=')
-            .ok_or_else(|| Error::input(format!("--set {item}: expected name=value")))?;
+        let (name, value) =
+            item.split_once('=').ok_or_else(|| Error::input(format!("--set {item}: expected name=value")))?;
         let (name, value) = (name.trim(), value.trim());
         let Some(i) = sweep.swept.iter().position(|p| p.name == name) else {
             if let Some(f) = sweep.fixed.iter().find(|p| p.name == name) {
-                let ParamKind::Fixed(v) = f.kind else {
-                    unreachable!()
-                };
+                let ParamKind::Fixed(v) = f.kind else { unreachable!() };
                 return Err(Error::input(format!(
                     "--set {name}: {name} is fixed at {v} in {}; only swept parameters can be set",
                     sweep.path.display()
@@ -117,12 +105,8 @@ pub fn swept_values_from_set(sweep: &Sweep, sets: &[String]) -> Result<Vec<f64>>
             .parse()
             .ok()
             .filter(|v: &f64| v.is_finite())
-            .ok_or_else(|| {
-                Error::input(format!("--set {name}={value}: expected a finite number"))
-            })?;
-        let ParamKind::Swept { lo, hi, .. } = sweep.swept[i].kind else {
-            unreachable!()
-        };
+            .ok_or_else(|| Error::input(format!("--set {name}={value}: expected a finite number")))?;
+        let ParamKind::Swept { lo, hi, .. } = sweep.swept[i].kind else { unreachable!() };
         if v < lo || v > hi {
             return Err(Error::input(format!(
                 "--set {name}={v}: outside the sweep's range [{lo}, {hi}] {}",
@@ -149,25 +133,15 @@ pub fn prepare(ctx: &PointContext, swept_values: &[f64]) -> Result<Prepared> {
     let parameters = resolve(&ctx.sweep, swept_values);
     let scene = Scene::new(&parameters, &ctx.sweep.file.scene)
         .map_err(|e| Error::input(format!("{}: {e}", ctx.sweep.path.display())))?;
-    let deck = Deck::new(&ctx.template, &scene, &ctx.engine.identity())
-        .map_err(|e| Error::input(e.to_string()))?;
-    Ok(Prepared {
-        hash: deck.hash.clone(),
-        parameters,
-        scene,
-        deck,
-    })
+    let deck =
+        Deck::new(&ctx.template, &scene, &ctx.engine.identity()).map_err(|e| Error::input(e.to_string()))?;
+    Ok(Prepared { hash: deck.hash.clone(), parameters, scene, deck })
 }
 
 /// Run a prepared point in `run_dir` (created if missing; stale files from an interrupted
 /// attempt are overwritten). Writes `result.json` or `failure.json` atomically and returns the
 /// outcome; a cancelled run writes neither, so it stays pending.
-pub fn execute(
-    ctx: &PointContext,
-    p: &Prepared,
-    run_dir: &Path,
-    cancel: &CancelToken,
-) -> RunOutcome {
+pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &CancelToken) -> RunOutcome {
     let fail = |class: FailureClass, reason: String, log_tail: String, wall: f64| {
         let f = RunFailure {
             format: RESULT_FORMAT,
@@ -191,21 +165,12 @@ pub fn execute(
             0.0,
         );
     }
-    let limits = LogLimits {
-        ke_limit: p.scene.ke_limit,
-        atoms: p.scene.particles as u64,
-    };
-    let run = ctx
-        .engine
-        .run(run_dir, Deck::INPUT, &limits, ctx.timeout, cancel);
+    let limits = LogLimits { ke_limit: p.scene.ke_limit, atoms: p.scene.particles as u64 };
+    let run = ctx.engine.run(run_dir, Deck::INPUT, &limits, ctx.timeout, cancel);
     let wall = run.wall_time;
     match run.status {
         RunStatus::Cancelled => return RunOutcome::Cancelled,
-        RunStatus::Failed {
-            class,
-            reason,
-            log_tail,
-        } => return fail(class, reason, log_tail, wall),
+        RunStatus::Failed { class, reason, log_tail } => return fail(class, reason, log_tail, wall),
         RunStatus::Ok => {}
     }
     let frames: Vec<Frame> = match crate::dump::read_dump(run_dir.join(DUMP), &metrics::COLUMNS)
@@ -222,10 +187,7 @@ pub fn execute(
     if !m.steady {
         warnings.push(format!(
             "MFR not steady over the window: sub-window values {:?}",
-            m.mfr_windows
-                .iter()
-                .map(|v| (v * 1e3).round() / 1e3)
-                .collect::<Vec<_>>()
+            m.mfr_windows.iter().map(|v| (v * 1e3).round() / 1e3).collect::<Vec<_>>()
         ));
     }
     let steps = p.scene.total_steps();
@@ -246,12 +208,7 @@ pub fn execute(
         warnings,
     };
     if let Err(e) = write_json_atomic(&run_dir.join(RESULT), &result) {
-        return fail(
-            FailureClass::Unparsable,
-            format!("cannot write {RESULT}: {e}"),
-            String::new(),
-            wall,
-        );
+        return fail(FailureClass::Unparsable, format!("cannot write {RESULT}: {e}"), String::new(), wall);
     }
     RunOutcome::Done(result)
 }

@@ -52,11 +52,7 @@ pub enum ProcessOutcome {
 ///
 /// PR_SET_PDEATHSIG fires when the *thread* that forked the child exits, so call this from a
 /// thread that outlives the child (a pool worker, the main thread).
-pub fn run(
-    mut cmd: Command,
-    timeout: Duration,
-    cancel: &CancelToken,
-) -> (ProcessOutcome, Duration) {
+pub fn run(mut cmd: Command, timeout: Duration, cancel: &CancelToken) -> (ProcessOutcome, Duration) {
     let start = Instant::now();
     // SAFETY: only async-signal-safe calls (setpgid, prctl, getppid) between fork and exec.
     unsafe {
@@ -71,9 +67,7 @@ pub fn run(
                 }
                 // The parent may have died between fork and prctl.
                 if libc::getppid() == 1 {
-                    return Err(std::io::Error::other(
-                        "parent exited before the job started",
-                    ));
+                    return Err(std::io::Error::other("parent exited before the job started"));
                 }
             }
             Ok(())
@@ -140,14 +134,8 @@ extern "C" fn on_signal(_: libc::c_int) {
 pub fn install_interrupt_handler() {
     // SAFETY: the handler only stores to an atomic, which is async-signal-safe.
     unsafe {
-        libc::signal(
-            libc::SIGINT,
-            on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t,
-        );
-        libc::signal(
-            libc::SIGTERM,
-            on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t,
-        );
+        libc::signal(libc::SIGINT, on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t);
+        libc::signal(libc::SIGTERM, on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t);
     }
 }
 
@@ -174,11 +162,7 @@ mod tests {
 
     #[test]
     fn a_missing_executable_is_spawn_failed() {
-        let (o, _) = run(
-            Command::new("/nonexistent/liggghts"),
-            Duration::from_secs(5),
-            &CancelToken::new(),
-        );
+        let (o, _) = run(Command::new("/nonexistent/liggghts"), Duration::from_secs(5), &CancelToken::new());
         assert!(matches!(o, ProcessOutcome::SpawnFailed(_)), "{o:?}");
     }
 
@@ -187,18 +171,11 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let pidfile = dir.path().join("grandchild.pid");
         // The grandchild ignores SIGTERM: only the group SIGKILL stops it.
-        let script = format!(
-            "sh -c 'trap \"\" TERM; echo $$ > {}; sleep 30' & wait",
-            pidfile.display()
-        );
+        let script = format!("sh -c 'trap \"\" TERM; echo $$ > {}; sleep 30' & wait", pidfile.display());
         let (o, took) = run(sh(&script), Duration::from_millis(300), &CancelToken::new());
         assert_eq!(o, ProcessOutcome::TimedOut);
         assert!(took < Duration::from_secs(10));
-        let pid: i32 = std::fs::read_to_string(&pidfile)
-            .unwrap()
-            .trim()
-            .parse()
-            .unwrap();
+        let pid: i32 = std::fs::read_to_string(&pidfile).unwrap().trim().parse().unwrap();
         std::thread::sleep(Duration::from_millis(100));
         // kill(pid, 0) fails with ESRCH once the process is gone (it is reaped by init).
         let alive = unsafe { libc::kill(pid, 0) } == 0

@@ -67,10 +67,7 @@ pub struct DesignSettings {
 
 impl Default for DesignSettings {
     fn default() -> Self {
-        DesignSettings {
-            lattice_levels: vec![5, 6, 7, 9, 10],
-            lds: LdsSettings::default(),
-        }
+        DesignSettings { lattice_levels: vec![5, 6, 7, 9, 10], lds: LdsSettings::default() }
     }
 }
 
@@ -88,12 +85,7 @@ pub struct LdsSettings {
 
 impl Default for LdsSettings {
     fn default() -> Self {
-        LdsSettings {
-            step: 400,
-            max: 2400,
-            scrambling: Scrambling::default(),
-            seed: 0,
-        }
+        LdsSettings { step: 400, max: 2400, scrambling: Scrambling::default(), seed: 0 }
     }
 }
 
@@ -125,12 +117,7 @@ pub struct ConvergenceSettings {
 
 impl Default for ConvergenceSettings {
     fn default() -> Self {
-        ConvergenceSettings {
-            rule: "all".into(),
-            tolerance: 0.05,
-            floor: 0.01,
-            hold: 2,
-        }
+        ConvergenceSettings { rule: "all".into(), tolerance: 0.05, floor: 0.01, hold: 2 }
     }
 }
 
@@ -210,11 +197,7 @@ pub struct RunSettings {
 
 impl Default for RunSettings {
     fn default() -> Self {
-        RunSettings {
-            engine: None,
-            timeout_s: 600.0,
-            retries: 1,
-        }
+        RunSettings { engine: None, timeout_s: 600.0, retries: 1 }
     }
 }
 
@@ -246,11 +229,7 @@ pub struct Sweep {
 impl Sweep {
     pub fn load(path: &Path) -> Result<Sweep> {
         let text = std::fs::read_to_string(path).map_err(|e| {
-            Error::input(format!(
-                "cannot read sweep file {}: {}",
-                path.display(),
-                io_reason(&e)
-            ))
+            Error::input(format!("cannot read sweep file {}: {}", path.display(), io_reason(&e)))
         })?;
         Sweep::parse(&text, path)
     }
@@ -259,12 +238,7 @@ impl Sweep {
     pub fn parse(text: &str, path: &Path) -> Result<Sweep> {
         let file: SweepFile = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
         let (swept, fixed) = validate(&file, path)?;
-        Ok(Sweep {
-            path: path.to_path_buf(),
-            file,
-            swept,
-            fixed,
-        })
+        Ok(Sweep { path: path.to_path_buf(), file, swept, fixed })
     }
 
     pub fn names(&self) -> Vec<&str> {
@@ -298,9 +272,7 @@ fn io_reason(e: &std::io::Error) -> String {
 
 /// Turn a (multi-line) toml error into one line: `file:line: message (did you mean ..?)`.
 fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> Error {
-    let line = e
-        .span()
-        .map(|s| text[..s.start.min(text.len())].lines().count().max(1));
+    let line = e.span().map(|s| text[..s.start.min(text.len())].lines().count().max(1));
     let msg = e.message().trim().replace('\n', " ");
     let mut extra = String::new();
     // serde's message: "unknown field `frction`, expected one of `a`, `b`".
@@ -317,12 +289,8 @@ fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> Error {
 fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>, Vec<Parameter>)> {
     let p = path.display();
     let bad = |key: &str, what: String| Error::input(format!("{p}: {key}: {what}"));
-    if file.name.trim().is_empty() || file.name.contains(['/', '\\']) || file.name.starts_with('.')
-    {
-        return Err(bad(
-            "name",
-            "expected a non-empty name without slashes".into(),
-        ));
+    if file.name.trim().is_empty() || file.name.contains(['/', '\\']) || file.name.starts_with('.') {
+        return Err(bad("name", "expected a non-empty name without slashes".into()));
     }
     let mut swept = Vec::new();
     let mut fixed = Vec::new();
@@ -334,11 +302,7 @@ fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>, Vec<Parame
                 format!(
                     "unknown parameter{}; known: {}",
                     hint(name, params::CATALOGUE.iter().map(|i| i.name)),
-                    params::CATALOGUE
-                        .iter()
-                        .map(|i| i.name)
-                        .collect::<Vec<_>>()
-                        .join(", ")
+                    params::CATALOGUE.iter().map(|i| i.name).collect::<Vec<_>>().join(", ")
                 ),
             )
         })?;
@@ -377,16 +341,10 @@ fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>, Vec<Parame
         }
         let check = |k: &str, v: f64| -> Result<f64> {
             if !v.is_finite() {
-                return Err(bad(
-                    &format!("{key}.{k}"),
-                    format!("{v} is not a finite number"),
-                ));
+                return Err(bad(&format!("{key}.{k}"), format!("{v} is not a finite number")));
             }
             if !info.accepts(v) {
-                return Err(bad(
-                    &format!("{key}.{k}"),
-                    format!("{v} is outside {}", info.domain()),
-                ));
+                return Err(bad(&format!("{key}.{k}"), format!("{v} is outside {}", info.domain())));
             }
             Ok(v)
         };
@@ -397,74 +355,42 @@ fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>, Vec<Parame
                     return Err(bad(&key, format!("lo = {lo} must be below hi = {hi}")));
                 }
                 if entry.scale == Scale::Log && lo <= 0.0 {
-                    return Err(bad(
-                        &format!("{key}.scale"),
-                        "log scale needs lo > 0".into(),
-                    ));
+                    return Err(bad(&format!("{key}.scale"), "log scale needs lo > 0".into()));
                 }
-                ParamKind::Swept {
-                    lo,
-                    hi,
-                    scale: entry.scale,
-                }
+                ParamKind::Swept { lo, hi, scale: entry.scale }
             }
             (None, None, Some(v)) => ParamKind::Fixed(check("value", v)?),
             _ => {
-                return Err(bad(
-                    &key,
-                    "expected either both `lo` and `hi` (swept) or `value` (fixed)".into(),
-                ))
+                return Err(bad(&key, "expected either both `lo` and `hi` (swept) or `value` (fixed)".into()))
             }
         };
-        let param = Parameter {
-            name: name.clone(),
-            unit: info.unit,
-            kind,
-        };
+        let param = Parameter { name: name.clone(), unit: info.unit, kind };
         match param.kind {
             ParamKind::Swept { .. } => swept.push(param),
             ParamKind::Fixed(_) => fixed.push(param),
         }
     }
     if swept.is_empty() {
-        return Err(bad(
-            "parameters",
-            "expected at least one swept parameter { lo, hi }".into(),
-        ));
+        return Err(bad("parameters", "expected at least one swept parameter { lo, hi }".into()));
     }
     let d = &file.design;
     if let Some(i) = d.lattice_levels.iter().position(|&n| n < 2) {
         return Err(bad(
             &format!("design.lattice_levels[{i}]"),
-            format!(
-                "{} levels: expected at least 2 values per dimension",
-                d.lattice_levels[i]
-            ),
+            format!("{} levels: expected at least 2 values per dimension", d.lattice_levels[i]),
         ));
     }
     if d.lds.step == 0 {
-        return Err(bad(
-            "design.lds.step",
-            "expected a positive number of points".into(),
-        ));
+        return Err(bad("design.lds.step", "expected a positive number of points".into()));
     }
     if d.lds.max == 0 {
-        return Err(bad(
-            "design.lds.max",
-            "expected a positive number of points".into(),
-        ));
+        return Err(bad("design.lds.max", "expected a positive number of points".into()));
     }
     let c = &file.convergence;
     if c.rule != "all" && c.rule != "any" {
-        return Err(bad(
-            "convergence.rule",
-            format!("\"{}\": expected \"all\" or \"any\"", c.rule),
-        ));
+        return Err(bad("convergence.rule", format!("\"{}\": expected \"all\" or \"any\"", c.rule)));
     }
-    for (k, v) in [
-        ("convergence.tolerance", c.tolerance),
-        ("convergence.floor", c.floor),
-    ] {
+    for (k, v) in [("convergence.tolerance", c.tolerance), ("convergence.floor", c.floor)] {
         if !v.is_finite() || v < 0.0 {
             return Err(bad(k, format!("{v}: expected a finite number ≥ 0")));
         }
@@ -474,10 +400,7 @@ fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>, Vec<Parame
     }
     let s = &file.scene;
     if s.fidelity != "fast" && s.fidelity != "thesis" {
-        return Err(bad(
-            "scene.fidelity",
-            format!("\"{}\": expected \"fast\" or \"thesis\"", s.fidelity),
-        ));
+        return Err(bad("scene.fidelity", format!("\"{}\": expected \"fast\" or \"thesis\"", s.fidelity)));
     }
     for (k, v) in [
         ("scene.rayleigh_fraction", s.rayleigh_fraction),
@@ -489,19 +412,13 @@ fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>, Vec<Parame
         }
     }
     if s.rayleigh_fraction > 1.0 {
-        return Err(bad(
-            "scene.rayleigh_fraction",
-            format!("{}: expected at most 1", s.rayleigh_fraction),
-        ));
+        return Err(bad("scene.rayleigh_fraction", format!("{}: expected at most 1", s.rayleigh_fraction)));
     }
     match &s.size_distribution {
         SizeDistributionSpec::Mono => {}
         SizeDistributionSpec::Classes { classes, .. } => {
             if classes.is_empty() {
-                return Err(bad(
-                    "scene.size_distribution.classes",
-                    "expected at least one class".into(),
-                ));
+                return Err(bad("scene.size_distribution.classes", "expected at least one class".into()));
             }
             for (i, [dia, frac]) in classes.iter().enumerate() {
                 if !(dia.is_finite() && *dia > 0.0 && frac.is_finite() && *frac > 0.0) {
@@ -514,18 +431,12 @@ fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>, Vec<Parame
         }
         SizeDistributionSpec::Weibull { bins } => {
             if *bins == 0 {
-                return Err(bad(
-                    "scene.size_distribution.bins",
-                    "expected at least 1".into(),
-                ));
+                return Err(bad("scene.size_distribution.bins", "expected at least 1".into()));
             }
         }
     }
     if !(file.run.timeout_s.is_finite() && file.run.timeout_s > 0.0) {
-        return Err(bad(
-            "run.timeout_s",
-            format!("{}: expected seconds > 0", file.run.timeout_s),
-        ));
+        return Err(bad("run.timeout_s", format!("{}: expected seconds > 0", file.run.timeout_s)));
     }
     Ok((swept, fixed))
 }

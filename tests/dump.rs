@@ -36,13 +36,7 @@ fn line(s: &str, n: usize) -> &str {
 
 #[test]
 fn liggghts_dump_headers() {
-    let snaps = read_dump(
-        DUMP,
-        &[
-            "id", "type", "x", "y", "z", "vx", "vy", "vz", "radius", "mass",
-        ],
-    )
-    .unwrap();
+    let snaps = read_dump(DUMP, &["id", "type", "x", "y", "z", "vx", "vy", "vz", "radius", "mass"]).unwrap();
     let steps: Vec<u64> = snaps.iter().map(|s| s.timestep).collect();
     assert_eq!(steps, [0, 2000, 4000, 6000, 8000, 10000]);
     for s in &snaps {
@@ -54,9 +48,7 @@ fn liggghts_dump_headers() {
         let mut ids: Vec<f64> = s.column_values(s.column("id").unwrap()).collect();
         ids.sort_by(f64::total_cmp);
         assert_eq!(ids, (1..=112).map(f64::from).collect::<Vec<_>>());
-        assert!(s
-            .column_values(s.column("type").unwrap())
-            .all(|t| t == 1.0 || t == 2.0));
+        assert!(s.column_values(s.column("type").unwrap()).all(|t| t == 1.0 || t == 2.0));
     }
 }
 
@@ -69,11 +61,7 @@ fn liggghts_dump_mass_matches_radius_and_density() {
         assert_eq!(s.get(i, r), 0.00075);
         let expected = 4.0 / 3.0 * std::f64::consts::PI * 0.00075f64.powi(3) * 2500.0;
         // The dump prints 6 significant digits.
-        assert!(
-            (s.get(i, m) - expected).abs() / expected < 1e-5,
-            "{}",
-            s.get(i, m)
-        );
+        assert!((s.get(i, m) - expected).abs() / expected < 1e-5, "{}", s.get(i, m));
     }
 }
 
@@ -89,9 +77,7 @@ fn liggghts_dump_free_fall_closed_form() {
     let col = |s: &Snapshot, n: &str| s.column(n).unwrap();
     for i in 0..s1.len() {
         let id = s1.get(i, col(s1, "id"));
-        let j = (0..s0.len())
-            .find(|&j| s0.get(j, col(s0, "id")) == id)
-            .unwrap();
+        let j = (0..s0.len()).find(|&j| s0.get(j, col(s0, "id")) == id).unwrap();
         let z = s0.get(j, col(s0, "z")) - 0.5 * g * t * t;
         assert!((s1.get(i, col(s1, "z")) - z).abs() < 1e-8, "atom {id}");
         assert!((s1.get(i, col(s1, "vz")) + g * t).abs() < 1e-8, "atom {id}");
@@ -169,10 +155,7 @@ fn subset_of_columns_and_a_missing_one() {
         e => panic!("{e}"),
     }
     let msg = e.to_string();
-    assert!(
-        msg.contains("radius") && msg.contains(path.to_str().unwrap()),
-        "{msg}"
-    );
+    assert!(msg.contains("radius") && msg.contains(path.to_str().unwrap()), "{msg}");
 }
 
 #[test]
@@ -213,11 +196,7 @@ fn triclinic_box() {
 
 fn assert_at(e: &DumpError, line: u64, snapshot: usize, timestep: Option<u64>) {
     let at = e.location().unwrap_or_else(|| panic!("no location: {e}"));
-    assert_eq!(
-        (at.line, at.snapshot, at.timestep),
-        (line, snapshot, timestep),
-        "{e}"
-    );
+    assert_eq!((at.line, at.snapshot, at.timestep), (line, snapshot, timestep), "{e}");
     assert!(e.to_string().contains(&format!("mem.dump:{line}")), "{e}");
 }
 
@@ -225,11 +204,7 @@ fn assert_at(e: &DumpError, line: u64, snapshot: usize, timestep: Option<u64>) {
 fn truncated_between_atom_rows() {
     let t = text();
     // Snapshot 1 (timestep 2000) keeps its header and 50 rows.
-    let cut: String = t
-        .lines()
-        .take(SNAP_LINES + 9 + 50)
-        .map(|l| format!("{l}\n"))
-        .collect();
+    let cut: String = t.lines().take(SNAP_LINES + 9 + 50).map(|l| format!("{l}\n")).collect();
     let e = parse_err(&cut);
     assert!(matches!(e, DumpError::Truncated { .. }), "{e}");
     assert_at(&e, (SNAP_LINES + 59) as u64, 1, Some(2000));
@@ -250,11 +225,7 @@ fn truncated_inside_a_number() {
 #[test]
 fn truncated_in_header() {
     let t = text();
-    let cut: String = t
-        .lines()
-        .take(SNAP_LINES + 3)
-        .map(|l| format!("{l}\n"))
-        .collect();
+    let cut: String = t.lines().take(SNAP_LINES + 3).map(|l| format!("{l}\n")).collect();
     let e = parse_err(&cut);
     assert!(matches!(e, DumpError::Truncated { .. }), "{e}");
     assert_at(&e, (SNAP_LINES + 3) as u64, 1, Some(2000));
@@ -264,11 +235,7 @@ fn truncated_in_header() {
 fn non_numeric_field() {
     let t = text();
     for bad in ["abc", "0.0O2", "nan", "-inf", "1e999"] {
-        let s = with_line(
-            &t,
-            12,
-            &format!("3 1 0.006 0.002 {bad} 0 0 0 0.00075 4.41786e-06"),
-        );
+        let s = with_line(&t, 12, &format!("3 1 0.006 0.002 {bad} 0 0 0 0.00075 4.41786e-06"));
         let e = parse_err(&s);
         match &e {
             DumpError::NotANumber { column, field, .. } => {
@@ -289,10 +256,7 @@ fn wrong_field_count() {
     ] {
         let s = with_line(&t, SNAP_LINES + 15, row);
         let e = parse_err(&s);
-        assert!(
-            matches!(e, DumpError::FieldCount { expected: 10, found: f, .. } if f == found),
-            "{e}"
-        );
+        assert!(matches!(e, DumpError::FieldCount { expected: 10, found: f, .. } if f == found), "{e}");
         assert_at(&e, (SNAP_LINES + 15) as u64, 1, Some(2000));
     }
 }
@@ -301,17 +265,7 @@ fn wrong_field_count() {
 fn fewer_rows_than_declared() {
     let s = with_line(&text(), 4, "113");
     let e = parse_err(&s);
-    assert!(
-        matches!(
-            e,
-            DumpError::AtomCount {
-                declared: 113,
-                found: 112,
-                ..
-            }
-        ),
-        "{e}"
-    );
+    assert!(matches!(e, DumpError::AtomCount { declared: 113, found: 112, .. }), "{e}");
     // The next snapshot's `ITEM: TIMESTEP` stands where row 113 should be.
     assert_at(&e, (SNAP_LINES + 1) as u64, 0, Some(0));
 }
@@ -320,33 +274,13 @@ fn fewer_rows_than_declared() {
 fn more_rows_than_declared() {
     let s = with_line(&text(), SNAP_LINES + 4, "110");
     let e = parse_err(&s);
-    assert!(
-        matches!(
-            e,
-            DumpError::AtomCount {
-                declared: 110,
-                found: 112,
-                ..
-            }
-        ),
-        "{e}"
-    );
+    assert!(matches!(e, DumpError::AtomCount { declared: 110, found: 112, .. }), "{e}");
     // Row 111 of snapshot 1 (line 9 + 111 of that snapshot).
     assert_at(&e, (SNAP_LINES + 9 + 111) as u64, 1, Some(2000));
     // Also in the last snapshot, where the file ends instead of a next header.
     let s = with_line(&text(), 5 * SNAP_LINES + 4, "111");
     let e = parse_err(&s);
-    assert!(
-        matches!(
-            e,
-            DumpError::AtomCount {
-                declared: 111,
-                found: 112,
-                ..
-            }
-        ),
-        "{e}"
-    );
+    assert!(matches!(e, DumpError::AtomCount { declared: 111, found: 112, .. }), "{e}");
     assert_at(&e, (6 * SNAP_LINES) as u64, 5, Some(10000));
 }
 

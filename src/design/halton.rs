@@ -9,11 +9,7 @@ pub fn primes(count: usize) -> Vec<u64> {
     let mut out = Vec::with_capacity(count);
     let mut candidate = 2u64;
     while out.len() < count {
-        if out
-            .iter()
-            .take_while(|&&p| p * p <= candidate)
-            .all(|&p| candidate % p != 0)
-        {
+        if out.iter().take_while(|&&p| p * p <= candidate).all(|&p| candidate % p != 0) {
             out.push(candidate);
         }
         candidate += 1;
@@ -38,7 +34,5 @@ pub fn radical_inverse(mut index: u64, base: u64) -> f64 {
 pub fn halton(dim: usize, n: usize, scrambling: Scrambling, seed: u64) -> super::Points {
     let _ = (scrambling, seed);
     let bases = primes(dim);
-    (1..=n as u64)
-        .map(|i| bases.iter().map(|&b| radical_inverse(i, b)).collect())
-        .collect()
+    (1..=n as u64).map(|i| bases.iter().map(|&b| radical_inverse(i, b)).collect()).collect()
 }

@@ -24,34 +24,15 @@ pub fn blade_stl(s: &Scene) -> String {
 /// An axis-aligned box [lo, hi] as ASCII STL, triangles wound counter-clockwise seen from
 /// outside; `y_ends` includes the two faces normal to y.
 fn box_stl(name: &str, lo: [f64; 3], hi: [f64; 3], y_ends: bool) -> String {
-    let corner =
-        |i: usize, j: usize, k: usize| [[lo[0], hi[0]][i], [lo[1], hi[1]][j], [lo[2], hi[2]][k]];
+    let corner = |i: usize, j: usize, k: usize| [[lo[0], hi[0]][i], [lo[1], hi[1]][j], [lo[2], hi[2]][k]];
     // Each face: outward normal and its four corners counter-clockwise seen from outside.
     let faces: [([f64; 3], [[usize; 3]; 4]); 6] = [
-        (
-            [-1.0, 0.0, 0.0],
-            [[0, 0, 0], [0, 0, 1], [0, 1, 1], [0, 1, 0]],
-        ),
-        (
-            [1.0, 0.0, 0.0],
-            [[1, 0, 0], [1, 1, 0], [1, 1, 1], [1, 0, 1]],
-        ),
-        (
-            [0.0, -1.0, 0.0],
-            [[0, 0, 0], [1, 0, 0], [1, 0, 1], [0, 0, 1]],
-        ),
-        (
-            [0.0, 1.0, 0.0],
-            [[0, 1, 0], [0, 1, 1], [1, 1, 1], [1, 1, 0]],
-        ),
-        (
-            [0.0, 0.0, -1.0],
-            [[0, 0, 0], [0, 1, 0], [1, 1, 0], [1, 0, 0]],
-        ),
-        (
-            [0.0, 0.0, 1.0],
-            [[0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]],
-        ),
+        ([-1.0, 0.0, 0.0], [[0, 0, 0], [0, 0, 1], [0, 1, 1], [0, 1, 0]]),
+        ([1.0, 0.0, 0.0], [[1, 0, 0], [1, 1, 0], [1, 1, 1], [1, 0, 1]]),
+        ([0.0, -1.0, 0.0], [[0, 0, 0], [1, 0, 0], [1, 0, 1], [0, 0, 1]]),
+        ([0.0, 1.0, 0.0], [[0, 1, 0], [0, 1, 1], [1, 1, 1], [1, 1, 0]]),
+        ([0.0, 0.0, -1.0], [[0, 0, 0], [0, 1, 0], [1, 1, 0], [1, 0, 0]]),
+        ([0.0, 0.0, 1.0], [[0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]),
     ];
     let mut out = format!("solid {name}\n");
     for (n, q) in faces {
@@ -59,11 +40,7 @@ fn box_stl(name: &str, lo: [f64; 3], hi: [f64; 3], y_ends: bool) -> String {
             continue;
         }
         for tri in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
-            let _ = writeln!(
-                out,
-                "  facet normal {} {} {}\n    outer loop",
-                n[0], n[1], n[2]
-            );
+            let _ = writeln!(out, "  facet normal {} {} {}\n    outer loop", n[0], n[1], n[2]);
             for [i, j, k] in tri {
                 let p = corner(i, j, k);
                 let _ = writeln!(out, "      vertex {:.9e} {:.9e} {:.9e}", p[0], p[1], p[2]);
@@ -84,9 +61,7 @@ mod tests {
         let mut normal = [0.0; 3];
         let mut verts = Vec::new();
         for line in stl.lines().map(str::trim) {
-            let nums = |s: &str| -> Vec<f64> {
-                s.split_whitespace().map(|t| t.parse().unwrap()).collect()
-            };
+            let nums = |s: &str| -> Vec<f64> { s.split_whitespace().map(|t| t.parse().unwrap()).collect() };
             if let Some(rest) = line.strip_prefix("facet normal") {
                 let v = nums(rest);
                 normal = [v[0], v[1], v[2]];
@@ -111,11 +86,7 @@ mod tests {
         for (n, [a, b, c]) in tris {
             let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
             let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-            let cross = [
-                u[1] * v[2] - u[2] * v[1],
-                u[2] * v[0] - u[0] * v[2],
-                u[0] * v[1] - u[1] * v[0],
-            ];
+            let cross = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
             let dot = cross[0] * n[0] + cross[1] * n[1] + cross[2] * n[2];
             assert!(dot > 0.0, "winding disagrees with normal {n:?}");
             area += dot / 2.0;

@@ -18,6 +18,7 @@
 
 pub mod mesh;
 pub mod params;
+pub mod pile;
 pub mod psd;
 
 use std::collections::BTreeMap;
@@ -37,9 +38,9 @@ pub const SNAPSHOTS_PER_SUB_WINDOW: usize = 2;
 /// Blade travel over which it accelerates from rest to full speed, in diameters. A blade that
 /// starts at full speed throws the particles touching it high into the air.
 const RAMP_DIAMETERS: f64 = 2.0;
-/// Volume fraction of the random insertion packing (insert/pack reaches it quickly).
-const INSERT_FRACTION: f64 = 0.22;
-/// Length over height of the insertion block.
+/// Lattice spacing of the initial pile over the largest diameter: room for a small jitter.
+const LATTICE_CLEARANCE: f64 = 1.05;
+/// Length over height of the initial pile block.
 const PILE_ASPECT: f64 = 1.5;
 /// Packing fraction assumed for a settled pile and an upper bound for a spread layer
 /// (random close packing ≈ 0.64; MFR cannot exceed it).
@@ -54,20 +55,7 @@ pub const THESIS_BAND: f64 = 1e-3;
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum SceneError {
     #[error("parameter `{name}` = {value}: {why}")]
-    Invalid {
-        name: String,
-        value: f64,
-        why: String,
-    },
-}
-
-/// One particle template of the deck (one per size class).
-#[derive(Debug, Clone, Serialize)]
-pub struct ParticleTemplate {
-    pub id: String,
-    pub radius: f64,
-    pub fraction: f64,
-    pub seed: u64,
+    Invalid { name: String, value: f64, why: String },
 }
 
 /// Every number the deck and the metrics need for one point.
@@ -81,9 +69,9 @@ pub struct Scene {
     pub friction: f64,
     pub rolling_friction: f64,
     // Particles.
-    pub templates: Vec<ParticleTemplate>,
-    pub distribution_seed: u64,
-    pub insert_seed: u64,
+    pub size_classes: Vec<psd::SizeClass>,
+    /// Seed of the pile's diameters and jitter.
+    pub seed: u64,
     pub particles: usize,
     /// Number-mean diameter: the unit of the scene's geometry, m.
     pub diameter: f64,
@@ -102,10 +90,12 @@ pub struct Scene {
     pub x_hi: f64,
     pub depth: f64,
     pub z_hi: f64,
-    // Pile insertion region.
+    // The initial pile: a jittered simple-cubic block nx × ny × nz with this spacing, from x0.
     pub pile_x0: f64,
     pub pile_x1: f64,
     pub pile_z1: f64,
+    pub pile_spacing: f64,
+    pub pile_n: [usize; 3],
     // Time.
     pub rayleigh_time: f64,
     pub timestep: f64,
@@ -131,10 +121,7 @@ pub struct Scene {
 
 impl Scene {
     /// Build the scene from every catalogue parameter (in catalogue units) and the settings.
-    pub fn new(
-        values: &BTreeMap<String, f64>,
-        settings: &SceneSettings,
-    ) -> Result<Scene, SceneError> {
+    pub fn new(values: &BTreeMap<String, f64>, settings: &SceneSettings) -> Result<Scene, SceneError> {
         let get = |name: &str| -> f64 {
             values
                 .get(name)
@@ -181,7 +168,12 @@ impl Scene {
         }
 
         // Geometry in units of the mean diameter, so the particle count barely changes with D.
-        let depth = settings.depth_diameters * d;
+        // The pile starts as a jittered simple-cubic block (an exact, reproducible count; no
+        // random insertion to fall short), which collapses into a heap while it settles. The
+        // depth is a whole number of lattice spacings so the periodic images keep their spacing.
+        let spacing = LATTICE_CLEARANCE * psd.max_diameter();
+        let ny = ((settings.depth_diameters * d / spacing).round() as usize).max(3);
+        let depth = ny as f64 * spacing;
         let blade_thickness = d;
         let blade_x0 = d;
         let front0 = blade_x0 + blade_thickness;
@@ -194,22 +186,24 @@ impl Scene {
         let window = 20.0 * d;
         // Travel = pile length (+ its slump) + develop + window; the pile length depends on
         // the particle count, which depends on the travel: iterate to the fixed point.
+        let (mut nx, mut nz) = (0usize, 0usize);
         let mut pile_len = 10.0 * d;
-        let mut particles = 0usize;
         for _ in 0..50 {
             let travel = pile_len + 0.5 * pile_len / PILE_ASPECT + develop + window;
             let area = LAYER_FRACTION_MAX * (gap * travel + heap_area);
-            particles = (area * depth / psd.mean_volume()).ceil() as usize;
-            // Insertion block of PILE_ASPECT length over height at the insertion packing fraction.
-            let block_area = particles as f64 * psd.mean_volume() / (INSERT_FRACTION * depth);
-            let new_len = (block_area * PILE_ASPECT).sqrt();
-            if (new_len - pile_len).abs() < 1e-9 {
+            let needed = (area * depth / psd.mean_volume()).ceil();
+            let per_layer = needed / ny as f64;
+            nz = ((per_layer / PILE_ASPECT).sqrt().ceil() as usize).max(1);
+            nx = ((per_layer / nz as f64).ceil() as usize).max(1);
+            let new_len = nx as f64 * spacing;
+            if new_len == pile_len {
                 break;
             }
             pile_len = new_len;
         }
+        let particles = nx * ny * nz;
         let pile_x1 = pile_x0 + pile_len;
-        let pile_z1 = pile_len / PILE_ASPECT;
+        let pile_z1 = nz as f64 * spacing;
         // The settled pile slumps forward by about half its height; start measuring `develop`
         // after that, with a heap fully formed in front of the blade.
         let window_start_front = pile_x1 + 0.5 * pile_z1 + develop;
@@ -239,29 +233,13 @@ impl Scene {
         let total_steps = settle_steps + approach_steps + window_length_steps;
 
         let profile_diameter = if psd.is_mono() { d } else { psd.quantile(0.85) };
-        let vx_band = if settings.thesis_band {
-            THESIS_BAND
-        } else {
-            settings.vx_band_diameters * profile_diameter
-        };
+        let vx_band =
+            if settings.thesis_band { THESIS_BAND } else { settings.vx_band_diameters * profile_diameter };
         // Unstable: kinetic energy of the whole pile moving at 10× the fastest speed the scene
         // can give it (the blade, or a free fall from the top of the box).
         let mass = particles as f64 * density * psd.mean_volume();
         let v_ref = speed.max((2.0 * GRAVITY * z_hi).sqrt());
         let ke_limit = 0.5 * mass * (10.0 * v_ref).powi(2);
-
-        let seeds = Seeds::new(settings.seed);
-        let templates = psd
-            .classes
-            .iter()
-            .enumerate()
-            .map(|(i, c)| ParticleTemplate {
-                id: format!("pts{}", i + 1),
-                radius: c.diameter / 2.0,
-                fraction: c.fraction,
-                seed: seeds.get(3 + i),
-            })
-            .collect();
 
         Ok(Scene {
             density,
@@ -270,9 +248,8 @@ impl Scene {
             restitution: get("restitution"),
             friction: get("friction"),
             rolling_friction: get("rolling_friction"),
-            templates,
-            distribution_seed: seeds.get(1),
-            insert_seed: seeds.get(2),
+            size_classes: psd.classes.clone(),
+            seed: settings.seed,
             particles,
             diameter: d,
             profile_diameter,
@@ -288,6 +265,8 @@ impl Scene {
             pile_x0,
             pile_x1,
             pile_z1,
+            pile_spacing: spacing,
+            pile_n: [nx, ny, nz],
             rayleigh_time,
             timestep,
             // Half a smallest radius: particles move far less than that between list builds.
@@ -324,11 +303,7 @@ impl Scene {
     pub fn blade_rear_at(&self, step: u64) -> f64 {
         let k = step.saturating_sub(self.blade_start_step()) as f64;
         let r = self.ramp_steps as f64;
-        let travel_steps = if k <= r {
-            k * k / (2.0 * r)
-        } else {
-            k - 0.5 * r
-        };
+        let travel_steps = if k <= r { k * k / (2.0 * r) } else { k - 0.5 * r };
         self.blade_x0 + self.blade_speed * self.timestep * travel_steps
     }
 
@@ -354,28 +329,6 @@ impl Scene {
 pub fn rayleigh_time(r: f64, density: f64, youngs: f64, poisson: f64) -> f64 {
     let shear = youngs / (2.0 * (1.0 + poisson));
     std::f64::consts::PI * r * (density / shear).sqrt() / (0.1631 * poisson + 0.8766)
-}
-
-/// LIGGGHTS random seeds must be primes above 10,000; derive distinct ones from the scene seed.
-struct Seeds(u64);
-
-impl Seeds {
-    fn new(seed: u64) -> Self {
-        Seeds(seed)
-    }
-
-    /// The `k`-th seed: the first prime at or above 10,007 + (seed·131 + k·7,919) mod 10^7.
-    fn get(&self, k: usize) -> u64 {
-        let mut n = 10_007 + (self.0.wrapping_mul(131).wrapping_add(k as u64 * 7_919)) % 10_000_000;
-        while !is_prime(n) {
-            n += 1;
-        }
-        n
-    }
-}
-
-fn is_prime(n: u64) -> bool {
-    n >= 2 && (2..).take_while(|d| d * d <= n).all(|d| n % d != 0)
 }
 
 #[cfg(test)]
@@ -439,18 +392,6 @@ mod tests {
         assert!((s.layer_height(1) - 4e-3).abs() < 1e-15);
         assert!((s.layer_height(12) - 15e-3).abs() < 1e-15);
         assert!((s.vx_band - 0.5e-3).abs() < 1e-15);
-    }
-
-    #[test]
-    fn seeds_are_distinct_primes_above_10000() {
-        let s = Seeds::new(12345);
-        let v: Vec<u64> = (0..8).map(|k| s.get(k)).collect();
-        for &p in &v {
-            assert!(p > 10_000 && is_prime(p));
-        }
-        let mut u = v.clone();
-        u.dedup();
-        assert_eq!(u.len(), v.len());
     }
 
     #[test]

@@ -28,10 +28,7 @@ impl SizeDistribution {
     /// shape/scale are the `weibull_shape`/`weibull_scale` parameters, all lengths in metres.
     pub fn from_spec(spec: &SizeDistributionSpec, diameter: f64, shape: f64, scale: f64) -> Self {
         let classes = match spec {
-            SizeDistributionSpec::Mono => vec![SizeClass {
-                diameter,
-                fraction: 1.0,
-            }],
+            SizeDistributionSpec::Mono => vec![SizeClass { diameter, fraction: 1.0 }],
             SizeDistributionSpec::Classes { classes, relative } => classes
                 .iter()
                 .map(|&[d, f]| SizeClass {
@@ -45,10 +42,7 @@ impl SizeDistribution {
         SizeDistribution {
             classes: classes
                 .into_iter()
-                .map(|c| SizeClass {
-                    diameter: c.diameter,
-                    fraction: c.fraction / total,
-                })
+                .map(|c| SizeClass { diameter: c.diameter, fraction: c.fraction / total })
                 .collect(),
         }
     }
@@ -58,10 +52,7 @@ impl SizeDistribution {
     }
 
     pub fn min_diameter(&self) -> f64 {
-        self.classes
-            .iter()
-            .map(|c| c.diameter)
-            .fold(f64::INFINITY, f64::min)
+        self.classes.iter().map(|c| c.diameter).fold(f64::INFINITY, f64::min)
     }
 
     pub fn max_diameter(&self) -> f64 {
@@ -75,10 +66,7 @@ impl SizeDistribution {
 
     /// Mean particle volume, m³.
     pub fn mean_volume(&self) -> f64 {
-        self.classes
-            .iter()
-            .map(|c| c.fraction * std::f64::consts::PI / 6.0 * c.diameter.powi(3))
-            .sum()
+        self.classes.iter().map(|c| c.fraction * std::f64::consts::PI / 6.0 * c.diameter.powi(3)).sum()
     }
 
     /// The diameter below which a fraction `p` of the particles lies (by number), taking the
@@ -147,31 +135,16 @@ mod tests {
     #[test]
     fn weibull_mean_matches_closed_form() {
         // Mean of Weibull(k, λ) = λ Γ(1 + 1/k); for k = 2: λ √π / 2.
-        let d = SizeDistribution::from_spec(
-            &SizeDistributionSpec::Weibull { bins: 400 },
-            0.0,
-            2.0,
-            1e-3,
-        );
+        let d = SizeDistribution::from_spec(&SizeDistributionSpec::Weibull { bins: 400 }, 0.0, 2.0, 1e-3);
         let exact = 1e-3 * std::f64::consts::PI.sqrt() / 2.0;
-        assert!(
-            (d.mean_diameter() - exact).abs() / exact < 5e-3,
-            "{}",
-            d.mean_diameter()
-        );
+        assert!((d.mean_diameter() - exact).abs() / exact < 5e-3, "{}", d.mean_diameter());
     }
 
     #[test]
     fn relative_classes_scale_with_the_diameter_and_normalise() {
         // Thesis Table 3.2, strategy 1, nominal 2 mm.
         let spec = SizeDistributionSpec::Classes {
-            classes: vec![
-                [0.7, 4.44],
-                [0.85, 22.76],
-                [1.0, 40.78],
-                [1.15, 26.91],
-                [1.3, 5.11],
-            ],
+            classes: vec![[0.7, 4.44], [0.85, 22.76], [1.0, 40.78], [1.15, 26.91], [1.3, 5.11]],
             relative: true,
         };
         let d = SizeDistribution::from_spec(&spec, 2e-3, 0.0, 0.0);
