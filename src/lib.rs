@@ -11,9 +11,13 @@ pub mod error;
 pub mod metrics;
 pub mod outcome;
 pub mod point;
+pub mod pool;
 pub mod process;
+pub mod progress;
 pub mod scene;
 pub mod space;
+pub mod store;
 pub mod sweep;
+pub mod sweeprun;
 
 pub use error::{Error, Result};

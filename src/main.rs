@@ -169,7 +169,7 @@ fn run(cli: Cli) -> Result<i32, Error> {
         Command::Lattice(_) => Err(Error::NotYet("lattice")),
         Command::Lds(_) => Err(Error::NotYet("lds")),
         Command::Resume(_) => Err(Error::NotYet("resume")),
-        Command::Status(_) => Err(Error::NotYet("status")),
+        Command::Status(a) => status(a),
         Command::Report(_) => Err(Error::NotYet("report")),
         Command::Render(a) => render(a),
         Command::Run(a) => run_one(a),
@@ -179,6 +179,18 @@ fn run(cli: Cli) -> Result<i32, Error> {
         Command::Submit => Err(Error::NotYet("submit")),
         Command::Bench => Err(Error::NotYet("bench")),
     }
+}
+
+fn status(a: DirArgs) -> Result<i32, Error> {
+    let report = demsweep::sweeprun::status(&a.dir)?;
+    if a.json {
+        let text =
+            serde_json::to_string_pretty(&report).map_err(|e| Error::Internal(e.to_string()))?;
+        println!("{text}");
+    } else {
+        print!("{}", report.to_text());
+    }
+    Ok(exit::SUCCESS)
 }
 
 fn points(a: PointsArgs) -> Result<i32, Error> {

@@ -1,0 +1,166 @@
+//! Progress of a running sweep on stderr: a bar (done, failed, running, ETA) on a terminal,
+//! plain periodic lines otherwise, nothing with `--quiet`.
+//!
+//! Not responsible for counting (the driver's reporter owns the counts and hands them in).
+
+use std::io::IsTerminal;
+use std::time::{Duration, Instant};
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+/// Time between plain progress lines when stderr is not a terminal.
+pub const LINE_EVERY: Duration = Duration::from_secs(10);
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ProgressMode {
+    Bar,
+    Lines,
+    Quiet,
+}
+
+impl ProgressMode {
+    /// A bar when stderr is a terminal, lines otherwise; nothing when `quiet`.
+    pub fn detect(quiet: bool) -> ProgressMode {
+        if quiet {
+            ProgressMode::Quiet
+        } else if std::io::stderr().is_terminal() {
+            ProgressMode::Bar
+        } else {
+            ProgressMode::Lines
+        }
+    }
+}
+
+/// Counts of design points.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Counts {
+    pub total: usize,
+    pub done: usize,
+    pub failed: usize,
+    pub running: usize,
+    /// Finished before this session started (reused).
+    pub reused: usize,
+}
+
+impl Counts {
+    fn finished(&self) -> usize {
+        self.done + self.failed
+    }
+}
+
+pub struct Progress {
+    mode: ProgressMode,
+    bar: Option<ProgressBar>,
+    start: Instant,
+    last_line: Instant,
+}
+
+impl Progress {
+    pub fn new(mode: ProgressMode, total: usize) -> Progress {
+        let bar = (mode == ProgressMode::Bar).then(|| {
+            let b = ProgressBar::with_draw_target(Some(total as u64), ProgressDrawTarget::stderr());
+            b.set_style(
+                ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
+                    .expect("valid template")
+                    .progress_chars("=> "),
+            );
+            b.enable_steady_tick(Duration::from_millis(500));
+            b
+        });
+        Progress {
+            mode,
+            bar,
+            start: Instant::now(),
+            last_line: Instant::now(),
+        }
+    }
+
+    /// Redraw (bar) or print a line if [`LINE_EVERY`] has passed (lines).
+    pub fn update(&mut self, c: &Counts) {
+        match self.mode {
+            ProgressMode::Quiet => {}
+            ProgressMode::Bar => {
+                let b = self.bar.as_ref().expect("bar mode has a bar");
+                b.set_position(c.finished() as u64);
+                b.set_message(self.message(c));
+            }
+            ProgressMode::Lines => {
+                if self.last_line.elapsed() >= LINE_EVERY {
+                    self.last_line = Instant::now();
+                    eprintln!("sweep: {}/{} {}", c.finished(), c.total, self.message(c));
+                }
+            }
+        }
+    }
+
+    /// The final line.
+    pub fn finish(&mut self, c: &Counts) {
+        if let Some(b) = self.bar.take() {
+            b.finish_and_clear();
+        }
+        if self.mode != ProgressMode::Quiet {
+            eprintln!(
+                "sweep: {}/{} finished ({} done, {} failed, {} reused) in {}",
+                c.finished(),
+                c.total,
+                c.done,
+                c.failed,
+                c.reused,
+                human(self.start.elapsed())
+            );
+        }
+    }
+
+    fn message(&self, c: &Counts) -> String {
+        let eta = eta(c, self.start.elapsed()).map_or("?".to_string(), human);
+        format!(
+            "done {} failed {} running {} ETA {eta}",
+            c.done, c.failed, c.running
+        )
+    }
+}
+
+/// Remaining time at this session's rate: elapsed / finished-here × left. Runs reused from an
+/// earlier session finish instantly and are left out of the rate.
+pub fn eta(c: &Counts, elapsed: Duration) -> Option<Duration> {
+    let here = c.finished().checked_sub(c.reused)?;
+    if here == 0 {
+        return None;
+    }
+    let left = c.total.saturating_sub(c.finished());
+    Some(elapsed.mul_f64(left as f64 / here as f64))
+}
+
+fn human(d: Duration) -> String {
+    let s = d.as_secs();
+    if s >= 3600 {
+        format!("{}h{:02}m", s / 3600, s % 3600 / 60)
+    } else if s >= 60 {
+        format!("{}m{:02}s", s / 60, s % 60)
+    } else {
+        format!("{:.1}s", d.as_secs_f64())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn eta_uses_only_this_sessions_rate() {
+        // 10 reused + 10 run here in 100 s; 20 left → 200 s.
+        let c = Counts {
+            total: 40,
+            done: 18,
+            failed: 2,
+            running: 2,
+            reused: 10,
+        };
+        assert_eq!(
+            eta(&c, Duration::from_secs(100)),
+            Some(Duration::from_secs(200))
+        );
+        let fresh = Counts { reused: 20, ..c };
+        assert_eq!(eta(&fresh, Duration::from_secs(100)), None);
+    }
+}

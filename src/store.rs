@@ -1,0 +1,793 @@
+//! The sweep directory (DESIGN §4): manifest, content-addressed run dirs, claims, joblog and
+//! results.csv.
+//!
+//! ```text
+//! DIR/sweep.toml        the sweep file as resolved
+//! DIR/manifest.json     design, points (index → values → hash), identity, tool version
+//! DIR/runs/<hash>/      one per distinct deck; result.json or failure.json when finished
+//! DIR/runs/<hash>/claim who is running it now: host, pid, process start time, session
+//! DIR/joblog.tsv        one line per attempt, appended
+//! DIR/results.csv       one row per design point, rewritten atomically
+//! ```
+//!
+//! A run is done when its `result.json` exists (written by rename, so whole or absent) and failed
+//! when its `failure.json` does; a directory holding neither is incomplete, whatever logs it
+//! holds. Claims are created with `O_EXCL` under a short `flock` of `DIR/.lock`, so two
+//! processes never hold the same claim; a claim whose owner is gone (same host, and no live
+//! process with that pid *and* that start time) is taken over.
+//!
+//! Not responsible for deciding what to run (the driver, [`crate::sweeprun`]) or running it
+//! ([`crate::pool`]).
+
+use std::collections::BTreeMap;
+use std::fs::{self, File, OpenOptions};
+use std::io::{Read, Write};
+use std::os::unix::fs::OpenOptionsExt;
+use std::os::unix::io::AsRawFd;
+use std::path::{Path, PathBuf};
+use std::time::{SystemTime, UNIX_EPOCH};
+
+use serde::{Deserialize, Serialize};
+
+use crate::outcome::{RunFailure, RunResult, VX_LAYERS};
+
+/// Version of `manifest.json`.
+pub const MANIFEST_FORMAT: u32 = 1;
+/// Header of `joblog.tsv` (GNU parallel's `--joblog`, plus the run hash and the failure class).
+pub const JOBLOG_HEADER: &str = "seq\thost\tpid\tstart\truntime_s\tstatus\tclass\thash";
+
+#[derive(Debug, thiserror::Error)]
+pub enum StoreError {
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// The directory is not a sweep directory this version can read.
+    #[error("{}: {reason}", path.display())]
+    NotASweep { path: PathBuf, reason: String },
+}
+
+impl From<StoreError> for crate::Error {
+    fn from(e: StoreError) -> Self {
+        match e {
+            StoreError::Io { .. } => crate::Error::Internal(e.to_string()),
+            StoreError::NotASweep { .. } => crate::Error::Input(e.to_string()),
+        }
+    }
+}
+
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> StoreError + '_ {
+    move |source| StoreError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// How the points were chosen; enough to extend the design later.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(tag = "kind", rename_all = "kebab-case")]
+pub enum DesignRecord {
+    Lattice {
+        levels: Vec<usize>,
+    },
+    Lds {
+        step: usize,
+        max: usize,
+        scrambling: crate::sweep::Scrambling,
+        seed: u64,
+    },
+}
+
+/// One nested space: a lattice level or an LDS prefix.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct SpaceRecord {
+    /// `"lattice 5"`, `"lds 400"`.
+    pub label: String,
+    /// Indices into [`Manifest::points`].
+    pub points: Vec<usize>,
+}
+
+/// One distinct design point.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct PointRecord {
+    pub index: usize,
+    /// Swept parameter values in file order, in the sweep file's units.
+    pub values: Vec<f64>,
+    pub hash: String,
+}
+
+/// `manifest.json`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct Manifest {
+    pub format: u32,
+    /// `demsweep <version>` that wrote it.
+    pub tool: String,
+    pub name: String,
+    /// Swept parameter names: the columns of [`PointRecord::values`].
+    pub parameters: Vec<String>,
+    pub design: DesignRecord,
+    pub spaces: Vec<SpaceRecord>,
+    pub points: Vec<PointRecord>,
+    /// Template, mesh generator and engine identity; a resume refuses when it changed.
+    pub identity: serde_json::Value,
+}
+
+/// Who holds a claim: `runs/<hash>/claim`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct ClaimInfo {
+    pub host: String,
+    pub pid: u32,
+    /// Start time of `pid` in clock ticks since boot (`/proc/<pid>/stat` field 22), which tells
+    /// a live owner from a new process that reused its pid.
+    pub start_ticks: u64,
+    /// Distinguishes two stores in one process (tests) and two sessions of one pid.
+    pub session: String,
+    /// Unix time of the claim, seconds.
+    pub claimed_at: f64,
+}
+
+/// What the run dir of one hash holds.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RunState {
+    Done(Box<RunResult>),
+    Failed(Box<RunFailure>),
+    /// Claimed by a live process.
+    Running(ClaimInfo),
+    /// A directory without a result, not claimed by a live process: re-run it.
+    Incomplete,
+    /// Never started.
+    Pending,
+}
+
+/// The outcome of [`Store::claim`].
+#[derive(Debug)]
+pub enum ClaimAttempt {
+    /// The claim is ours; the previous claim, if any, was stale and is returned.
+    Claimed(Claim, Option<ClaimInfo>),
+    /// A live process holds it.
+    Busy(ClaimInfo),
+}
+
+/// A held claim; [`Store::release`] gives it back.
+#[derive(Debug)]
+pub struct Claim {
+    path: PathBuf,
+    session: String,
+}
+
+/// An open sweep directory.
+#[derive(Debug)]
+pub struct Store {
+    dir: PathBuf,
+    host: String,
+    me: ClaimInfo,
+}
+
+impl Store {
+    /// Open `dir` (which must exist) for running: this process's identity is fixed here.
+    pub fn open(dir: &Path) -> Store {
+        let pid = std::process::id();
+        let host = hostname();
+        static SESSIONS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let n = SESSIONS.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+        let now = unix_now();
+        Store {
+            dir: dir.to_path_buf(),
+            host: host.clone(),
+            me: ClaimInfo {
+                host,
+                pid,
+                start_ticks: process_start_ticks(pid).unwrap_or(0),
+                session: format!("{pid}-{n}-{}", (now * 1e6) as u64),
+                claimed_at: now,
+            },
+        }
+    }
+
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    pub fn host(&self) -> &str {
+        &self.host
+    }
+
+    pub fn manifest_path(dir: &Path) -> PathBuf {
+        dir.join("manifest.json")
+    }
+
+    pub fn run_dir(&self, hash: &str) -> PathBuf {
+        self.dir.join("runs").join(hash)
+    }
+
+    /// Write `sweep.toml` and `manifest.json` (atomically each) and create `runs/` and the joblog.
+    pub fn write_manifest(&self, sweep_toml: &str, manifest: &Manifest) -> Result<(), StoreError> {
+        let runs = self.dir.join("runs");
+        fs::create_dir_all(&runs).map_err(io(&runs))?;
+        let toml_path = self.dir.join("sweep.toml");
+        write_atomic(&toml_path, sweep_toml.as_bytes())?;
+        let path = Self::manifest_path(&self.dir);
+        crate::outcome::write_json_atomic(&path, manifest).map_err(io(&path))?;
+        let log = self.dir.join("joblog.tsv");
+        if !log.exists() {
+            write_atomic(&log, format!("{JOBLOG_HEADER}\n").as_bytes())?;
+        }
+        Ok(())
+    }
+
+    /// Read `manifest.json` and `sweep.toml` of `dir`.
+    pub fn read_manifest(dir: &Path) -> Result<(Manifest, String), StoreError> {
+        let path = Self::manifest_path(dir);
+        let text = fs::read_to_string(&path).map_err(|e| StoreError::NotASweep {
+            path: dir.to_path_buf(),
+            reason: format!(
+                "not a sweep directory (cannot read manifest.json: {})",
+                match e.kind() {
+                    std::io::ErrorKind::NotFound => "no such file".to_string(),
+                    _ => e.to_string(),
+                }
+            ),
+        })?;
+        let format = serde_json::from_str::<serde_json::Value>(&text)
+            .ok()
+            .and_then(|v| v.get("format").and_then(|f| f.as_u64()));
+        if format != Some(MANIFEST_FORMAT as u64) {
+            return Err(StoreError::NotASweep {
+                path: path.clone(),
+                reason: format!(
+                    "manifest format {}: expected {MANIFEST_FORMAT}",
+                    format.map_or("missing".into(), |f| f.to_string())
+                ),
+            });
+        }
+        let manifest: Manifest =
+            serde_json::from_str(&text).map_err(|e| StoreError::NotASweep {
+                path: path.clone(),
+                reason: format!("unreadable manifest: {e}"),
+            })?;
+        let toml_path = dir.join("sweep.toml");
+        let sweep = fs::read_to_string(&toml_path).map_err(|e| StoreError::NotASweep {
+            path: toml_path.clone(),
+            reason: format!("cannot read the resolved sweep file: {e}"),
+        })?;
+        Ok((manifest, sweep))
+    }
+
+    /// The state of the run `hash`, read without taking its claim.
+    pub fn state(&self, hash: &str) -> RunState {
+        let dir = self.run_dir(hash);
+        if let Some(s) = finished_state(&dir) {
+            return s;
+        }
+        if let Some(c) = read_claim(&dir.join("claim")) {
+            if self.owner_alive(&c) {
+                return RunState::Running(c);
+            }
+        }
+        if dir.exists() {
+            RunState::Incomplete
+        } else {
+            RunState::Pending
+        }
+    }
+
+    /// Whether the run `hash` has finished: its result or failure, if any.
+    pub fn finished(&self, hash: &str) -> Option<RunState> {
+        finished_state(&self.run_dir(hash))
+    }
+
+    /// Modification time of the run's `failure.json`, if it has one.
+    pub fn failure_time(&self, hash: &str) -> Option<SystemTime> {
+        fs::metadata(self.run_dir(hash).join("failure.json"))
+            .and_then(|m| m.modified())
+            .ok()
+    }
+
+    /// Claim the run `hash`: create `runs/<hash>/claim` exclusively, taking over a claim whose
+    /// owner is gone.
+    pub fn claim(&self, hash: &str) -> Result<ClaimAttempt, StoreError> {
+        let dir = self.run_dir(hash);
+        fs::create_dir_all(&dir).map_err(io(&dir))?;
+        let path = dir.join("claim");
+        let _lock = DirLock::take(&self.dir.join(".lock"))?;
+        let mut stale = None;
+        for _ in 0..2 {
+            match OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .mode(0o644)
+                .open(&path)
+            {
+                Ok(mut f) => {
+                    let mut me = self.me.clone();
+                    me.claimed_at = unix_now();
+                    let text = serde_json::to_string(&me).expect("claim serialises");
+                    f.write_all(text.as_bytes()).map_err(io(&path))?;
+                    return Ok(ClaimAttempt::Claimed(
+                        Claim {
+                            path,
+                            session: me.session,
+                        },
+                        stale,
+                    ));
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                    // Written under the lock, so an unreadable claim means its writer died.
+                    match read_claim(&path) {
+                        Some(c) if self.owner_alive(&c) => return Ok(ClaimAttempt::Busy(c)),
+                        old => {
+                            fs::remove_file(&path).map_err(io(&path))?;
+                            stale = old;
+                        }
+                    }
+                }
+                Err(e) => return Err(io(&path)(e)),
+            }
+        }
+        unreachable!("a removed claim can be created again under the lock")
+    }
+
+    /// Give a claim back. Only removes the file if it is still ours.
+    pub fn release(&self, claim: Claim) -> Result<(), StoreError> {
+        if read_claim(&claim.path).is_some_and(|c| c.session == claim.session) {
+            fs::remove_file(&claim.path).map_err(io(&claim.path))?;
+        }
+        Ok(())
+    }
+
+    /// Empty the run dir of a held claim (a stale attempt's files), keeping the claim.
+    pub fn clean_run_dir(&self, hash: &str) -> Result<(), StoreError> {
+        let dir = self.run_dir(hash);
+        for entry in fs::read_dir(&dir).map_err(io(&dir))? {
+            let entry = entry.map_err(io(&dir))?;
+            if entry.file_name() == "claim" {
+                continue;
+            }
+            let p = entry.path();
+            let r = if entry.file_type().map_err(io(&p))?.is_dir() {
+                fs::remove_dir_all(&p)
+            } else {
+                fs::remove_file(&p)
+            };
+            r.map_err(io(&p))?;
+        }
+        Ok(())
+    }
+
+    /// Whether the process named by a claim is still running it.
+    fn owner_alive(&self, c: &ClaimInfo) -> bool {
+        if c.host != self.host {
+            // Cannot look at another host's processes: its claim stands.
+            return true;
+        }
+        if c.session == self.me.session {
+            return true;
+        }
+        process_start_ticks(c.pid) == Some(c.start_ticks)
+    }
+
+    /// Open the joblog for appending attempts.
+    pub fn joblog(&self) -> Result<Joblog, StoreError> {
+        let path = self.dir.join("joblog.tsv");
+        let mut text = String::new();
+        if let Ok(mut f) = File::open(&path) {
+            f.read_to_string(&mut text).map_err(io(&path))?;
+        }
+        let seq = text.lines().skip(1).count() as u64;
+        let file = OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(&path)
+            .map_err(io(&path))?;
+        Ok(Joblog {
+            file,
+            path,
+            seq,
+            host: self.host.clone(),
+        })
+    }
+}
+
+fn finished_state(dir: &Path) -> Option<RunState> {
+    if let Ok(text) = fs::read_to_string(dir.join("result.json")) {
+        if let Ok(r) = serde_json::from_str::<RunResult>(&text) {
+            return Some(RunState::Done(Box::new(r)));
+        }
+    }
+    if let Ok(text) = fs::read_to_string(dir.join("failure.json")) {
+        if let Ok(f) = serde_json::from_str::<RunFailure>(&text) {
+            return Some(RunState::Failed(Box::new(f)));
+        }
+    }
+    None
+}
+
+fn read_claim(path: &Path) -> Option<ClaimInfo> {
+    serde_json::from_str(&fs::read_to_string(path).ok()?).ok()
+}
+
+/// `flock(2)` on a lock file, held while the guard lives. Released by the kernel if we die.
+struct DirLock(File);
+
+impl DirLock {
+    fn take(path: &Path) -> Result<DirLock, StoreError> {
+        let f = OpenOptions::new()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(path)
+            .map_err(io(path))?;
+        // SAFETY: flock on a file descriptor we own.
+        if unsafe { libc::flock(f.as_raw_fd(), libc::LOCK_EX) } != 0 {
+            return Err(io(path)(std::io::Error::last_os_error()));
+        }
+        Ok(DirLock(f))
+    }
+}
+
+impl Drop for DirLock {
+    fn drop(&mut self) {
+        // SAFETY: unlocking the descriptor we locked.
+        unsafe { libc::flock(self.0.as_raw_fd(), libc::LOCK_UN) };
+    }
+}
+
+/// One attempt, as a joblog line.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AttemptRecord {
+    pub hash: String,
+    pub start: SystemTime,
+    pub runtime_s: f64,
+    /// `done`, `failed` or `cancelled`.
+    pub status: &'static str,
+    /// The failure class, if it failed.
+    pub class: Option<&'static str>,
+}
+
+/// `joblog.tsv`, opened for appending. Each line is one `write`, so lines of two processes
+/// appending at once do not interleave.
+#[derive(Debug)]
+pub struct Joblog {
+    file: File,
+    path: PathBuf,
+    seq: u64,
+    host: String,
+}
+
+impl Joblog {
+    pub fn append(&mut self, a: &AttemptRecord) -> Result<(), StoreError> {
+        self.seq += 1;
+        let start = a
+            .start
+            .duration_since(UNIX_EPOCH)
+            .map(|d| d.as_secs_f64())
+            .unwrap_or(0.0);
+        let line = format!(
+            "{}\t{}\t{}\t{:.3}\t{:.3}\t{}\t{}\t{}\n",
+            self.seq,
+            self.host,
+            std::process::id(),
+            start,
+            a.runtime_s,
+            a.status,
+            a.class.unwrap_or("-"),
+            a.hash
+        );
+        self.file.write_all(line.as_bytes()).map_err(io(&self.path))
+    }
+}
+
+/// A parsed joblog line (for status and tests).
+#[derive(Debug, Clone, PartialEq)]
+pub struct JoblogLine {
+    pub seq: u64,
+    pub pid: u32,
+    pub status: String,
+    pub class: String,
+    pub hash: String,
+}
+
+/// Read `DIR/joblog.tsv`.
+pub fn read_joblog(dir: &Path) -> Result<Vec<JoblogLine>, StoreError> {
+    let path = dir.join("joblog.tsv");
+    let text = fs::read_to_string(&path).map_err(io(&path))?;
+    Ok(text
+        .lines()
+        .skip(1)
+        .filter_map(|l| {
+            let f: Vec<&str> = l.split('\t').collect();
+            (f.len() == 8).then(|| JoblogLine {
+                seq: f[0].parse().unwrap_or(0),
+                pid: f[2].parse().unwrap_or(0),
+                status: f[5].to_string(),
+                class: f[6].to_string(),
+                hash: f[7].to_string(),
+            })
+        })
+        .collect())
+}
+
+/// The state of one design point in results.csv.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PointStatus {
+    Pending,
+    Done(Box<RunResult>),
+    Failed(Box<RunFailure>),
+}
+
+impl PointStatus {
+    pub fn is_finished(&self) -> bool {
+        !matches!(self, PointStatus::Pending)
+    }
+}
+
+/// Write `DIR/results.csv`: one row per design point, in index order, atomically.
+///
+/// Columns: index, the swept parameters, status (`done`, `failed`, `pending`), failure (class),
+/// mfr, mfr_flux, steady, vx_1..vx_12 (m/s, empty for an empty layer), runtime_s, hash.
+pub fn write_results(
+    dir: &Path,
+    parameters: &[String],
+    points: &[PointRecord],
+    status: &[PointStatus],
+) -> Result<(), StoreError> {
+    let path = dir.join("results.csv");
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let mut header: Vec<String> = vec!["index".into()];
+    header.extend(parameters.iter().cloned());
+    header.extend(["status", "failure", "mfr", "mfr_flux", "steady"].map(String::from));
+    header.extend((1..=VX_LAYERS).map(|k| format!("vx_{k}")));
+    header.extend(["runtime_s", "hash"].map(String::from));
+    w.write_record(&header).expect("in-memory csv");
+    for (p, s) in points.iter().zip(status) {
+        let mut row: Vec<String> = vec![p.index.to_string()];
+        row.extend(p.values.iter().map(|v| v.to_string()));
+        match s {
+            PointStatus::Pending => {
+                row.push("pending".into());
+                row.extend(std::iter::repeat_n(String::new(), 4 + VX_LAYERS + 1));
+            }
+            PointStatus::Done(r) => {
+                row.extend([
+                    "done".into(),
+                    String::new(),
+                    r.mfr.to_string(),
+                    r.mfr_flux.to_string(),
+                    r.steady.to_string(),
+                ]);
+                row.extend((0..VX_LAYERS).map(|k| {
+                    r.vx.get(k)
+                        .copied()
+                        .flatten()
+                        .map_or(String::new(), |v| v.to_string())
+                }));
+                row.push(format!("{:.3}", r.wall_time));
+            }
+            PointStatus::Failed(f) => {
+                row.extend(["failed".into(), f.class.as_str().into()]);
+                row.extend(std::iter::repeat_n(String::new(), 3 + VX_LAYERS));
+                row.push(format!("{:.3}", f.wall_time));
+            }
+        }
+        row.push(p.hash.clone());
+        w.write_record(&row).expect("in-memory csv");
+    }
+    let bytes = w.into_inner().expect("in-memory csv");
+    write_atomic(&path, &bytes)
+}
+
+/// Write `bytes` to a temporary name beside `path` and rename it into place.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), StoreError> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
+    // Unique per writer: two sessions of one process may write the same file.
+    static WRITES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = WRITES.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+    let tmp = dir.join(format!(".{name}.tmp.{}.{n}", std::process::id()));
+    let write = || -> std::io::Result<()> {
+        let mut f = File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        fs::rename(&tmp, path)
+    };
+    write().map_err(io(path))
+}
+
+fn unix_now() -> f64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map(|d| d.as_secs_f64())
+        .unwrap_or(0.0)
+}
+
+/// This machine's host name.
+pub fn hostname() -> String {
+    let mut buf = [0u8; 256];
+    // SAFETY: gethostname writes at most buf.len() bytes into buf.
+    if unsafe { libc::gethostname(buf.as_mut_ptr().cast(), buf.len()) } != 0 {
+        return "localhost".into();
+    }
+    let end = buf.iter().position(|&b| b == 0).unwrap_or(buf.len());
+    String::from_utf8_lossy(&buf[..end]).into_owned()
+}
+
+/// Start time of a live process in clock ticks since boot (`/proc/<pid>/stat` field 22);
+/// `None` when there is no such process or it is a zombie (dead, not yet reaped).
+pub fn process_start_ticks(pid: u32) -> Option<u64> {
+    let stat = fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    // The command name (field 2) is in parentheses and may itself hold spaces or ')'.
+    let rest = &stat[stat.rfind(')')? + 1..];
+    let fields: Vec<&str> = rest.split_whitespace().collect();
+    // fields[0] is field 3 (state), so field 22 (starttime) is fields[19].
+    if matches!(fields.first(), Some(&"Z") | Some(&"X")) {
+        return None;
+    }
+    fields.get(19)?.parse().ok()
+}
+
+/// Counts of a directory's points by state, for `sweep status` and the driver.
+pub fn point_states(store: &Store, points: &[PointRecord]) -> BTreeMap<String, RunState> {
+    points
+        .iter()
+        .map(|p| (p.hash.clone(), store.state(&p.hash)))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dead_pid() -> u32 {
+        let mut c = std::process::Command::new("true").spawn().unwrap();
+        let pid = c.id();
+        c.wait().unwrap();
+        pid
+    }
+
+    fn claim_file(store: &Store, hash: &str, info: &ClaimInfo) {
+        let d = store.run_dir(hash);
+        fs::create_dir_all(&d).unwrap();
+        fs::write(d.join("claim"), serde_json::to_string(info).unwrap()).unwrap();
+    }
+
+    #[test]
+    fn a_claim_is_exclusive_between_two_sessions() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = Store::open(dir.path());
+        let b = Store::open(dir.path());
+        let ClaimAttempt::Claimed(claim, None) = a.claim("h1").unwrap() else {
+            panic!("first claim must succeed")
+        };
+        match b.claim("h1").unwrap() {
+            ClaimAttempt::Busy(owner) => assert_eq!(owner.pid, std::process::id()),
+            other => panic!("second claim must be busy, got {other:?}"),
+        }
+        assert!(matches!(b.state("h1"), RunState::Running(_)));
+        a.release(claim).unwrap();
+        assert!(matches!(
+            b.claim("h1").unwrap(),
+            ClaimAttempt::Claimed(_, None)
+        ));
+    }
+
+    #[test]
+    fn a_claim_of_a_dead_process_is_taken_over() {
+        let dir = tempfile::tempdir().unwrap();
+        let s = Store::open(dir.path());
+        let dead = ClaimInfo {
+            pid: dead_pid(),
+            session: "gone".into(),
+            ..s.me.clone()
+        };
+        claim_file(&s, "h", &dead);
+        assert_eq!(s.state("h"), RunState::Incomplete);
+        match s.claim("h").unwrap() {
+            ClaimAttempt::Claimed(_, Some(old)) => assert_eq!(old, dead),
+            other => panic!("expected a takeover, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn a_reused_pid_does_not_keep_a_claim_alive() {
+        // Our own pid is alive, but with another start time it is a different process.
+        let dir = tempfile::tempdir().unwrap();
+        let s = Store::open(dir.path());
+        let reused = ClaimInfo {
+            start_ticks: s.me.start_ticks + 1,
+            session: "earlier".into(),
+            ..s.me.clone()
+        };
+        claim_file(&s, "h", &reused);
+        assert!(matches!(
+            s.claim("h").unwrap(),
+            ClaimAttempt::Claimed(_, Some(_))
+        ));
+    }
+
+    #[test]
+    fn a_claim_from_another_host_stands() {
+        let dir = tempfile::tempdir().unwrap();
+        let s = Store::open(dir.path());
+        let remote = ClaimInfo {
+            host: "elsewhere".into(),
+            pid: dead_pid(),
+            session: "remote".into(),
+            ..s.me.clone()
+        };
+        claim_file(&s, "h", &remote);
+        assert!(matches!(s.claim("h").unwrap(), ClaimAttempt::Busy(_)));
+    }
+
+    #[test]
+    fn a_truncated_claim_is_stale() {
+        let dir = tempfile::tempdir().unwrap();
+        let s = Store::open(dir.path());
+        fs::create_dir_all(s.run_dir("h")).unwrap();
+        fs::write(s.run_dir("h").join("claim"), "{\"host\": \"x").unwrap();
+        assert!(matches!(
+            s.claim("h").unwrap(),
+            ClaimAttempt::Claimed(_, None)
+        ));
+    }
+
+    #[test]
+    fn start_ticks_of_self_and_of_a_zombie() {
+        assert!(process_start_ticks(std::process::id()).is_some());
+        let c = std::process::Command::new("true").spawn().unwrap();
+        let pid = c.id();
+        std::thread::sleep(std::time::Duration::from_millis(200));
+        // Exited but not reaped: a zombie counts as gone.
+        assert_eq!(process_start_ticks(pid), None);
+        drop(c);
+    }
+
+    #[test]
+    fn cleaning_keeps_only_the_claim() {
+        let dir = tempfile::tempdir().unwrap();
+        let s = Store::open(dir.path());
+        let ClaimAttempt::Claimed(claim, _) = s.claim("h").unwrap() else {
+            panic!()
+        };
+        let d = s.run_dir("h");
+        fs::write(d.join("log.liggghts"), "half a log").unwrap();
+        fs::create_dir(d.join("post")).unwrap();
+        fs::write(d.join("post/dump.1"), "x").unwrap();
+        s.clean_run_dir("h").unwrap();
+        let left: Vec<_> = fs::read_dir(&d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(left, vec![std::ffi::OsString::from("claim")]);
+        s.release(claim).unwrap();
+        assert!(!d.join("claim").exists());
+    }
+
+    #[test]
+    fn joblog_lines_round_trip_and_continue_numbering() {
+        let dir = tempfile::tempdir().unwrap();
+        fs::write(dir.path().join("joblog.tsv"), format!("{JOBLOG_HEADER}\n")).unwrap();
+        let s = Store::open(dir.path());
+        let rec = |h: &str, status, class| AttemptRecord {
+            hash: h.into(),
+            start: SystemTime::now(),
+            runtime_s: 1.5,
+            status,
+            class,
+        };
+        s.joblog().unwrap().append(&rec("a", "done", None)).unwrap();
+        let mut log = s.joblog().unwrap();
+        log.append(&rec("b", "failed", Some("timed-out"))).unwrap();
+        let lines = read_joblog(dir.path()).unwrap();
+        assert_eq!(lines.len(), 2);
+        assert_eq!((lines[0].seq, lines[0].hash.as_str()), (1, "a"));
+        assert_eq!(
+            (
+                lines[1].seq,
+                lines[1].status.as_str(),
+                lines[1].class.as_str()
+            ),
+            (2, "failed", "timed-out")
+        );
+    }
+}

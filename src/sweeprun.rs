@@ -1,0 +1,773 @@
+//! The sweep drivers: `sweep lattice`, `sweep lds`, `sweep resume` and `sweep status`.
+//!
+//! A driver turns a sweep and a design into the directory's manifest (every distinct point with
+//! its content hash, every nested space as a list of points), checks an existing directory
+//! before touching it, queues the points that are not finished, and consumes the pool's events
+//! with one reporter: joblog lines, results.csv (rewritten as points finish), progress, and the
+//! per-space hook where convergence checking plugs in ([`SpaceHook`]).
+//!
+//! Everything that can be refused (bad design, changed engine, a directory of another sweep) is
+//! refused before anything is written.
+//!
+//! Not responsible for running one point (the [`Executor`]), for scheduling ([`crate::pool`]) or
+//! for the directory's formats ([`crate::store`]); no statistics here.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::{Instant, SystemTime};
+
+use serde::Serialize;
+
+use crate::design::{halton::halton, lattice::lattice};
+use crate::error::{Error, Result};
+use crate::outcome::RunOutcome;
+use crate::pool::{self, Event, Executor, Flow, PoolOptions};
+use crate::process::CancelToken;
+use crate::progress::{Counts, Progress, ProgressMode};
+use crate::store::{
+    self, DesignRecord, Manifest, PointRecord, PointStatus, RunState, SpaceRecord, Store,
+    MANIFEST_FORMAT,
+};
+use crate::sweep::Sweep;
+
+/// Most points one design may have.
+pub const MAX_POINTS: usize = 1_000_000;
+/// Least time between two rewrites of results.csv while points finish.
+const RESULTS_EVERY: std::time::Duration = std::time::Duration::from_secs(1);
+
+/// Options shared by the running commands.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    pub jobs: usize,
+    pub progress: ProgressMode,
+    /// Re-run runs that failed (`sweep resume --retry-failed`).
+    pub retry_failed: bool,
+    /// Resume although the identity (template, mesh, engine) changed (`--force`).
+    pub force: bool,
+}
+
+/// Called after each nested space has all its points finished, in space order, with that
+/// space's points. Convergence checking (a later issue) implements it; `Flow::Drain` stops
+/// starting new runs.
+pub trait SpaceHook {
+    fn space_complete(
+        &mut self,
+        space: &SpaceRecord,
+        points: &[(&PointRecord, &PointStatus)],
+    ) -> Flow;
+}
+
+/// The hook that never stops a sweep.
+pub struct RunAll;
+
+impl SpaceHook for RunAll {
+    fn space_complete(&mut self, _: &SpaceRecord, _: &[(&PointRecord, &PointStatus)]) -> Flow {
+        Flow::Continue
+    }
+}
+
+/// How a sweep ended.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    pub dir: PathBuf,
+    pub points: usize,
+    pub done: usize,
+    pub failed: usize,
+    pub pending: usize,
+    /// Runs executed by this process (not counting retries).
+    pub ran: usize,
+    /// Points already finished when it started.
+    pub reused: usize,
+    pub interrupted: bool,
+    /// The space after which the hook stopped the sweep.
+    pub stopped_after: Option<String>,
+}
+
+impl Summary {
+    /// 130 interrupted, 1 when runs failed, else 0 (DESIGN §4).
+    pub fn exit_code(&self) -> i32 {
+        use crate::error::exit;
+        if self.interrupted {
+            exit::INTERRUPTED
+        } else if self.failed > 0 {
+            exit::RUNS_FAILED
+        } else {
+            exit::SUCCESS
+        }
+    }
+}
+
+/// The default sweep directory, `runs/<sweep name>`.
+pub fn default_out(sweep: &Sweep) -> PathBuf {
+    Path::new("runs").join(&sweep.file.name)
+}
+
+/// A design laid out for running.
+pub struct Plan<J> {
+    pub spaces: Vec<SpaceRecord>,
+    /// Distinct points (by hash), in order of first appearance.
+    pub points: Vec<PointRecord>,
+    /// The prepared job of each point.
+    pub jobs: Vec<J>,
+}
+
+/// The spaces and distinct points of a design, with the prepared job of each point.
+pub fn plan<E: Executor>(exec: &E, sweep: &Sweep, design: &DesignRecord) -> Result<Plan<E::Job>> {
+    let dim = sweep.dim();
+    // Each space as a list of unit points.
+    let spaces: Vec<(String, Vec<Vec<f64>>)> = match design {
+        DesignRecord::Lattice { levels } => {
+            let mut out = Vec::new();
+            for &l in levels {
+                if l < 2 {
+                    return Err(Error::input(format!(
+                        "lattice level {l}: expected at least 2 values per dimension"
+                    )));
+                }
+                let n = l.checked_pow(dim as u32).filter(|&n| n <= MAX_POINTS);
+                if n.is_none() {
+                    return Err(Error::input(format!(
+                        "lattice level {l} in {dim} dimensions: more than {MAX_POINTS} points"
+                    )));
+                }
+                out.push((format!("lattice {l}"), lattice(dim, l)));
+            }
+            out
+        }
+        DesignRecord::Lds {
+            step,
+            max,
+            scrambling,
+            seed,
+        } => {
+            if *step == 0 || *max == 0 || *max > MAX_POINTS {
+                return Err(Error::input(format!(
+                    "lds step {step}, max {max}: expected 1 ≤ step and 1 ≤ max ≤ {MAX_POINTS}"
+                )));
+            }
+            let all = halton(dim, *max, *scrambling, *seed);
+            let mut ends: Vec<usize> = (1..).map(|k| k * step).take_while(|&n| n < *max).collect();
+            ends.push(*max);
+            ends.into_iter()
+                .map(|n| (format!("lds {n}"), all[..n].to_vec()))
+                .collect()
+        }
+    };
+    let mut points: Vec<PointRecord> = Vec::new();
+    let mut jobs = Vec::new();
+    let mut by_hash: BTreeMap<String, usize> = BTreeMap::new();
+    let mut records = Vec::new();
+    for (label, unit) in spaces {
+        let mut members = Vec::with_capacity(unit.len());
+        for u in &unit {
+            let values = crate::space::scale_point(sweep, u);
+            let job = exec.prepare(&values)?;
+            let hash = exec.hash(&job).to_string();
+            let index = *by_hash.entry(hash.clone()).or_insert_with(|| {
+                points.push(PointRecord {
+                    index: points.len(),
+                    values,
+                    hash,
+                });
+                jobs.push(job);
+                points.len() - 1
+            });
+            members.push(index);
+        }
+        records.push(SpaceRecord {
+            label,
+            points: members,
+        });
+    }
+    Ok(Plan {
+        spaces: records,
+        points,
+        jobs,
+    })
+}
+
+/// The sweep file as resolved for `DIR/sweep.toml`: defaults filled in, the design actually run,
+/// and the template path made absolute (the directory may be resumed from anywhere).
+pub fn resolved_toml(sweep: &Sweep, design: &DesignRecord) -> Result<String> {
+    let mut f = sweep.file.clone();
+    if let Some(t) = sweep.template_path() {
+        f.scene.template = Some(std::path::absolute(&t).unwrap_or(t));
+    }
+    match design {
+        DesignRecord::Lattice { levels } => f.design.lattice_levels = levels.clone(),
+        DesignRecord::Lds {
+            step,
+            max,
+            scrambling,
+            seed,
+        } => {
+            f.design.lds.step = *step;
+            f.design.lds.max = *max;
+            f.design.lds.scrambling = *scrambling;
+            f.design.lds.seed = *seed;
+        }
+    }
+    let body = toml::to_string(&f).map_err(|e| Error::Internal(format!("resolved sweep: {e}")))?;
+    Ok(format!(
+        "# The sweep as resolved by demsweep {} (resolved-sweep format {}).\n{body}",
+        env!("CARGO_PKG_VERSION"),
+        crate::sweep::SWEEP_FORMAT
+    ))
+}
+
+/// `sweep lattice` / `sweep lds`: create (or extend) the sweep directory `out` and run it.
+pub fn start<E: Executor>(
+    sweep: &Sweep,
+    design: DesignRecord,
+    out: &Path,
+    exec: &E,
+    opts: &RunOptions,
+    hook: &mut dyn SpaceHook,
+    cancel: &CancelToken,
+) -> Result<Summary> {
+    let Plan {
+        spaces,
+        points,
+        jobs,
+    } = plan(exec, sweep, &design)?;
+    let toml = resolved_toml(sweep, &design)?;
+    let manifest = Manifest {
+        format: MANIFEST_FORMAT,
+        tool: format!("demsweep {}", env!("CARGO_PKG_VERSION")),
+        name: sweep.file.name.clone(),
+        parameters: sweep.names().iter().map(|s| s.to_string()).collect(),
+        design,
+        spaces,
+        points,
+        identity: exec.identity(),
+    };
+    if Store::manifest_path(out).exists() {
+        let (old, old_toml) = Store::read_manifest(out)?;
+        check_extension(out, &old, &old_toml, &manifest, &toml)?;
+    } else if std::fs::read_dir(out).is_ok_and(|mut d| d.next().is_some()) {
+        return Err(Error::input(format!(
+            "{}: exists and is not a sweep directory (no manifest.json); choose another --out",
+            out.display()
+        )));
+    }
+    let store = Store::open(out);
+    store.write_manifest(&toml, &manifest)?;
+    let retries = sweep.file.run.retries;
+    execute(&store, &manifest, exec, jobs, retries, opts, hook, cancel)
+}
+
+/// An existing directory may be run again with the same sweep, or extended: the same design
+/// kind and sweep apart from the design, the same identity, and its points a prefix of ours.
+fn check_extension(
+    dir: &Path,
+    old: &Manifest,
+    old_toml: &str,
+    new: &Manifest,
+    new_toml: &str,
+) -> Result<()> {
+    let d = dir.display();
+    let without_design = |t: &str| -> Option<toml::Table> {
+        let mut v: toml::Table = toml::from_str(t).ok()?;
+        v.remove("design");
+        Some(v)
+    };
+    if std::mem::discriminant(&old.design) != std::mem::discriminant(&new.design) {
+        return Err(Error::input(format!(
+            "{d}: holds a {} sweep, not a {} one; choose another --out",
+            design_kind(&old.design),
+            design_kind(&new.design)
+        )));
+    }
+    if without_design(old_toml) != without_design(new_toml) {
+        return Err(Error::input(format!(
+            "{d}: holds sweep `{}` made from a different sweep file (compare {d}/sweep.toml); \
+             choose another --out",
+            old.name
+        )));
+    }
+    let diff = identity_diff(&old.identity, &new.identity);
+    if !diff.is_empty() {
+        return Err(Error::input(format!(
+            "{d}: the engine or templates changed since it was made ({}); choose another --out, \
+             or `sweep resume {d} --force` to re-run its points",
+            diff.join("; ")
+        )));
+    }
+    let prefix = old.points.len() <= new.points.len()
+        && old
+            .points
+            .iter()
+            .zip(&new.points)
+            .all(|(a, b)| a.hash == b.hash);
+    if !prefix {
+        return Err(Error::input(format!(
+            "{d}: its {} points are not the first points of this design ({}); a design can \
+             only be extended (larger --max, more levels); choose another --out",
+            old.points.len(),
+            design_label(&new.design)
+        )));
+    }
+    Ok(())
+}
+
+fn design_kind(d: &DesignRecord) -> &'static str {
+    match d {
+        DesignRecord::Lattice { .. } => "lattice",
+        DesignRecord::Lds { .. } => "lds",
+    }
+}
+
+fn design_label(d: &DesignRecord) -> String {
+    match d {
+        DesignRecord::Lattice { levels } => format!(
+            "lattice levels {}",
+            levels
+                .iter()
+                .map(|l| l.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
+        ),
+        DesignRecord::Lds { step, max, .. } => format!("lds step {step}, max {max}"),
+    }
+}
+
+/// `key: old → new` for every leaf that differs between two identity records.
+pub fn identity_diff(old: &serde_json::Value, new: &serde_json::Value) -> Vec<String> {
+    fn walk(path: &str, a: &serde_json::Value, b: &serde_json::Value, out: &mut Vec<String>) {
+        match (a, b) {
+            (serde_json::Value::Object(x), serde_json::Value::Object(y)) => {
+                let keys: std::collections::BTreeSet<&String> = x.keys().chain(y.keys()).collect();
+                let null = serde_json::Value::Null;
+                for k in keys {
+                    let p = if path.is_empty() {
+                        k.clone()
+                    } else {
+                        format!("{path}.{k}")
+                    };
+                    walk(
+                        &p,
+                        x.get(k).unwrap_or(&null),
+                        y.get(k).unwrap_or(&null),
+                        out,
+                    );
+                }
+            }
+            _ if a != b => out.push(format!("{path}: {a} → {b}")),
+            _ => {}
+        }
+    }
+    let mut out = Vec::new();
+    walk("", old, new, &mut out);
+    out
+}
+
+/// Read the sweep of an existing directory (its resolved `sweep.toml`).
+pub fn load_dir_sweep(dir: &Path) -> Result<Sweep> {
+    let (_, text) = Store::read_manifest(dir)?;
+    Sweep::parse(&text, &dir.join("sweep.toml"))
+}
+
+/// `sweep resume DIR`: re-prepare the manifest's points, refuse if the identity or the decks
+/// changed (unless `--force`), and run what is not finished.
+pub fn resume<E: Executor>(
+    dir: &Path,
+    exec: &E,
+    opts: &RunOptions,
+    hook: &mut dyn SpaceHook,
+    cancel: &CancelToken,
+) -> Result<Summary> {
+    let (mut manifest, toml) = Store::read_manifest(dir)?;
+    let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
+    let mut jobs = Vec::with_capacity(manifest.points.len());
+    let mut changed = 0;
+    for p in &manifest.points {
+        let job = exec.prepare(&p.values)?;
+        changed += usize::from(exec.hash(&job) != p.hash);
+        jobs.push(job);
+    }
+    let identity = exec.identity();
+    let diff = identity_diff(&manifest.identity, &identity);
+    if !opts.force && (!diff.is_empty() || changed > 0) {
+        let what = if diff.is_empty() {
+            format!(
+                "{changed} of {} decks render differently",
+                manifest.points.len()
+            )
+        } else {
+            diff.join("; ")
+        };
+        return Err(Error::input(format!(
+            "{}: the engine or templates changed since the sweep started ({what}); \
+             `--force` re-runs the changed points with the new ones",
+            dir.display()
+        )));
+    }
+    let store = Store::open(dir);
+    if changed > 0 || !diff.is_empty() {
+        manifest.identity = identity;
+        for (p, j) in manifest.points.iter_mut().zip(&jobs) {
+            p.hash = exec.hash(j).to_string();
+        }
+        store.write_manifest(&toml, &manifest)?;
+    }
+    let retries = sweep.file.run.retries;
+    execute(&store, &manifest, exec, jobs, retries, opts, hook, cancel)
+}
+
+/// Run the unfinished points of a manifest.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "one call site each in start and resume"
+)]
+fn execute<E: Executor>(
+    store: &Store,
+    manifest: &Manifest,
+    exec: &E,
+    jobs: Vec<E::Job>,
+    retries: u32,
+    opts: &RunOptions,
+    hook: &mut dyn SpaceHook,
+    cancel: &CancelToken,
+) -> Result<Summary> {
+    let session_start = SystemTime::now();
+    let mut status = Vec::with_capacity(manifest.points.len());
+    let mut queue = Vec::new();
+    for (p, job) in manifest.points.iter().zip(jobs) {
+        let s = match store.state(&p.hash) {
+            RunState::Done(r) => PointStatus::Done(r),
+            RunState::Failed(f) => {
+                if opts.retry_failed {
+                    queue.push(job);
+                }
+                PointStatus::Failed(f)
+            }
+            _ => {
+                queue.push(job);
+                PointStatus::Pending
+            }
+        };
+        status.push(s);
+    }
+    let mut rep = Reporter::new(store, manifest, status, opts.progress, hook)?;
+    if rep.fire_spaces() == Flow::Drain {
+        queue.clear();
+    }
+    let popts = PoolOptions {
+        slots: opts.jobs.max(1),
+        retries,
+        retry_failed_before: opts.retry_failed.then_some(session_start),
+    };
+    pool::run(exec, store, queue, &popts, cancel, |e| rep.event(e));
+    rep.finish(cancel.is_cancelled())
+}
+
+/// The one consumer of pool events: joblog, results.csv, progress, spaces.
+struct Reporter<'a> {
+    store: &'a Store,
+    manifest: &'a Manifest,
+    status: Vec<PointStatus>,
+    by_hash: BTreeMap<&'a str, usize>,
+    /// Unfinished points per space, and the spaces each point is in.
+    unfinished: Vec<usize>,
+    member_of: Vec<Vec<usize>>,
+    next_space: usize,
+    hook: &'a mut dyn SpaceHook,
+    stopped_after: Option<String>,
+    joblog: store::Joblog,
+    counts: Counts,
+    ran: usize,
+    progress: Progress,
+    results_dirty: bool,
+    results_written: Instant,
+    errors: Vec<String>,
+}
+
+impl<'a> Reporter<'a> {
+    fn new(
+        store: &'a Store,
+        manifest: &'a Manifest,
+        status: Vec<PointStatus>,
+        mode: ProgressMode,
+        hook: &'a mut dyn SpaceHook,
+    ) -> Result<Reporter<'a>> {
+        let mut member_of = vec![Vec::new(); manifest.points.len()];
+        let mut unfinished = Vec::with_capacity(manifest.spaces.len());
+        for (k, s) in manifest.spaces.iter().enumerate() {
+            unfinished.push(
+                s.points
+                    .iter()
+                    .filter(|&&i| !status[i].is_finished())
+                    .count(),
+            );
+            for &i in &s.points {
+                member_of[i].push(k);
+            }
+        }
+        let done = status
+            .iter()
+            .filter(|s| matches!(s, PointStatus::Done(_)))
+            .count();
+        let failed = status
+            .iter()
+            .filter(|s| matches!(s, PointStatus::Failed(_)))
+            .count();
+        let counts = Counts {
+            total: status.len(),
+            done,
+            failed,
+            running: 0,
+            reused: done + failed,
+        };
+        let rep = Reporter {
+            store,
+            manifest,
+            by_hash: manifest
+                .points
+                .iter()
+                .map(|p| (p.hash.as_str(), p.index))
+                .collect(),
+            status,
+            unfinished,
+            member_of,
+            next_space: 0,
+            hook,
+            stopped_after: None,
+            joblog: store.joblog()?,
+            counts,
+            ran: 0,
+            progress: Progress::new(mode, manifest.points.len()),
+            results_dirty: true,
+            results_written: Instant::now(),
+            errors: Vec::new(),
+        };
+        store::write_results(
+            store.dir(),
+            &manifest.parameters,
+            &manifest.points,
+            &rep.status,
+        )?;
+        Ok(rep)
+    }
+
+    /// Call the hook for every space, in order, whose points have all finished.
+    fn fire_spaces(&mut self) -> Flow {
+        while self.stopped_after.is_none()
+            && self.next_space < self.manifest.spaces.len()
+            && self.unfinished[self.next_space] == 0
+        {
+            let space = &self.manifest.spaces[self.next_space];
+            let rows: Vec<(&PointRecord, &PointStatus)> = space
+                .points
+                .iter()
+                .map(|&i| (&self.manifest.points[i], &self.status[i]))
+                .collect();
+            if self.hook.space_complete(space, &rows) == Flow::Drain {
+                self.stopped_after = Some(space.label.clone());
+            }
+            self.next_space += 1;
+        }
+        if self.stopped_after.is_some() {
+            Flow::Drain
+        } else {
+            Flow::Continue
+        }
+    }
+
+    fn event(&mut self, e: &Event) -> Flow {
+        match e {
+            Event::Started { .. } => {
+                self.counts.running += 1;
+                self.ran += 1;
+            }
+            Event::Attempt { record, .. } => {
+                if let Err(err) = self.joblog.append(record) {
+                    self.errors.push(err.to_string());
+                }
+            }
+            Event::Finished { hash, outcome, ran } => {
+                if *ran {
+                    self.counts.running -= 1;
+                }
+                if let Some(&i) = self.by_hash.get(hash.as_str()) {
+                    let new = match outcome {
+                        RunOutcome::Done(r) => Some(PointStatus::Done(Box::new(r.clone()))),
+                        RunOutcome::Failed(f) => Some(PointStatus::Failed(Box::new(f.clone()))),
+                        RunOutcome::Cancelled => None,
+                    };
+                    if let Some(new) = new {
+                        let was_finished = self.status[i].is_finished();
+                        match &self.status[i] {
+                            PointStatus::Done(_) => self.counts.done -= 1,
+                            PointStatus::Failed(_) => self.counts.failed -= 1,
+                            PointStatus::Pending => {}
+                        }
+                        match &new {
+                            PointStatus::Done(_) => self.counts.done += 1,
+                            PointStatus::Failed(_) => self.counts.failed += 1,
+                            PointStatus::Pending => {}
+                        }
+                        self.status[i] = new;
+                        self.results_dirty = true;
+                        if !was_finished {
+                            for &k in &self.member_of[i] {
+                                self.unfinished[k] -= 1;
+                            }
+                        }
+                    }
+                }
+            }
+            Event::StoreError { hash, error } => {
+                self.errors.push(format!("run {hash}: {error}"));
+            }
+            Event::Busy { .. } | Event::Tick => {}
+        }
+        self.progress.update(&self.counts);
+        if self.results_dirty && self.results_written.elapsed() >= RESULTS_EVERY {
+            self.write_results();
+        }
+        self.fire_spaces()
+    }
+
+    fn write_results(&mut self) {
+        match store::write_results(
+            self.store.dir(),
+            &self.manifest.parameters,
+            &self.manifest.points,
+            &self.status,
+        ) {
+            Ok(()) => {
+                self.results_dirty = false;
+                self.results_written = Instant::now();
+            }
+            Err(e) => self.errors.push(e.to_string()),
+        }
+    }
+
+    fn finish(mut self, interrupted: bool) -> Result<Summary> {
+        self.write_results();
+        self.progress.finish(&self.counts);
+        if let Some(e) = self.errors.first() {
+            return Err(Error::Internal(format!(
+                "{} error(s) writing the sweep directory; first: {e}",
+                self.errors.len()
+            )));
+        }
+        let c = self.counts;
+        Ok(Summary {
+            dir: self.store.dir().to_path_buf(),
+            points: c.total,
+            done: c.done,
+            failed: c.failed,
+            pending: c.total - c.done - c.failed,
+            ran: self.ran,
+            reused: c.reused,
+            interrupted,
+            stopped_after: self.stopped_after,
+        })
+    }
+}
+
+/// `sweep status DIR`.
+#[derive(Debug, Clone, Serialize)]
+pub struct StatusReport {
+    pub dir: PathBuf,
+    pub name: String,
+    pub design: DesignRecord,
+    pub points: usize,
+    pub done: usize,
+    pub failed: usize,
+    /// Claimed by a live process.
+    pub running: usize,
+    pub pending: usize,
+    /// Failures by class: count and the first few (by point index) with their reasons.
+    pub failures: BTreeMap<String, FailureGroup>,
+    /// Convergence verdict; `None` until convergence checking exists.
+    pub converged: Option<bool>,
+}
+
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct FailureGroup {
+    pub count: usize,
+    pub first: Vec<FailureNote>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct FailureNote {
+    pub index: usize,
+    pub hash: String,
+    pub reason: String,
+}
+
+/// Failures listed per class in `sweep status`.
+const FIRST_FAILURES: usize = 3;
+
+pub fn status(dir: &Path) -> Result<StatusReport> {
+    let (manifest, _) = Store::read_manifest(dir)?;
+    let store = Store::open(dir);
+    let mut r = StatusReport {
+        dir: dir.to_path_buf(),
+        name: manifest.name.clone(),
+        design: manifest.design.clone(),
+        points: manifest.points.len(),
+        done: 0,
+        failed: 0,
+        running: 0,
+        pending: 0,
+        failures: BTreeMap::new(),
+        converged: None,
+    };
+    for p in &manifest.points {
+        match store.state(&p.hash) {
+            RunState::Done(_) => r.done += 1,
+            RunState::Failed(f) => {
+                r.failed += 1;
+                let g = r.failures.entry(f.class.as_str().to_string()).or_default();
+                g.count += 1;
+                if g.first.len() < FIRST_FAILURES {
+                    g.first.push(FailureNote {
+                        index: p.index,
+                        hash: p.hash.clone(),
+                        reason: f.reason.clone(),
+                    });
+                }
+            }
+            RunState::Running(_) => r.running += 1,
+            RunState::Incomplete | RunState::Pending => r.pending += 1,
+        }
+    }
+    Ok(r)
+}
+
+impl StatusReport {
+    /// The human-readable form.
+    pub fn to_text(&self) -> String {
+        let mut s = format!(
+            "{} ({}, {}): {} points\n  done     {}\n  failed   {}\n  running  {}\n  pending  {}\n",
+            self.dir.display(),
+            self.name,
+            design_label(&self.design),
+            self.points,
+            self.done,
+            self.failed,
+            self.running,
+            self.pending
+        );
+        for (class, g) in &self.failures {
+            s.push_str(&format!("  {class}: {}\n", g.count));
+            for n in &g.first {
+                s.push_str(&format!(
+                    "    point {} ({}): {}\n",
+                    n.index,
+                    &n.hash[..12.min(n.hash.len())],
+                    n.reason
+                ));
+            }
+        }
+        s.push_str(&format!(
+            "  converged: {}\n",
+            self.converged
+                .map_or("unknown", |c| if c { "yes" } else { "no" })
+        ));
+        s
+    }
+}
