@@ -1,0 +1,128 @@
+//! Overhead of the job pool against GNU parallel, on the same trivial jobs, side by side.
+//!
+//! `cargo bench --bench pool_overhead -- [--jobs N] [--count N]` (defaults: the machine's cores,
+//! 1000 jobs). Each job runs `true`. The pool path is the one a sweep takes: claim the run dir,
+//! run the child in its own process group under the timeout, write result.json, release the
+//! claim, append a joblog line; GNU parallel runs the same `true` with `--joblog`. Prints both
+//! wall times, the per-job cost and the ratio.
+
+use std::path::Path;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use demsweep::outcome::{write_json_atomic, RunOutcome, RunResult, RESULT_FORMAT};
+use demsweep::pool::{self, Executor, Flow, PoolOptions};
+use demsweep::process::{self, CancelToken, ProcessOutcome};
+use demsweep::store::Store;
+
+/// Runs `true` and records a trivial result.
+struct TrueExecutor;
+
+impl Executor for TrueExecutor {
+    type Job = String;
+
+    fn identity(&self) -> serde_json::Value {
+        serde_json::json!("true")
+    }
+
+    fn prepare(&self, swept: &[f64]) -> demsweep::Result<String> {
+        Ok(format!("job{:06}", swept[0] as u64))
+    }
+
+    fn hash<'a>(&self, job: &'a String) -> &'a str {
+        job
+    }
+
+    fn execute(&self, job: &String, run_dir: &Path, cancel: &CancelToken) -> RunOutcome {
+        let (o, took) = process::run(Command::new("true"), Duration::from_secs(60), cancel);
+        assert_eq!(o, ProcessOutcome::Exited(0));
+        let r = RunResult {
+            format: RESULT_FORMAT,
+            hash: job.clone(),
+            parameters: Default::default(),
+            mfr: 0.0,
+            mfr_flux: 0.0,
+            mfr_windows: vec![],
+            steady: true,
+            vx: vec![],
+            particles: 0,
+            steps: 0,
+            simulated_time: 0.0,
+            wall_time: took.as_secs_f64(),
+            engine_version: "true".into(),
+            warnings: vec![],
+        };
+        write_json_atomic(&run_dir.join("result.json"), &r).unwrap();
+        RunOutcome::Done(r)
+    }
+}
+
+fn arg(name: &str, default: usize) -> usize {
+    let args: Vec<String> = std::env::args().collect();
+    args.iter()
+        .position(|a| a == name)
+        .and_then(|i| args.get(i + 1))
+        .map(|v| v.parse().expect("a number"))
+        .unwrap_or(default)
+}
+
+fn main() {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let jobs = arg("--jobs", cores);
+    let count = arg("--count", 1000);
+
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("sweep");
+    std::fs::create_dir_all(dir.join("runs")).unwrap();
+    let store = Store::open(&dir);
+    let exec = TrueExecutor;
+    let work: Vec<String> = (0..count).map(|i| exec.prepare(&[i as f64]).unwrap()).collect();
+    let mut log = store.joblog().unwrap();
+    let opts = PoolOptions {
+        slots: jobs,
+        retries: 0,
+        retry_failed_before: None,
+    };
+    let t = Instant::now();
+    let mut done = 0;
+    pool::run(&exec, &store, work, &opts, &CancelToken::new(), |e| {
+        match e {
+            pool::Event::Attempt { record, .. } => log.append(record).unwrap(),
+            pool::Event::Finished { .. } => done += 1,
+            _ => {}
+        }
+        Flow::Continue
+    });
+    let ours = t.elapsed();
+    assert_eq!(done, count);
+
+    let joblog = tmp.path().join("parallel.joblog");
+    let t = Instant::now();
+    let status = Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "seq {count} | parallel --will-cite -j {jobs} --joblog {} true",
+            joblog.display()
+        ))
+        .status()
+        .expect("GNU parallel (apt-get install parallel)");
+    let theirs = t.elapsed();
+    assert!(status.success());
+
+    let per = |d: Duration| d.as_secs_f64() * 1e3 / count as f64;
+    println!("pool overhead: {count} jobs of `true` on {jobs} slots");
+    println!(
+        "  sweep pool    {:7.3} s  {:6.3} ms/job",
+        ours.as_secs_f64(),
+        per(ours)
+    );
+    println!(
+        "  GNU parallel  {:7.3} s  {:6.3} ms/job",
+        theirs.as_secs_f64(),
+        per(theirs)
+    );
+    println!(
+        "  ratio pool / parallel = {:.2}",
+        ours.as_secs_f64() / theirs.as_secs_f64()
+    );
+}
