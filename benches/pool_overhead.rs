@@ -76,7 +76,9 @@ fn main() {
     std::fs::create_dir_all(dir.join("runs")).unwrap();
     let store = Store::open(&dir);
     let exec = TrueExecutor;
-    let work: Vec<String> = (0..count).map(|i| exec.prepare(&[i as f64]).unwrap()).collect();
+    let work: Vec<String> = (0..count)
+        .map(|i| exec.prepare(&[i as f64]).unwrap())
+        .collect();
     let mut log = store.joblog().unwrap();
     let opts = PoolOptions {
         slots: jobs,

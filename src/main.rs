@@ -7,7 +7,11 @@ use clap::{Args, Parser, Subcommand};
 use demsweep::error::{exit, Error};
 use demsweep::outcome::RunOutcome;
 use demsweep::point::{self, PointContext};
+use demsweep::process::CancelToken;
+use demsweep::progress::ProgressMode;
+use demsweep::store::DesignRecord;
 use demsweep::sweep::{Scrambling, Sweep};
+use demsweep::sweeprun::{self, RunAll, RunOptions, Summary};
 
 /// Parameter sweeps of LIGGGHTS powder-spreading simulations.
 ///
@@ -58,29 +62,32 @@ enum Command {
 struct LatticeArgs {
     sweep: PathBuf,
     /// Lattice levels (values per dimension), e.g. 5,6,7,9,10; default from the sweep file.
+    /// A point shared by two levels runs once.
     #[arg(long, value_delimiter = ',')]
     levels: Option<Vec<usize>>,
-    /// Concurrent LIGGGHTS runs (default: the machine's cores).
-    #[arg(long)]
-    jobs: Option<usize>,
-    /// Sweep directory (default: runs/<sweep name>).
+    /// Sweep directory (default: runs/<sweep name>). An existing one is continued, or extended
+    /// with more levels.
     #[arg(long)]
     out: Option<PathBuf>,
+    #[command(flatten)]
+    pool: PoolArgs,
 }
 
 #[derive(Args)]
 struct LdsArgs {
     sweep: PathBuf,
-    /// Points per batch (one nested space per batch).
+    /// Points per batch (one nested space per batch); default design.lds.step.
     #[arg(long)]
     step: Option<usize>,
-    /// Most points to run.
+    /// Most points to run; default design.lds.max. A larger --max on an existing directory
+    /// extends it, reusing its points.
     #[arg(long)]
     max: Option<usize>,
-    #[arg(long)]
-    jobs: Option<usize>,
+    /// Sweep directory (default: runs/<sweep name>).
     #[arg(long)]
     out: Option<PathBuf>,
+    #[command(flatten)]
+    pool: PoolArgs,
 }
 
 #[derive(Args)]
@@ -89,11 +96,22 @@ struct ResumeArgs {
     /// Also re-run runs that failed.
     #[arg(long)]
     retry_failed: bool,
-    /// Resume even if templates, mesh or engine changed since the manifest.
+    /// Resume even if templates, mesh or engine changed since the manifest (changed points
+    /// run again under their new hashes).
     #[arg(long)]
     force: bool,
+    #[command(flatten)]
+    pool: PoolArgs,
+}
+
+#[derive(Args)]
+struct PoolArgs {
+    /// Concurrent LIGGGHTS runs (default: the machine's cores).
     #[arg(long)]
     jobs: Option<usize>,
+    /// No progress on stderr (default: a bar on a terminal, a line every 10 s otherwise).
+    #[arg(long, short)]
+    quiet: bool,
 }
 
 #[derive(Args)]
@@ -166,9 +184,9 @@ fn main() {
 fn run(cli: Cli) -> Result<i32, Error> {
     match cli.command {
         Command::Points(a) => points(a),
-        Command::Lattice(_) => Err(Error::NotYet("lattice")),
-        Command::Lds(_) => Err(Error::NotYet("lds")),
-        Command::Resume(_) => Err(Error::NotYet("resume")),
+        Command::Lattice(a) => lattice(a),
+        Command::Lds(a) => lds(a),
+        Command::Resume(a) => resume(a),
         Command::Status(a) => status(a),
         Command::Report(_) => Err(Error::NotYet("report")),
         Command::Render(a) => render(a),
@@ -179,6 +197,89 @@ fn run(cli: Cli) -> Result<i32, Error> {
         Command::Submit => Err(Error::NotYet("submit")),
         Command::Bench => Err(Error::NotYet("bench")),
     }
+}
+
+fn run_options(p: &PoolArgs, retry_failed: bool, force: bool) -> Result<RunOptions, Error> {
+    let jobs = match p.jobs {
+        Some(0) => return Err(Error::input("--jobs 0: expected at least 1")),
+        Some(n) => n,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    Ok(RunOptions {
+        jobs,
+        progress: ProgressMode::detect(p.quiet),
+        retry_failed,
+        force,
+    })
+}
+
+fn lattice(a: LatticeArgs) -> Result<i32, Error> {
+    let sweep = Sweep::load(&a.sweep)?;
+    let levels = a
+        .levels
+        .unwrap_or_else(|| sweep.file.design.lattice_levels.clone());
+    start(sweep, DesignRecord::Lattice { levels }, a.out, &a.pool)
+}
+
+fn lds(a: LdsArgs) -> Result<i32, Error> {
+    let sweep = Sweep::load(&a.sweep)?;
+    let l = &sweep.file.design.lds;
+    let design = DesignRecord::Lds {
+        step: a.step.unwrap_or(l.step),
+        max: a.max.unwrap_or(l.max),
+        scrambling: l.scrambling,
+        seed: l.seed,
+    };
+    start(sweep, design, a.out, &a.pool)
+}
+
+fn start(
+    sweep: Sweep,
+    design: DesignRecord,
+    out: Option<PathBuf>,
+    p: &PoolArgs,
+) -> Result<i32, Error> {
+    let opts = run_options(p, false, false)?;
+    let out = out.unwrap_or_else(|| sweeprun::default_out(&sweep));
+    demsweep::process::install_interrupt_handler();
+    let exec = sweeprun::PointExecutor::new(sweep.clone())?;
+    let summary = sweeprun::start(
+        &sweep,
+        design,
+        &out,
+        &exec,
+        &opts,
+        &mut RunAll,
+        &CancelToken::new(),
+    )?;
+    Ok(finish(&summary))
+}
+
+fn resume(a: ResumeArgs) -> Result<i32, Error> {
+    let opts = run_options(&a.pool, a.retry_failed, a.force)?;
+    let sweep = sweeprun::load_dir_sweep(&a.dir)?;
+    demsweep::process::install_interrupt_handler();
+    let exec = sweeprun::PointExecutor::new(sweep)?;
+    let summary = sweeprun::resume(&a.dir, &exec, &opts, &mut RunAll, &CancelToken::new())?;
+    Ok(finish(&summary))
+}
+
+/// Say what to do next and return the exit code.
+fn finish(s: &Summary) -> i32 {
+    let dir = s.dir.display();
+    if s.interrupted {
+        eprintln!(
+            "interrupted: {} of {} points finished; continue with `sweep resume {dir}`",
+            s.done + s.failed,
+            s.points
+        );
+    } else if s.failed > 0 {
+        eprintln!("{} of {} runs failed; reasons: `sweep status {dir}`; re-run them: `sweep resume {dir} --retry-failed`", s.failed, s.points);
+    }
+    if let Some(space) = &s.stopped_after {
+        eprintln!("stopped after {space}");
+    }
+    s.exit_code()
 }
 
 fn status(a: DirArgs) -> Result<i32, Error> {

@@ -21,6 +21,7 @@ use serde::Serialize;
 use crate::design::{halton::halton, lattice::lattice};
 use crate::error::{Error, Result};
 use crate::outcome::RunOutcome;
+use crate::point::{self, PointContext};
 use crate::pool::{self, Event, Executor, Flow, PoolOptions};
 use crate::process::CancelToken;
 use crate::progress::{Counts, Progress, ProgressMode};
@@ -34,6 +35,75 @@ use crate::sweep::Sweep;
 pub const MAX_POINTS: usize = 1_000_000;
 /// Least time between two rewrites of results.csv while points finish.
 const RESULTS_EVERY: std::time::Duration = std::time::Duration::from_secs(1);
+
+/// The real executor: one LIGGGHTS run per point through [`crate::point`].
+///
+/// A job keeps only the point's values and hash; the deck is rendered again when the run starts
+/// (rendering is cheap and deterministic), so a 10,000-point sweep does not hold 10,000 decks.
+pub struct PointExecutor {
+    ctx: PointContext,
+}
+
+/// A point to run for real.
+pub struct PointJob {
+    values: Vec<f64>,
+    hash: String,
+}
+
+impl PointExecutor {
+    /// Find LIGGGHTS and load the template of `sweep`.
+    pub fn new(sweep: Sweep) -> Result<PointExecutor> {
+        Ok(PointExecutor {
+            ctx: PointContext::new(sweep)?,
+        })
+    }
+}
+
+impl Executor for PointExecutor {
+    type Job = PointJob;
+
+    fn identity(&self) -> serde_json::Value {
+        self.ctx.identity()
+    }
+
+    fn prepare(&self, swept: &[f64]) -> Result<PointJob> {
+        let p = point::prepare(&self.ctx, swept)?;
+        Ok(PointJob {
+            values: swept.to_vec(),
+            hash: p.hash,
+        })
+    }
+
+    fn hash<'a>(&self, job: &'a PointJob) -> &'a str {
+        &job.hash
+    }
+
+    fn execute(&self, job: &PointJob, run_dir: &Path, cancel: &CancelToken) -> RunOutcome {
+        match point::prepare(&self.ctx, &job.values) {
+            Ok(p) if p.hash == job.hash => point::execute(&self.ctx, &p, run_dir, cancel),
+            // Prepared once already, so neither can happen short of a bug; fail the run loudly.
+            Ok(p) => point_failure(
+                job,
+                run_dir,
+                format!("deck hash changed on re-render: {}", p.hash),
+            ),
+            Err(e) => point_failure(job, run_dir, format!("cannot render the deck: {e}")),
+        }
+    }
+}
+
+fn point_failure(job: &PointJob, run_dir: &Path, reason: String) -> RunOutcome {
+    let f = crate::outcome::RunFailure {
+        format: crate::outcome::RESULT_FORMAT,
+        hash: job.hash.clone(),
+        class: crate::outcome::FailureClass::CouldNotStart,
+        reason,
+        log_tail: String::new(),
+        wall_time: 0.0,
+    };
+    let _ = crate::outcome::write_json_atomic(&run_dir.join(point::FAILURE), &f);
+    RunOutcome::Failed(f)
+}
 
 /// Options shared by the running commands.
 #[derive(Debug, Clone)]
