@@ -20,10 +20,7 @@ const COLUMNS: &str = "id type x y z vx vy vz radius mass";
 const RUNS: usize = 3;
 
 fn env_usize(name: &str, default: usize) -> usize {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
+    std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
 }
 
 /// `v` formatted like C's `%g` (6 significant digits, trailing zeros dropped).
@@ -34,11 +31,7 @@ fn g(v: f64) -> String {
     let exp = v.abs().log10().floor() as i32;
     if (-5..6).contains(&exp) {
         let s = format!("{:.*}", (5 - exp) as usize, v);
-        let s = if s.contains('.') {
-            s.trim_end_matches('0').trim_end_matches('.')
-        } else {
-            &s
-        };
+        let s = if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.') } else { &s };
         s.to_string()
     } else {
         let s = format!("{v:.5e}");
@@ -54,9 +47,7 @@ fn write_dump(path: &Path, natoms: usize, snapshots: usize) {
     // A fixed-seed LCG: the same file every run.
     let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
     let mut rnd = move || {
-        state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
+        state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
         (state >> 11) as f64 / (1u64 << 53) as f64
     };
     for s in 0..snapshots {
@@ -115,10 +106,7 @@ fn parse_naive(path: &Path) -> (usize, f64) {
         let mut rows: Vec<Vec<f64>> = Vec::with_capacity(n);
         for _ in 0..n {
             let l = lines.next().unwrap().unwrap();
-            let row: Vec<f64> = l
-                .split_whitespace()
-                .map(|f| f.parse::<f64>().unwrap())
-                .collect();
+            let row: Vec<f64> = l.split_whitespace().map(|f| f.parse::<f64>().unwrap()).collect();
             rows.push(row);
         }
         atoms += rows.len();
@@ -154,11 +142,33 @@ fn main() {
     assert_eq!(r_fast.1, r_naive.1, "parsed values differ");
 
     for (name, t) in [("DumpReader", t_fast), ("naive baseline", t_naive)] {
-        println!(
-            "{name:>15}: {t:7.3} s  {:7.1} MB/s  {:6.2} M atoms/s",
-            mb / t,
-            atoms / t / 1e6
-        );
+        println!("{name:>15}: {t:7.3} s  {:7.1} MB/s  {:6.2} M atoms/s", mb / t, atoms / t / 1e6);
     }
     println!("speed-up DumpReader / naive: {:.2}x", t_naive / t_fast);
+
+    // The float parser alone, on the fields of the first rows: why fast-float2 and not std.
+    let text = std::fs::read(&path).unwrap();
+    let fields: Vec<&[u8]> = text
+        .split(|&b| b == b'\n')
+        .skip(9)
+        .take(natoms.min(500_000))
+        .flat_map(|l| l.split(|&b| b == b' ').filter(|f| !f.is_empty()))
+        .collect();
+    let (t_std, s_std) = best_of(|| {
+        let sum = fields.iter().map(|f| std::str::from_utf8(f).unwrap().parse::<f64>().unwrap()).sum();
+        (fields.len(), sum)
+    });
+    let (t_ff, s_ff) = best_of(|| {
+        let sum = fields.iter().map(|f| fast_float2::parse::<f64, _>(f).unwrap()).sum();
+        (fields.len(), sum)
+    });
+    assert_eq!(s_std, s_ff, "float parsers disagree");
+    let n = fields.len() as f64;
+    println!(
+        "float parsing only, {} fields: str::parse {:.1} ns/field, fast-float2 {:.1} ns/field, ratio {:.2}x",
+        fields.len(),
+        t_std / n * 1e9,
+        t_ff / n * 1e9,
+        t_std / t_ff
+    );
 }
