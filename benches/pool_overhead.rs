@@ -76,15 +76,9 @@ fn main() {
     std::fs::create_dir_all(dir.join("runs")).unwrap();
     let store = Store::open(&dir);
     let exec = TrueExecutor;
-    let work: Vec<String> = (0..count)
-        .map(|i| exec.prepare(&[i as f64]).unwrap())
-        .collect();
+    let work: Vec<String> = (0..count).map(|i| exec.prepare(&[i as f64]).unwrap()).collect();
     let mut log = store.joblog().unwrap();
-    let opts = PoolOptions {
-        slots: jobs,
-        retries: 0,
-        retry_failed_before: None,
-    };
+    let opts = PoolOptions { slots: jobs, retries: 0, retry_failed_before: None };
     let t = Instant::now();
     let mut done = 0;
     pool::run(&exec, &store, work, &opts, &CancelToken::new(), |e| {
@@ -102,10 +96,7 @@ fn main() {
     let t = Instant::now();
     let status = Command::new("sh")
         .arg("-c")
-        .arg(format!(
-            "seq {count} | parallel --will-cite -j {jobs} --joblog {} true",
-            joblog.display()
-        ))
+        .arg(format!("seq {count} | parallel --will-cite -j {jobs} --joblog {} true", joblog.display()))
         .status()
         .expect("GNU parallel (apt-get install parallel)");
     let theirs = t.elapsed();
@@ -113,18 +104,7 @@ fn main() {
 
     let per = |d: Duration| d.as_secs_f64() * 1e3 / count as f64;
     println!("pool overhead: {count} jobs of `true` on {jobs} slots");
-    println!(
-        "  sweep pool    {:7.3} s  {:6.3} ms/job",
-        ours.as_secs_f64(),
-        per(ours)
-    );
-    println!(
-        "  GNU parallel  {:7.3} s  {:6.3} ms/job",
-        theirs.as_secs_f64(),
-        per(theirs)
-    );
-    println!(
-        "  ratio pool / parallel = {:.2}",
-        ours.as_secs_f64() / theirs.as_secs_f64()
-    );
+    println!("  sweep pool    {:7.3} s  {:6.3} ms/job", ours.as_secs_f64(), per(ours));
+    println!("  GNU parallel  {:7.3} s  {:6.3} ms/job", theirs.as_secs_f64(), per(theirs));
+    println!("  ratio pool / parallel = {:.2}", ours.as_secs_f64() / theirs.as_secs_f64());
 }

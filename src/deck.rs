@@ -140,8 +140,10 @@ mod tests {
 
     #[test]
     fn a_size_distribution_puts_every_class_in_the_pile() {
-        let settings =
-            SceneSettings { size_distribution: SizeDistributionSpec::Weibull { bins: 5 }, ..SceneSettings::default() };
+        let settings = SceneSettings {
+            size_distribution: SizeDistributionSpec::Weibull { bins: 5 },
+            ..SceneSettings::default()
+        };
         let s = scene(&settings, &[]);
         let pile = pile::pile_data(&s);
         for c in &s.size_classes {

@@ -205,19 +205,12 @@ fn run_options(p: &PoolArgs, retry_failed: bool, force: bool) -> Result<RunOptio
         Some(n) => n,
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
-    Ok(RunOptions {
-        jobs,
-        progress: ProgressMode::detect(p.quiet),
-        retry_failed,
-        force,
-    })
+    Ok(RunOptions { jobs, progress: ProgressMode::detect(p.quiet), retry_failed, force })
 }
 
 fn lattice(a: LatticeArgs) -> Result<i32, Error> {
     let sweep = Sweep::load(&a.sweep)?;
-    let levels = a
-        .levels
-        .unwrap_or_else(|| sweep.file.design.lattice_levels.clone());
+    let levels = a.levels.unwrap_or_else(|| sweep.file.design.lattice_levels.clone());
     start(sweep, DesignRecord::Lattice { levels }, a.out, &a.pool)
 }
 
@@ -233,25 +226,12 @@ fn lds(a: LdsArgs) -> Result<i32, Error> {
     start(sweep, design, a.out, &a.pool)
 }
 
-fn start(
-    sweep: Sweep,
-    design: DesignRecord,
-    out: Option<PathBuf>,
-    p: &PoolArgs,
-) -> Result<i32, Error> {
+fn start(sweep: Sweep, design: DesignRecord, out: Option<PathBuf>, p: &PoolArgs) -> Result<i32, Error> {
     let opts = run_options(p, false, false)?;
     let out = out.unwrap_or_else(|| sweeprun::default_out(&sweep));
     demsweep::process::install_interrupt_handler();
     let exec = sweeprun::PointExecutor::new(sweep.clone())?;
-    let summary = sweeprun::start(
-        &sweep,
-        design,
-        &out,
-        &exec,
-        &opts,
-        &mut RunAll,
-        &CancelToken::new(),
-    )?;
+    let summary = sweeprun::start(&sweep, design, &out, &exec, &opts, &mut RunAll, &CancelToken::new())?;
     Ok(finish(&summary))
 }
 
@@ -285,8 +265,7 @@ fn finish(s: &Summary) -> i32 {
 fn status(a: DirArgs) -> Result<i32, Error> {
     let report = demsweep::sweeprun::status(&a.dir)?;
     if a.json {
-        let text =
-            serde_json::to_string_pretty(&report).map_err(|e| Error::Internal(e.to_string()))?;
+        let text = serde_json::to_string_pretty(&report).map_err(|e| Error::Internal(e.to_string()))?;
         println!("{text}");
     } else {
         print!("{}", report.to_text());

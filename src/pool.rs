@@ -67,16 +67,9 @@ pub enum Event {
     /// A slot started running the job.
     Started { hash: String },
     /// One attempt ended (one joblog line). `retrying` when another attempt follows.
-    Attempt {
-        record: AttemptRecord,
-        retrying: bool,
-    },
+    Attempt { record: AttemptRecord, retrying: bool },
     /// The job is over: run here (`ran`), or found finished by another process.
-    Finished {
-        hash: String,
-        outcome: RunOutcome,
-        ran: bool,
-    },
+    Finished { hash: String, outcome: RunOutcome, ran: bool },
     /// Another live process holds the run; it is waited for.
     Busy { hash: String, owner: ClaimInfo },
     /// The pool could not use the sweep directory for this job (I/O); it is left pending.
@@ -109,16 +102,7 @@ pub fn run<E: Executor>(
     std::thread::scope(|scope| {
         for _ in 0..opts.slots.max(1) {
             let tx = tx.clone();
-            let w = Worker {
-                exec,
-                store,
-                opts,
-                cancel,
-                queue: &queue,
-                busy: &busy,
-                drain: &drain,
-                tx,
-            };
+            let w = Worker { exec, store, opts, cancel, queue: &queue, busy: &busy, drain: &drain, tx };
             scope.spawn(move || w.run());
         }
         drop(tx);
@@ -172,10 +156,7 @@ impl<E: Executor> Worker<'_, E> {
             let hash = self.exec.hash(&job).to_string();
             if let Err(e) = self.one(job, &hash) {
                 // Only an I/O failure of the store lands here; the job stays unfinished.
-                self.send(Event::StoreError {
-                    hash,
-                    error: e.to_string(),
-                });
+                self.send(Event::StoreError { hash, error: e.to_string() });
             }
         }
     }
@@ -189,10 +170,7 @@ impl<E: Executor> Worker<'_, E> {
         let hash = hash.to_string();
         let claim = match self.store.claim(&hash)? {
             ClaimAttempt::Busy(owner) => {
-                self.send(Event::Busy {
-                    hash: hash.clone(),
-                    owner,
-                });
+                self.send(Event::Busy { hash: hash.clone(), owner });
                 self.busy.lock().unwrap().push_back((job, Instant::now()));
                 return Ok(());
             }
@@ -202,10 +180,7 @@ impl<E: Executor> Worker<'_, E> {
         let found = match self.store.finished(&hash) {
             Some(RunState::Done(r)) => Some(RunOutcome::Done(*r)),
             Some(RunState::Failed(f)) => {
-                let retry = match (
-                    self.opts.retry_failed_before,
-                    self.store.failure_time(&hash),
-                ) {
+                let retry = match (self.opts.retry_failed_before, self.store.failure_time(&hash)) {
                     (Some(before), Some(t)) => t < before,
                     _ => false,
                 };
@@ -215,11 +190,7 @@ impl<E: Executor> Worker<'_, E> {
         };
         if let Some(outcome) = found {
             self.store.release(claim)?;
-            self.send(Event::Finished {
-                hash,
-                outcome,
-                ran: false,
-            });
+            self.send(Event::Finished { hash, outcome, ran: false });
             return Ok(());
         }
         if self.cancel.is_cancelled() {
@@ -258,11 +229,7 @@ impl<E: Executor> Worker<'_, E> {
             attempt += 1;
         };
         self.store.release(claim)?;
-        self.send(Event::Finished {
-            hash,
-            outcome,
-            ran: true,
-        });
+        self.send(Event::Finished { hash, outcome, ran: true });
         Ok(())
     }
 }
@@ -284,8 +251,7 @@ pub mod fake {
 
     use super::Executor;
     use crate::outcome::{
-        write_json_atomic, FailureClass, RunFailure, RunOutcome, RunResult, RESULT_FORMAT,
-        VX_LAYERS,
+        write_json_atomic, FailureClass, RunFailure, RunOutcome, RunResult, RESULT_FORMAT, VX_LAYERS,
     };
     use crate::process::{self, CancelToken, ProcessOutcome};
 
@@ -326,11 +292,7 @@ pub mod fake {
 
     /// The fake's MFR: a smooth function of the swept values, in (0, 1).
     pub fn fake_mfr(values: &[f64]) -> f64 {
-        let s: f64 = values
-            .iter()
-            .enumerate()
-            .map(|(i, v)| (i + 1) as f64 * v)
-            .sum();
+        let s: f64 = values.iter().enumerate().map(|(i, v)| (i + 1) as f64 * v).sum();
         0.5 + 0.4 * s.sin()
     }
 
@@ -368,10 +330,7 @@ pub mod fake {
                 h.update(v.to_bits().to_le_bytes());
             }
             let hash = h.finalize().iter().map(|b| format!("{b:02x}")).collect();
-            Ok(FakeJob {
-                values: swept.to_vec(),
-                hash,
-            })
+            Ok(FakeJob { values: swept.to_vec(), hash })
         }
 
         fn hash<'a>(&self, job: &'a FakeJob) -> &'a str {
@@ -419,10 +378,9 @@ pub mod fake {
             };
             match (p, behaviour) {
                 (ProcessOutcome::Cancelled, _) => RunOutcome::Cancelled,
-                (ProcessOutcome::TimedOut, _) => fail(
-                    FailureClass::TimedOut,
-                    format!("ran past its timeout of {:?}", self.timeout),
-                ),
+                (ProcessOutcome::TimedOut, _) => {
+                    fail(FailureClass::TimedOut, format!("ran past its timeout of {:?}", self.timeout))
+                }
                 (ProcessOutcome::Exited(0), Behaviour::Fail(_, class)) => {
                     fail(class, format!("fake {} failure", class.as_str()))
                 }

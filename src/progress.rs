@@ -67,12 +67,7 @@ impl Progress {
             b.enable_steady_tick(Duration::from_millis(500));
             b
         });
-        Progress {
-            mode,
-            bar,
-            start: Instant::now(),
-            last_line: Instant::now(),
-        }
+        Progress { mode, bar, start: Instant::now(), last_line: Instant::now() }
     }
 
     /// Redraw (bar) or print a line if [`LINE_EVERY`] has passed (lines).
@@ -113,10 +108,7 @@ impl Progress {
 
     fn message(&self, c: &Counts) -> String {
         let eta = eta(c, self.start.elapsed()).map_or("?".to_string(), human);
-        format!(
-            "done {} failed {} running {} ETA {eta}",
-            c.done, c.failed, c.running
-        )
+        format!("done {} failed {} running {} ETA {eta}", c.done, c.failed, c.running)
     }
 }
 
@@ -149,17 +141,8 @@ mod tests {
     #[test]
     fn eta_uses_only_this_sessions_rate() {
         // 10 reused + 10 run here in 100 s; 20 left → 200 s.
-        let c = Counts {
-            total: 40,
-            done: 18,
-            failed: 2,
-            running: 2,
-            reused: 10,
-        };
-        assert_eq!(
-            eta(&c, Duration::from_secs(100)),
-            Some(Duration::from_secs(200))
-        );
+        let c = Counts { total: 40, done: 18, failed: 2, running: 2, reused: 10 };
+        assert_eq!(eta(&c, Duration::from_secs(100)), Some(Duration::from_secs(200)));
         let fresh = Counts { reused: 20, ..c };
         assert_eq!(eta(&fresh, Duration::from_secs(100)), None);
     }

@@ -39,10 +39,7 @@ pub const JOBLOG_HEADER: &str = "seq\thost\tpid\tstart\truntime_s\tstatus\tclass
 #[derive(Debug, thiserror::Error)]
 pub enum StoreError {
     #[error("{}: {source}", path.display())]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
+    Io { path: PathBuf, source: std::io::Error },
     /// The directory is not a sweep directory this version can read.
     #[error("{}: {reason}", path.display())]
     NotASweep { path: PathBuf, reason: String },
@@ -58,25 +55,15 @@ impl From<StoreError> for crate::Error {
 }
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> StoreError + '_ {
-    move |source| StoreError::Io {
-        path: path.to_path_buf(),
-        source,
-    }
+    move |source| StoreError::Io { path: path.to_path_buf(), source }
 }
 
 /// How the points were chosen; enough to extend the design later.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(tag = "kind", rename_all = "kebab-case")]
 pub enum DesignRecord {
-    Lattice {
-        levels: Vec<usize>,
-    },
-    Lds {
-        step: usize,
-        max: usize,
-        scrambling: crate::sweep::Scrambling,
-        seed: u64,
-    },
+    Lattice { levels: Vec<usize> },
+    Lds { step: usize, max: usize, scrambling: crate::sweep::Scrambling, seed: u64 },
 }
 
 /// One nested space: a lattice level or an LDS prefix.
@@ -241,11 +228,10 @@ impl Store {
                 ),
             });
         }
-        let manifest: Manifest =
-            serde_json::from_str(&text).map_err(|e| StoreError::NotASweep {
-                path: path.clone(),
-                reason: format!("unreadable manifest: {e}"),
-            })?;
+        let manifest: Manifest = serde_json::from_str(&text).map_err(|e| StoreError::NotASweep {
+            path: path.clone(),
+            reason: format!("unreadable manifest: {e}"),
+        })?;
         let toml_path = dir.join("sweep.toml");
         let sweep = fs::read_to_string(&toml_path).map_err(|e| StoreError::NotASweep {
             path: toml_path.clone(),
@@ -279,9 +265,7 @@ impl Store {
 
     /// Modification time of the run's `failure.json`, if it has one.
     pub fn failure_time(&self, hash: &str) -> Option<SystemTime> {
-        fs::metadata(self.run_dir(hash).join("failure.json"))
-            .and_then(|m| m.modified())
-            .ok()
+        fs::metadata(self.run_dir(hash).join("failure.json")).and_then(|m| m.modified()).ok()
     }
 
     /// Claim the run `hash`: create `runs/<hash>/claim` exclusively, taking over a claim whose
@@ -293,24 +277,13 @@ impl Store {
         let _lock = DirLock::take(&self.dir.join(".lock"))?;
         let mut stale = None;
         for _ in 0..2 {
-            match OpenOptions::new()
-                .write(true)
-                .create_new(true)
-                .mode(0o644)
-                .open(&path)
-            {
+            match OpenOptions::new().write(true).create_new(true).mode(0o644).open(&path) {
                 Ok(mut f) => {
                     let mut me = self.me.clone();
                     me.claimed_at = unix_now();
                     let text = serde_json::to_string(&me).expect("claim serialises");
                     f.write_all(text.as_bytes()).map_err(io(&path))?;
-                    return Ok(ClaimAttempt::Claimed(
-                        Claim {
-                            path,
-                            session: me.session,
-                        },
-                        stale,
-                    ));
+                    return Ok(ClaimAttempt::Claimed(Claim { path, session: me.session }, stale));
                 }
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
                     // Written under the lock, so an unreadable claim means its writer died.
@@ -375,17 +348,8 @@ impl Store {
             f.read_to_string(&mut text).map_err(io(&path))?;
         }
         let seq = text.lines().skip(1).count() as u64;
-        let file = OpenOptions::new()
-            .create(true)
-            .append(true)
-            .open(&path)
-            .map_err(io(&path))?;
-        Ok(Joblog {
-            file,
-            path,
-            seq,
-            host: self.host.clone(),
-        })
+        let file = OpenOptions::new().create(true).append(true).open(&path).map_err(io(&path))?;
+        Ok(Joblog { file, path, seq, host: self.host.clone() })
     }
 }
 
@@ -412,12 +376,7 @@ struct DirLock(File);
 
 impl DirLock {
     fn take(path: &Path) -> Result<DirLock, StoreError> {
-        let f = OpenOptions::new()
-            .create(true)
-            .truncate(false)
-            .write(true)
-            .open(path)
-            .map_err(io(path))?;
+        let f = OpenOptions::new().create(true).truncate(false).write(true).open(path).map_err(io(path))?;
         // SAFETY: flock on a file descriptor we own.
         if unsafe { libc::flock(f.as_raw_fd(), libc::LOCK_EX) } != 0 {
             return Err(io(path)(std::io::Error::last_os_error()));
@@ -458,11 +417,7 @@ pub struct Joblog {
 impl Joblog {
     pub fn append(&mut self, a: &AttemptRecord) -> Result<(), StoreError> {
         self.seq += 1;
-        let start = a
-            .start
-            .duration_since(UNIX_EPOCH)
-            .map(|d| d.as_secs_f64())
-            .unwrap_or(0.0);
+        let start = a.start.duration_since(UNIX_EPOCH).map(|d| d.as_secs_f64()).unwrap_or(0.0);
         let line = format!(
             "{}\t{}\t{}\t{:.3}\t{:.3}\t{}\t{}\t{}\n",
             self.seq,
@@ -556,12 +511,10 @@ pub fn write_results(
                     r.mfr_flux.to_string(),
                     r.steady.to_string(),
                 ]);
-                row.extend((0..VX_LAYERS).map(|k| {
-                    r.vx.get(k)
-                        .copied()
-                        .flatten()
-                        .map_or(String::new(), |v| v.to_string())
-                }));
+                row.extend(
+                    (0..VX_LAYERS)
+                        .map(|k| r.vx.get(k).copied().flatten().map_or(String::new(), |v| v.to_string())),
+                );
                 row.push(format!("{:.3}", r.wall_time));
             }
             PointStatus::Failed(f) => {
@@ -595,10 +548,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), StoreError> {
 }
 
 fn unix_now() -> f64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map(|d| d.as_secs_f64())
-        .unwrap_or(0.0)
+    SystemTime::now().duration_since(UNIX_EPOCH).map(|d| d.as_secs_f64()).unwrap_or(0.0)
 }
 
 /// This machine's host name.
@@ -628,10 +578,7 @@ pub fn process_start_ticks(pid: u32) -> Option<u64> {
 
 /// Counts of a directory's points by state, for `sweep status` and the driver.
 pub fn point_states(store: &Store, points: &[PointRecord]) -> BTreeMap<String, RunState> {
-    points
-        .iter()
-        .map(|p| (p.hash.clone(), store.state(&p.hash)))
-        .collect()
+    points.iter().map(|p| (p.hash.clone(), store.state(&p.hash))).collect()
 }
 
 #[cfg(test)]
@@ -665,21 +612,14 @@ mod tests {
         }
         assert!(matches!(b.state("h1"), RunState::Running(_)));
         a.release(claim).unwrap();
-        assert!(matches!(
-            b.claim("h1").unwrap(),
-            ClaimAttempt::Claimed(_, None)
-        ));
+        assert!(matches!(b.claim("h1").unwrap(), ClaimAttempt::Claimed(_, None)));
     }
 
     #[test]
     fn a_claim_of_a_dead_process_is_taken_over() {
         let dir = tempfile::tempdir().unwrap();
         let s = Store::open(dir.path());
-        let dead = ClaimInfo {
-            pid: dead_pid(),
-            session: "gone".into(),
-            ..s.me.clone()
-        };
+        let dead = ClaimInfo { pid: dead_pid(), session: "gone".into(), ..s.me.clone() };
         claim_file(&s, "h", &dead);
         assert_eq!(s.state("h"), RunState::Incomplete);
         match s.claim("h").unwrap() {
@@ -693,28 +633,18 @@ mod tests {
         // Our own pid is alive, but with another start time it is a different process.
         let dir = tempfile::tempdir().unwrap();
         let s = Store::open(dir.path());
-        let reused = ClaimInfo {
-            start_ticks: s.me.start_ticks + 1,
-            session: "earlier".into(),
-            ..s.me.clone()
-        };
+        let reused =
+            ClaimInfo { start_ticks: s.me.start_ticks + 1, session: "earlier".into(), ..s.me.clone() };
         claim_file(&s, "h", &reused);
-        assert!(matches!(
-            s.claim("h").unwrap(),
-            ClaimAttempt::Claimed(_, Some(_))
-        ));
+        assert!(matches!(s.claim("h").unwrap(), ClaimAttempt::Claimed(_, Some(_))));
     }
 
     #[test]
     fn a_claim_from_another_host_stands() {
         let dir = tempfile::tempdir().unwrap();
         let s = Store::open(dir.path());
-        let remote = ClaimInfo {
-            host: "elsewhere".into(),
-            pid: dead_pid(),
-            session: "remote".into(),
-            ..s.me.clone()
-        };
+        let remote =
+            ClaimInfo { host: "elsewhere".into(), pid: dead_pid(), session: "remote".into(), ..s.me.clone() };
         claim_file(&s, "h", &remote);
         assert!(matches!(s.claim("h").unwrap(), ClaimAttempt::Busy(_)));
     }
@@ -725,10 +655,7 @@ mod tests {
         let s = Store::open(dir.path());
         fs::create_dir_all(s.run_dir("h")).unwrap();
         fs::write(s.run_dir("h").join("claim"), "{\"host\": \"x").unwrap();
-        assert!(matches!(
-            s.claim("h").unwrap(),
-            ClaimAttempt::Claimed(_, None)
-        ));
+        assert!(matches!(s.claim("h").unwrap(), ClaimAttempt::Claimed(_, None)));
     }
 
     #[test]
@@ -746,18 +673,13 @@ mod tests {
     fn cleaning_keeps_only_the_claim() {
         let dir = tempfile::tempdir().unwrap();
         let s = Store::open(dir.path());
-        let ClaimAttempt::Claimed(claim, _) = s.claim("h").unwrap() else {
-            panic!()
-        };
+        let ClaimAttempt::Claimed(claim, _) = s.claim("h").unwrap() else { panic!() };
         let d = s.run_dir("h");
         fs::write(d.join("log.liggghts"), "half a log").unwrap();
         fs::create_dir(d.join("post")).unwrap();
         fs::write(d.join("post/dump.1"), "x").unwrap();
         s.clean_run_dir("h").unwrap();
-        let left: Vec<_> = fs::read_dir(&d)
-            .unwrap()
-            .map(|e| e.unwrap().file_name())
-            .collect();
+        let left: Vec<_> = fs::read_dir(&d).unwrap().map(|e| e.unwrap().file_name()).collect();
         assert_eq!(left, vec![std::ffi::OsString::from("claim")]);
         s.release(claim).unwrap();
         assert!(!d.join("claim").exists());
@@ -782,11 +704,7 @@ mod tests {
         assert_eq!(lines.len(), 2);
         assert_eq!((lines[0].seq, lines[0].hash.as_str()), (1, "a"));
         assert_eq!(
-            (
-                lines[1].seq,
-                lines[1].status.as_str(),
-                lines[1].class.as_str()
-            ),
+            (lines[1].seq, lines[1].status.as_str(), lines[1].class.as_str()),
             (2, "failed", "timed-out")
         );
     }

@@ -26,8 +26,7 @@ use crate::pool::{self, Event, Executor, Flow, PoolOptions};
 use crate::process::CancelToken;
 use crate::progress::{Counts, Progress, ProgressMode};
 use crate::store::{
-    self, DesignRecord, Manifest, PointRecord, PointStatus, RunState, SpaceRecord, Store,
-    MANIFEST_FORMAT,
+    self, DesignRecord, Manifest, PointRecord, PointStatus, RunState, SpaceRecord, Store, MANIFEST_FORMAT,
 };
 use crate::sweep::Sweep;
 
@@ -53,9 +52,7 @@ pub struct PointJob {
 impl PointExecutor {
     /// Find LIGGGHTS and load the template of `sweep`.
     pub fn new(sweep: Sweep) -> Result<PointExecutor> {
-        Ok(PointExecutor {
-            ctx: PointContext::new(sweep)?,
-        })
+        Ok(PointExecutor { ctx: PointContext::new(sweep)? })
     }
 }
 
@@ -68,10 +65,7 @@ impl Executor for PointExecutor {
 
     fn prepare(&self, swept: &[f64]) -> Result<PointJob> {
         let p = point::prepare(&self.ctx, swept)?;
-        Ok(PointJob {
-            values: swept.to_vec(),
-            hash: p.hash,
-        })
+        Ok(PointJob { values: swept.to_vec(), hash: p.hash })
     }
 
     fn hash<'a>(&self, job: &'a PointJob) -> &'a str {
@@ -82,11 +76,7 @@ impl Executor for PointExecutor {
         match point::prepare(&self.ctx, &job.values) {
             Ok(p) if p.hash == job.hash => point::execute(&self.ctx, &p, run_dir, cancel),
             // Prepared once already, so neither can happen short of a bug; fail the run loudly.
-            Ok(p) => point_failure(
-                job,
-                run_dir,
-                format!("deck hash changed on re-render: {}", p.hash),
-            ),
+            Ok(p) => point_failure(job, run_dir, format!("deck hash changed on re-render: {}", p.hash)),
             Err(e) => point_failure(job, run_dir, format!("cannot render the deck: {e}")),
         }
     }
@@ -120,11 +110,7 @@ pub struct RunOptions {
 /// space's points. Convergence checking (a later issue) implements it; `Flow::Drain` stops
 /// starting new runs.
 pub trait SpaceHook {
-    fn space_complete(
-        &mut self,
-        space: &SpaceRecord,
-        points: &[(&PointRecord, &PointStatus)],
-    ) -> Flow;
+    fn space_complete(&mut self, space: &SpaceRecord, points: &[(&PointRecord, &PointStatus)]) -> Flow;
 }
 
 /// The hook that never stops a sweep.
@@ -204,12 +190,7 @@ pub fn plan<E: Executor>(exec: &E, sweep: &Sweep, design: &DesignRecord) -> Resu
             }
             out
         }
-        DesignRecord::Lds {
-            step,
-            max,
-            scrambling,
-            seed,
-        } => {
+        DesignRecord::Lds { step, max, scrambling, seed } => {
             if *step == 0 || *max == 0 || *max > MAX_POINTS {
                 return Err(Error::input(format!(
                     "lds step {step}, max {max}: expected 1 ≤ step and 1 ≤ max ≤ {MAX_POINTS}"
@@ -218,9 +199,7 @@ pub fn plan<E: Executor>(exec: &E, sweep: &Sweep, design: &DesignRecord) -> Resu
             let all = halton(dim, *max, *scrambling, *seed);
             let mut ends: Vec<usize> = (1..).map(|k| k * step).take_while(|&n| n < *max).collect();
             ends.push(*max);
-            ends.into_iter()
-                .map(|n| (format!("lds {n}"), all[..n].to_vec()))
-                .collect()
+            ends.into_iter().map(|n| (format!("lds {n}"), all[..n].to_vec())).collect()
         }
     };
     let mut points: Vec<PointRecord> = Vec::new();
@@ -234,26 +213,15 @@ pub fn plan<E: Executor>(exec: &E, sweep: &Sweep, design: &DesignRecord) -> Resu
             let job = exec.prepare(&values)?;
             let hash = exec.hash(&job).to_string();
             let index = *by_hash.entry(hash.clone()).or_insert_with(|| {
-                points.push(PointRecord {
-                    index: points.len(),
-                    values,
-                    hash,
-                });
+                points.push(PointRecord { index: points.len(), values, hash });
                 jobs.push(job);
                 points.len() - 1
             });
             members.push(index);
         }
-        records.push(SpaceRecord {
-            label,
-            points: members,
-        });
+        records.push(SpaceRecord { label, points: members });
     }
-    Ok(Plan {
-        spaces: records,
-        points,
-        jobs,
-    })
+    Ok(Plan { spaces: records, points, jobs })
 }
 
 /// The sweep file as resolved for `DIR/sweep.toml`: defaults filled in, the design actually run,
@@ -265,12 +233,7 @@ pub fn resolved_toml(sweep: &Sweep, design: &DesignRecord) -> Result<String> {
     }
     match design {
         DesignRecord::Lattice { levels } => f.design.lattice_levels = levels.clone(),
-        DesignRecord::Lds {
-            step,
-            max,
-            scrambling,
-            seed,
-        } => {
+        DesignRecord::Lds { step, max, scrambling, seed } => {
             f.design.lds.step = *step;
             f.design.lds.max = *max;
             f.design.lds.scrambling = *scrambling;
@@ -295,11 +258,7 @@ pub fn start<E: Executor>(
     hook: &mut dyn SpaceHook,
     cancel: &CancelToken,
 ) -> Result<Summary> {
-    let Plan {
-        spaces,
-        points,
-        jobs,
-    } = plan(exec, sweep, &design)?;
+    let Plan { spaces, points, jobs } = plan(exec, sweep, &design)?;
     let toml = resolved_toml(sweep, &design)?;
     let manifest = Manifest {
         format: MANIFEST_FORMAT,
@@ -328,13 +287,7 @@ pub fn start<E: Executor>(
 
 /// An existing directory may be run again with the same sweep, or extended: the same design
 /// kind and sweep apart from the design, the same identity, and its points a prefix of ours.
-fn check_extension(
-    dir: &Path,
-    old: &Manifest,
-    old_toml: &str,
-    new: &Manifest,
-    new_toml: &str,
-) -> Result<()> {
+fn check_extension(dir: &Path, old: &Manifest, old_toml: &str, new: &Manifest, new_toml: &str) -> Result<()> {
     let d = dir.display();
     let without_design = |t: &str| -> Option<toml::Table> {
         let mut v: toml::Table = toml::from_str(t).ok()?;
@@ -364,11 +317,7 @@ fn check_extension(
         )));
     }
     let prefix = old.points.len() <= new.points.len()
-        && old
-            .points
-            .iter()
-            .zip(&new.points)
-            .all(|(a, b)| a.hash == b.hash);
+        && old.points.iter().zip(&new.points).all(|(a, b)| a.hash == b.hash);
     if !prefix {
         return Err(Error::input(format!(
             "{d}: its {} points are not the first points of this design ({}); a design can \
@@ -389,14 +338,9 @@ fn design_kind(d: &DesignRecord) -> &'static str {
 
 fn design_label(d: &DesignRecord) -> String {
     match d {
-        DesignRecord::Lattice { levels } => format!(
-            "lattice levels {}",
-            levels
-                .iter()
-                .map(|l| l.to_string())
-                .collect::<Vec<_>>()
-                .join(",")
-        ),
+        DesignRecord::Lattice { levels } => {
+            format!("lattice levels {}", levels.iter().map(|l| l.to_string()).collect::<Vec<_>>().join(","))
+        }
         DesignRecord::Lds { step, max, .. } => format!("lds step {step}, max {max}"),
     }
 }
@@ -409,17 +353,8 @@ pub fn identity_diff(old: &serde_json::Value, new: &serde_json::Value) -> Vec<St
                 let keys: std::collections::BTreeSet<&String> = x.keys().chain(y.keys()).collect();
                 let null = serde_json::Value::Null;
                 for k in keys {
-                    let p = if path.is_empty() {
-                        k.clone()
-                    } else {
-                        format!("{path}.{k}")
-                    };
-                    walk(
-                        &p,
-                        x.get(k).unwrap_or(&null),
-                        y.get(k).unwrap_or(&null),
-                        out,
-                    );
+                    let p = if path.is_empty() { k.clone() } else { format!("{path}.{k}") };
+                    walk(&p, x.get(k).unwrap_or(&null), y.get(k).unwrap_or(&null), out);
                 }
             }
             _ if a != b => out.push(format!("{path}: {a} → {b}")),
@@ -459,10 +394,7 @@ pub fn resume<E: Executor>(
     let diff = identity_diff(&manifest.identity, &identity);
     if !opts.force && (!diff.is_empty() || changed > 0) {
         let what = if diff.is_empty() {
-            format!(
-                "{changed} of {} decks render differently",
-                manifest.points.len()
-            )
+            format!("{changed} of {} decks render differently", manifest.points.len())
         } else {
             diff.join("; ")
         };
@@ -485,10 +417,7 @@ pub fn resume<E: Executor>(
 }
 
 /// Run the unfinished points of a manifest.
-#[expect(
-    clippy::too_many_arguments,
-    reason = "one call site each in start and resume"
-)]
+#[expect(clippy::too_many_arguments, reason = "one call site each in start and resume")]
 fn execute<E: Executor>(
     store: &Store,
     manifest: &Manifest,
@@ -563,39 +492,18 @@ impl<'a> Reporter<'a> {
         let mut member_of = vec![Vec::new(); manifest.points.len()];
         let mut unfinished = Vec::with_capacity(manifest.spaces.len());
         for (k, s) in manifest.spaces.iter().enumerate() {
-            unfinished.push(
-                s.points
-                    .iter()
-                    .filter(|&&i| !status[i].is_finished())
-                    .count(),
-            );
+            unfinished.push(s.points.iter().filter(|&&i| !status[i].is_finished()).count());
             for &i in &s.points {
                 member_of[i].push(k);
             }
         }
-        let done = status
-            .iter()
-            .filter(|s| matches!(s, PointStatus::Done(_)))
-            .count();
-        let failed = status
-            .iter()
-            .filter(|s| matches!(s, PointStatus::Failed(_)))
-            .count();
-        let counts = Counts {
-            total: status.len(),
-            done,
-            failed,
-            running: 0,
-            reused: done + failed,
-        };
+        let done = status.iter().filter(|s| matches!(s, PointStatus::Done(_))).count();
+        let failed = status.iter().filter(|s| matches!(s, PointStatus::Failed(_))).count();
+        let counts = Counts { total: status.len(), done, failed, running: 0, reused: done + failed };
         let rep = Reporter {
             store,
             manifest,
-            by_hash: manifest
-                .points
-                .iter()
-                .map(|p| (p.hash.as_str(), p.index))
-                .collect(),
+            by_hash: manifest.points.iter().map(|p| (p.hash.as_str(), p.index)).collect(),
             status,
             unfinished,
             member_of,
@@ -610,12 +518,7 @@ impl<'a> Reporter<'a> {
             results_written: Instant::now(),
             errors: Vec::new(),
         };
-        store::write_results(
-            store.dir(),
-            &manifest.parameters,
-            &manifest.points,
-            &rep.status,
-        )?;
+        store::write_results(store.dir(), &manifest.parameters, &manifest.points, &rep.status)?;
         Ok(rep)
     }
 
@@ -626,11 +529,8 @@ impl<'a> Reporter<'a> {
             && self.unfinished[self.next_space] == 0
         {
             let space = &self.manifest.spaces[self.next_space];
-            let rows: Vec<(&PointRecord, &PointStatus)> = space
-                .points
-                .iter()
-                .map(|&i| (&self.manifest.points[i], &self.status[i]))
-                .collect();
+            let rows: Vec<(&PointRecord, &PointStatus)> =
+                space.points.iter().map(|&i| (&self.manifest.points[i], &self.status[i])).collect();
             if self.hook.space_complete(space, &rows) == Flow::Drain {
                 self.stopped_after = Some(space.label.clone());
             }
@@ -835,8 +735,7 @@ impl StatusReport {
         }
         s.push_str(&format!(
             "  converged: {}\n",
-            self.converged
-                .map_or("unknown", |c| if c { "yes" } else { "no" })
+            self.converged.map_or("unknown", |c| if c { "yes" } else { "no" })
         ));
         s
     }

@@ -27,21 +27,11 @@ fn sweep(dir: &Path, run: &str) -> Sweep {
 }
 
 fn opts(jobs: usize) -> RunOptions {
-    RunOptions {
-        jobs,
-        progress: ProgressMode::Quiet,
-        retry_failed: false,
-        force: false,
-    }
+    RunOptions { jobs, progress: ProgressMode::Quiet, retry_failed: false, force: false }
 }
 
 fn lds(max: usize, step: usize) -> DesignRecord {
-    DesignRecord::Lds {
-        step,
-        max,
-        scrambling: Scrambling::Random,
-        seed: 7,
-    }
+    DesignRecord::Lds { step, max, scrambling: Scrambling::Random, seed: 7 }
 }
 
 /// results.csv as (hash, status, failure, mfr) rows.
@@ -53,12 +43,7 @@ fn results(dir: &Path) -> Vec<(String, String, String, String)> {
     r.records()
         .map(|rec| {
             let rec = rec.unwrap();
-            (
-                rec[hash].to_string(),
-                rec[status].to_string(),
-                rec[failure].to_string(),
-                rec[mfr].to_string(),
-            )
+            (rec[hash].to_string(), rec[status].to_string(), rec[failure].to_string(), rec[mfr].to_string())
         })
         .collect()
 }
@@ -79,25 +64,10 @@ fn every_point_runs_once_with_its_result_in_results_csv() {
     let s = sweep(tmp.path(), "");
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(100 * MS));
-    let sum = sweeprun::start(
-        &s,
-        lds(8, 4),
-        &out,
-        &exec,
-        &opts(3),
-        &mut RunAll,
-        &CancelToken::new(),
-    )
-    .unwrap();
-    assert_eq!(
-        (sum.done, sum.failed, sum.pending, sum.exit_code()),
-        (8, 0, 0, 0)
-    );
-    assert_eq!(
-        exec.peak.load(Ordering::SeqCst),
-        3,
-        "three slots were all used"
-    );
+    let sum =
+        sweeprun::start(&s, lds(8, 4), &out, &exec, &opts(3), &mut RunAll, &CancelToken::new()).unwrap();
+    assert_eq!((sum.done, sum.failed, sum.pending, sum.exit_code()), (8, 0, 0, 0));
+    assert_eq!(exec.peak.load(Ordering::SeqCst), 3, "three slots were all used");
     let (manifest, _) = store::Store::read_manifest(&out).unwrap();
     let rows = results(&out);
     assert_eq!(rows.len(), 8);
@@ -124,24 +94,11 @@ fn a_free_slot_takes_the_next_job_while_a_long_one_runs() {
         let long = f.get_or_insert_with(|| v.to_vec()) == v;
         Behaviour::Succeed(if long { 1500 * MS } else { 20 * MS })
     });
-    sweeprun::start(
-        &s,
-        lds(8, 8),
-        &out,
-        &exec,
-        &opts(2),
-        &mut RunAll,
-        &CancelToken::new(),
-    )
-    .unwrap();
+    sweeprun::start(&s, lds(8, 8), &out, &exec, &opts(2), &mut RunAll, &CancelToken::new()).unwrap();
     let log = store::read_joblog(&out).unwrap();
     let (manifest, _) = store::Store::read_manifest(&out).unwrap();
     assert_eq!(log.len(), 8);
-    assert_eq!(
-        log.last().unwrap().hash,
-        manifest.points[0].hash,
-        "the long job ends last"
-    );
+    assert_eq!(log.last().unwrap().hash, manifest.points[0].hash, "the long job ends last");
 }
 
 #[test]
@@ -167,16 +124,8 @@ fn transient_failures_are_retried_and_physics_failures_are_not() {
             Behaviour::Succeed(MS)
         }
     });
-    let sum = sweeprun::start(
-        &s,
-        lds(16, 16),
-        &out,
-        &exec,
-        &opts(2),
-        &mut RunAll,
-        &CancelToken::new(),
-    )
-    .unwrap();
+    let sum =
+        sweeprun::start(&s, lds(16, 16), &out, &exec, &opts(2), &mut RunAll, &CancelToken::new()).unwrap();
     let (manifest, _) = store::Store::read_manifest(&out).unwrap();
     let attempts = exec.attempts();
     let rows = results(&out);
@@ -188,16 +137,10 @@ fn transient_failures_are_retried_and_physics_failures_are_not() {
             assert_eq!((n, row.1.as_str()), (2, "done"), "{gap}");
             seen[0] = true;
         } else if gap < 3.0 {
-            assert_eq!(
-                (n, row.1.as_str(), row.2.as_str()),
-                (1, "failed", "unstable")
-            );
+            assert_eq!((n, row.1.as_str(), row.2.as_str()), (1, "failed", "unstable"));
             seen[1] = true;
         } else if gap < 3.5 {
-            assert_eq!(
-                (n, row.1.as_str(), row.2.as_str()),
-                (3, "failed", "signalled")
-            );
+            assert_eq!((n, row.1.as_str(), row.2.as_str()), (3, "failed", "signalled"));
             seen[2] = true;
         } else {
             assert_eq!((n, row.1.as_str()), (1, "done"));
@@ -217,24 +160,11 @@ fn a_hanging_job_is_killed_at_its_timeout_and_the_sweep_goes_on() {
     let tmp = tempfile::tempdir().unwrap();
     let s = sweep(tmp.path(), "retries = 1");
     let out = tmp.path().join("out");
-    let mut exec = FakeExecutor::new(|v, _| {
-        if v[0] < 2.5 {
-            Behaviour::Hang
-        } else {
-            Behaviour::Succeed(MS)
-        }
-    });
+    let mut exec =
+        FakeExecutor::new(|v, _| if v[0] < 2.5 { Behaviour::Hang } else { Behaviour::Succeed(MS) });
     exec.timeout = 300 * MS;
-    let sum = sweeprun::start(
-        &s,
-        lds(8, 8),
-        &out,
-        &exec,
-        &opts(2),
-        &mut RunAll,
-        &CancelToken::new(),
-    )
-    .unwrap();
+    let sum =
+        sweeprun::start(&s, lds(8, 8), &out, &exec, &opts(2), &mut RunAll, &CancelToken::new()).unwrap();
     let (manifest, _) = store::Store::read_manifest(&out).unwrap();
     let rows = results(&out);
     let mut hung = 0;
@@ -244,8 +174,7 @@ fn a_hanging_job_is_killed_at_its_timeout_and_the_sweep_goes_on() {
             assert_eq!((row.1.as_str(), row.2.as_str()), ("failed", "timed-out"));
             assert_eq!(exec.attempts()[&p.hash], 2, "a timeout is retried once");
             let f: serde_json::Value = serde_json::from_str(
-                &std::fs::read_to_string(out.join("runs").join(&p.hash).join("failure.json"))
-                    .unwrap(),
+                &std::fs::read_to_string(out.join("runs").join(&p.hash).join("failure.json")).unwrap(),
             )
             .unwrap();
             assert!(f["reason"].as_str().unwrap().contains("timeout"));
@@ -267,16 +196,8 @@ fn an_interrupted_sweep_resumes_without_rerunning_finished_points() {
     // The reference: one uninterrupted run.
     let reference = tmp.path().join("reference");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(50 * MS));
-    sweeprun::start(
-        &s,
-        design.clone(),
-        &reference,
-        &exec,
-        &opts(2),
-        &mut RunAll,
-        &CancelToken::new(),
-    )
-    .unwrap();
+    sweeprun::start(&s, design.clone(), &reference, &exec, &opts(2), &mut RunAll, &CancelToken::new())
+        .unwrap();
 
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(200 * MS));
@@ -298,15 +219,9 @@ fn an_interrupted_sweep_resumes_without_rerunning_finished_points() {
 
     let exec2 = FakeExecutor::new(|_, _| Behaviour::Succeed(50 * MS));
     let sum2 = sweeprun::resume(&out, &exec2, &opts(2), &mut RunAll, &CancelToken::new()).unwrap();
-    assert_eq!(
-        (sum2.done, sum2.reused, sum2.exit_code()),
-        (12, before.len(), 0)
-    );
+    assert_eq!((sum2.done, sum2.reused, sum2.exit_code()), (12, before.len(), 0));
     for h in before.keys() {
-        assert!(
-            !exec2.attempts().contains_key(h),
-            "finished run {h} ran again"
-        );
+        assert!(!exec2.attempts().contains_key(h), "finished run {h} ran again");
     }
     assert!(done_attempts(&out).values().all(|&n| n == 1));
     assert_eq!(results(&out), results(&reference));
@@ -326,10 +241,8 @@ fn two_resumes_on_one_directory_never_run_a_point_twice() {
     let a = FakeExecutor::new(|_, _| Behaviour::Succeed(100 * MS));
     let b = FakeExecutor::new(|_, _| Behaviour::Succeed(100 * MS));
     let (sa, sb) = std::thread::scope(|sc| {
-        let ha =
-            sc.spawn(|| sweeprun::resume(&out, &a, &opts(2), &mut RunAll, &CancelToken::new()));
-        let hb =
-            sc.spawn(|| sweeprun::resume(&out, &b, &opts(2), &mut RunAll, &CancelToken::new()));
+        let ha = sc.spawn(|| sweeprun::resume(&out, &a, &opts(2), &mut RunAll, &CancelToken::new()));
+        let hb = sc.spawn(|| sweeprun::resume(&out, &b, &opts(2), &mut RunAll, &CancelToken::new()));
         (ha.join().unwrap().unwrap(), hb.join().unwrap().unwrap())
     });
     assert_eq!((sa.done, sb.done), (10, 10), "each sees every point done");
@@ -349,16 +262,7 @@ fn a_stale_claim_and_a_half_written_run_dir_are_cleaned_and_rerun() {
     let s = sweep(tmp.path(), "");
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    sweeprun::start(
-        &s,
-        lds(3, 3),
-        &out,
-        &exec,
-        &opts(1),
-        &mut RunAll,
-        &CancelToken::new(),
-    )
-    .unwrap();
+    sweeprun::start(&s, lds(3, 3), &out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
     let (manifest, _) = store::Store::read_manifest(&out).unwrap();
     let run = out.join("runs").join(&manifest.points[1].hash);
     // A process that died mid-run: no result, a log, and its claim.
@@ -376,10 +280,7 @@ fn a_stale_claim_and_a_half_written_run_dir_are_cleaned_and_rerun() {
     let exec2 = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
     let sum = sweeprun::resume(&out, &exec2, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
     assert_eq!(sum.done, 3);
-    assert_eq!(
-        exec2.attempts().keys().collect::<Vec<_>>(),
-        vec![&manifest.points[1].hash]
-    );
+    assert_eq!(exec2.attempts().keys().collect::<Vec<_>>(), vec![&manifest.points[1].hash]);
     assert!(!run.join("log.liggghts").exists());
     assert!(!run.join("claim").exists());
 }
@@ -390,30 +291,16 @@ fn failed_runs_are_rerun_only_with_retry_failed() {
     let s = sweep(tmp.path(), "");
     let out = tmp.path().join("out");
     let fail_all = FakeExecutor::new(|_, _| Behaviour::Fail(MS, FailureClass::EngineError));
-    let sum = sweeprun::start(
-        &s,
-        lds(3, 3),
-        &out,
-        &fail_all,
-        &opts(1),
-        &mut RunAll,
-        &CancelToken::new(),
-    )
-    .unwrap();
+    let sum =
+        sweeprun::start(&s, lds(3, 3), &out, &fail_all, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
     assert_eq!((sum.failed, sum.exit_code()), (3, 1));
 
     let ok = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
     let sum = sweeprun::resume(&out, &ok, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
     assert_eq!((sum.failed, sum.ran), (3, 0));
-    assert!(
-        ok.attempts().is_empty(),
-        "a failure is a result, not a missing run"
-    );
+    assert!(ok.attempts().is_empty(), "a failure is a result, not a missing run");
 
-    let retry = RunOptions {
-        retry_failed: true,
-        ..opts(1)
-    };
+    let retry = RunOptions { retry_failed: true, ..opts(1) };
     let sum = sweeprun::resume(&out, &ok, &retry, &mut RunAll, &CancelToken::new()).unwrap();
     assert_eq!((sum.done, sum.failed, sum.exit_code()), (3, 0, 0));
     assert!(results(&out).iter().all(|r| r.1 == "done"));
@@ -425,16 +312,7 @@ fn a_changed_engine_is_refused_unless_forced_and_nothing_changes_on_disk() {
     let s = sweep(tmp.path(), "");
     let out = tmp.path().join("out");
     let v1 = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    sweeprun::start(
-        &s,
-        lds(3, 3),
-        &out,
-        &v1,
-        &opts(1),
-        &mut RunAll,
-        &CancelToken::new(),
-    )
-    .unwrap();
+    sweeprun::start(&s, lds(3, 3), &out, &v1, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
     let manifest_before = std::fs::read(out.join("manifest.json")).unwrap();
     let mut v2 = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
     v2.identity = "fake-2".into();
@@ -443,16 +321,10 @@ fn a_changed_engine_is_refused_unless_forced_and_nothing_changes_on_disk() {
     let msg = err.to_string();
     assert!(msg.contains("engine: \"fake-1\" → \"fake-2\""), "{msg}");
     assert!(msg.contains("--force"), "{msg}");
-    assert_eq!(
-        std::fs::read(out.join("manifest.json")).unwrap(),
-        manifest_before
-    );
+    assert_eq!(std::fs::read(out.join("manifest.json")).unwrap(), manifest_before);
     assert!(v2.attempts().is_empty());
 
-    let forced = RunOptions {
-        force: true,
-        ..opts(1)
-    };
+    let forced = RunOptions { force: true, ..opts(1) };
     let sum = sweeprun::resume(&out, &v2, &forced, &mut RunAll, &CancelToken::new()).unwrap();
     assert_eq!((sum.done, sum.ran), (3, 3), "new decks, new runs");
 }
@@ -463,27 +335,9 @@ fn a_larger_max_extends_an_lds_directory_reusing_its_prefix() {
     let s = sweep(tmp.path(), "");
     let out = tmp.path().join("out");
     let e1 = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    sweeprun::start(
-        &s,
-        lds(4, 4),
-        &out,
-        &e1,
-        &opts(2),
-        &mut RunAll,
-        &CancelToken::new(),
-    )
-    .unwrap();
+    sweeprun::start(&s, lds(4, 4), &out, &e1, &opts(2), &mut RunAll, &CancelToken::new()).unwrap();
     let e2 = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    let sum = sweeprun::start(
-        &s,
-        lds(8, 4),
-        &out,
-        &e2,
-        &opts(2),
-        &mut RunAll,
-        &CancelToken::new(),
-    )
-    .unwrap();
+    let sum = sweeprun::start(&s, lds(8, 4), &out, &e2, &opts(2), &mut RunAll, &CancelToken::new()).unwrap();
     assert_eq!((sum.done, sum.reused, sum.ran), (8, 4, 4));
     assert!(e2.attempts().keys().all(|h| !e1.attempts().contains_key(h)));
     let (manifest, toml) = store::Store::read_manifest(&out).unwrap();
@@ -498,41 +352,16 @@ fn a_design_that_does_not_extend_the_directory_is_refused_and_nothing_changes() 
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
     let three = DesignRecord::Lattice { levels: vec![3] };
-    sweeprun::start(
-        &s,
-        three,
-        &out,
-        &exec,
-        &opts(2),
-        &mut RunAll,
-        &CancelToken::new(),
-    )
-    .unwrap();
+    sweeprun::start(&s, three, &out, &exec, &opts(2), &mut RunAll, &CancelToken::new()).unwrap();
     let before = std::fs::read(out.join("manifest.json")).unwrap();
     // Levels 2,3 put the 2x2 corners first: the old 3x3 points are not its prefix.
     let two_three = DesignRecord::Lattice { levels: vec![2, 3] };
-    let err = sweeprun::start(
-        &s,
-        two_three,
-        &out,
-        &exec,
-        &opts(2),
-        &mut RunAll,
-        &CancelToken::new(),
-    )
-    .unwrap_err();
+    let err =
+        sweeprun::start(&s, two_three, &out, &exec, &opts(2), &mut RunAll, &CancelToken::new()).unwrap_err();
     assert_eq!(err.code(), 2, "{err}");
     assert!(err.to_string().contains("not the first points"), "{err}");
-    let err = sweeprun::start(
-        &s,
-        lds(9, 9),
-        &out,
-        &exec,
-        &opts(2),
-        &mut RunAll,
-        &CancelToken::new(),
-    )
-    .unwrap_err();
+    let err =
+        sweeprun::start(&s, lds(9, 9), &out, &exec, &opts(2), &mut RunAll, &CancelToken::new()).unwrap_err();
     assert!(err.to_string().contains("holds a lattice sweep"), "{err}");
     assert_eq!(std::fs::read(out.join("manifest.json")).unwrap(), before);
     assert_eq!(exec.attempts().len(), 9);
@@ -545,16 +374,7 @@ fn a_point_shared_by_two_lattice_levels_runs_once() {
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
     let design = DesignRecord::Lattice { levels: vec![2, 3] };
-    let sum = sweeprun::start(
-        &s,
-        design,
-        &out,
-        &exec,
-        &opts(2),
-        &mut RunAll,
-        &CancelToken::new(),
-    )
-    .unwrap();
+    let sum = sweeprun::start(&s, design, &out, &exec, &opts(2), &mut RunAll, &CancelToken::new()).unwrap();
     // The 2×2 corners are among the 3×3 points.
     assert_eq!((sum.points, sum.done), (9, 9));
     assert_eq!(exec.attempts().len(), 9);
@@ -567,15 +387,8 @@ fn a_point_shared_by_two_lattice_levels_runs_once() {
 struct StopAfterFirst(Vec<(String, usize, usize)>);
 
 impl SpaceHook for StopAfterFirst {
-    fn space_complete(
-        &mut self,
-        space: &SpaceRecord,
-        points: &[(&PointRecord, &PointStatus)],
-    ) -> Flow {
-        let done = points
-            .iter()
-            .filter(|(_, s)| matches!(s, PointStatus::Done(_)))
-            .count();
+    fn space_complete(&mut self, space: &SpaceRecord, points: &[(&PointRecord, &PointStatus)]) -> Flow {
+        let done = points.iter().filter(|(_, s)| matches!(s, PointStatus::Done(_))).count();
         self.0.push((space.label.clone(), points.len(), done));
         Flow::Drain
     }
@@ -588,16 +401,7 @@ fn the_space_hook_sees_each_completed_space_and_can_stop_the_sweep() {
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(20 * MS));
     let mut hook = StopAfterFirst(vec![]);
-    let sum = sweeprun::start(
-        &s,
-        lds(40, 4),
-        &out,
-        &exec,
-        &opts(1),
-        &mut hook,
-        &CancelToken::new(),
-    )
-    .unwrap();
+    let sum = sweeprun::start(&s, lds(40, 4), &out, &exec, &opts(1), &mut hook, &CancelToken::new()).unwrap();
     assert_eq!(hook.0, vec![("lds 4".to_string(), 4, 4)]);
     assert_eq!(sum.stopped_after.as_deref(), Some("lds 4"));
     assert!(sum.done < 40 && sum.done >= 4, "{sum:?}");
@@ -610,41 +414,22 @@ fn bad_designs_are_refused_before_anything_is_written() {
     let s = sweep(tmp.path(), "");
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    for design in [
-        DesignRecord::Lattice { levels: vec![1] },
-        DesignRecord::Lattice { levels: vec![1001] },
-        lds(0, 4),
-    ] {
-        let err = sweeprun::start(
-            &s,
-            design,
-            &out,
-            &exec,
-            &opts(1),
-            &mut RunAll,
-            &CancelToken::new(),
-        )
-        .unwrap_err();
+    for design in
+        [DesignRecord::Lattice { levels: vec![1] }, DesignRecord::Lattice { levels: vec![1001] }, lds(0, 4)]
+    {
+        let err =
+            sweeprun::start(&s, design, &out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap_err();
         assert_eq!(err.code(), 2, "{err}");
         assert!(!out.exists());
     }
     // A directory that is not a sweep directory.
     std::fs::create_dir(&out).unwrap();
     std::fs::write(out.join("notes.txt"), "mine").unwrap();
-    let err = sweeprun::start(
-        &s,
-        lds(2, 2),
-        &out,
-        &exec,
-        &opts(1),
-        &mut RunAll,
-        &CancelToken::new(),
-    )
-    .unwrap_err();
+    let err =
+        sweeprun::start(&s, lds(2, 2), &out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap_err();
     assert_eq!(err.code(), 2);
     assert_eq!(std::fs::read_dir(&out).unwrap().count(), 1);
-    let err =
-        sweeprun::resume(&out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap_err();
+    let err = sweeprun::resume(&out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap_err();
     assert_eq!(err.code(), 2);
     assert!(err.to_string().contains("not a sweep directory"), "{err}");
 }

@@ -1,0 +1,160 @@
+//! One point end to end through the real LIGGGHTS: `sweep run` and `sweep render`.
+//!
+//! These run the installed `liggghts` on small scenes (seconds each).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use serde_json::Value;
+
+fn sweep_bin() -> &'static str {
+    env!("CARGO_BIN_EXE_sweep")
+}
+
+/// A sweep file over the thesis's D and gap ranges at μ = 0.3, v = 1.6 m/s, written to `dir`.
+fn thesis_space(dir: &Path) -> PathBuf {
+    let path = dir.join("space.toml");
+    std::fs::write(
+        &path,
+        r#"name = "space"
+[parameters]
+diameter = { lo = 1.0, hi = 3.0, unit = "mm" }
+gap      = { lo = 1.0, hi = 6.0, unit = "mm" }
+friction = 0.3
+blade_speed = 1.6
+"#,
+    )
+    .unwrap();
+    path
+}
+
+/// `sweep run --json` of one point; returns (exit code, parsed JSON, stderr).
+fn run_point(sweep: &Path, set: &str) -> (i32, Value, String) {
+    let out =
+        Command::new(sweep_bin()).args(["run"]).arg(sweep).args(["--set", set, "--json"]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    let json = serde_json::from_slice(&out.stdout).unwrap_or(Value::Null);
+    (out.status.code().unwrap_or(-1), json, stderr)
+}
+
+fn filled_layers(r: &Value) -> usize {
+    r["vx"].as_array().unwrap().iter().filter(|v| !v.is_null()).count()
+}
+
+/// Deposited MFR and flux MFR count crossings of the rear and front faces over the same
+/// intervals; they differ only by the change of what sits under the blade.
+const FLUX_AGREEMENT: f64 = 0.10;
+
+fn assert_open_case(r: &Value, what: &str) {
+    let (mfr, flux) = (r["mfr"].as_f64().unwrap(), r["mfr_flux"].as_f64().unwrap());
+    assert!(mfr > 0.0, "{what}: MFR {mfr}");
+    // MFR is the layer's packing fraction over the gap: it cannot exceed random close packing.
+    assert!(mfr < 0.64, "{what}: MFR {mfr} above random close packing");
+    assert!((mfr - flux).abs() <= FLUX_AGREEMENT * mfr, "{what}: MFR {mfr} vs flux {flux}");
+}
+
+#[test]
+fn gap_of_two_diameters_flows_and_fills_the_profile() {
+    let dir = tempfile::tempdir().unwrap();
+    let (code, r, err) = run_point(&thesis_space(dir.path()), "diameter=2,gap=4");
+    assert_eq!(code, 0, "{err}");
+    assert_open_case(&r, "D = 2 mm, gap = 4 mm");
+    assert!(filled_layers(&r) >= 6, "v_x profile: {}", r["vx"]);
+    // Every filled layer in front of the blade moves forward, no faster than ~the blade.
+    for v in r["vx"].as_array().unwrap().iter().filter_map(Value::as_f64) {
+        assert!(v > 0.0 && v < 1.6 * 1.5, "v_x {v}");
+    }
+    assert_eq!(r["particles"].as_u64().unwrap() as usize, r["particles"].as_u64().unwrap() as usize);
+    assert!(r["engine_version"].as_str().unwrap().contains("LIGGGHTS"));
+}
+
+#[test]
+fn thesis_corners_run_without_errors_or_lost_atoms() {
+    // D 1 and 3 mm × gap 1 and 5 mm at μ = 0.3, v = 1.6 m/s. A failed run (LIGGGHTS ERROR,
+    // lost atoms, unstable energy) exits 1 with its class; all four must complete.
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = thesis_space(dir.path());
+    for (d, gap) in [(1.0, 1.0), (1.0, 5.0), (3.0, 1.0), (3.0, 5.0)] {
+        let (code, r, err) = run_point(&sweep, &format!("diameter={d},gap={gap}"));
+        assert_eq!(code, 0, "D = {d}, gap = {gap}: {err}");
+        let mfr = r["mfr"].as_f64().unwrap();
+        if gap < d {
+            // No particle fits under the tip: zero flow, and that is a result, not a failure.
+            assert_eq!(mfr, 0.0, "D = {d}, gap = {gap}");
+            assert_eq!(r["mfr_flux"].as_f64().unwrap(), 0.0);
+        } else if gap > d {
+            assert_open_case(&r, &format!("D = {d}, gap = {gap}"));
+        }
+    }
+}
+
+#[test]
+fn render_writes_the_three_files_of_a_point() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("deck");
+    let status = Command::new(sweep_bin())
+        .args(["render"])
+        .arg(thesis_space(dir.path()))
+        .args(["--set", "gap=3", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(status.status.success(), "{}", String::from_utf8_lossy(&status.stderr));
+    let deck = std::fs::read_to_string(out.join("in.liggghts")).unwrap();
+    assert!(deck.contains("read_data       pile.data"));
+    assert!(deck.contains("move/mesh"));
+    // Only what the scene needs: no VTK, no rolling friction when it is zero.
+    assert!(!deck.contains("vtk") && !deck.contains("rolling"));
+    assert!(std::fs::read_to_string(out.join("blade.stl")).unwrap().starts_with("solid blade"));
+    assert!(out.join("pile.data").is_file());
+}
+
+#[test]
+fn a_point_outside_the_space_or_an_unknown_name_is_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = thesis_space(dir.path());
+    for (set, needle) in [("gap=9", "gap=9"), ("gapp=3", "did you mean `gap`"), ("friction=0.2", "fixed")] {
+        let (code, _, err) = run_point(&sweep, set);
+        assert_eq!(code, 2, "--set {set}: {err}");
+        assert!(err.contains(needle), "--set {set}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+}
+
+#[test]
+fn a_template_variable_the_scene_lacks_is_an_error_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("t.tera"), "units si\nrun {{ scene.blade_angle }}\n").unwrap();
+    let sweep = dir.path().join("s.toml");
+    std::fs::write(
+        &sweep,
+        "name = \"t\"\n[parameters]\ngap = { lo = 1.0, hi = 2.0 }\n[scene]\ntemplate = \"t.tera\"\n",
+    )
+    .unwrap();
+    let (code, _, err) = run_point(&sweep, "gap=1.5");
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("scene.blade_angle"), "{err}");
+}
+
+#[test]
+fn a_deck_that_makes_liggghts_fail_is_reported_with_its_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("t.tera"),
+        "units si\natom_style granular\nregion d block 0 1 0 1 0 1 units box\ncreate_box 1 d\n\
+         fix blade all mesh/surface file missing.stl type 1\nrun 10\n",
+    )
+    .unwrap();
+    let sweep = dir.path().join("s.toml");
+    std::fs::write(
+        &sweep,
+        "name = \"t\"\n[parameters]\ngap = { lo = 1.0, hi = 2.0 }\n[scene]\ntemplate = \"t.tera\"\n",
+    )
+    .unwrap();
+    let (code, r, err) = run_point(&sweep, "gap=1.5");
+    assert_eq!(code, 1, "{err}");
+    assert_eq!(r["class"], "engine-error");
+    assert!(r["reason"].as_str().unwrap().contains("Cannot open mesh file missing.stl"), "{r}");
+    // A failure carries no number.
+    assert!(r.get("mfr").is_none());
+}
