@@ -443,3 +443,57 @@ pub fn read_trajectory(path: &Path, case: &Case, dt: f64) -> Result<Vec<Sample>,
     }
     Ok(samples)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::Regime;
+
+    fn outcome(regime: Regime) -> Outcome {
+        Outcome {
+            contact_time: 1e-4,
+            max_overlap: 1e-6,
+            restitution_n: 0.5,
+            restitution_t: None,
+            omega_out: 0.0,
+            omega2_out: None,
+            regime,
+            steps: 10,
+            dt: 1e-5,
+        }
+    }
+
+    #[test]
+    fn a_difference_beyond_the_tolerance_fails() {
+        assert!(Compared::new("q", Some(1.0), Some(1.0 + 0.5e-9), 0.0).passed());
+        assert!(!Compared::new("q", Some(1.0), Some(1.0 + 2e-9), 0.0).passed());
+        // Only one side defined (e.g. a slip LIGGGHTS did not see) fails.
+        assert!(!Compared::new("q", Some(0.0), None, 1.0).passed());
+        // Near zero, the floor sets the scale.
+        assert!(Compared::new("q", Some(0.0), Some(1e-10), 1.0).passed());
+    }
+
+    #[test]
+    fn a_different_regime_fails_the_case_and_the_report() {
+        let case = CaseReport {
+            name: "x".into(),
+            reference: outcome(Regime::Stick),
+            liggghts: outcome(Regime::Slide),
+            quantities: vec![],
+        };
+        let report = Report { cases: vec![case] };
+        assert!(!report.passed());
+        assert!(report.table().contains("1 case(s), 1 failed"));
+    }
+
+    #[test]
+    fn the_deck_renders_with_the_case_numbers() {
+        let (_, case) = default_cases().remove(6);
+        let deck = render("pair", &case, 1e-7, 1234).unwrap();
+        assert!(deck.contains("pair_style gran model hertz tangential history"));
+        assert!(!deck.contains("wall/gran"));
+        assert!(deck.contains("run 1234"));
+        assert!(deck.contains("${wz2}"), "{deck}");
+        assert!(!deck.contains("{{") && !deck.contains("{%"));
+    }
+}
