@@ -5,26 +5,30 @@ use std::fmt::Write;
 use super::Scene;
 
 /// Version of the mesh generator; part of a run's identity (a change re-runs every point).
-pub const MESH_VERSION: u32 = 2;
+pub const MESH_VERSION: u32 = 3;
 
-/// The blade as a box open at its two y ends (8 triangles, outward normals): x from the rear
-/// face to the front face, y across the whole periodic depth (inset from the periodic faces, as
-/// a mesh must lie inside the box), z from the tip (gap) to the top.
+/// The blade as a box open at its two y ends, outward normals: x from the rear face to the
+/// front face, y across the whole periodic depth (inset from the periodic faces, as a mesh must
+/// lie inside the box), z from the tip (gap) to the top. Faces are split into triangles no
+/// larger than a sixth of the depth.
 ///
-/// The y ends are left out on purpose: no particle can reach them (the blade spans the periodic
-/// depth), and LIGGGHTS 3.8 fails with "assertion failed (region_neighbor_list_I.h:165)" for
-/// some depths when two end faces face each other across the periodic boundary.
+/// Both choices work around LIGGGHTS 3.8's mesh topology build (surface_mesh_I.h), which bins
+/// the elements by their bounding radius over the whole box and fails with "assertion failed
+/// (region_neighbor_list_I.h:165)" for some geometries when an element's bounding radius is
+/// large against the box's depth, or when two end faces face each other across the periodic
+/// boundary. The y ends are not needed: no particle can reach them.
 pub fn blade_stl(s: &Scene) -> String {
     let (x0, x1) = (s.blade_x0, s.blade_x0 + s.blade_thickness);
     let (y0, y1) = (s.blade_y_inset, s.depth - s.blade_y_inset);
     let (z0, z1) = (s.gap, s.blade_top);
-    box_stl("blade", [x0, y0, z0], [x1, y1, z1], false)
+    box_stl("blade", [x0, y0, z0], [x1, y1, z1], false, s.depth / 6.0)
 }
 
-/// An axis-aligned box [lo, hi] as ASCII STL, triangles wound counter-clockwise seen from
-/// outside; `y_ends` includes the two faces normal to y.
-fn box_stl(name: &str, lo: [f64; 3], hi: [f64; 3], y_ends: bool) -> String {
-    let corner = |i: usize, j: usize, k: usize| [[lo[0], hi[0]][i], [lo[1], hi[1]][j], [lo[2], hi[2]][k]];
+/// An axis-aligned box [lo, hi] as ASCII STL, each face split into a grid of cells no larger
+/// than `h`, two triangles per cell, wound counter-clockwise seen from outside; `y_ends`
+/// includes the two faces normal to y.
+fn box_stl(name: &str, lo: [f64; 3], hi: [f64; 3], y_ends: bool, h: f64) -> String {
+    let corner = |c: [usize; 3]| [[lo[0], hi[0]][c[0]], [lo[1], hi[1]][c[1]], [lo[2], hi[2]][c[2]]];
     // Each face: outward normal and its four corners counter-clockwise seen from outside.
     let faces: [([f64; 3], [[usize; 3]; 4]); 6] = [
         ([-1.0, 0.0, 0.0], [[0, 0, 0], [0, 0, 1], [0, 1, 1], [0, 1, 0]]),
@@ -39,13 +43,26 @@ fn box_stl(name: &str, lo: [f64; 3], hi: [f64; 3], y_ends: bool) -> String {
         if n[1] != 0.0 && !y_ends {
             continue;
         }
-        for tri in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
-            let _ = writeln!(out, "  facet normal {} {} {}\n    outer loop", n[0], n[1], n[2]);
-            for [i, j, k] in tri {
-                let p = corner(i, j, k);
-                let _ = writeln!(out, "      vertex {:.9e} {:.9e} {:.9e}", p[0], p[1], p[2]);
+        let (o, a, b) = (corner(q[0]), corner(q[1]), corner(q[3]));
+        let du: [f64; 3] = std::array::from_fn(|k| a[k] - o[k]);
+        let dv: [f64; 3] = std::array::from_fn(|k| b[k] - o[k]);
+        let len = |d: [f64; 3]| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let (nu, nv) = ((len(du) / h).ceil().max(1.0) as usize, (len(dv) / h).ceil().max(1.0) as usize);
+        let at = |i: usize, j: usize| -> [f64; 3] {
+            let (u, v) = (i as f64 / nu as f64, j as f64 / nv as f64);
+            std::array::from_fn(|k| o[k] + u * du[k] + v * dv[k])
+        };
+        for i in 0..nu {
+            for j in 0..nv {
+                let (p00, p10, p11, p01) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+                for tri in [[p00, p10, p11], [p00, p11, p01]] {
+                    let _ = writeln!(out, "  facet normal {} {} {}\n    outer loop", n[0], n[1], n[2]);
+                    for p in tri {
+                        let _ = writeln!(out, "      vertex {:.9e} {:.9e} {:.9e}", p[0], p[1], p[2]);
+                    }
+                    out.push_str("    endloop\n  endfacet\n");
+                }
             }
-            out.push_str("    endloop\n  endfacet\n");
         }
     }
     let _ = writeln!(out, "endsolid {name}");
@@ -79,9 +96,10 @@ mod tests {
 
     #[test]
     fn box_is_closed_with_outward_normals_matching_the_winding() {
-        let stl = box_stl("b", [0.0, 0.0, 0.0], [1.0, 2.0, 3.0], true);
+        // Cells of at most 1: 2·(1·2 + 1·3 + 2·3) = 22 cells, 44 triangles.
+        let stl = box_stl("b", [0.0, 0.0, 0.0], [1.0, 2.0, 3.0], true, 1.0);
         let tris = parse_triangles(&stl);
-        assert_eq!(tris.len(), 12);
+        assert_eq!(tris.len(), 44);
         let mut area = 0.0;
         for (n, [a, b, c]) in tris {
             let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
@@ -97,7 +115,7 @@ mod tests {
 
     #[test]
     fn the_blade_has_no_y_end_faces() {
-        let open = parse_triangles(&box_stl("b", [0.0; 3], [1.0, 2.0, 3.0], false));
+        let open = parse_triangles(&box_stl("b", [0.0; 3], [1.0, 2.0, 3.0], false, 10.0));
         assert_eq!(open.len(), 8);
         assert!(open.iter().all(|(n, _)| n[1] == 0.0));
     }
