@@ -500,8 +500,9 @@ fn run_one(a: RunArgs) -> Result<i32, Error> {
                 let vx: Vec<String> =
                     r.vx.iter().map(|v| v.map(|v| format!("{v:.3}")).unwrap_or_else(|| "-".into())).collect();
                 println!(
-                    "MFR        {:.4}  (flux cross-check {:.4}, {})",
+                    "MFR        {:.4}  ({} particles; flux cross-check {:.4}, {})",
                     r.mfr,
+                    r.mfr_particles,
                     r.mfr_flux,
                     if r.steady { "steady" } else { "NOT steady" }
                 );

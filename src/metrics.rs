@@ -78,6 +78,8 @@ pub struct Metrics {
     pub mfr: f64,
     pub mfr_flux: f64,
     pub mfr_windows: Vec<f64>,
+    /// Particles that crossed the rear face (gross count, both directions).
+    pub mfr_particles: usize,
     pub steady: bool,
     pub vx: Vec<Option<f64>>,
     pub particles: usize,
@@ -116,6 +118,7 @@ pub fn compute(scene: &Scene, frames: &[Frame]) -> Result<Metrics, MetricsError>
         mfr_flux: mfr_of(&front, t1, t2),
         steady: is_steady(&sub),
         mfr_windows: sub.iter().map(|w| w.0).collect(),
+        mfr_particles: rear.iter().map(|c| c.count).sum(),
         vx: vx_profile(scene, window.iter().copied()),
         particles: window.last().map(|f| f.len()).unwrap_or(0),
     })

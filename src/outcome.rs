@@ -27,6 +27,8 @@ pub struct RunResult {
     pub mfr: f64,
     /// The same from the flux of particles past the blade's front face (cross-check).
     pub mfr_flux: f64,
+    /// Particles counted in `mfr`: its counting noise is about 1/√n relative.
+    pub mfr_particles: usize,
     /// MFR over consecutive sub-windows of the measurement window.
     pub mfr_windows: Vec<f64>,
     /// False when the sub-window MFRs show the flow had not reached a steady state.

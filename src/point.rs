@@ -197,6 +197,7 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
         parameters: p.parameters.clone(),
         mfr: m.mfr,
         mfr_flux: m.mfr_flux,
+        mfr_particles: m.mfr_particles,
         mfr_windows: m.mfr_windows,
         steady: m.steady,
         vx: m.vx,

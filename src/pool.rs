@@ -397,6 +397,7 @@ pub mod fake {
                             .collect::<BTreeMap<_, _>>(),
                         mfr: fake_mfr(&job.values),
                         mfr_flux: fake_mfr(&job.values),
+                        mfr_particles: 0,
                         mfr_windows: vec![],
                         steady: true,
                         vx: vec![Some(0.5); VX_LAYERS],

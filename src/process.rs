@@ -11,7 +11,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-/// How often a running child is polled for exit, timeout and cancellation.
+/// How often a running child is polled for exit, timeout and cancellation: starting at
+/// POLL_MIN and doubling up to POLL, so a short job is noticed within a millisecond and a long
+/// one costs 50 wake-ups a second.
+const POLL_MIN: Duration = Duration::from_millis(1);
 const POLL: Duration = Duration::from_millis(20);
 /// Time between SIGTERM and SIGKILL when a job is stopped.
 pub const KILL_GRACE: Duration = Duration::from_secs(2);
@@ -77,6 +80,7 @@ pub fn run(mut cmd: Command, timeout: Duration, cancel: &CancelToken) -> (Proces
         Ok(c) => c,
         Err(e) => return (ProcessOutcome::SpawnFailed(e.to_string()), start.elapsed()),
     };
+    let mut poll = POLL_MIN;
     let outcome = loop {
         match child.try_wait() {
             Ok(Some(status)) => {
@@ -100,7 +104,8 @@ pub fn run(mut cmd: Command, timeout: Duration, cancel: &CancelToken) -> (Proces
             kill_group(&mut child);
             break ProcessOutcome::TimedOut;
         }
-        std::thread::sleep(POLL);
+        std::thread::sleep(poll);
+        poll = (poll * 2).min(POLL);
     };
     (outcome, start.elapsed())
 }
