@@ -127,14 +127,17 @@ struct PointsArgs {
     /// A lattice with L values per dimension (L^d points).
     #[arg(long, conflicts_with = "lds", required_unless_present = "lds")]
     lattice: Option<usize>,
-    /// The first N points of the Halton sequence. Index 0 (the origin of plain Halton) is
-    /// skipped, so point 1 is the first row.
+    /// The first N points of the Halton sequence, scrambled as design.lds.scrambling says.
+    /// Plain and Braaten–Weller Halton skip index 0 (the origin: every parameter at lo), so
+    /// their first row is index 1; random scrambling starts at index 0, which it maps to a
+    /// random point like any other (as scipy's Halton does). Every prefix is a design.
     #[arg(long)]
     lds: Option<usize>,
     /// Plain Halton, no digit scrambling (overrides design.lds.scrambling).
     #[arg(long, requires = "lds")]
     no_scramble: bool,
-    /// Also print the design's centred L2 discrepancy (in unit coordinates) to stderr.
+    /// Also print the design's squared centred L2 discrepancy CD² (Hickernell 1998; scipy's
+    /// qmc.discrepancy(method="CD") convention) in unit coordinates to stderr.
     #[arg(long)]
     discrepancy: bool,
 }
@@ -415,21 +418,26 @@ fn points(a: PointsArgs) -> Result<i32, Error> {
     let sweep = Sweep::load(&a.sweep)?;
     let unit = match (a.lattice, a.lds) {
         (Some(l), _) => {
-            if l < 2 {
-                return Err(Error::input(format!("--lattice {l}: expected at least 2 values per dimension")));
-            }
+            demsweep::design::lattice_size(sweep.dim(), l)
+                .map_err(|e| Error::input(format!("--lattice {l}: {e}")))?;
             demsweep::design::lattice::lattice(sweep.dim(), l)
         }
         (None, Some(n)) => {
-            if n == 0 {
-                return Err(Error::input("--lds 0: expected a positive number of points"));
-            }
+            demsweep::design::lds_size(n).map_err(|e| Error::input(format!("--lds {n}: {e}")))?;
             let lds = &sweep.file.design.lds;
             let scrambling = if a.no_scramble { Scrambling::None } else { lds.scrambling };
             demsweep::design::halton::halton(sweep.dim(), n, scrambling, lds.seed)
         }
         (None, None) => unreachable!("clap requires --lattice or --lds"),
     };
+    if a.discrepancy {
+        eprintln!(
+            "centred L2 discrepancy (squared) of {} points in {}-D: {:.6e}",
+            unit.len(),
+            sweep.dim(),
+            demsweep::design::discrepancy::centred_l2(&unit)
+        );
+    }
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
     let write = |out: &mut dyn Write| -> std::io::Result<()> {

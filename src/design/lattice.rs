@@ -2,6 +2,9 @@
 
 /// The lattice with `n` values per dimension in `dim` dimensions.
 ///
+/// Callers check the size first with [`super::lattice_size`] (n ≥ 2, at most
+/// [`super::MAX_POINTS`] points); the asserts here only guard against that being skipped.
+///
 /// Order is stable: the last dimension varies fastest (row-major, like nested loops over the
 /// parameters in file order). Coordinates are k/(n−1), k = 0..n−1, so both ends are present.
 pub fn lattice(dim: usize, n: usize) -> super::Points {

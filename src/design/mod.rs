@@ -14,3 +14,30 @@ pub mod lattice;
 
 /// A design: points in unit coordinates, one `Vec` of length `dim` per point.
 pub type Points = Vec<Vec<f64>>;
+
+/// The most points a design may have: far beyond any DEM sweep (the thesis's largest is
+/// 10,000), small enough that a mistyped level count is an error instead of exhausting memory.
+pub const MAX_POINTS: usize = 1_000_000;
+
+/// The number of points of the lattice with `levels` values per dimension in `dim`
+/// dimensions, or why it cannot be built (fewer than 2 levels, more than [`MAX_POINTS`]).
+pub fn lattice_size(dim: usize, levels: usize) -> Result<usize, String> {
+    if levels < 2 {
+        return Err("expected at least 2 values per dimension".into());
+    }
+    match levels.checked_pow(dim as u32) {
+        Some(n) if n <= MAX_POINTS => Ok(n),
+        _ => Err(format!("{levels}^{dim} points: expected at most {MAX_POINTS}")),
+    }
+}
+
+/// Check a Halton design size: at least 1 and at most [`MAX_POINTS`] points.
+pub fn lds_size(n: usize) -> Result<usize, String> {
+    if n == 0 {
+        Err("expected a positive number of points".into())
+    } else if n > MAX_POINTS {
+        Err(format!("expected at most {MAX_POINTS} points"))
+    } else {
+        Ok(n)
+    }
+}
