@@ -125,13 +125,18 @@ struct DirArgs {
 struct PointsArgs {
     sweep: PathBuf,
     /// A lattice with L values per dimension (L^d points).
-    #[arg(long, conflicts_with = "lds", required_unless_present = "lds")]
+    #[arg(
+        long,
+        value_name = "L",
+        conflicts_with = "lds",
+        required_unless_present = "lds"
+    )]
     lattice: Option<usize>,
     /// The first N points of the Halton sequence, scrambled as design.lds.scrambling says.
     /// Plain and Braaten–Weller Halton skip index 0 (the origin: every parameter at lo), so
     /// their first row is index 1; random scrambling starts at index 0, which it maps to a
     /// random point like any other (as scipy's Halton does). Every prefix is a design.
-    #[arg(long)]
+    #[arg(long, value_name = "N")]
     lds: Option<usize>,
     /// Plain Halton, no digit scrambling (overrides design.lds.scrambling).
     #[arg(long, requires = "lds")]

@@ -153,13 +153,18 @@ pub fn random_permutations(seed: u64, k: usize, base: u64) -> Vec<Vec<u32>> {
 /// A uniform integer in 0..m by rejection: draws in the incomplete last block of size
 /// 2^32 mod m are redrawn, so every residue is equally likely.
 fn uniform_below(rng: &mut ChaCha8Rng, m: u32) -> u32 {
-    let reject_from = u32::MAX - (u32::MAX % m + 1) % m; // largest multiple of m, minus 1
+    let limit = accept_up_to(m);
     loop {
         let r = rng.next_u32();
-        if r <= reject_from {
+        if r <= limit {
             return r % m;
         }
     }
+}
+
+/// The largest accepted draw: the largest multiple of m not above 2^32, minus 1.
+fn accept_up_to(m: u32) -> u32 {
+    u32::MAX - (u32::MAX % m + 1) % m
 }
 
 /// How the digits of one coordinate are permuted.
@@ -292,6 +297,15 @@ mod tests {
         // The table length is exactly 16, one row per prime.
         for (row, &b) in BRAATEN_WELLER.iter().zip(&primes(16)) {
             assert_eq!(row.len() as u64, b);
+        }
+    }
+
+    #[test]
+    fn rejection_keeps_whole_blocks_of_m() {
+        for m in [1u32, 2, 3, 7, 53, 1000, (1 << 31) + 1, u32::MAX] {
+            let accepted = accept_up_to(m) as u64 + 1;
+            assert_eq!(accepted % m as u64, 0, "m = {m}");
+            assert!((1u64 << 32) - accepted < m as u64, "m = {m}");
         }
     }
 
