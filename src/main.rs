@@ -125,12 +125,7 @@ struct DirArgs {
 struct PointsArgs {
     sweep: PathBuf,
     /// A lattice with L values per dimension (L^d points).
-    #[arg(
-        long,
-        value_name = "L",
-        conflicts_with = "lds",
-        required_unless_present = "lds"
-    )]
+    #[arg(long, value_name = "L", conflicts_with = "lds", required_unless_present = "lds")]
     lattice: Option<usize>,
     /// The first N points of the Halton sequence, scrambled as design.lds.scrambling says.
     /// Plain and Braaten–Weller Halton skip index 0 (the origin: every parameter at lo), so
