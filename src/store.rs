@@ -196,11 +196,7 @@ impl Store {
         write_atomic(&toml_path, sweep_toml.as_bytes())?;
         let path = Self::manifest_path(&self.dir);
         crate::outcome::write_json_atomic(&path, manifest).map_err(io(&path))?;
-        let log = self.dir.join("joblog.tsv");
-        if !log.exists() {
-            write_atomic(&log, format!("{JOBLOG_HEADER}\n").as_bytes())?;
-        }
-        Ok(())
+        self.joblog().map(drop)
     }
 
     /// Read `manifest.json` and `sweep.toml` of `dir`.
@@ -340,17 +336,26 @@ impl Store {
         process_start_ticks(c.pid) == Some(c.start_ticks)
     }
 
-    /// Open the joblog for appending attempts.
+    /// Open the joblog for appending attempts, creating it with its header if missing.
     pub fn joblog(&self) -> Result<Joblog, StoreError> {
         let path = self.dir.join("joblog.tsv");
-        let mut text = String::new();
-        if let Ok(mut f) = File::open(&path) {
-            f.read_to_string(&mut text).map_err(io(&path))?;
-        }
-        let seq = text.lines().skip(1).count() as u64;
-        let file = OpenOptions::new().create(true).append(true).open(&path).map_err(io(&path))?;
+        let file = {
+            // Under the lock so that a second process cannot append before the header.
+            let _lock = DirLock::take(&self.dir.join(".lock"))?;
+            let mut file = OpenOptions::new().create(true).append(true).open(&path).map_err(io(&path))?;
+            if file.metadata().map_err(io(&path))?.len() == 0 {
+                file.write_all(format!("{JOBLOG_HEADER}\n").as_bytes()).map_err(io(&path))?;
+            }
+            file
+        };
+        let text = fs::read_to_string(&path).map_err(io(&path))?;
+        let seq = text.lines().filter(|l| !is_header(l)).count() as u64;
         Ok(Joblog { file, path, seq, host: self.host.clone() })
     }
+}
+
+fn is_header(line: &str) -> bool {
+    line.starts_with("seq\t")
 }
 
 fn finished_state(dir: &Path) -> Option<RunState> {
@@ -449,7 +454,7 @@ pub fn read_joblog(dir: &Path) -> Result<Vec<JoblogLine>, StoreError> {
     let text = fs::read_to_string(&path).map_err(io(&path))?;
     Ok(text
         .lines()
-        .skip(1)
+        .filter(|l| !is_header(l))
         .filter_map(|l| {
             let f: Vec<&str> = l.split('\t').collect();
             (f.len() == 8).then(|| JoblogLine {
@@ -702,6 +707,11 @@ mod tests {
         log.append(&rec("b", "failed", Some("timed-out"))).unwrap();
         let lines = read_joblog(dir.path()).unwrap();
         assert_eq!(lines.len(), 2);
+        // A directory without a joblog (copied manifest) gets one, header first.
+        let other = tempfile::tempdir().unwrap();
+        Store::open(other.path()).joblog().unwrap().append(&rec("c", "done", None)).unwrap();
+        let text = fs::read_to_string(other.path().join("joblog.tsv")).unwrap();
+        assert!(text.starts_with(&format!("{JOBLOG_HEADER}\n1\t")), "{text}");
         assert_eq!((lines[0].seq, lines[0].hash.as_str()), (1, "a"));
         assert_eq!(
             (lines[1].seq, lines[1].status.as_str(), lines[1].class.as_str()),
