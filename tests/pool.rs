@@ -232,11 +232,14 @@ fn two_resumes_on_one_directory_never_run_a_point_twice() {
     let tmp = tempfile::tempdir().unwrap();
     let s = sweep(tmp.path(), "");
     let out = tmp.path().join("out");
-    // Create the directory without running anything.
-    let idle = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    let cancel = CancelToken::new();
-    cancel.cancel();
-    sweeprun::start(&s, lds(10, 10), &out, &idle, &opts(1), &mut RunAll, &cancel).unwrap();
+    // A directory with its manifest and nothing run: copied from a finished one.
+    let reference = tmp.path().join("reference");
+    let first = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
+    sweeprun::start(&s, lds(10, 10), &reference, &first, &opts(2), &mut RunAll, &CancelToken::new()).unwrap();
+    std::fs::create_dir(&out).unwrap();
+    for f in ["sweep.toml", "manifest.json"] {
+        std::fs::copy(reference.join(f), out.join(f)).unwrap();
+    }
 
     let a = FakeExecutor::new(|_, _| Behaviour::Succeed(100 * MS));
     let b = FakeExecutor::new(|_, _| Behaviour::Succeed(100 * MS));
@@ -253,7 +256,20 @@ fn two_resumes_on_one_directory_never_run_a_point_twice() {
     assert_eq!(runs.len(), 10);
     assert!(runs.values().all(|&n| n == 1), "{runs:?}");
     assert!(done_attempts(&out).values().all(|&n| n == 1));
-    assert!(results(&out).iter().all(|r| r.1 == "done"));
+    assert_eq!(results(&out), results(&reference));
+}
+
+#[test]
+fn an_interrupt_while_planning_writes_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let s = sweep(tmp.path(), "");
+    let out = tmp.path().join("out");
+    let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
+    let cancel = CancelToken::new();
+    cancel.cancel();
+    let err = sweeprun::start(&s, lds(10, 10), &out, &exec, &opts(1), &mut RunAll, &cancel).unwrap_err();
+    assert_eq!(err.code(), 130);
+    assert!(!out.exists());
 }
 
 #[test]
