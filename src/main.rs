@@ -541,26 +541,18 @@ fn run_one(a: RunArgs) -> Result<i32, Error> {
 
 fn contact(a: ContactArgs) -> Result<i32, Error> {
     let outcome = demsweep::contact::run(&a.case.case()?).map_err(contact_error)?;
-    let json =
-        serde_json::to_string_pretty(&outcome).map_err(|e| Error::Internal(e.to_string()))?;
+    let json = serde_json::to_string_pretty(&outcome).map_err(|e| Error::Internal(e.to_string()))?;
     println!("{json}");
     Ok(exit::SUCCESS)
 }
 
 fn contact_check(a: ContactCheckArgs) -> Result<i32, Error> {
     use demsweep::contact::check;
-    let cases = if a.case.given() {
-        vec![("cli".to_string(), a.case.case()?)]
-    } else {
-        check::default_cases()
-    };
+    let cases =
+        if a.case.given() { vec![("cli".to_string(), a.case.case()?)] } else { check::default_cases() };
     let report = check::run_cases(&cases, &a.engine, a.keep.as_deref()).map_err(contact_error)?;
     print!("{}", report.table());
-    Ok(if report.passed() {
-        exit::SUCCESS
-    } else {
-        exit::RUNS_FAILED
-    })
+    Ok(if report.passed() { exit::SUCCESS } else { exit::RUNS_FAILED })
 }
 
 /// Bad case parameters are input errors (exit 2); LIGGGHTS failures are engine errors (3).

@@ -7,24 +7,12 @@ use std::process::Command;
 use demsweep::contact::{self, check, solver, Case, Material, Outcome, Regime, Target};
 
 /// Glass (LIGGGHTS-NOTES closed-form check).
-const GLASS: Material = Material {
-    youngs: 48e9,
-    poisson: 0.2,
-};
+const GLASS: Material = Material { youngs: 48e9, poisson: 0.2 };
 /// The spreading scene's reduced-modulus steel (thesis Table 3.1).
-const SPREAD: Material = Material {
-    youngs: 21e6,
-    poisson: 0.3,
-};
+const SPREAD: Material = Material { youngs: 21e6, poisson: 0.3 };
 /// Real steel: stiff enough that the lever arm r − δ/2 is r to 0.1 %.
-const STEEL: Material = Material {
-    youngs: 200e9,
-    poisson: 0.3,
-};
-const RIGID: Material = Material {
-    youngs: f64::INFINITY,
-    poisson: 0.3,
-};
+const STEEL: Material = Material { youngs: 200e9, poisson: 0.3 };
+const RIGID: Material = Material { youngs: f64::INFINITY, poisson: 0.3 };
 
 #[expect(
     clippy::too_many_arguments,
@@ -41,18 +29,7 @@ fn case(
     vt: f64,
     spin: f64,
 ) -> Case {
-    Case {
-        target,
-        radius,
-        density,
-        material,
-        restitution: e,
-        friction: mu,
-        vn,
-        vt,
-        spin,
-        dt: None,
-    }
+    Case { target, radius, density, material, restitution: e, friction: mu, vn, vt, spin, dt: None }
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -80,74 +57,28 @@ fn elastic_cases() -> Vec<(&'static str, Case, f64, f64, f64)> {
     vec![
         (
             "glass pair, 20 m/s",
-            case(
-                Target::Sphere {
-                    radius: rg,
-                    density: rhog,
-                },
-                rg,
-                rhog,
-                GLASS,
-                1.0,
-                0.2,
-                20.0,
-                0.0,
-                0.0,
-            ),
+            case(Target::Sphere { radius: rg, density: rhog }, rg, rhog, GLASS, 1.0, 0.2, 20.0, 0.0, 0.0),
             same(GLASS),
             rg / 2.0,
             mass(rg, rhog) / 2.0,
         ),
         (
             "D2 on a rigid wall, 1 m/s",
-            case(
-                Target::Wall(RIGID),
-                1e-3,
-                rho,
-                SPREAD,
-                1.0,
-                0.2,
-                1.0,
-                0.0,
-                0.0,
-            ),
+            case(Target::Wall(RIGID), 1e-3, rho, SPREAD, 1.0, 0.2, 1.0, 0.0, 0.0),
             SPREAD.youngs / (1.0 - SPREAD.poisson * SPREAD.poisson),
             1e-3,
             mass(1e-3, rho),
         ),
         (
             "D1 on a same-material wall, 0.1 m/s",
-            case(
-                Target::Wall(SPREAD),
-                r1,
-                rho,
-                SPREAD,
-                1.0,
-                0.2,
-                0.1,
-                0.0,
-                0.0,
-            ),
+            case(Target::Wall(SPREAD), r1, rho, SPREAD, 1.0, 0.2, 0.1, 0.0, 0.0),
             same(SPREAD),
             r1,
             mass(r1, rho),
         ),
         (
             "D1 on D3, 2 m/s",
-            case(
-                Target::Sphere {
-                    radius: r3,
-                    density: rho,
-                },
-                r1,
-                rho,
-                SPREAD,
-                1.0,
-                0.3,
-                2.0,
-                0.0,
-                0.0,
-            ),
+            case(Target::Sphere { radius: r3, density: rho }, r1, rho, SPREAD, 1.0, 0.3, 2.0, 0.0, 0.0),
             same(SPREAD),
             r1 * r3 / (r1 + r3),
             pair_m(mass(r1, rho), mass(r3, rho)),
@@ -187,8 +118,7 @@ fn kinetic_energy(c: &Case, s: &solver::Sample) -> f64 {
     let i1 = 0.4 * m1 * c.radius * c.radius;
     let mut e = 0.5 * m1 * solver::dot(s.v1, s.v1) + 0.5 * i1 * solver::dot(s.w1, s.w1);
     if let Some((r2, m2)) = c.sphere2() {
-        e +=
-            0.5 * m2 * solver::dot(s.v2, s.v2) + 0.5 * 0.4 * m2 * r2 * r2 * solver::dot(s.w2, s.w2);
+        e += 0.5 * m2 * solver::dot(s.v2, s.v2) + 0.5 * 0.4 * m2 * r2 * r2 * solver::dot(s.w2, s.w2);
     }
     e
 }
@@ -197,17 +127,7 @@ fn kinetic_energy(c: &Case, s: &solver::Sample) -> f64 {
 fn elastic_impact_conserves_energy() {
     let mut cases: Vec<Case> = elastic_cases().into_iter().map(|c| c.1).collect();
     // Frictionless and oblique, with spin: no tangential force, so no loss either.
-    cases.push(case(
-        Target::Wall(SPREAD),
-        1e-3,
-        7980.0,
-        SPREAD,
-        1.0,
-        0.0,
-        1.0,
-        2.0,
-        300.0,
-    ));
+    cases.push(case(Target::Wall(SPREAD), 1e-3, 7980.0, SPREAD, 1.0, 0.0, 1.0, 2.0, 300.0));
     for c in cases {
         let t = solver::simulate(&c, c.timestep()).unwrap();
         let before = kinetic_energy(&c, &t.samples[0]);
@@ -220,30 +140,15 @@ fn elastic_impact_conserves_energy() {
 fn observed_orders(c: &Case, ns: &[f64], q: fn(&Outcome) -> f64) -> Vec<f64> {
     let tc = c.pair().hertz_time(c.vn);
     let v: Vec<f64> = ns.iter().map(|n| q(&run(&with_dt(c, tc / n)))).collect();
-    v.windows(3)
-        .map(|w| ((w[0] - w[1]) / (w[1] - w[2])).abs().log2())
-        .collect()
+    v.windows(3).map(|w| ((w[0] - w[1]) / (w[1] - w[2])).abs().log2()).collect()
 }
 
 #[test]
 fn elastic_impact_converges_at_second_order_in_the_timestep() {
-    let c = case(
-        Target::Wall(SPREAD),
-        1e-3,
-        7980.0,
-        SPREAD,
-        1.0,
-        0.2,
-        1.0,
-        0.0,
-        0.0,
-    );
+    let c = case(Target::Wall(SPREAD), 1e-3, 7980.0, SPREAD, 1.0, 0.2, 1.0, 0.0, 0.0);
     let ns = [100.0, 200.0, 400.0, 800.0];
     for (name, q) in [
-        (
-            "contact_time",
-            (|o: &Outcome| o.contact_time) as fn(&Outcome) -> f64,
-        ),
+        ("contact_time", (|o: &Outcome| o.contact_time) as fn(&Outcome) -> f64),
         ("max_overlap", |o: &Outcome| o.max_overlap),
     ] {
         for p in observed_orders(&c, &ns, q) {
@@ -256,17 +161,7 @@ fn elastic_impact_converges_at_second_order_in_the_timestep() {
 fn damped_impact_converges_at_first_order_to_the_nominal_restitution() {
     // The damping force −γn vn with γn ∝ δ^(1/4) switches on steeply at contact; velocity
     // Verlet drops to first order (docs/contact.md). The restitution tends to the nominal one.
-    let c = case(
-        Target::Wall(SPREAD),
-        1e-3,
-        7980.0,
-        SPREAD,
-        0.5,
-        0.2,
-        1.0,
-        0.0,
-        0.0,
-    );
+    let c = case(Target::Wall(SPREAD), 1e-3, 7980.0, SPREAD, 0.5, 0.2, 1.0, 0.0, 0.0);
     for p in observed_orders(&c, &[200.0, 400.0, 800.0, 1600.0], |o| o.contact_time) {
         assert!((0.9..1.2).contains(&p), "observed order {p}");
     }
@@ -277,10 +172,7 @@ fn damped_impact_converges_at_first_order_to_the_nominal_restitution() {
     assert!(fine < 1e-5, "{fine:e}");
     // At the default timestep (t_c/1000) the documented deviation is below 2e-4 for e 0.4–0.6.
     for e in [0.4, 0.5, 0.6] {
-        let o = run(&Case {
-            restitution: e,
-            ..c
-        });
+        let o = run(&Case { restitution: e, ..c });
         assert!((o.restitution_n - e).abs() < 2e-4, "{e}: {o:?}");
     }
 }
@@ -299,22 +191,9 @@ fn elastic_sliding_impact_matches_impulse_momentum_theory() {
     assert_eq!(o.regime, Regime::Slide);
     assert!(rel(5.0 - out.v1[0], j) < 1e-3, "Δvt {}", 5.0 - out.v1[0]);
     assert!(rel(o.omega_out, 2.5 * j / r) < 5e-3, "{o:?}");
-    assert!(
-        rel(o.restitution_t.unwrap(), -1.0 + 3.5 * j / 5.0) < 5e-3,
-        "{o:?}"
-    );
+    assert!(rel(o.restitution_t.unwrap(), -1.0 + 3.5 * j / 5.0) < 5e-3, "{o:?}");
     // Back-spin only: the slip u = −r ω is +5 m/s, so the same impulses, signs as above.
-    let c = case(
-        Target::Wall(STEEL),
-        r,
-        rho,
-        STEEL,
-        1.0,
-        mu,
-        vn,
-        0.0,
-        -5000.0,
-    );
+    let c = case(Target::Wall(STEEL), r, rho, STEEL, 1.0, mu, vn, 0.0, -5000.0);
     let t = solver::simulate(&c, c.timestep()).unwrap();
     let o = run(&c);
     assert_eq!(o.regime, Regime::Slide);
@@ -325,10 +204,7 @@ fn elastic_sliding_impact_matches_impulse_momentum_theory() {
     // here), which fixed-normal theory ignores: the slip and the spin are off by O(vt θ / vn),
     // so a lower vt and 1–2 % (docs/contact.md).
     let vt = 2.0;
-    let sphere = Target::Sphere {
-        radius: r,
-        density: rho,
-    };
+    let sphere = Target::Sphere { radius: r, density: rho };
     let c = case(sphere, r, rho, STEEL, 1.0, mu, vn, vt, 0.0);
     let o = run(&c);
     let jt = mu * c.mass() / 2.0 * 2.0 * vn;
@@ -336,10 +212,7 @@ fn elastic_sliding_impact_matches_impulse_momentum_theory() {
     assert_eq!(o.regime, Regime::Slide);
     assert!(rel(o.omega_out, dw) < 1e-2, "{o:?}");
     assert!(rel(o.omega2_out.unwrap(), dw) < 1e-2, "{o:?}");
-    assert!(
-        rel(o.restitution_t.unwrap(), -1.0 + 3.5 * j / vt) < 2e-2,
-        "{o:?}"
-    );
+    assert!(rel(o.restitution_t.unwrap(), -1.0 + 3.5 * j / vt) < 2e-2, "{o:?}");
 }
 
 #[test]
@@ -347,19 +220,8 @@ fn slip_is_arrested_below_the_rigid_body_threshold() {
     // Rigid-body theory: sliding throughout iff u_t,in/vn > 3.5 μ (1 + e).
     let (mu, e) = (0.2, 1.0);
     let threshold = 3.5 * mu * (1.0 + e);
-    let at = |ratio: f64| {
-        run(&case(
-            Target::Wall(STEEL),
-            1e-3,
-            7980.0,
-            STEEL,
-            e,
-            mu,
-            1.0,
-            ratio * threshold,
-            0.0,
-        ))
-    };
+    let at =
+        |ratio: f64| run(&case(Target::Wall(STEEL), 1e-3, 7980.0, STEEL, e, mu, 1.0, ratio * threshold, 0.0));
     for ratio in [0.3, 0.6, 0.9] {
         let o = at(ratio);
         assert_eq!(o.regime, Regime::Stick, "{ratio}: {o:?}");
@@ -377,26 +239,13 @@ fn damped_sliding_impact_transfers_more_than_mu_times_the_normal_impulse() {
     // and with limitForce off Fn turns attractive at the end of a damped contact, where
     // friction keeps acting on |Fn|; in steps below the Coulomb limit the tangential damping
     // −γt vtr is added uncapped. So J_t > μ ∫|Fn| dt > μ J_n.
-    let c = case(
-        Target::Wall(STEEL),
-        1e-3,
-        7980.0,
-        STEEL,
-        0.5,
-        0.2,
-        1.0,
-        5.0,
-        0.0,
-    );
+    let c = case(Target::Wall(STEEL), 1e-3, 7980.0, STEEL, 0.5, 0.2, 1.0, 5.0, 0.0);
     let t = solver::simulate(&c, c.timestep()).unwrap();
     let m = c.mass();
     let s = &t.samples;
     let jt = m * (s[0].v1[0] - s.last().unwrap().v1[0]);
     let jn = m * (s.last().unwrap().v1[2] - s[0].v1[2]);
-    let jn_abs: f64 = s
-        .windows(2)
-        .map(|w| m * (w[1].v1[2] - w[0].v1[2]).abs())
-        .sum();
+    let jn_abs: f64 = s.windows(2).map(|w| m * (w[1].v1[2] - w[0].v1[2]).abs()).sum();
     assert!(jn_abs > 1.02 * jn, "{jn_abs:e} vs {jn:e}");
     assert!(jt > 1.02 * 0.2 * jn_abs, "{jt:e} vs {:e}", 0.2 * jn_abs);
 }
@@ -412,19 +261,12 @@ fn contact_check_passes_against_liggghts() {
     for r in [Regime::Normal, Regime::Stick, Regime::Slide] {
         assert!(regimes.contains(&r), "{r:?} missing");
     }
-    assert!(cases
-        .iter()
-        .any(|(_, c)| matches!(c.target, Target::Wall(_))));
-    assert!(cases
-        .iter()
-        .any(|(_, c)| matches!(c.target, Target::Sphere { .. })));
+    assert!(cases.iter().any(|(_, c)| matches!(c.target, Target::Wall(_))));
+    assert!(cases.iter().any(|(_, c)| matches!(c.target, Target::Sphere { .. })));
 }
 
 fn sweep(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_sweep"))
-        .args(args)
-        .output()
-        .expect("sweep starts")
+    Command::new(env!("CARGO_BIN_EXE_sweep")).args(args).output().expect("sweep starts")
 }
 
 const WALL_ARGS: [&str; 16] = [
@@ -452,19 +294,9 @@ fn sweep_contact_prints_the_outcome_as_json() {
     args.extend(WALL_ARGS);
     args.extend(["--vt", "0.5", "--spin", "-100"]);
     let out = sweep(&args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    for key in [
-        "contact_time",
-        "max_overlap",
-        "restitution_n",
-        "restitution_t",
-        "omega_out",
-    ] {
+    for key in ["contact_time", "max_overlap", "restitution_n", "restitution_t", "omega_out"] {
         assert!(json[key].is_f64(), "{key}: {json}");
     }
     assert!(json["steps"].is_u64());
@@ -480,10 +312,7 @@ fn sweep_contact_rejects_bad_input_with_exit_2() {
     let out = sweep(&args);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        err.contains("--restitution 0.05") && err.contains("0.05 < e <= 1"),
-        "{err}"
-    );
+    assert!(err.contains("--restitution 0.05") && err.contains("0.05 < e <= 1"), "{err}");
     let out = sweep(&["contact", "--case", "sphere-wall"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--radius: required"));
@@ -496,12 +325,7 @@ fn sweep_contact_check_runs_one_case_from_flags() {
     args.extend(["--vt", "2"]);
     let out = sweep(&args);
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{stdout}{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_eq!(out.status.code(), Some(0), "{stdout}{}", String::from_utf8_lossy(&out.stderr));
     assert!(stdout.contains("1 case(s), 0 failed"), "{stdout}");
     assert!(stdout.contains("restitution_t"), "{stdout}");
 }

@@ -90,17 +90,10 @@ fn contact(case: &Case, s: &Sample) -> Contact {
     let (cr1, cr2) = (case.radius - half, r2 - half);
     let vr = [s.v1[0] - s.v2[0], s.v1[1] - s.v2[1], s.v1[2] - s.v2[2]];
     let un = dot(vr, normal);
-    let spin = [
-        cr1 * s.w1[0] + cr2 * s.w2[0],
-        cr1 * s.w1[1] + cr2 * s.w2[1],
-        cr1 * s.w1[2] + cr2 * s.w2[2],
-    ];
+    let spin = [cr1 * s.w1[0] + cr2 * s.w2[0], cr1 * s.w1[1] + cr2 * s.w2[1], cr1 * s.w1[2] + cr2 * s.w2[2]];
     let rot = cross(normal, spin);
-    let ut = [
-        vr[0] - un * normal[0] + rot[0],
-        vr[1] - un * normal[1] + rot[1],
-        vr[2] - un * normal[2] + rot[2],
-    ];
+    let ut =
+        [vr[0] - un * normal[0] + rot[0], vr[1] - un * normal[1] + rot[1], vr[2] - un * normal[2] + rot[2]];
     Contact { overlap, un, ut }
 }
 
@@ -115,10 +108,8 @@ fn crossing(a: (&Sample, f64), b: (&Sample, f64)) -> f64 {
 pub fn analyse(case: &Case, samples: &[Sample], steps: usize) -> Result<Outcome, ContactError> {
     let fail = |message: &str| ContactError::Analysis(message.to_string());
     let contacts: Vec<Contact> = samples.iter().map(|s| contact(case, s)).collect();
-    let first = contacts
-        .iter()
-        .position(|c| c.overlap > 0.0)
-        .ok_or_else(|| fail("the bodies never touched"))?;
+    let first =
+        contacts.iter().position(|c| c.overlap > 0.0).ok_or_else(|| fail("the bodies never touched"))?;
     if first == 0 {
         return Err(fail("the bodies touch in the first sample"));
     }
@@ -132,10 +123,8 @@ pub fn analyse(case: &Case, samples: &[Sample], steps: usize) -> Result<Outcome,
         (&samples[first - 1], contacts[first - 1].overlap),
         (&samples[first], contacts[first].overlap),
     );
-    let t_end = crossing(
-        (&samples[last], contacts[last].overlap),
-        (&samples[last + 1], contacts[last + 1].overlap),
-    );
+    let t_end =
+        crossing((&samples[last], contacts[last].overlap), (&samples[last + 1], contacts[last + 1].overlap));
 
     let (k, _) = contacts[first..=last]
         .iter()
@@ -143,11 +132,7 @@ pub fn analyse(case: &Case, samples: &[Sample], steps: usize) -> Result<Outcome,
         .map(|(i, c)| (first + i, c.overlap))
         .max_by(|a, b| a.1.total_cmp(&b.1))
         .expect("at least one sample in contact");
-    let max_overlap = parabola_vertex(
-        contacts[k - 1].overlap,
-        contacts[k].overlap,
-        contacts[k + 1].overlap,
-    );
+    let max_overlap = parabola_vertex(contacts[k - 1].overlap, contacts[k].overlap, contacts[k + 1].overlap);
 
     // "Out" is the first sample after separation: later the normal of two spheres that slid
     // past each other is no longer the contact normal.
@@ -158,16 +143,9 @@ pub fn analyse(case: &Case, samples: &[Sample], steps: usize) -> Result<Outcome,
     let (restitution_t, regime) = if slip_in <= NO_SLIP * c_in.un.abs() {
         (None, Regime::Normal)
     } else {
-        let dir = [
-            c_in.ut[0] / slip_in,
-            c_in.ut[1] / slip_in,
-            c_in.ut[2] / slip_in,
-        ];
+        let dir = [c_in.ut[0] / slip_in, c_in.ut[1] / slip_in, c_in.ut[2] / slip_in];
         let slid = contacts[first..=last].iter().all(|c| dot(c.ut, dir) > 0.0);
-        (
-            Some(-dot(c_out.ut, dir) / slip_in),
-            if slid { Regime::Slide } else { Regime::Stick },
-        )
+        (Some(-dot(c_out.ut, dir) / slip_in), if slid { Regime::Slide } else { Regime::Stick })
     };
     Ok(Outcome {
         contact_time: t_end - t_start,

@@ -34,10 +34,7 @@ fn liggghts_steps(solver_steps: usize) -> usize {
 /// ν = 0.3, ρ = 7980 kg/m³, D 1–3 mm, e 0.4–0.6, μ 0.1–0.3) at 0.1–2 m/s, sphere–sphere and
 /// sphere–wall (same-material wall), normal, oblique (stick and slide) and spinning.
 pub fn default_cases() -> Vec<(String, Case)> {
-    let steel = Material {
-        youngs: 21e6,
-        poisson: 0.3,
-    };
+    let steel = Material { youngs: 21e6, poisson: 0.3 };
     let case = |target, d: f64, e, mu, vn, vt, spin| Case {
         target,
         radius: d / 2.0,
@@ -51,43 +48,16 @@ pub fn default_cases() -> Vec<(String, Case)> {
         dt: None,
     };
     let wall = Target::Wall(steel);
-    let sphere = |d: f64| Target::Sphere {
-        radius: d / 2.0,
-        density: 7980.0,
-    };
+    let sphere = |d: f64| Target::Sphere { radius: d / 2.0, density: 7980.0 };
     vec![
-        (
-            "wall-normal-D1-e0.4".into(),
-            case(wall, 1e-3, 0.4, 0.1, 0.1, 0.0, 0.0),
-        ),
-        (
-            "wall-normal-D3-e0.6".into(),
-            case(wall, 3e-3, 0.6, 0.3, 2.0, 0.0, 0.0),
-        ),
-        (
-            "wall-oblique-slide".into(),
-            case(wall, 2e-3, 0.5, 0.1, 1.0, 2.0, 0.0),
-        ),
-        (
-            "wall-oblique-stick".into(),
-            case(wall, 2e-3, 0.5, 0.3, 1.0, 0.5, 0.0),
-        ),
-        (
-            "wall-spin".into(),
-            case(wall, 1.5e-3, 0.55, 0.2, 0.5, 0.0, 400.0),
-        ),
-        (
-            "pair-normal-D1-D3".into(),
-            case(sphere(3e-3), 1e-3, 0.45, 0.2, 1.5, 0.0, 0.0),
-        ),
-        (
-            "pair-oblique-slide".into(),
-            case(sphere(2e-3), 2e-3, 0.5, 0.1, 0.5, 1.5, 0.0),
-        ),
-        (
-            "pair-oblique-stick".into(),
-            case(sphere(1e-3), 2.5e-3, 0.6, 0.3, 2.0, 0.8, -200.0),
-        ),
+        ("wall-normal-D1-e0.4".into(), case(wall, 1e-3, 0.4, 0.1, 0.1, 0.0, 0.0)),
+        ("wall-normal-D3-e0.6".into(), case(wall, 3e-3, 0.6, 0.3, 2.0, 0.0, 0.0)),
+        ("wall-oblique-slide".into(), case(wall, 2e-3, 0.5, 0.1, 1.0, 2.0, 0.0)),
+        ("wall-oblique-stick".into(), case(wall, 2e-3, 0.5, 0.3, 1.0, 0.5, 0.0)),
+        ("wall-spin".into(), case(wall, 1.5e-3, 0.55, 0.2, 0.5, 0.0, 400.0)),
+        ("pair-normal-D1-D3".into(), case(sphere(3e-3), 1e-3, 0.45, 0.2, 1.5, 0.0, 0.0)),
+        ("pair-oblique-slide".into(), case(sphere(2e-3), 2e-3, 0.5, 0.1, 0.5, 1.5, 0.0)),
+        ("pair-oblique-stick".into(), case(sphere(1e-3), 2.5e-3, 0.6, 0.3, 2.0, 0.8, -200.0)),
     ]
 }
 
@@ -103,24 +73,13 @@ pub struct Compared {
 }
 
 impl Compared {
-    fn new(
-        quantity: &'static str,
-        reference: Option<f64>,
-        liggghts: Option<f64>,
-        floor: f64,
-    ) -> Self {
+    fn new(quantity: &'static str, reference: Option<f64>, liggghts: Option<f64>, floor: f64) -> Self {
         let rel_diff = match (reference, liggghts) {
             (Some(a), Some(b)) => (a - b).abs() / a.abs().max(floor).max(f64::MIN_POSITIVE),
             (None, None) => 0.0,
             _ => f64::INFINITY,
         };
-        Compared {
-            quantity,
-            reference,
-            liggghts,
-            rel_diff,
-            tolerance: TOLERANCE,
-        }
+        Compared { quantity, reference, liggghts, rel_diff, tolerance: TOLERANCE }
     }
 
     pub fn passed(&self) -> bool {
@@ -139,8 +98,7 @@ pub struct CaseReport {
 
 impl CaseReport {
     pub fn passed(&self) -> bool {
-        self.reference.regime == self.liggghts.regime
-            && self.quantities.iter().all(Compared::passed)
+        self.reference.regime == self.liggghts.regime && self.quantities.iter().all(Compared::passed)
     }
 }
 
@@ -226,14 +184,9 @@ pub fn run_cases(
                 })
             })
             .collect();
-        handles
-            .into_iter()
-            .map(|h| h.join().expect("a contact-check thread panicked"))
-            .collect()
+        handles.into_iter().map(|h| h.join().expect("a contact-check thread panicked")).collect()
     });
-    Ok(Report {
-        cases: results.into_iter().collect::<Result<_, _>>()?,
-    })
+    Ok(Report { cases: results.into_iter().collect::<Result<_, _>>()? })
 }
 
 /// A fresh directory under the system temporary directory.
@@ -241,10 +194,7 @@ fn scratch_dir(name: &str) -> PathBuf {
     use std::sync::atomic::{AtomicUsize, Ordering};
     static COUNTER: AtomicUsize = AtomicUsize::new(0);
     let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    std::env::temp_dir().join(format!(
-        "demsweep-contact-{}-{n}-{name}",
-        std::process::id()
-    ))
+    std::env::temp_dir().join(format!("demsweep-contact-{}-{n}-{name}", std::process::id()))
 }
 
 fn compare(name: &str, case: &Case, engine: &Path, dir: &Path) -> Result<CaseReport, ContactError> {
@@ -259,51 +209,16 @@ fn compare(name: &str, case: &Case, engine: &Path, dir: &Path) -> Result<CaseRep
     let liggghts = analyse(case, &samples, steps)?;
     let spin_scale = case.vn / case.radius;
     let quantities = vec![
-        Compared::new(
-            "contact_time",
-            Some(reference.contact_time),
-            Some(liggghts.contact_time),
-            0.0,
-        ),
-        Compared::new(
-            "max_overlap",
-            Some(reference.max_overlap),
-            Some(liggghts.max_overlap),
-            0.0,
-        ),
-        Compared::new(
-            "restitution_n",
-            Some(reference.restitution_n),
-            Some(liggghts.restitution_n),
-            0.0,
-        ),
+        Compared::new("contact_time", Some(reference.contact_time), Some(liggghts.contact_time), 0.0),
+        Compared::new("max_overlap", Some(reference.max_overlap), Some(liggghts.max_overlap), 0.0),
+        Compared::new("restitution_n", Some(reference.restitution_n), Some(liggghts.restitution_n), 0.0),
         // Tangential restitution runs through 0 between stick and slide: relative to 1.
-        Compared::new(
-            "restitution_t",
-            reference.restitution_t,
-            liggghts.restitution_t,
-            1.0,
-        ),
+        Compared::new("restitution_t", reference.restitution_t, liggghts.restitution_t, 1.0),
         // Spin relative to the natural scale vn/r (it is 0 in a normal impact).
-        Compared::new(
-            "omega_out",
-            Some(reference.omega_out),
-            Some(liggghts.omega_out),
-            spin_scale,
-        ),
-        Compared::new(
-            "omega2_out",
-            reference.omega2_out,
-            liggghts.omega2_out,
-            spin_scale,
-        ),
+        Compared::new("omega_out", Some(reference.omega_out), Some(liggghts.omega_out), spin_scale),
+        Compared::new("omega2_out", reference.omega2_out, liggghts.omega2_out, spin_scale),
     ];
-    Ok(CaseReport {
-        name: name.to_string(),
-        reference,
-        liggghts,
-        quantities,
-    })
+    Ok(CaseReport { name: name.to_string(), reference, liggghts, quantities })
 }
 
 /// The LIGGGHTS deck of `case` at timestep `dt`, running `steps` steps.
@@ -313,10 +228,7 @@ pub fn render(name: &str, case: &Case, dt: f64, steps: usize) -> Result<String, 
         Target::Wall(w) => (true, w, 0.0, case.density),
         Target::Sphere { radius, density } => (false, case.material, radius, density),
     };
-    for (flag, youngs) in [
-        ("youngs", case.material.youngs),
-        ("wall-youngs", wall_material.youngs),
-    ] {
+    for (flag, youngs) in [("youngs", case.material.youngs), ("wall-youngs", wall_material.youngs)] {
         if !(5e6..=1e12).contains(&youngs) {
             return Err(ContactError::Input {
                 name: flag,
@@ -336,10 +248,7 @@ pub fn render(name: &str, case: &Case, dt: f64, steps: usize) -> Result<String, 
     ctx.insert("hard", &hard);
     ctx.insert("wall", &wall);
     ctx.insert("half", &num(half));
-    ctx.insert(
-        "skin",
-        &num(case.radius.min(if wall { case.radius } else { r2 })),
-    );
+    ctx.insert("skin", &num(case.radius.min(if wall { case.radius } else { r2 })));
     ctx.insert("youngs", &num(case.material.youngs));
     ctx.insert("poisson", &num(case.material.poisson));
     ctx.insert("wall_youngs", &num(wall_material.youngs));
@@ -367,16 +276,7 @@ pub fn render(name: &str, case: &Case, dt: f64, steps: usize) -> Result<String, 
 /// Runs `engine -in in.contact` in `dir`, output to files there.
 fn run_liggghts(engine: &Path, dir: &Path) -> Result<(), ContactError> {
     let status = Command::new(engine)
-        .args([
-            "-in",
-            "in.contact",
-            "-log",
-            "log.liggghts",
-            "-echo",
-            "none",
-            "-screen",
-            "none",
-        ])
+        .args(["-in", "in.contact", "-log", "log.liggghts", "-echo", "none", "-screen", "none"])
         .current_dir(dir)
         .stdin(std::process::Stdio::null())
         .stdout(std::process::Stdio::null())
@@ -387,15 +287,8 @@ fn run_liggghts(engine: &Path, dir: &Path) -> Result<(), ContactError> {
         return Ok(());
     }
     let log = std::fs::read_to_string(dir.join("log.liggghts")).unwrap_or_default();
-    let error = log
-        .lines()
-        .find(|l| l.starts_with("ERROR"))
-        .unwrap_or("no ERROR line in the log");
-    Err(ContactError::Engine(format!(
-        "{} failed ({status}) in {}: {error}",
-        engine.display(),
-        dir.display()
-    )))
+    let error = log.lines().find(|l| l.starts_with("ERROR")).unwrap_or("no ERROR line in the log");
+    Err(ContactError::Engine(format!("{} failed ({status}) in {}: {error}", engine.display(), dir.display())))
 }
 
 /// Reads the `fix print` file: per line the step, then per atom x y z vx vy vz ωx ωy ωz.
@@ -405,30 +298,20 @@ pub fn read_trajectory(path: &Path, case: &Case, dt: f64) -> Result<Vec<Sample>,
     let atoms = if case.sphere2().is_some() { 2 } else { 1 };
     let mut samples = vec![initial_state(case, dt)];
     for (i, line) in text.lines().enumerate() {
-        let err = |message: String| ContactError::Output {
-            path: path.display().to_string(),
-            line: i + 1,
-            message,
-        };
+        let err =
+            |message: String| ContactError::Output { path: path.display().to_string(), line: i + 1, message };
         let fields: Vec<&str> = line.split_whitespace().collect();
         if fields.is_empty() {
             continue;
         }
         if fields.len() != 1 + 9 * atoms {
-            return Err(err(format!(
-                "expected {} columns, found {}",
-                1 + 9 * atoms,
-                fields.len()
-            )));
+            return Err(err(format!("expected {} columns, found {}", 1 + 9 * atoms, fields.len())));
         }
-        let step: usize = fields[0]
-            .parse()
-            .map_err(|_| err(format!("step `{}` is not an integer", fields[0])))?;
+        let step: usize =
+            fields[0].parse().map_err(|_| err(format!("step `{}` is not an integer", fields[0])))?;
         let mut v = [0.0; 18];
         for (k, f) in fields[1..].iter().enumerate() {
-            v[k] = f
-                .parse()
-                .map_err(|_| err(format!("column {} `{f}` is not a number", k + 2)))?;
+            v[k] = f.parse().map_err(|_| err(format!("column {} `{f}` is not a number", k + 2)))?;
         }
         let three = |k: usize| [v[k], v[k + 1], v[k + 2]];
         samples.push(Sample {

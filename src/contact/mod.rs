@@ -27,11 +27,7 @@ pub use model::Material;
 pub enum ContactError {
     /// A case parameter is out of range.
     #[error("--{name} {value}: expected {expected}")]
-    Input {
-        name: &'static str,
-        value: f64,
-        expected: &'static str,
-    },
+    Input { name: &'static str, value: f64, expected: &'static str },
     /// The bodies were still in contact after the step limit (should not happen for e > 0.05).
     #[error("the bodies did not separate within {steps} steps of {dt:e} s")]
     NoSeparation { steps: usize, dt: f64 },
@@ -40,11 +36,7 @@ pub enum ContactError {
     Engine(String),
     /// The LIGGGHTS output of a case could not be read.
     #[error("{path}:{line}: {message}")]
-    Output {
-        path: String,
-        line: usize,
-        message: String,
-    },
+    Output { path: String, line: usize, message: String },
     /// A recorded trajectory does not show one complete impact.
     #[error("the trajectory cannot be analysed: {0}")]
     Analysis(String),
@@ -102,26 +94,12 @@ impl Case {
             if ok && !value.is_nan() {
                 Ok(())
             } else {
-                Err(ContactError::Input {
-                    name,
-                    value,
-                    expected,
-                })
+                Err(ContactError::Input { name, value, expected })
             }
         }
         let positive = |v: f64| v > 0.0 && v.is_finite();
-        check(
-            "radius",
-            self.radius,
-            positive(self.radius),
-            "a positive radius in m",
-        )?;
-        check(
-            "density",
-            self.density,
-            positive(self.density),
-            "a positive density in kg/m^3",
-        )?;
+        check("radius", self.radius, positive(self.radius), "a positive radius in m")?;
+        check("density", self.density, positive(self.density), "a positive density in kg/m^3")?;
         check(
             "youngs",
             self.material.youngs,
@@ -146,19 +124,9 @@ impl Case {
             self.friction >= 0.0 && self.friction.is_finite(),
             "a friction coefficient >= 0",
         )?;
-        check(
-            "vn",
-            self.vn,
-            positive(self.vn),
-            "a positive approach speed in m/s",
-        )?;
+        check("vn", self.vn, positive(self.vn), "a positive approach speed in m/s")?;
         check("vt", self.vt, self.vt.is_finite(), "a finite speed in m/s")?;
-        check(
-            "spin",
-            self.spin,
-            self.spin.is_finite(),
-            "a finite rate in rad/s",
-        )?;
+        check("spin", self.spin, self.spin.is_finite(), "a finite rate in rad/s")?;
         if let Some(dt) = self.dt {
             check("dt", dt, positive(dt), "a positive timestep in s")?;
         }
@@ -170,26 +138,11 @@ impl Case {
                     w.youngs > 0.0,
                     "a positive Young's modulus in Pa (inf: rigid)",
                 )?;
-                check(
-                    "wall-poisson",
-                    w.poisson,
-                    (0.0..=0.5).contains(&w.poisson),
-                    "0 <= nu <= 0.5",
-                )?;
+                check("wall-poisson", w.poisson, (0.0..=0.5).contains(&w.poisson), "0 <= nu <= 0.5")?;
             }
             Target::Sphere { radius, density } => {
-                check(
-                    "radius2",
-                    radius,
-                    positive(radius),
-                    "a positive radius in m",
-                )?;
-                check(
-                    "density2",
-                    density,
-                    positive(density),
-                    "a positive density in kg/m^3",
-                )?;
+                check("radius2", radius, positive(radius), "a positive radius in m")?;
+                check("density2", density, positive(density), "a positive density in kg/m^3")?;
             }
         }
         Ok(())
@@ -216,11 +169,7 @@ impl Case {
             Target::Wall(w) => (w, self.radius, m1),
             Target::Sphere { radius, .. } => {
                 let (_, m2) = self.sphere2().expect("sphere target");
-                (
-                    self.material,
-                    self.radius * radius / (self.radius + radius),
-                    m1 * m2 / (m1 + m2),
-                )
+                (self.material, self.radius * radius / (self.radius + radius), m1 * m2 / (m1 + m2))
             }
         };
         model::Pair {
@@ -235,8 +184,7 @@ impl Case {
 
     /// The timestep: the given one, or the Hertz contact time / [`DEFAULT_STEPS_PER_CONTACT`].
     pub fn timestep(&self) -> f64 {
-        self.dt
-            .unwrap_or_else(|| self.pair().hertz_time(self.vn) / DEFAULT_STEPS_PER_CONTACT)
+        self.dt.unwrap_or_else(|| self.pair().hertz_time(self.vn) / DEFAULT_STEPS_PER_CONTACT)
     }
 }
 

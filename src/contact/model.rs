@@ -121,10 +121,7 @@ mod tests {
 
     #[test]
     fn same_material_effective_youngs_is_e_over_two_one_minus_nu_squared() {
-        let m = Material {
-            youngs: 21e6,
-            poisson: 0.3,
-        };
+        let m = Material { youngs: 21e6, poisson: 0.3 };
         let expected = 21e6 / (2.0 * (1.0 - 0.09));
         assert!((effective_youngs(m, m) / expected - 1.0).abs() < 1e-14);
         let g_expected = 21e6 / (4.0 * (2.0 - 0.3) * 1.3);
@@ -133,14 +130,8 @@ mod tests {
 
     #[test]
     fn rigid_wall_leaves_the_particle_compliance_only() {
-        let m = Material {
-            youngs: 21e6,
-            poisson: 0.3,
-        };
-        let wall = Material {
-            youngs: f64::INFINITY,
-            poisson: 0.3,
-        };
+        let m = Material { youngs: 21e6, poisson: 0.3 };
+        let wall = Material { youngs: f64::INFINITY, poisson: 0.3 };
         assert!((effective_youngs(m, wall) / (21e6 / 0.91) - 1.0).abs() < 1e-14);
     }
 
@@ -163,9 +154,6 @@ mod tests {
             integral += 2.0 * s / (1.0 - x.powf(2.5)).sqrt() / n as f64;
         }
         let constant = 2.0 * integral * (15.0f64 / 16.0).powf(0.4);
-        assert!(
-            (constant / HERTZ_TIME_CONSTANT - 1.0).abs() < 1e-5,
-            "{constant}"
-        );
+        assert!((constant / HERTZ_TIME_CONSTANT - 1.0).abs() < 1e-5, "{constant}");
     }
 }

@@ -28,11 +28,7 @@ pub fn dot(a: V3, b: V3) -> f64 {
 }
 /// a × b.
 pub fn cross(a: V3, b: V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 /// |a|.
 pub fn norm(a: V3) -> f64 {
@@ -171,27 +167,13 @@ pub fn simulate(case: &Case, dt: f64) -> Result<Trajectory, ContactError> {
             b2.final_integrate(dtf);
         }
         let (x2, v2, w2) = b2.map_or(([0.0; 3], [0.0; 3], [0.0; 3]), |b| (b.x, b.v, b.w));
-        samples.push(Sample {
-            t: step as f64 * dt,
-            x1: b1.x,
-            v1: b1.v,
-            w1: b1.w,
-            x2,
-            v2,
-            w2,
-        });
+        samples.push(Sample { t: step as f64 * dt, x1: b1.x, v1: b1.v, w1: b1.w, x2, v2, w2 });
         touched |= in_contact;
         if touched && !in_contact {
-            return Ok(Trajectory {
-                samples,
-                steps: step,
-            });
+            return Ok(Trajectory { samples, steps: step });
         }
     }
-    Err(ContactError::NoSeparation {
-        steps: max_steps,
-        dt,
-    })
+    Err(ContactError::NoSeparation { steps: max_steps, dt })
 }
 
 /// Sets the contact force and torques on the bodies (zero when apart) and updates the shear
@@ -209,13 +191,7 @@ fn contact_force(
     // |delta| < ri + rj.
     let (delta, radsum, v2, w2, r2) = match &b2 {
         None => ([0.0, 0.0, b1.x[2]], b1.radius, [0.0; 3], [0.0; 3], 0.0),
-        Some(b2) => (
-            sub(b1.x, b2.x),
-            b1.radius + b2.radius,
-            b2.v,
-            b2.w,
-            b2.radius,
-        ),
+        Some(b2) => (sub(b1.x, b2.x), b1.radius + b2.radius, b2.v, b2.w, b2.radius),
     };
     let r = norm(delta);
     let touching = if wall { r <= radsum } else { r < radsum };
