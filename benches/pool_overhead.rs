@@ -1,10 +1,11 @@
 //! Overhead of the job pool against GNU parallel, on the same trivial jobs, side by side.
 //!
-//! `cargo bench --bench pool_overhead -- [--jobs N] [--count N]` (defaults: the machine's cores,
-//! 1000 jobs). Each job runs `true`. The pool path is the one a sweep takes: claim the run dir,
-//! run the child in its own process group under the timeout, write result.json, release the
-//! claim, append a joblog line; GNU parallel runs the same `true` with `--joblog`. Prints both
-//! wall times, the per-job cost and the ratio.
+//! `cargo bench --bench pool_overhead -- [--jobs N] [--count N] [--rounds N]` (defaults: the
+//! machine's cores, 1000 jobs, 3 rounds alternating pool and parallel; the median ratio counts).
+//! Each job runs `true`. The pool path is the one a sweep takes: claim the run dir, run the child
+//! in its own process group under the timeout, write result.json, release the claim, append a
+//! joblog line; GNU parallel runs the same `true` with `--joblog`. Prints both wall times, the
+//! per-job cost and the ratio.
 
 use std::path::Path;
 use std::process::Command;
@@ -42,6 +43,7 @@ impl Executor for TrueExecutor {
             parameters: Default::default(),
             mfr: 0.0,
             mfr_flux: 0.0,
+            mfr_particles: 0,
             mfr_windows: vec![],
             steady: true,
             vx: vec![],
@@ -66,13 +68,9 @@ fn arg(name: &str, default: usize) -> usize {
         .unwrap_or(default)
 }
 
-fn main() {
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let jobs = arg("--jobs", cores);
-    let count = arg("--count", 1000);
-
-    let tmp = tempfile::tempdir().unwrap();
-    let dir = tmp.path().join("sweep");
+/// Wall time of `count` jobs through the pool, in a fresh sweep directory under `tmp`.
+fn ours(tmp: &Path, round: usize, jobs: usize, count: usize) -> Duration {
+    let dir = tmp.join(format!("sweep{round}"));
     std::fs::create_dir_all(dir.join("runs")).unwrap();
     let store = Store::open(&dir);
     let exec = TrueExecutor;
@@ -89,22 +87,47 @@ fn main() {
         }
         Flow::Continue
     });
-    let ours = t.elapsed();
+    let took = t.elapsed();
     assert_eq!(done, count);
+    took
+}
 
-    let joblog = tmp.path().join("parallel.joblog");
+/// Wall time of the same jobs through GNU parallel with a joblog.
+fn theirs(tmp: &Path, round: usize, jobs: usize, count: usize) -> Duration {
+    let joblog = tmp.join(format!("parallel{round}.joblog"));
     let t = Instant::now();
     let status = Command::new("sh")
         .arg("-c")
         .arg(format!("seq {count} | parallel --will-cite -j {jobs} --joblog {} true", joblog.display()))
         .status()
         .expect("GNU parallel (apt-get install parallel)");
-    let theirs = t.elapsed();
+    let took = t.elapsed();
     assert!(status.success());
+    took
+}
 
+fn main() {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let jobs = arg("--jobs", cores);
+    let count = arg("--count", 1000);
+    let rounds = arg("--rounds", 3);
+    let tmp = tempfile::tempdir().unwrap();
     let per = |d: Duration| d.as_secs_f64() * 1e3 / count as f64;
-    println!("pool overhead: {count} jobs of `true` on {jobs} slots");
-    println!("  sweep pool    {:7.3} s  {:6.3} ms/job", ours.as_secs_f64(), per(ours));
-    println!("  GNU parallel  {:7.3} s  {:6.3} ms/job", theirs.as_secs_f64(), per(theirs));
-    println!("  ratio pool / parallel = {:.2}", ours.as_secs_f64() / theirs.as_secs_f64());
+    println!("pool overhead: {count} jobs of `true` on {jobs} slots, {rounds} alternating rounds");
+    let mut ratios = Vec::new();
+    for round in 0..rounds {
+        let a = ours(tmp.path(), round, jobs, count);
+        let b = theirs(tmp.path(), round, jobs, count);
+        ratios.push(a.as_secs_f64() / b.as_secs_f64());
+        println!(
+            "  round {round}: sweep pool {:6.3} s ({:5.2} ms/job)  GNU parallel {:6.3} s ({:5.2} ms/job)  ratio {:.2}",
+            a.as_secs_f64(),
+            per(a),
+            b.as_secs_f64(),
+            per(b),
+            ratios[round]
+        );
+    }
+    ratios.sort_by(f64::total_cmp);
+    println!("  median ratio pool / parallel = {:.2}", ratios[ratios.len() / 2]);
 }
