@@ -277,4 +277,14 @@ fn a_deck_that_makes_liggghts_fail_is_reported_and_the_sweep_goes_on() {
     assert_eq!((st["done"].as_u64(), st["failed"].as_u64()), (Some(2), Some(2)));
     let reason = st["failures"]["engine-error"]["first"][0]["reason"].as_str().unwrap();
     assert!(reason.contains("no_such_command"), "{reason}");
+
+    // The template changes: resume refuses, naming what changed, and touches nothing.
+    std::fs::write(&template, format!("# edited\n{}", std::fs::read_to_string(&template).unwrap())).unwrap();
+    let manifest = std::fs::read(out.join("manifest.json")).unwrap();
+    let o = run(sweep_bin().args(["resume", "--retry-failed", "-q"]).arg(&out));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("template_hash"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--force"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(out.join("manifest.json")).unwrap(), manifest);
+    assert_eq!(attempts(&out).values().map(Vec::len).sum::<usize>(), 4, "nothing ran");
 }
