@@ -19,7 +19,6 @@
 //! Not responsible for deciding what to run (the driver, [`crate::sweeprun`]) or running it
 //! ([`crate::pool`]).
 
-use std::collections::BTreeMap;
 use std::fs::{self, File, OpenOptions};
 use std::io::Write;
 use std::os::unix::fs::OpenOptionsExt;
@@ -174,10 +173,6 @@ impl Store {
 
     pub fn dir(&self) -> &Path {
         &self.dir
-    }
-
-    pub fn host(&self) -> &str {
-        &self.host
     }
 
     pub fn manifest_path(dir: &Path) -> PathBuf {
@@ -579,11 +574,6 @@ pub fn process_start_ticks(pid: u32) -> Option<u64> {
         return None;
     }
     fields.get(19)?.parse().ok()
-}
-
-/// Counts of a directory's points by state, for `sweep status` and the driver.
-pub fn point_states(store: &Store, points: &[PointRecord]) -> BTreeMap<String, RunState> {
-    points.iter().map(|p| (p.hash.clone(), store.state(&p.hash))).collect()
 }
 
 #[cfg(test)]
