@@ -32,7 +32,8 @@ fn liggghts_steps(solver_steps: usize) -> usize {
 
 /// The built-in cases: the spreading scene's materials (thesis Table 3.1: E = 21 MPa,
 /// ν = 0.3, ρ = 7980 kg/m³, D 1–3 mm, e 0.4–0.6, μ 0.1–0.3) at 0.1–2 m/s, sphere–sphere and
-/// sphere–wall (same-material wall), normal, oblique (stick and slide) and spinning.
+/// sphere–wall (a same-material wall, and a 200 GPa plate as its own wall type), normal,
+/// oblique (stick and slide) and spinning, at t_c/1000 and once at a coarse t_c/50.
 pub fn default_cases() -> Vec<(String, Case)> {
     let steel = Material { youngs: 21e6, poisson: 0.3 };
     let case = |target, d: f64, e, mu, vn, vt, spin| Case {
@@ -48,16 +49,23 @@ pub fn default_cases() -> Vec<(String, Case)> {
         dt: None,
     };
     let wall = Target::Wall(steel);
+    // A hard plate (real steel) as a wall type of its own: Y* from both types.
+    let plate = Target::Wall(Material { youngs: 200e9, poisson: 0.3 });
     let sphere = |d: f64| Target::Sphere { radius: d / 2.0, density: 7980.0 };
+    // At a production-like timestep (t_c/50), where the first and last contact steps weigh most.
+    let mut coarse = case(sphere(1.5e-3), 1.5e-3, 0.4, 0.2, 1.0, 1.0, 100.0);
+    coarse.dt = Some(coarse.pair().hertz_time(coarse.vn) / 50.0);
     vec![
         ("wall-normal-D1-e0.4".into(), case(wall, 1e-3, 0.4, 0.1, 0.1, 0.0, 0.0)),
         ("wall-normal-D3-e0.6".into(), case(wall, 3e-3, 0.6, 0.3, 2.0, 0.0, 0.0)),
         ("wall-oblique-slide".into(), case(wall, 2e-3, 0.5, 0.1, 1.0, 2.0, 0.0)),
         ("wall-oblique-stick".into(), case(wall, 2e-3, 0.5, 0.3, 1.0, 0.5, 0.0)),
+        ("plate-oblique".into(), case(plate, 2e-3, 0.45, 0.15, 0.3, 0.6, 0.0)),
         ("wall-spin".into(), case(wall, 1.5e-3, 0.55, 0.2, 0.5, 0.0, 400.0)),
         ("pair-normal-D1-D3".into(), case(sphere(3e-3), 1e-3, 0.45, 0.2, 1.5, 0.0, 0.0)),
         ("pair-oblique-slide".into(), case(sphere(2e-3), 2e-3, 0.5, 0.1, 0.5, 1.5, 0.0)),
         ("pair-oblique-stick".into(), case(sphere(1e-3), 2.5e-3, 0.6, 0.3, 2.0, 0.8, -200.0)),
+        ("pair-coarse-dt".into(), coarse),
     ]
 }
 
@@ -217,8 +225,39 @@ fn compare(name: &str, case: &Case, engine: &Path, dir: &Path) -> Result<CaseRep
         // Spin relative to the natural scale vn/r (it is 0 in a normal impact).
         Compared::new("omega_out", Some(reference.omega_out), Some(liggghts.omega_out), spin_scale),
         Compared::new("omega2_out", reference.omega2_out, liggghts.omega2_out, spin_scale),
+        Compared {
+            quantity: "trajectory",
+            reference: None,
+            liggghts: None,
+            rel_diff: trajectory_deviation(case, &trajectory.samples, &samples),
+            tolerance: TOLERANCE,
+        },
     ];
     Ok(CaseReport { name: name.to_string(), reference, liggghts, quantities })
+}
+
+/// The largest difference of state between two trajectories over their common steps, relative
+/// to the natural scales: r1 for positions, vn for velocities, vn/r1 for spins.
+fn trajectory_deviation(case: &Case, a: &[Sample], b: &[Sample]) -> f64 {
+    let dev = |p: [f64; 3], q: [f64; 3], scale: f64| {
+        (0..3).map(|k| (p[k] - q[k]).abs() / scale).fold(0.0, f64::max)
+    };
+    let (r, v, w) = (case.radius, case.vn, case.vn / case.radius);
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| {
+            [
+                dev(p.x1, q.x1, r),
+                dev(p.x2, q.x2, r),
+                dev(p.v1, q.v1, v),
+                dev(p.v2, q.v2, v),
+                dev(p.w1, q.w1, w),
+                dev(p.w2, q.w2, w),
+            ]
+            .into_iter()
+            .fold(0.0, f64::max)
+        })
+        .fold(0.0, f64::max)
 }
 
 /// The LIGGGHTS deck of `case` at timestep `dt`, running `steps` steps.
@@ -288,7 +327,11 @@ fn run_liggghts(engine: &Path, dir: &Path) -> Result<(), ContactError> {
     }
     let log = std::fs::read_to_string(dir.join("log.liggghts")).unwrap_or_default();
     let error = log.lines().find(|l| l.starts_with("ERROR")).unwrap_or("no ERROR line in the log");
-    Err(ContactError::Engine(format!("{} failed ({status}) in {}: {error}", engine.display(), dir.display())))
+    Err(ContactError::Engine(format!(
+        "{} failed ({status}) in {}: {error} (--keep DIR keeps the deck and log)",
+        engine.display(),
+        dir.display()
+    )))
 }
 
 /// Reads the `fix print` file: per line the step, then per atom x y z vx vy vz ωx ωy ωz.
@@ -371,7 +414,8 @@ mod tests {
 
     #[test]
     fn the_deck_renders_with_the_case_numbers() {
-        let (_, case) = default_cases().remove(6);
+        // pair-oblique-slide.
+        let (_, case) = default_cases().remove(7);
         let deck = render("pair", &case, 1e-7, 1234).unwrap();
         assert!(deck.contains("pair_style gran model hertz tangential history"));
         assert!(!deck.contains("wall/gran"));

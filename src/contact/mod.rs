@@ -167,8 +167,8 @@ impl Case {
         let m1 = self.mass();
         let (other, r_eff, m_eff) = match self.target {
             Target::Wall(w) => (w, self.radius, m1),
-            Target::Sphere { radius, .. } => {
-                let (_, m2) = self.sphere2().expect("sphere target");
+            Target::Sphere { radius, density } => {
+                let m2 = sphere_mass(radius, density);
                 (self.material, self.radius * radius / (self.radius + radius), m1 * m2 / (m1 + m2))
             }
         };
