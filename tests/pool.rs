@@ -260,6 +260,34 @@ fn two_resumes_on_one_directory_never_run_a_point_twice() {
 }
 
 #[test]
+fn status_counts_runs_claimed_by_a_live_sweep_as_running() {
+    let tmp = tempfile::tempdir().unwrap();
+    let s = sweep(tmp.path(), "");
+    let out = tmp.path().join("out");
+    let exec = FakeExecutor::new(|_, _| Behaviour::Hang);
+    let cancel = CancelToken::new();
+    std::thread::scope(|sc| {
+        let h = sc.spawn(|| sweeprun::start(&s, lds(4, 4), &out, &exec, &opts(2), &mut RunAll, &cancel));
+        let mut seen = None;
+        for _ in 0..200 {
+            if let Ok(st) = sweeprun::status(&out) {
+                if st.running == 2 {
+                    seen = Some(st);
+                    break;
+                }
+            }
+            std::thread::sleep(50 * MS);
+        }
+        cancel.cancel();
+        let sum = h.join().unwrap().unwrap();
+        let st = seen.expect("two runs seen running");
+        assert_eq!((st.running, st.pending, st.done), (2, 2, 0));
+        assert_eq!((sum.done, sum.pending, sum.exit_code()), (0, 4, 130));
+    });
+    assert_eq!(sweeprun::status(&out).unwrap().running, 0, "claims released on interrupt");
+}
+
+#[test]
 fn an_interrupt_while_planning_writes_nothing() {
     let tmp = tempfile::tempdir().unwrap();
     let s = sweep(tmp.path(), "");
