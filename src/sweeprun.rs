@@ -6,6 +6,11 @@
 //! with one reporter: joblog lines, results.csv (rewritten as points finish), progress, and the
 //! per-space hook where convergence checking plugs in ([`SpaceHook`]).
 //!
+//! Spaces are not run as batches with a barrier between them: all points go into one queue in
+//! design order (an LDS prefix, a lattice level, comes first), so no slot idles at the end of a
+//! batch; the hook fires as soon as a space's last point finishes, and if it stops the sweep only
+//! the runs already started past that space finish.
+//!
 //! Everything that can be refused (bad design, changed engine, a directory of another sweep) is
 //! refused before anything is written.
 //!
