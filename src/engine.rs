@@ -123,9 +123,22 @@ impl Engine {
             .stdin(Stdio::null())
             .stdout(screen)
             .stderr(screen_err);
-        let (outcome, took) = process::run(cmd, timeout, cancel);
+        // Read the log as LIGGGHTS writes it (the deck flushes it at every thermo line) and stop a
+        // run the moment its energy explodes or it loses atoms: it can only fail from there,
+        // and an exploding run with a shrink-wrapped box can grab gigabytes before it ends.
+        let log_path = dir.join(LOG);
+        let mut watch = || {
+            let log = read_lossy(&log_path);
+            match analyse_log(&log, limits).failure {
+                Some((class @ (FailureClass::Unstable | FailureClass::LostAtoms), reason)) => {
+                    Some(format!("{}: {reason}", class.as_str()))
+                }
+                _ => None,
+            }
+        };
+        let (outcome, took) = process::run_watched(cmd, timeout, cancel, &mut watch);
         let wall = took.as_secs_f64();
-        let log = std::fs::read_to_string(dir.join(LOG)).unwrap_or_default();
+        let log = read_lossy(&dir.join(LOG));
         let tail = tail(&log, TAIL_LINES);
         let fail = |class, reason: String| EngineRun::failed(class, reason, tail.clone(), wall);
         match outcome {
@@ -134,6 +147,12 @@ impl Engine {
                     FailureClass::CouldNotStart,
                     format!("cannot start {}: {e}", self.path.display()),
                 )
+            }
+            ProcessOutcome::Stopped(_) => {
+                // The watcher saw the failure in the log; classify it from the log as written.
+                let analysis = analyse_log(&log, limits);
+                let (class, reason) = analysis.failure.unwrap_or((FailureClass::Unstable, "stopped".into()));
+                return fail(class, format!("{reason} (stopped early)"));
             }
             ProcessOutcome::TimedOut => {
                 return fail(
@@ -151,7 +170,7 @@ impl Engine {
             }
             ProcessOutcome::Signalled(sig) => {
                 // LIGGGHTS may have printed an ERROR before dying.
-                let screen = std::fs::read_to_string(dir.join(SCREEN)).unwrap_or_default();
+                let screen = read_lossy(&dir.join(SCREEN));
                 if let Some(e) = first_error(&log).or_else(|| first_error(&screen)) {
                     return fail(FailureClass::EngineError, e);
                 }
@@ -159,10 +178,16 @@ impl Engine {
             }
             ProcessOutcome::Exited(code) => {
                 if let Some(e) = first_error(&log) {
-                    return fail(FailureClass::EngineError, e);
+                    // `thermo_modify lost error` stops LIGGGHTS at the first lost atom.
+                    let class = if e.contains("Lost atoms") {
+                        FailureClass::LostAtoms
+                    } else {
+                        FailureClass::EngineError
+                    };
+                    return fail(class, e);
                 }
                 if code != 0 {
-                    let screen = std::fs::read_to_string(dir.join(SCREEN)).unwrap_or_default();
+                    let screen = read_lossy(&dir.join(SCREEN));
                     let why = first_error(&screen).unwrap_or_else(|| format!("exited with code {code}"));
                     return fail(FailureClass::EngineError, why);
                 }
@@ -179,6 +204,12 @@ impl Engine {
             },
         }
     }
+}
+
+/// A log as text, whatever it holds: LIGGGHTS prints stray bytes after some errors, and a
+/// failed UTF-8 decode must not hide the ERROR line before them. Missing file: empty.
+fn read_lossy(path: &Path) -> String {
+    std::fs::read(path).map(|b| String::from_utf8_lossy(&b).into_owned()).unwrap_or_default()
 }
 
 fn find_on_path(name: &str) -> Option<PathBuf> {

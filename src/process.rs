@@ -46,6 +46,8 @@ pub enum ProcessOutcome {
     TimedOut,
     /// Stopped by the cancel token (Ctrl-C, SIGTERM).
     Cancelled,
+    /// Stopped because the watcher saw it going wrong; the watcher's reason.
+    Stopped(String),
     /// Could not be started (no such executable, permission, ...).
     SpawnFailed(String),
 }
@@ -55,7 +57,21 @@ pub enum ProcessOutcome {
 ///
 /// PR_SET_PDEATHSIG fires when the *thread* that forked the child exits, so call this from a
 /// thread that outlives the child (a pool worker, the main thread).
-pub fn run(mut cmd: Command, timeout: Duration, cancel: &CancelToken) -> (ProcessOutcome, Duration) {
+pub fn run(cmd: Command, timeout: Duration, cancel: &CancelToken) -> (ProcessOutcome, Duration) {
+    run_watched(cmd, timeout, cancel, &mut || None)
+}
+
+/// How often [`run_watched`] calls its watcher.
+pub const WATCH_EVERY: Duration = Duration::from_secs(1);
+
+/// [`run`], also calling `watch` every [`WATCH_EVERY`] while the child runs; when it returns a
+/// reason, the job is stopped at once (so a run that has already failed costs no more time).
+pub fn run_watched(
+    mut cmd: Command,
+    timeout: Duration,
+    cancel: &CancelToken,
+    watch: &mut dyn FnMut() -> Option<String>,
+) -> (ProcessOutcome, Duration) {
     let start = Instant::now();
     // SAFETY: only async-signal-safe calls (setpgid, prctl, getppid) between fork and exec.
     unsafe {
@@ -81,6 +97,7 @@ pub fn run(mut cmd: Command, timeout: Duration, cancel: &CancelToken) -> (Proces
         Err(e) => return (ProcessOutcome::SpawnFailed(e.to_string()), start.elapsed()),
     };
     let mut poll = POLL_MIN;
+    let mut last_watch = Instant::now();
     let outcome = loop {
         match child.try_wait() {
             Ok(Some(status)) => {
@@ -103,6 +120,13 @@ pub fn run(mut cmd: Command, timeout: Duration, cancel: &CancelToken) -> (Proces
         if start.elapsed() > timeout {
             kill_group(&mut child);
             break ProcessOutcome::TimedOut;
+        }
+        if last_watch.elapsed() >= WATCH_EVERY {
+            last_watch = Instant::now();
+            if let Some(reason) = watch() {
+                kill_group(&mut child);
+                break ProcessOutcome::Stopped(reason);
+            }
         }
         std::thread::sleep(poll);
         poll = (poll * 2).min(POLL);
@@ -188,6 +212,18 @@ mod tests {
                 .map(|s| !s.contains(") Z "))
                 .unwrap_or(false);
         assert!(!alive, "grandchild {pid} survived the timeout");
+    }
+
+    #[test]
+    fn a_watcher_stops_a_job_that_went_wrong() {
+        let mut calls = 0;
+        let mut watch = || {
+            calls += 1;
+            (calls == 2).then(|| "energy exploded".to_string())
+        };
+        let (o, took) = run_watched(sh("sleep 30"), Duration::from_secs(60), &CancelToken::new(), &mut watch);
+        assert_eq!(o, ProcessOutcome::Stopped("energy exploded".into()));
+        assert!(took < Duration::from_secs(10));
     }
 
     #[test]

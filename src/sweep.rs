@@ -150,7 +150,7 @@ pub struct SceneSettings {
     /// with the thesis's fixed ±1 mm.
     pub vx_band_diameters: f64,
     pub thesis_band: bool,
-    /// Seed for particle insertion.
+    /// Seed of the initial pile: diameters and lattice jitter.
     pub seed: u64,
 }
 

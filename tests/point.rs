@@ -204,3 +204,30 @@ fn every_thesis_geometry_passes_liggghts_setup() {
         assert!(run.status.success() && !log.contains("ERROR"), "{set}: {screen}\n{log}");
     }
 }
+
+/// Stress: the built-in deck with a timestep 10× too large (2 Rayleigh times). Hertz contacts
+/// at such a step blow up; the run must fail with a physics class and a reason, never produce
+/// an MFR — and stop at once (the deck turns a lost atom into an error; the engine's watcher
+/// stops a run whose energy explodes).
+#[test]
+fn an_unstable_timestep_fails_the_run_instead_of_giving_a_number() {
+    let dir = tempfile::tempdir().unwrap();
+    let builtin = include_str!("../templates/spreading.liggghts.tera");
+    let unstable =
+        builtin.replace("timestep        {{ scene.timestep }}", "timestep        {{ scene.timestep * 10 }}");
+    assert_ne!(unstable, builtin, "the template's timestep line moved");
+    std::fs::write(dir.path().join("unstable.tera"), unstable).unwrap();
+    let sweep = dir.path().join("s.toml");
+    std::fs::write(
+        &sweep,
+        "name = \"unstable\"\n[parameters]\ngap = { lo = 1.0, hi = 2.0 }\ndiameter = 3.0\n\
+         [scene]\ntemplate = \"unstable.tera\"\n",
+    )
+    .unwrap();
+    let (code, r, err) = run_point(&sweep, "gap=1.5");
+    assert_eq!(code, 1, "{err}\n{r}");
+    let class = r["class"].as_str().unwrap();
+    assert!(["unstable", "lost-atoms", "engine-error"].contains(&class), "{r}");
+    assert!(!r["reason"].as_str().unwrap().is_empty());
+    assert!(r.get("mfr").is_none());
+}

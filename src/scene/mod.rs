@@ -229,7 +229,10 @@ impl Scene {
         // a blade three pile heights tall keeps nearly all of them in front of it. Any that fly
         // over are excluded from the flux counts (they cross far above the tip).
         let blade_top = 3.0 * pile_z1 + 2.0 * d;
-        let z_hi = blade_top + 2.0 * d;
+        // A fixed top high enough for a particle launched at √2 times the blade speed
+        // (v²/g): anything above it has exploded, and LIGGGHTS stops on the lost atom at once
+        // (a shrink-wrapped top would follow an exploding particle and grow without bound).
+        let z_hi = blade_top + 2.0 * d + speed * speed / GRAVITY;
         let total_steps = settle_steps + approach_steps + window_length_steps;
 
         let profile_diameter = if psd.is_mono() { d } else { psd.quantile(0.85) };
@@ -238,7 +241,7 @@ impl Scene {
         // Unstable: kinetic energy of the whole pile moving at 10× the fastest speed the scene
         // can give it (the blade, or a free fall from the top of the box).
         let mass = particles as f64 * density * psd.mean_volume();
-        let v_ref = speed.max((2.0 * GRAVITY * z_hi).sqrt());
+        let v_ref = speed.max((2.0 * GRAVITY * blade_top).sqrt());
         let ke_limit = 0.5 * mass * (10.0 * v_ref).powi(2);
 
         Ok(Scene {
@@ -276,7 +279,8 @@ impl Scene {
             ramp_steps,
             dump_every,
             window_length_steps,
-            thermo_every: (total_steps / 40).max(1),
+            // Frequent enough for the engine's watcher to stop an exploding run early.
+            thermo_every: (total_steps / 40).clamp(1, 200),
             vx_band,
             vx_length: 6.0 * profile_diameter,
             ke_limit,

@@ -38,7 +38,7 @@ pub fn pile_data(s: &Scene) -> String {
     let mut diameters: Vec<f64> = class_counts(&fractions, s.particles)
         .iter()
         .zip(&s.size_classes)
-        .flat_map(|(&n, c)| std::iter::repeat(c.diameter).take(n))
+        .flat_map(|(&n, c)| std::iter::repeat_n(c.diameter, n))
         .collect();
     diameters.shuffle(&mut rng);
     let d_max = s.size_classes.iter().map(|c| c.diameter).fold(0.0, f64::max);
