@@ -30,7 +30,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run nested lattices (e.g. 5^d, 6^d, ...) and check convergence level to level.
+    /// Run nested lattices (e.g. 5^d, 6^d, ...); a point shared by two levels runs once.
     Lattice(LatticeArgs),
     /// Run scrambled-Halton points in batches of --step up to --max.
     Lds(LdsArgs),
@@ -38,23 +38,23 @@ enum Command {
     Resume(ResumeArgs),
     /// Counts of a sweep directory: done, failed, running, pending.
     Status(DirArgs),
-    /// (Re)write results.csv, convergence.csv, summary.json and plots of a sweep directory.
+    /// (Re)write convergence.csv, summary.json and plots of a sweep directory [not yet implemented].
     Report(DirArgs),
     /// Print a design as CSV (header = swept parameter names, values in their units).
     Points(PointsArgs),
-    /// Write the deck (and blade mesh) of one point without running it.
+    /// Write the deck, blade mesh and initial pile of one point without running it.
     Render(RenderArgs),
     /// Run one point through LIGGGHTS and print its result.
     Run(RunArgs),
-    /// The four statistics (mean, std, skewness, kurtosis) of a CSV column, as JSON.
+    /// The four statistics (mean, std, skewness, kurtosis) of a CSV column, as JSON [not yet implemented].
     Stats(StatsArgs),
     /// One single-contact case on the Hertz–Mindlin reference solver, as JSON.
     Contact(ContactArgs),
     /// Single-contact cases through LIGGGHTS, compared with the reference solver.
     ContactCheck(ContactCheckArgs),
-    /// Write (and optionally submit) a PBS or Slurm array script for a sweep directory.
+    /// Write (and optionally submit) a PBS or Slurm array script for a sweep directory [not yet implemented].
     Submit,
-    /// Run-time-against-error and overhead benchmarks.
+    /// Run-time-against-error and overhead benchmarks [not yet implemented].
     Bench,
 }
 

@@ -480,7 +480,8 @@ impl PointStatus {
 /// Write `DIR/results.csv`: one row per design point, in index order, atomically.
 ///
 /// Columns: index, the swept parameters, status (`done`, `failed`, `pending`), failure (class),
-/// mfr, mfr_flux, steady, vx_1..vx_12 (m/s, empty for an empty layer), runtime_s, hash.
+/// mfr, mfr_flux, mfr_particles, steady, vx_1..vx_12 (m/s, empty for an empty layer), runtime_s,
+/// hash.
 pub fn write_results(
     dir: &Path,
     parameters: &[String],
@@ -491,7 +492,7 @@ pub fn write_results(
     let mut w = csv::Writer::from_writer(Vec::new());
     let mut header: Vec<String> = vec!["index".into()];
     header.extend(parameters.iter().cloned());
-    header.extend(["status", "failure", "mfr", "mfr_flux", "steady"].map(String::from));
+    header.extend(["status", "failure", "mfr", "mfr_flux", "mfr_particles", "steady"].map(String::from));
     header.extend((1..=VX_LAYERS).map(|k| format!("vx_{k}")));
     header.extend(["runtime_s", "hash"].map(String::from));
     w.write_record(&header).expect("in-memory csv");
@@ -501,7 +502,7 @@ pub fn write_results(
         match s {
             PointStatus::Pending => {
                 row.push("pending".into());
-                row.extend(std::iter::repeat_n(String::new(), 4 + VX_LAYERS + 1));
+                row.extend(std::iter::repeat_n(String::new(), 5 + VX_LAYERS + 1));
             }
             PointStatus::Done(r) => {
                 row.extend([
@@ -509,6 +510,7 @@ pub fn write_results(
                     String::new(),
                     r.mfr.to_string(),
                     r.mfr_flux.to_string(),
+                    r.mfr_particles.to_string(),
                     r.steady.to_string(),
                 ]);
                 row.extend(
@@ -519,7 +521,7 @@ pub fn write_results(
             }
             PointStatus::Failed(f) => {
                 row.extend(["failed".into(), f.class.as_str().into()]);
-                row.extend(std::iter::repeat_n(String::new(), 3 + VX_LAYERS));
+                row.extend(std::iter::repeat_n(String::new(), 4 + VX_LAYERS));
                 row.push(format!("{:.3}", f.wall_time));
             }
         }

@@ -88,9 +88,11 @@ fn a_free_slot_takes_the_next_job_while_a_long_one_runs() {
     let tmp = tempfile::tempdir().unwrap();
     let s = sweep(tmp.path(), "");
     let out = tmp.path().join("out");
-    let first = std::sync::Mutex::new(None::<Vec<f64>>);
+    // Whichever job a worker starts first is the long one (two workers race for the queue).
+    let first = std::sync::Arc::new(std::sync::Mutex::new(None::<Vec<f64>>));
+    let seen = first.clone();
     let exec = FakeExecutor::new(move |v, _| {
-        let mut f = first.lock().unwrap();
+        let mut f = seen.lock().unwrap();
         let long = f.get_or_insert_with(|| v.to_vec()) == v;
         Behaviour::Succeed(if long { 1500 * MS } else { 20 * MS })
     });
@@ -98,7 +100,9 @@ fn a_free_slot_takes_the_next_job_while_a_long_one_runs() {
     let log = store::read_joblog(&out).unwrap();
     let (manifest, _) = store::Store::read_manifest(&out).unwrap();
     assert_eq!(log.len(), 8);
-    assert_eq!(log.last().unwrap().hash, manifest.points[0].hash, "the long job ends last");
+    let long_values = first.lock().unwrap().clone().unwrap();
+    let long = manifest.points.iter().find(|p| p.values == long_values).unwrap();
+    assert_eq!(log.last().unwrap().hash, long.hash, "the long job ends last");
 }
 
 #[test]
