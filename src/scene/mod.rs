@@ -356,8 +356,7 @@ mod tests {
     fn timestep_is_the_rayleigh_fraction_or_the_thesis_step() {
         let s = scene(&[("diameter", 1.0)]);
         assert!((s.timestep - 0.2 * s.rayleigh_time).abs() < 1e-18);
-        let mut settings = SceneSettings::default();
-        settings.fidelity = "thesis".into();
+        let settings = SceneSettings { fidelity: "thesis".into(), ..SceneSettings::default() };
         let t = Scene::new(&BTreeMap::new(), &settings).unwrap();
         assert_eq!(t.timestep, THESIS_TIMESTEP);
     }
