@@ -144,6 +144,8 @@ pub struct SceneSettings {
     pub rayleigh_fraction: f64,
     /// Domain depth across the blade (periodic y), in particle diameters.
     pub depth_diameters: f64,
+    /// Length of the MFR measurement window (blade travel), in diameters.
+    pub window_diameters: f64,
     /// Size distribution of the particles.
     pub size_distribution: SizeDistributionSpec,
     /// Half-height of each v_x layer, in diameters (0.25 = ±D/4); `thesis_band` overrides it
@@ -161,6 +163,9 @@ impl Default for SceneSettings {
             fidelity: "fast".into(),
             rayleigh_fraction: 0.2,
             depth_diameters: 6.0,
+            // 40 D: measured 2.8× less seed-to-seed spread than 20 D for 1.6× the CPU
+            // (BENCHMARKS.md "MFR noise").
+            window_diameters: 40.0,
             size_distribution: SizeDistributionSpec::default(),
             vx_band_diameters: 0.25,
             thesis_band: false,
@@ -457,6 +462,7 @@ fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>, Vec<Parame
     for (k, v) in [
         ("scene.rayleigh_fraction", s.rayleigh_fraction),
         ("scene.depth_diameters", s.depth_diameters),
+        ("scene.window_diameters", s.window_diameters),
         ("scene.vx_band_diameters", s.vx_band_diameters),
     ] {
         if !v.is_finite() || v <= 0.0 {

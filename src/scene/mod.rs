@@ -183,7 +183,7 @@ impl Scene {
         let heap_height = gap + 6.0 * d;
         let heap_area = heap_height.powi(2) / (2.0 * REPOSE_DEG.to_radians().tan());
         let develop = 5.0 * d;
-        let window = 20.0 * d;
+        let window = settings.window_diameters * d;
         // Travel = pile length (+ its slump) + develop + window; the pile length depends on
         // the particle count, which depends on the travel: iterate to the fixed point.
         let (mut nx, mut nz) = (0usize, 0usize);
@@ -368,9 +368,11 @@ mod tests {
             let (t1, t2) = s.window_steps();
             // Window starts after the blade front has passed the insertion block's far end.
             assert!(s.blade_front_at(t1) > s.pile_x1, "d={d} gap={gap}");
-            // Window length is 20 D (rounded up to whole snapshot intervals), at full speed.
+            // Window length is window_diameters·D (rounded up to whole snapshot intervals), at
+            // full speed.
             let len = s.blade_rear_at(t2) - s.blade_rear_at(t1);
-            assert!(len >= 20.0 * s.diameter && len < 21.0 * s.diameter, "{len}");
+            let w = SceneSettings::default().window_diameters * s.diameter;
+            assert!(len >= w && len < w + s.diameter, "{len}");
             assert_eq!(s.blade_speed_at(t1), s.blade_speed);
             // The blade never leaves the box.
             assert!(s.blade_front_at(s.total_steps()) < s.x_hi);
