@@ -3,6 +3,7 @@
 //! The pipeline (DESIGN §2), one module per stage, data flowing one way:
 //! sweep file → [`sweep`] → [`space`] + [`design`] → [`scene`] → deck → engine → dump → metrics.
 
+pub mod atomic;
 pub mod contact;
 pub mod deck;
 pub mod design;

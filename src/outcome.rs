@@ -4,7 +4,6 @@
 //! into a number: it carries its class (which decides the retry policy) and a one-line reason.
 
 use std::collections::BTreeMap;
-use std::io::Write;
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
@@ -108,17 +107,9 @@ pub enum RunOutcome {
     Cancelled,
 }
 
-/// Write `value` as JSON to `path` atomically: a temporary file in the same directory, fsynced,
-/// then renamed, so a reader sees the whole file or none.
+/// Write `value` as pretty JSON to `path` atomically ([`crate::atomic::write`]).
 pub fn write_json_atomic<T: Serialize>(path: &Path, value: &T) -> std::io::Result<()> {
-    let dir = path.parent().unwrap_or(Path::new("."));
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out.json");
-    let tmp = dir.join(format!(".{name}.tmp.{}", std::process::id()));
-    {
-        let mut f = std::fs::File::create(&tmp)?;
-        serde_json::to_writer_pretty(&mut f, value)?;
-        f.write_all(b"\n")?;
-        f.sync_all()?;
-    }
-    std::fs::rename(&tmp, path)
+    let mut bytes = serde_json::to_vec_pretty(value)?;
+    bytes.push(b'\n');
+    crate::atomic::write(path, &bytes)
 }

@@ -534,19 +534,7 @@ pub fn write_results(
 
 /// Write `bytes` to a temporary name beside `path` and rename it into place.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), StoreError> {
-    let dir = path.parent().unwrap_or(Path::new("."));
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
-    // Unique per writer: two sessions of one process may write the same file.
-    static WRITES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-    let n = WRITES.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-    let tmp = dir.join(format!(".{name}.tmp.{}.{n}", std::process::id()));
-    let write = || -> std::io::Result<()> {
-        let mut f = File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        fs::rename(&tmp, path)
-    };
-    write().map_err(io(path))
+    crate::atomic::write(path, bytes).map_err(io(path))
 }
 
 fn unix_now() -> f64 {
