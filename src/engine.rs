@@ -91,38 +91,13 @@ impl Engine {
         timeout: Duration,
         cancel: &CancelToken,
     ) -> EngineRun {
-        let screen = match std::fs::File::create(dir.join(SCREEN)) {
-            Ok(f) => f,
+        let cmd = match command(&self.path, dir, deck) {
+            Ok(c) => c,
             Err(e) => {
-                return EngineRun::failed(
-                    FailureClass::CouldNotStart,
-                    format!("cannot create {SCREEN}: {e}"),
-                    String::new(),
-                    0.0,
-                )
+                let reason = format!("cannot create {SCREEN} in {}: {e}", dir.display());
+                return EngineRun::failed(FailureClass::CouldNotStart, reason, String::new(), 0.0);
             }
         };
-        let screen_err = match screen.try_clone() {
-            Ok(f) => f,
-            Err(e) => {
-                return EngineRun::failed(FailureClass::CouldNotStart, e.to_string(), String::new(), 0.0)
-            }
-        };
-        // LIGGGHTS aborts through MPI_Abort without flushing its log or a redirected stdout, so
-        // the ERROR line would be lost; line-buffer stdout with coreutils' stdbuf when we can.
-        let mut cmd = match find_on_path("stdbuf") {
-            Some(stdbuf) => {
-                let mut c = Command::new(stdbuf);
-                c.args(["-oL", "-eL"]).arg(&self.path);
-                c
-            }
-            None => Command::new(&self.path),
-        };
-        cmd.args(["-in", deck, "-log", LOG, "-echo", "none", "-nocite"])
-            .current_dir(dir)
-            .stdin(Stdio::null())
-            .stdout(screen)
-            .stderr(screen_err);
         // Read the log as LIGGGHTS writes it (the deck flushes it at every thermo line) and stop a
         // run the moment its energy explodes or it loses atoms: it can only fail from there,
         // and an exploding run with a shrink-wrapped box can grab gigabytes before it ends.
@@ -170,14 +145,13 @@ impl Engine {
             }
             ProcessOutcome::Signalled(sig) => {
                 // LIGGGHTS may have printed an ERROR before dying.
-                let screen = read_lossy(&dir.join(SCREEN));
-                if let Some(e) = first_error(&log).or_else(|| first_error(&screen)) {
+                if let Some(e) = first_error_in(dir) {
                     return fail(FailureClass::EngineError, e);
                 }
                 return fail(FailureClass::Signalled, format!("killed by signal {sig}"));
             }
             ProcessOutcome::Exited(code) => {
-                if let Some(e) = first_error(&log) {
+                if let Some(e) = first_error_in(dir) {
                     // `thermo_modify lost error` stops LIGGGHTS at the first lost atom.
                     let class = if e.contains("Lost atoms") {
                         FailureClass::LostAtoms
@@ -187,9 +161,7 @@ impl Engine {
                     return fail(class, e);
                 }
                 if code != 0 {
-                    let screen = read_lossy(&dir.join(SCREEN));
-                    let why = first_error(&screen).unwrap_or_else(|| format!("exited with code {code}"));
-                    return fail(FailureClass::EngineError, why);
+                    return fail(FailureClass::EngineError, format!("exited with code {code}"));
                 }
             }
         }
@@ -204,6 +176,35 @@ impl Engine {
             },
         }
     }
+}
+
+/// The command that runs `deck` (a file in `dir`) with LIGGGHTS at `engine`, in `dir`: log to
+/// [`LOG`], screen output to [`SCREEN`], no echo.
+///
+/// LIGGGHTS aborts through MPI_Abort without flushing its log or a redirected stdout, so the
+/// ERROR line would be lost; stdout is line-buffered with coreutils' stdbuf when it is there.
+pub fn command(engine: &Path, dir: &Path, deck: &str) -> std::io::Result<Command> {
+    let screen = std::fs::File::create(dir.join(SCREEN))?;
+    let screen_err = screen.try_clone()?;
+    let mut cmd = match find_on_path("stdbuf") {
+        Some(stdbuf) => {
+            let mut c = Command::new(stdbuf);
+            c.args(["-oL", "-eL"]).arg(engine);
+            c
+        }
+        None => Command::new(engine),
+    };
+    cmd.args(["-in", deck, "-log", LOG, "-echo", "none", "-nocite"])
+        .current_dir(dir)
+        .stdin(Stdio::null())
+        .stdout(screen)
+        .stderr(screen_err);
+    Ok(cmd)
+}
+
+/// The first LIGGGHTS ERROR line a run in `dir` left, in its log or on its screen output.
+pub fn first_error_in(dir: &Path) -> Option<String> {
+    first_error(&read_lossy(&dir.join(LOG))).or_else(|| first_error(&read_lossy(&dir.join(SCREEN))))
 }
 
 /// A log as text, whatever it holds: LIGGGHTS prints stray bytes after some errors, and a

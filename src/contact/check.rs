@@ -8,7 +8,6 @@
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use super::analysis::{analyse, Outcome};
 use super::solver::{initial_state, simulate, Sample};
@@ -312,23 +311,27 @@ pub fn render(name: &str, case: &Case, dt: f64, steps: usize) -> Result<String, 
         .map_err(|e| ContactError::Engine(format!("failed to render contact.liggghts.tera: {e:?}")))
 }
 
-/// Runs `engine -in in.contact` in `dir`, output to files there.
+/// Longest a single-contact LIGGGHTS case may run (they take well under a second).
+const CASE_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(120);
+
+/// Runs `engine -in in.contact` in `dir`, output to files there, through the same runner as the
+/// sweeps (`engine::command`, `process::run`): own process group, a timeout, the ERROR line kept.
 fn run_liggghts(engine: &Path, dir: &Path) -> Result<(), ContactError> {
-    let status = Command::new(engine)
-        .args(["-in", "in.contact", "-log", "log.liggghts", "-echo", "none", "-screen", "none"])
-        .current_dir(dir)
-        .stdin(std::process::Stdio::null())
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .status()
-        .map_err(|e| ContactError::Engine(format!("failed to start {}: {e}", engine.display())))?;
-    if status.success() {
-        return Ok(());
-    }
-    let log = std::fs::read_to_string(dir.join("log.liggghts")).unwrap_or_default();
-    let error = log.lines().find(|l| l.starts_with("ERROR")).unwrap_or("no ERROR line in the log");
+    use crate::process::{self, CancelToken, ProcessOutcome};
+    let cmd = crate::engine::command(engine, dir, "in.contact")
+        .map_err(|e| ContactError::Engine(format!("failed to prepare {}: {e}", dir.display())))?;
+    let (outcome, _) = process::run(cmd, CASE_TIMEOUT, &CancelToken::new());
+    let why = match outcome {
+        ProcessOutcome::Exited(0) => return Ok(()),
+        ProcessOutcome::SpawnFailed(e) => {
+            return Err(ContactError::Engine(format!("failed to start {}: {e}", engine.display())))
+        }
+        ProcessOutcome::TimedOut => format!("timed out after {} s", CASE_TIMEOUT.as_secs()),
+        other => crate::engine::first_error_in(dir)
+            .unwrap_or_else(|| format!("{other:?}, no ERROR line in the log")),
+    };
     Err(ContactError::Engine(format!(
-        "{} failed ({status}) in {}: {error} (--keep DIR keeps the deck and log)",
+        "{} failed in {}: {why} (--keep DIR keeps the deck and log)",
         engine.display(),
         dir.display()
     )))
