@@ -136,12 +136,7 @@ impl Engine {
                 )
             }
             ProcessOutcome::Cancelled => {
-                return EngineRun {
-                    wall_time: wall,
-                    status: RunStatus::Cancelled,
-                    thermo: Vec::new(),
-                    warnings: Vec::new(),
-                }
+                return EngineRun { wall_time: wall, status: RunStatus::Cancelled, warnings: Vec::new() }
             }
             ProcessOutcome::Signalled(sig) => {
                 // LIGGGHTS may have printed an ERROR before dying.
@@ -168,12 +163,7 @@ impl Engine {
         let analysis = analyse_log(&log, limits);
         match analysis.failure {
             Some((class, reason)) => fail(class, reason),
-            None => EngineRun {
-                wall_time: wall,
-                status: RunStatus::Ok,
-                thermo: analysis.thermo,
-                warnings: analysis.warnings,
-            },
+            None => EngineRun { wall_time: wall, status: RunStatus::Ok, warnings: analysis.warnings },
         }
     }
 }
@@ -238,20 +228,13 @@ pub enum RunStatus {
 pub struct EngineRun {
     pub status: RunStatus,
     pub wall_time: f64,
-    /// (step, atoms, kinetic energy) rows of the thermo output.
-    pub thermo: Vec<ThermoRow>,
     /// Distinct LIGGGHTS warnings, in order.
     pub warnings: Vec<String>,
 }
 
 impl EngineRun {
     fn failed(class: FailureClass, reason: String, log_tail: String, wall_time: f64) -> Self {
-        EngineRun {
-            status: RunStatus::Failed { class, reason, log_tail },
-            wall_time,
-            thermo: Vec::new(),
-            warnings: Vec::new(),
-        }
+        EngineRun { status: RunStatus::Failed { class, reason, log_tail }, wall_time, warnings: Vec::new() }
     }
 }
 
