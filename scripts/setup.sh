@@ -2,7 +2,7 @@
 # Install what demsweep needs and build the release binary. Idempotent: a second run changes
 # nothing and takes seconds.
 #   - LIGGGHTS 3.8 from Debian when `liggghts` is not on PATH (needs root or sudo);
-#   - GNU parallel, only for the pool-overhead benchmark (BENCHMARKS.md);
+#   - GNU parallel and GNU time, only for the benchmarks (BENCHMARKS.md);
 #   - target/release/sweep.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -15,6 +15,7 @@ as_root() {
 missing=()
 command -v liggghts >/dev/null 2>&1 || missing+=(liggghts)
 command -v parallel >/dev/null 2>&1 || missing+=(parallel)
+[ -x /usr/bin/time ] || missing+=(time)
 if [ ${#missing[@]} -gt 0 ]; then
   echo "setup: installing ${missing[*]} from Debian" >&2
   as_root apt-get update -qq
