@@ -192,6 +192,22 @@ pub fn command(engine: &Path, dir: &Path, deck: &str) -> std::io::Result<Command
     Ok(cmd)
 }
 
+/// The step at which the deck's settle ended, from the line it prints
+/// (`demsweep: settled at step N`); an error naming why when the pile did not settle or the
+/// line is missing.
+pub fn settled_at(log: &str) -> Result<u64, String> {
+    for line in log.lines() {
+        let t = line.trim();
+        if let Some(rest) = t.strip_prefix("demsweep: settled at step ") {
+            return rest.trim().parse().map_err(|_| format!("unreadable settle line in the log: {t}"));
+        }
+        if t.starts_with("demsweep: not settled") {
+            return Err(t.trim_start_matches("demsweep: ").to_string());
+        }
+    }
+    Err("the log has no settle line (demsweep: settled at step N)".into())
+}
+
 /// The first LIGGGHTS ERROR line a run in `dir` left, in its log or on its screen output.
 pub fn first_error_in(dir: &Path) -> Option<String> {
     first_error(&read_lossy(&dir.join(LOG))).or_else(|| first_error(&read_lossy(&dir.join(SCREEN))))

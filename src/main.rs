@@ -466,11 +466,12 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
         .map_err(|e| Error::Internal(format!("cannot write to {}: {e}", a.out.display())))?;
     let s = &prepared.scene;
     eprintln!(
-        "wrote {}/{{in.liggghts,blade.stl,pile.data}}: {} particles, dt = {:.3e} s, {} steps, hash {}",
+        "wrote {}/{{in.liggghts,blade.stl,pile.data}}: {} particles ({} substrate), dt = {:.3e} s, settle + {} steps, hash {}",
         a.out.display(),
         s.particles,
+        s.substrate_particles,
         s.timestep,
-        s.total_steps(),
+        s.spread_steps(),
         &prepared.hash[..16]
     );
     Ok(exit::SUCCESS)
@@ -492,9 +493,9 @@ fn run_one(a: RunArgs) -> Result<i32, Error> {
     };
     if !a.json {
         eprintln!(
-            "running {} particles, {} steps (dt = {:.3e} s) in {}",
+            "running {} particles, settle + {} steps (dt = {:.3e} s) in {}",
             prepared.scene.particles,
-            prepared.scene.total_steps(),
+            prepared.scene.spread_steps(),
             prepared.scene.timestep,
             dir.display()
         );

@@ -372,6 +372,7 @@ pub mod fake {
                     reason,
                     log_tail: String::new(),
                     wall_time: took.as_secs_f64(),
+                    measured: None,
                 };
                 write_json_atomic(&run_dir.join("failure.json"), &f).expect("fake writes");
                 RunOutcome::Failed(f)
@@ -400,8 +401,10 @@ pub mod fake {
                         mfr_particles: 0,
                         mfr_windows: vec![],
                         steady: true,
+                        steady_p: 1.0,
                         vx: vec![Some(0.5); VX_LAYERS],
                         particles: 1,
+                        settle_steps: 0,
                         steps: 1,
                         simulated_time: 0.0,
                         wall_time: took.as_secs_f64(),

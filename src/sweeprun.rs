@@ -96,6 +96,7 @@ fn point_failure(job: &PointJob, run_dir: &Path, reason: String) -> RunOutcome {
         reason,
         log_tail: String::new(),
         wall_time: 0.0,
+        measured: None,
     };
     let _ = crate::outcome::write_json_atomic(&run_dir.join(point::FAILURE), &f);
     RunOutcome::Failed(f)
