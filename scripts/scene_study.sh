@@ -18,7 +18,7 @@ trap 'rm -rf "$work"' EXIT
 declare -A scene=(
   [base]=""
   [window/2]="window_diameters = 20.0"        [window*2]="window_diameters = 80.0"
-  [start/2]="window_start_diameters = 10.0"   [start*2]="window_start_diameters = 40.0"
+  [start/2]="window_start_diameters = 15.0"   [start*2]="window_start_diameters = 60.0"
   [supply/2]="supply_factor = 0.5"            [supply*2]="supply_factor = 2.0"
   [rest/2]="rest_speed = 0.005"               [rest*2]="rest_speed = 0.02"
   [depth/2]="depth_diameters = 3.0"           [depth*2]="depth_diameters = 12.0"
@@ -53,7 +53,7 @@ blade_speed = { lo = 0.5, hi = 3.0, unit = "m/s" }
 $rolling
 [scene]
 seed = $seed
-${scene[$v]}
+$SCENE_LINES
 TOML
   /usr/bin/time -f "%U %S" -o "$dir.time" "$bin" run "$toml" --set "friction=$mu,diameter=$d,gap=$gap,blade_speed=$speed" \
     --out "$dir" --json > /dev/null 2>&1 || true
@@ -78,7 +78,6 @@ PY
 export -f one
 export out bin work
 for v in "${order[@]}"; do
-  export -A scene 2>/dev/null || true
   if [[ $v == lds24-* ]]; then points=$lds24_points; seeds=1; else points=$study_points; seeds="1 2 3"; fi
   jobs=()
   i=0
@@ -86,8 +85,8 @@ for v in "${order[@]}"; do
     i=$((i + 1))
     for seed in $seeds; do jobs+=("$v|$i|$seed|$mu|$d|$gap|$speed"); done
   done <<< "$points"
-  # Bash cannot export the associative array: pass the variant's settings through the env.
+  # Bash cannot export an associative array: the variant's settings go through the environment.
   printf '%s\n' "${jobs[@]}" | SCENE_LINES="${scene[$v]}" parallel -j "${JOBS:-2}" --colsep '\|' \
-    'declare -A scene=(["{1}"]="$SCENE_LINES"); one {1} {2} {3} {4} {5} {6} {7}'
+    one {1} {2} {3} {4} {5} {6} {7}
   echo "scene_study: $v done" >&2
 done

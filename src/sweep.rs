@@ -159,8 +159,8 @@ pub struct SceneSettings {
     pub settle_max_s: f64,
     /// Gated layout: blade travel past the opened gate before the window starts, in diameters.
     pub window_start_diameters: f64,
-    /// Size of the heap left at the window's end, relative to the one that fills the twelve
-    /// v_x layers (gap + 6 D tall at 30° repose).
+    /// Size of the heap in front of the blade, relative to the planned one (gated: gap + 10 D
+    /// tall at 30° repose; thesis: the heap left at the end, gap + 6 D tall).
     pub supply_factor: f64,
     /// Size distribution of the particles.
     pub size_distribution: SizeDistributionSpec,
@@ -186,7 +186,7 @@ impl Default for SceneSettings {
             substrate: "rough".into(),
             rest_speed: 0.01,
             settle_max_s: 1.0,
-            window_start_diameters: 20.0,
+            window_start_diameters: 30.0,
             supply_factor: 1.0,
             size_distribution: SizeDistributionSpec::default(),
             vx_band_diameters: 0.25,
