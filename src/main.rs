@@ -373,7 +373,8 @@ fn check_levels(dim: usize, levels: &[usize], source: &str) -> Result<(), Error>
         return Err(Error::input(format!("{source}: expected at least one level, e.g. 5,6,7")));
     }
     for &l in levels {
-        demsweep::design::lattice_size(dim, l).map_err(|e| Error::input(format!("{source} {list}: level {l}: {e}")))?;
+        demsweep::design::lattice_size(dim, l)
+            .map_err(|e| Error::input(format!("{source} {list}: level {l}: {e}")))?;
     }
     if levels.windows(2).any(|w| w[1] <= w[0]) {
         return Err(Error::input(format!(

@@ -215,7 +215,13 @@ impl<E: Executor> Worker<'_, E> {
         if let Some(old) = stale {
             // The trace of an attempt that was killed: its claim outlived its process.
             let start = UNIX_EPOCH + Duration::from_secs_f64(old.claimed_at.max(0.0));
-            let record = AttemptRecord { hash: hash.clone(), start, runtime_s: f64::NAN, status: "interrupted", class: None };
+            let record = AttemptRecord {
+                hash: hash.clone(),
+                start,
+                runtime_s: f64::NAN,
+                status: "interrupted",
+                class: None,
+            };
             self.send(Event::Attempt { record, retrying: false });
         }
         if self.cancel.is_cancelled() {

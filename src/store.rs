@@ -243,7 +243,10 @@ pub enum RunState {
     Interrupted(ClaimInfo),
     /// `result.json` or `failure.json` is there but cannot be read (edited, damaged, an
     /// older format): the file and why. Re-run it, saying so.
-    Damaged { file: PathBuf, reason: String },
+    Damaged {
+        file: PathBuf,
+        reason: String,
+    },
     /// A directory without a result, not claimed by a live process: re-run it.
     Incomplete,
     /// Never started.
@@ -451,7 +454,9 @@ impl Store {
         let (name, written) = match (outcome, finished_state(&dir)) {
             (RunOutcome::Done(r), Some(RunState::Done(d))) if *d == *r => return Ok(()),
             (RunOutcome::Failed(f), Some(RunState::Failed(d))) if *d == *f => return Ok(()),
-            (RunOutcome::Done(r), _) => ("result.json", crate::outcome::write_json_atomic(&dir.join("result.json"), r)),
+            (RunOutcome::Done(r), _) => {
+                ("result.json", crate::outcome::write_json_atomic(&dir.join("result.json"), r))
+            }
             (RunOutcome::Failed(f), _) => {
                 ("failure.json", crate::outcome::write_json_atomic(&dir.join("failure.json"), f))
             }
@@ -498,7 +503,9 @@ impl Store {
                     continue;
                 };
                 // Another host's writer may be alive; a live pid here may be writing it now.
-                if host.is_some_and(|h| h != crate::atomic::temporary_host()) || process_start_ticks(pid).is_some() {
+                if host.is_some_and(|h| h != crate::atomic::temporary_host())
+                    || process_start_ticks(pid).is_some()
+                {
                     continue;
                 }
                 match fs::remove_file(e.path()) {

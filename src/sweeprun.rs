@@ -400,7 +400,7 @@ pub fn check_out_dir(out: &Path) -> Result<()> {
             Ok(()) => Ok(()),
             Err(e) => bad(format!("cannot write in it ({})", plain_io(&e))),
         },
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+        Err(e) if matches!(e.kind(), std::io::ErrorKind::NotFound | std::io::ErrorKind::NotADirectory) => {
             let abs = std::path::absolute(out).map_err(|e| Error::input(format!("{d}: {e}")))?;
             let mut up = abs.parent();
             while let Some(p) = up {
@@ -408,7 +408,11 @@ pub fn check_out_dir(out: &Path) -> Result<()> {
                     Ok(m) if m.is_dir() => {
                         return match writable(p) {
                             Ok(()) => Ok(()),
-                            Err(e) => bad(format!("cannot create it: {} is not writable ({})", p.display(), plain_io(&e))),
+                            Err(e) => bad(format!(
+                                "cannot create it: {} is not writable ({})",
+                                p.display(),
+                                plain_io(&e)
+                            )),
                         }
                     }
                     Ok(_) => return bad(format!("cannot create it: {} is not a directory", p.display())),
@@ -949,7 +953,10 @@ impl StatusReport {
             self.pending
         );
         if self.interrupted > 0 {
-            s.insert_str(s.len() - 1, &format!("  ({} interrupted: killed or cancelled part-way)", self.interrupted));
+            s.insert_str(
+                s.len() - 1,
+                &format!("  ({} interrupted: killed or cancelled part-way)", self.interrupted),
+            );
         }
         for d in &self.damaged {
             s.push_str(&format!("  warning: {d}\n"));
