@@ -5,8 +5,9 @@
 #
 # Runs a small LDS sweep of the quick scene once without interruption (the reference), then
 # again in another directory while SIGKILLing `sweep lds` / `sweep resume` at random moments
-# (0.5 to 8 s after each start) KILLS times, resuming after each kill, and finally lets a resume
-# finish. It then checks and prints:
+# (0.5 s to 1.5 times the reference's time per run after each start, so that some runs finish
+# between kills and others are cut off) KILLS times, resuming after each kill, and finally lets
+# a resume finish. It then checks and prints:
 #   - kills survived: every resume after a kill ran (exit 0 or killed again), none refused;
 #   - runs executed twice: hashes with more than one `done` line in the joblog (must be 0);
 #   - orphans: LIGGGHTS processes still running in the sweep directory 2 s after a kill (0);
@@ -34,7 +35,10 @@ lds=(lds "$work/chaos.toml" --max "$POINTS" --step "$POINTS" --jobs "$JOBS" -q)
 echo "chaos: reference sweep of $POINTS points ($JOBS jobs)"
 t0=$(date +%s)
 "$SWEEP" "${lds[@]}" --out "$work/ref"
-echo "chaos: reference took $(( $(date +%s) - t0 )) s"
+took=$(( $(date +%s) - t0 ))
+# Longest wait before a kill: 1.5 times the time one slot took per run (at least 3 s).
+wait_max=$(awk -v t="$took" -v j="$JOBS" -v n="$POINTS" 'BEGIN { w = 1.5 * t * j / n; printf "%.1f", (w < 3 ? 3 : w) }')
+echo "chaos: reference took $took s; kills come 0.5 to $wait_max s after each start"
 
 out="$work/chaos"
 kills=0 starts=0 orphans=0 refused=0
@@ -51,8 +55,7 @@ while [ "$kills" -lt "$KILLS" ]; do
   "$SWEEP" "${cmd[@]}" 2>>"$work/stderr" &
   pid=$!
   starts=$((starts + 1))
-  # 0.5 .. 8 s
-  sleep "$(awk -v r="$RANDOM" 'BEGIN { printf "%.2f", 0.5 + 7.5 * r / 32767 }')"
+  sleep "$(awk -v r="$RANDOM" -v m="$wait_max" 'BEGIN { printf "%.2f", 0.5 + (m - 0.5) * r / 32767 }')"
   if kill -0 "$pid" 2>/dev/null; then
     kill -9 "$pid"
     wait "$pid" 2>/dev/null || true
@@ -69,7 +72,8 @@ while [ "$kills" -lt "$KILLS" ]; do
     [ "$rc" = 0 ] && break
   fi
 done
-echo "chaos: final resume"
+between=$(awk -F'\t' 'NR > 1 && $6 == "done"' "$out/joblog.tsv" 2>/dev/null | wc -l)
+echo "chaos: $between of $POINTS runs finished between kills; final resume"
 "$SWEEP" resume "$out" --jobs "$JOBS" -q
 
 twice=$(awk -F'\t' 'NR > 1 && $6 == "done" { n[$8]++ } END { t = 0; for (h in n) if (n[h] > 1) t++; print t }' "$out/joblog.tsv")

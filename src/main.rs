@@ -79,8 +79,8 @@ struct LdsArgs {
     /// Points per batch (one nested space per batch); default design.lds.step.
     #[arg(long)]
     step: Option<usize>,
-    /// Most points to run; default design.lds.max. A larger --max on an existing directory
-    /// extends it, reusing its points.
+    /// Most points to run, at least the step; default design.lds.max. A larger --max on an
+    /// existing directory extends it, reusing its points.
     #[arg(long)]
     max: Option<usize>,
     /// Sweep directory (default: runs/<sweep name>).

@@ -14,7 +14,12 @@
 //! when its `failure.json` does; a directory holding neither is incomplete, whatever logs it
 //! holds. Claims are created with `O_EXCL` under a short `flock` of `DIR/.lock`, so two
 //! processes never hold the same claim; a claim whose owner is gone (same host, and no live
-//! process with that pid *and* that start time) is taken over.
+//! process with that pid *and* that start time) is taken over, and until then marks the run
+//! as interrupted. The manifest is created (or extended) and each joblog line numbered under
+//! the same lock, so two processes started at once on a new directory share it, and `seq` is
+//! unique. `manifest.json` is validated when read. A write error (a full disk) is a
+//! [`StoreError`] naming the device and the file; temporaries of writes cut off are removed by
+//! [`Store::remove_stale_temporaries`].
 //!
 //! Not responsible for deciding what to run (the driver, [`crate::sweeprun`]) or running it
 //! ([`crate::pool`]).
