@@ -83,7 +83,9 @@ fn ours(tmp: &Path, round: usize, jobs: usize, count: usize) -> Duration {
     let mut done = 0;
     pool::run(&exec, &store, work, &opts, &CancelToken::new(), |e| {
         match e {
-            pool::Event::Attempt { record, .. } => log.append(record).unwrap(),
+            pool::Event::Attempt { record, .. } => {
+                log.append(record).unwrap();
+            }
             pool::Event::Finished { .. } => done += 1,
             _ => {}
         }

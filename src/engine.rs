@@ -54,11 +54,21 @@ impl Engine {
                 .ok_or_else(|| EngineError::NotFound("`liggghts` is not on PATH".into()))?,
         };
         let identify = |reason: String| EngineError::Identify { path: path.display().to_string(), reason };
+        // `-log none`: LIGGGHTS opens `log.liggghts` in its working directory even for `-h`.
+        // And in an empty scratch directory, so that nothing is written where `sweep` was
+        // started whatever a future LIGGGHTS does with `-h`.
+        let scratch = tempfile::Builder::new()
+            .prefix("sweep-engine-")
+            .tempdir()
+            .map_err(|e| identify(format!("cannot create a scratch directory: {e}")))?;
         let out = Command::new(&path)
-            .arg("-h")
+            .args(["-log", "none", "-h"])
+            .current_dir(scratch.path())
             .stdin(Stdio::null())
+            .stderr(Stdio::null())
             .output()
             .map_err(|e| identify(e.to_string()))?;
+        drop(scratch);
         let text = String::from_utf8_lossy(&out.stdout);
         let version = text
             .lines()

@@ -31,10 +31,11 @@ pub struct PointContext {
 
 impl PointContext {
     pub fn new(sweep: Sweep) -> Result<PointContext> {
-        let engine =
-            Engine::locate(sweep.file.run.engine.as_deref()).map_err(|e| Error::Engine(e.to_string()))?;
+        // The template first: a bad one is bad input, found before the engine is run.
         let template =
             Template::load(sweep.template_path().as_deref()).map_err(|e| Error::input(e.to_string()))?;
+        let engine =
+            Engine::locate(sweep.file.run.engine.as_deref()).map_err(|e| Error::Engine(e.to_string()))?;
         let timeout = Duration::from_secs_f64(sweep.file.run.timeout_s);
         Ok(PointContext { sweep, engine, template, timeout })
     }
@@ -106,6 +107,11 @@ pub fn swept_values_from_set(sweep: &Sweep, sets: &[String]) -> Result<Vec<f64>>
             .ok()
             .filter(|v: &f64| v.is_finite())
             .ok_or_else(|| Error::input(format!("--set {name}={value}: expected a finite number")))?;
+        if let Some(first) = values[i] {
+            return Err(Error::input(format!(
+                "--set {name}: given twice ({first} and {value}); give each parameter once"
+            )));
+        }
         let ParamKind::Swept { lo, hi, .. } = sweep.swept[i].kind else { unreachable!() };
         if v < lo || v > hi {
             return Err(Error::input(format!(
