@@ -96,6 +96,8 @@ pub struct SubmitOptions {
     pub only: Only,
     /// A template to use instead of the built-in one.
     pub template: Option<PathBuf>,
+    /// Tasks help with other tasks' leftovers once their own points are done.
+    pub steal: bool,
     /// The `sweep` executable the tasks run (on the shared file system).
     pub exe: PathBuf,
 }
@@ -148,8 +150,8 @@ pub fn task_points(task: usize, per_task: usize, n: usize) -> std::ops::Range<us
 }
 
 /// The order in which task `task` runs the unfinished points `unfinished` (manifest order):
-/// its own first, then — with `steal` — the others that nobody held when it started
-/// (`held`), beginning after its own block and wrapping, so that tasks helping each other
+/// its own first, then — with `steal` — the others that nobody holds (`held`, read when its
+/// own are done), beginning after its own block and wrapping, so that tasks helping each other
 /// spread out instead of all starting on the same block.
 pub fn share_order(
     task: usize,
@@ -280,6 +282,7 @@ pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendere
     ctx.insert("account", &o.account.clone().unwrap_or_default());
     ctx.insert("lease", &o.lease.as_secs());
     ctx.insert("retry_failed", &o.only.failed);
+    ctx.insert("no_steal", &!o.steal);
     ctx.insert("torque", &(o.scheduler == Scheduler::Torque));
     let (array, index_map) = array_spec(o.scheduler, &tasks);
     ctx.insert("array", &array);
@@ -525,10 +528,24 @@ pub fn work(
     }
     let sweep = crate::sweeprun::load_dir_sweep(dir)?;
     let exec = crate::sweeprun::PointExecutor::new(sweep)?.with_ranks(w.ranks);
-    let held = held_points(&manifest, &Store::open(dir));
-    let order = |unfinished: &[usize]| share_order(w.task, w.per_task, w.steal, &held, unfinished);
-    let summary =
-        crate::sweeprun::resume_share(dir, &exec, opts, Some(&order), &mut crate::sweeprun::RunAll, cancel)?;
+    let run = |order: crate::sweeprun::Order| {
+        crate::sweeprun::resume_share(dir, &exec, opts, Some(order), &mut crate::sweeprun::RunAll, cancel)
+    };
+    // Its own points first, waiting for any another task holds (and taking them over if that
+    // task is lost); then, in a second pass, the leftovers nobody holds *now*: a helper must
+    // not wait on runs that live tasks are doing.
+    let none = BTreeSet::new();
+    let mut summary = run(&|u: &[usize]| share_order(w.task, w.per_task, false, &none, u))?;
+    if w.steal && !summary.interrupted {
+        let held = held_points(&manifest, &Store::open(dir));
+        let own = task_points(w.task, w.per_task, n);
+        let others = |u: &[usize]| {
+            share_order(w.task, w.per_task, true, &held, u).into_iter().filter(|i| !own.contains(i)).collect()
+        };
+        let first_ran = summary.ran;
+        summary = run(&others)?;
+        summary.ran += first_ran;
+    }
     refresh_results(dir)?;
     Ok(summary)
 }
@@ -548,7 +565,7 @@ mod tests {
 
     #[test]
     fn task_points_cover_every_point_once() {
-        let (n, per) = (10, 3);
+        let (n, per) = (10usize, 3usize);
         let all: Vec<usize> = (0..n.div_ceil(per)).flat_map(|t| task_points(t, per, n)).collect();
         assert_eq!(all, (0..n).collect::<Vec<_>>());
         assert!(task_points(7, per, n).is_empty());

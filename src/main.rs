@@ -175,6 +175,9 @@ struct SubmitArgs {
     /// A template to use instead of the built-in one.
     #[arg(long)]
     template: Option<PathBuf>,
+    /// Tasks run only their own points, and do not help with what other tasks left.
+    #[arg(long)]
+    no_steal: bool,
     /// Write the scripts into DIR/cluster/ but do not submit them.
     #[arg(long)]
     dry_run: bool,
@@ -526,6 +529,7 @@ fn submit(a: SubmitArgs) -> Result<i32, Error> {
         lease: std::time::Duration::from_secs(a.lease),
         only: Only { missing: a.only.contains(&OnlyArg::Missing), failed: a.only.contains(&OnlyArg::Failed) },
         template: a.template,
+        steal: !a.no_steal,
         exe: std::env::current_exe()?,
     };
     let cmd = scheduler.submit_command();
