@@ -124,7 +124,10 @@ impl Layout {
             Err(e) => return Err(Error::Internal(format!("{}: {e}", path.display()))),
         };
         let l: Layout = serde_json::from_str(&text).map_err(|e| {
-            Error::input(format!("{}: unreadable ({e}); it fixes which points each array index runs", path.display()))
+            Error::input(format!(
+                "{}: unreadable ({e}); it fixes which points each array index runs",
+                path.display()
+            ))
         })?;
         if l.format != LAYOUT_FORMAT || l.per_task == 0 {
             return Err(Error::input(format!(
@@ -238,12 +241,10 @@ pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendere
         (Some(l), _) => l,
         (None, Some(0)) => return Err(Error::input("--tasks 0: expected at least 1")),
         (None, Some(t)) => Layout { format: LAYOUT_FORMAT, per_task: n.div_ceil(t.min(n).max(1)) },
-        (None, None) => {
-            return Err(Error::input(format!(
-                "--tasks: required for the first submission of {} ({n} points): how many array tasks share them",
-                dir.display()
-            )))
-        }
+        (None, None) => return Err(Error::input(format!(
+            "--tasks: required for the first submission of {} ({n} points): how many array tasks share them",
+            dir.display()
+        ))),
     };
     let counts = counts(&dir, &manifest);
     let store = Store::open(&dir);

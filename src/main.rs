@@ -561,7 +561,12 @@ fn submit(a: SubmitArgs) -> Result<i32, Error> {
         rendered.layout.per_task
     );
     if a.dry_run {
-        eprintln!("wrote {} and {}: {what}; submit with `{cmd} {}`", array.display(), report.display(), array.display());
+        eprintln!(
+            "wrote {} and {}: {what}; submit with `{cmd} {}`",
+            array.display(),
+            report.display(),
+            array.display()
+        );
         println!("{}", array.display());
         return Ok(exit::SUCCESS);
     }
@@ -598,7 +603,12 @@ fn work(a: WorkArgs) -> Result<i32, Error> {
     let pool = PoolArgs { jobs: Some(cores / a.ranks as usize), quiet: a.quiet };
     let opts = run_options(&pool, a.retry_failed, false)?;
     demsweep::process::install_interrupt_handler();
-    let w = demsweep::cluster::WorkOptions { task: a.task, per_task: a.per_task, steal: !a.no_steal, ranks: a.ranks };
+    let w = demsweep::cluster::WorkOptions {
+        task: a.task,
+        per_task: a.per_task,
+        steal: !a.no_steal,
+        ranks: a.ranks,
+    };
     let summary = demsweep::cluster::work(&a.dir, &w, &opts, &CancelToken::new())?;
     eprintln!(
         "task {}: ran {} runs; the sweep has {} of {} points done, {} failed",

@@ -132,7 +132,8 @@ pub const DEFAULT_LEASE: Duration = Duration::from_secs(120);
 
 /// The lease of the claims of every store this process opens from now on (`sweep work
 /// --lease`), milliseconds.
-static LEASE_MS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(DEFAULT_LEASE.as_millis() as u64);
+static LEASE_MS: std::sync::atomic::AtomicU64 =
+    std::sync::atomic::AtomicU64::new(DEFAULT_LEASE.as_millis() as u64);
 /// The host name this process's claims give instead of the machine's (`sweep work --host`).
 static HOST_OVERRIDE: std::sync::OnceLock<String> = std::sync::OnceLock::new();
 

@@ -512,7 +512,8 @@ fn execute<E: Executor>(
         status.push(s);
     }
     if let Some(order) = order {
-        let index: HashMap<&str, usize> = manifest.points.iter().map(|p| (p.hash.as_str(), p.index)).collect();
+        let index: HashMap<&str, usize> =
+            manifest.points.iter().map(|p| (p.hash.as_str(), p.index)).collect();
         let mut by_index: BTreeMap<usize, E::Job> = queue
             .into_iter()
             .map(|j| {

@@ -123,7 +123,9 @@ fn repo() -> PathBuf {
 
 /// Bring the local Slurm up; `None` (with the reason printed) when Slurm is not installed.
 fn local_slurm() -> Option<String> {
-    let have = |c: &str| Command::new("sh").args(["-c", &format!("command -v {c}")]).output().unwrap().status.success();
+    let have = |c: &str| {
+        Command::new("sh").args(["-c", &format!("command -v {c}")]).output().unwrap().status.success()
+    };
     if !(have("slurmctld") && have("slurmd") && have("munged") && have("sbatch")) {
         eprintln!(
             "SKIPPED: Slurm is not installed; `bash scripts/slurm_local.sh up` (as root) installs and \
@@ -203,16 +205,23 @@ fn slurm_array_with_a_cancelled_task_completes_on_resubmission() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     wait_until("the report jobs", Duration::from_secs(60), || {
-        std::fs::read_dir(dir.join("cluster/logs")).unwrap().filter(|e| {
-            e.as_ref().unwrap().file_name().to_string_lossy().starts_with("report-")
-        }).count() == 2
+        std::fs::read_dir(dir.join("cluster/logs"))
+            .unwrap()
+            .filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().starts_with("report-"))
+            .count()
+            == 2
     });
     assert!(logs.iter().any(|l| l.starts_with(&format!("{job}_"))), "{logs:?}");
     let subs = std::fs::read_to_string(dir.join("cluster/submissions.tsv")).unwrap();
     assert_eq!(subs.lines().count(), 2, "{subs}");
 
     // Nothing left: a third submission says so and submits nothing.
-    let o = run(sweep_bin().env("SLURM_CONF", &conf).args(["submit", dir.to_str().unwrap(), "--scheduler", "slurm"]));
+    let o = run(sweep_bin().env("SLURM_CONF", &conf).args([
+        "submit",
+        dir.to_str().unwrap(),
+        "--scheduler",
+        "slurm",
+    ]));
     assert!(o.status.success() && text(&o.stdout).is_empty(), "{}", text(&o.stderr));
     assert!(text(&o.stderr).contains("nothing to submit"), "{}", text(&o.stderr));
 }
@@ -244,12 +253,21 @@ fn pbs_task(script: &Path, index: usize, torque: bool, workdir: &Path) -> Child 
 #[test]
 fn pbs_task_bodies_under_the_pbs_environment_equal_a_local_run() {
     let (root, dir) = fresh_copy("cluster-pbs-");
-    let o = run(sweep_bin().args(["submit", dir.to_str().unwrap(), "--scheduler", "pbs", "--tasks", "3", "--dry-run"]));
+    let o = run(sweep_bin().args([
+        "submit",
+        dir.to_str().unwrap(),
+        "--scheduler",
+        "pbs",
+        "--tasks",
+        "3",
+        "--dry-run",
+    ]));
     assert!(o.status.success(), "{}", text(&o.stderr));
     let script = PathBuf::from(text(&o.stdout).trim());
     let body = std::fs::read_to_string(&script).unwrap();
     assert!(body.contains("#PBS -J 0-2\n"), "{body}");
-    let tasks: Vec<(usize, Child)> = [0, 2].into_iter().map(|i| (i, pbs_task(&script, i, false, root.path()))).collect();
+    let tasks: Vec<(usize, Child)> =
+        [0, 2].into_iter().map(|i| (i, pbs_task(&script, i, false, root.path()))).collect();
     for (i, t) in tasks {
         let o = t.wait_with_output().unwrap();
         let out = text(&o.stdout);
@@ -258,7 +276,15 @@ fn pbs_task_bodies_under_the_pbs_environment_equal_a_local_run() {
     }
     assert_same_as_reference(&dir);
 
-    let o = run(sweep_bin().args(["submit", dir.to_str().unwrap(), "--scheduler", "torque", "--dry-run", "--only", "missing,failed"]));
+    let o = run(sweep_bin().args([
+        "submit",
+        dir.to_str().unwrap(),
+        "--scheduler",
+        "torque",
+        "--dry-run",
+        "--only",
+        "missing,failed",
+    ]));
     assert!(o.status.success(), "{}", text(&o.stderr));
     // With every point done, only a failed one (if the sweep has one) is left to submit.
     let failed: Vec<usize> =
@@ -351,7 +377,14 @@ fn bad_submit_input_is_refused_and_writes_nothing() {
         assert!(err.contains(needle) && err.lines().count() == 1, "{args:?}: {err}");
         assert!(!dir.join("cluster").exists(), "{args:?} wrote something");
     }
-    let o = run(sweep_bin().args(["submit", root.path().to_str().unwrap(), "--scheduler", "slurm", "--tasks", "1"]));
+    let o = run(sweep_bin().args([
+        "submit",
+        root.path().to_str().unwrap(),
+        "--scheduler",
+        "slurm",
+        "--tasks",
+        "1",
+    ]));
     assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
     assert!(text(&o.stderr).contains("not a sweep directory"), "{}", text(&o.stderr));
 }
