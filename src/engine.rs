@@ -38,6 +38,9 @@ pub struct Engine {
     pub version: String,
     /// sha256 of the executable: a rebuilt engine is a different engine.
     pub binary_hash: String,
+    /// MPI ranks of each run: above 1, LIGGGHTS runs under `mpirun -np ranks`. Not part of the
+    /// identity: like `--jobs`, it is how a run is executed, chosen per session.
+    pub ranks: u32,
 }
 
 impl Engine {
@@ -84,7 +87,7 @@ impl Engine {
                 h.update(bytes);
             }
         }
-        Ok(Engine { path, version, binary_hash: crate::deck::hex(&h.finalize()) })
+        Ok(Engine { path, version, binary_hash: crate::deck::hex(&h.finalize()), ranks: 1 })
     }
 
     /// What identifies this engine in a run's hash.
@@ -101,7 +104,7 @@ impl Engine {
         timeout: Duration,
         cancel: &CancelToken,
     ) -> EngineRun {
-        let cmd = match command(&self.path, dir, deck) {
+        let cmd = match command_ranks(&self.path, dir, deck, self.ranks) {
             Ok(c) => c,
             Err(e) => {
                 let reason = format!("cannot create {SCREEN} in {}: {e}", dir.display());
@@ -184,16 +187,33 @@ impl Engine {
 /// LIGGGHTS aborts through MPI_Abort without flushing its log or a redirected stdout, so the
 /// ERROR line would be lost; stdout is line-buffered with coreutils' stdbuf when it is there.
 pub fn command(engine: &Path, dir: &Path, deck: &str) -> std::io::Result<Command> {
+    command_ranks(engine, dir, deck, 1)
+}
+
+/// [`command`] on `ranks` MPI ranks: `mpirun -np ranks` in front when `ranks` > 1.
+///
+/// `--bind-to none`: several runs share a node, and Open MPI would bind every run's rank 0 to
+/// core 0. `--oversubscribe`: `sweep` counts the cores itself (`--jobs` in ranks). As root,
+/// Open MPI refuses to start without `--allow-run-as-root`.
+pub fn command_ranks(engine: &Path, dir: &Path, deck: &str, ranks: u32) -> std::io::Result<Command> {
     let screen = std::fs::File::create(dir.join(SCREEN))?;
     let screen_err = screen.try_clone()?;
-    let mut cmd = match find_on_path("stdbuf") {
-        Some(stdbuf) => {
-            let mut c = Command::new(stdbuf);
-            c.args(["-oL", "-eL"]).arg(engine);
-            c
+    let mut argv: Vec<std::ffi::OsString> = Vec::new();
+    if ranks > 1 {
+        argv.push(find_on_path("mpirun").unwrap_or_else(|| PathBuf::from("mpirun")).into());
+        // SAFETY: geteuid cannot fail.
+        if unsafe { libc::geteuid() } == 0 {
+            argv.push("--allow-run-as-root".into());
         }
-        None => Command::new(engine),
-    };
+        argv.extend(["--bind-to", "none", "--oversubscribe", "-np"].map(Into::into));
+        argv.push(ranks.to_string().into());
+    }
+    if let Some(stdbuf) = find_on_path("stdbuf") {
+        argv.extend([stdbuf.into(), "-oL".into(), "-eL".into()]);
+    }
+    argv.push(engine.into());
+    let mut cmd = Command::new(&argv[0]);
+    cmd.args(&argv[1..]);
     cmd.args(["-in", deck, "-log", LOG, "-echo", "none", "-nocite"])
         .current_dir(dir)
         .stdin(Stdio::null())

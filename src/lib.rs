@@ -4,6 +4,7 @@
 //! sweep file → [`sweep`] → [`space`] + [`design`] → [`scene`] → deck → engine → dump → metrics.
 
 pub mod atomic;
+pub mod cluster;
 pub mod contact;
 pub mod deck;
 pub mod design;

@@ -95,6 +95,8 @@ pub fn run<E: Executor>(
     cancel: &CancelToken,
     mut consume: impl FnMut(&Event) -> Flow,
 ) {
+    // Keeps this process's claims alive for other hosts while the pool runs.
+    let _heartbeat = store.heartbeat();
     let queue = Mutex::new(jobs.into_iter().collect::<VecDeque<_>>());
     let busy: Mutex<VecDeque<(E::Job, Instant)>> = Mutex::new(VecDeque::new());
     let drain = AtomicBool::new(false);

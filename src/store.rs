@@ -21,6 +21,11 @@
 //! [`StoreError`] naming the device and the file; temporaries of writes cut off are removed by
 //! [`Store::remove_stale_temporaries`].
 //!
+//! Across hosts (a cluster on a shared file system) processes cannot be seen, so a claim is a
+//! lease: its holder renews `renewed_at` every [`Store::lease`]/4 while it lives
+//! ([`Store::heartbeat`]), and a claim of another host not renewed for its `lease_s` is taken
+//! over. The hosts' clocks must agree to well within the lease (NTP does).
+//!
 //! Not responsible for deciding what to run (the driver, [`crate::sweeprun`]) or running it
 //! ([`crate::pool`]).
 
@@ -29,7 +34,8 @@ use std::io::Write;
 use std::os::unix::fs::OpenOptionsExt;
 use std::os::unix::io::AsRawFd;
 use std::path::{Path, PathBuf};
-use std::time::{SystemTime, UNIX_EPOCH};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use serde::{Deserialize, Serialize};
 
@@ -235,6 +241,35 @@ pub struct ClaimInfo {
     pub session: String,
     /// Unix time of the claim, seconds.
     pub claimed_at: f64,
+    /// How long the claim stands without renewal, seconds (absent in claims written before
+    /// leases existed: those stand, as they did).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lease_s: Option<f64>,
+    /// Unix time of the last renewal, seconds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub renewed_at: Option<f64>,
+}
+
+/// Default lease of a claim: long against a busy NFS server's delays and clock skew, short
+/// against a run (minutes to hours) whose node was lost.
+pub const DEFAULT_LEASE: Duration = Duration::from_secs(120);
+
+/// The lease of the claims of every store this process opens from now on (`sweep work
+/// --lease`), milliseconds.
+static LEASE_MS: std::sync::atomic::AtomicU64 =
+    std::sync::atomic::AtomicU64::new(DEFAULT_LEASE.as_millis() as u64);
+/// The host name this process's claims give instead of the machine's (`sweep work --host`).
+static HOST_OVERRIDE: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+
+/// Set the lease of the claims of stores opened from now on.
+pub fn set_default_lease(lease: Duration) {
+    LEASE_MS.store(lease.as_millis() as u64, std::sync::atomic::Ordering::SeqCst);
+}
+
+/// Name claims of stores opened from now on after `host` (nodes that share a name; tests that
+/// play two hosts on one machine). Only the first call counts.
+pub fn set_host_name(host: &str) {
+    let _ = HOST_OVERRIDE.set(host.to_string());
 }
 
 /// What the run dir of one hash holds.
@@ -280,13 +315,15 @@ pub struct Store {
     dir: PathBuf,
     host: String,
     me: ClaimInfo,
+    /// Claim files held now, renewed by the heartbeat.
+    held: Arc<Mutex<Vec<PathBuf>>>,
 }
 
 impl Store {
     /// Open `dir` (which must exist) for running: this process's identity is fixed here.
     pub fn open(dir: &Path) -> Store {
         let pid = std::process::id();
-        let host = hostname();
+        let host = HOST_OVERRIDE.get().cloned().unwrap_or_else(hostname);
         static SESSIONS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
         let n = SESSIONS.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
         let now = unix_now();
@@ -299,8 +336,51 @@ impl Store {
                 start_ticks: process_start_ticks(pid).unwrap_or(0),
                 session: format!("{pid}-{n}-{}", (now * 1e6) as u64),
                 claimed_at: now,
+                lease_s: Some(LEASE_MS.load(std::sync::atomic::Ordering::SeqCst) as f64 / 1e3),
+                renewed_at: None,
             },
+            held: Arc::default(),
         }
+    }
+
+    /// Claims of this store last `lease` without renewal (default [`DEFAULT_LEASE`]).
+    pub fn with_lease(mut self, lease: Duration) -> Store {
+        self.me.lease_s = Some(lease.as_secs_f64());
+        self
+    }
+
+    /// Claims of this store name `host` instead of this machine's name: for nodes that share a
+    /// name, and for tests that play two hosts on one machine.
+    pub fn with_host(mut self, host: &str) -> Store {
+        self.host = host.to_string();
+        self.me.host = host.to_string();
+        self
+    }
+
+    /// The lease of this store's claims.
+    pub fn lease(&self) -> Duration {
+        Duration::from_secs_f64(self.me.lease_s.unwrap_or(DEFAULT_LEASE.as_secs_f64()))
+    }
+
+    /// Renew this store's claims every lease/4 until the returned guard is dropped, so that
+    /// other hosts see them live. Renewal is a rewrite of the claim under the directory lock,
+    /// and only of a claim that is still ours.
+    pub fn heartbeat(&self) -> Heartbeat {
+        let (stop, stopped) = std::sync::mpsc::channel::<()>();
+        let every = self.lease() / 4;
+        let held = Arc::clone(&self.held);
+        let lock = self.dir.join(".lock");
+        let session = self.me.session.clone();
+        let thread = std::thread::spawn(move || {
+            while let Err(std::sync::mpsc::RecvTimeoutError::Timeout) = stopped.recv_timeout(every) {
+                let paths = held.lock().unwrap().clone();
+                for path in paths {
+                    // A failed renewal is retried at the next beat; the lease covers a few.
+                    let _ = renew(&lock, &path, &session);
+                }
+            }
+        });
+        Heartbeat { stop: Some(stop), thread: Some(thread) }
     }
 
     pub fn dir(&self) -> &Path {
@@ -423,8 +503,10 @@ impl Store {
                 Ok(mut f) => {
                     let mut me = self.me.clone();
                     me.claimed_at = unix_now();
+                    me.renewed_at = Some(me.claimed_at);
                     let text = serde_json::to_string(&me).expect("claim serialises");
                     f.write_all(text.as_bytes()).map_err(io(&path))?;
+                    self.held.lock().unwrap().push(path.clone());
                     return Ok(ClaimAttempt::Claimed(Claim { path, session: me.session }, stale));
                 }
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
@@ -445,6 +527,9 @@ impl Store {
 
     /// Give a claim back. Only removes the file if it is still ours.
     pub fn release(&self, claim: Claim) -> Result<(), StoreError> {
+        self.held.lock().unwrap().retain(|p| *p != claim.path);
+        // Under the lock, so that a renewal in flight cannot write the claim back.
+        let _lock = DirLock::take(&self.dir.join(".lock"))?;
         if read_claim(&claim.path).is_some_and(|c| c.session == claim.session) {
             fs::remove_file(&claim.path).map_err(io(&claim.path))?;
         }
@@ -523,11 +608,17 @@ impl Store {
         Ok(removed)
     }
 
+    /// Run `f` under the directory's lock (a consistent read-then-write of a shared file).
+    pub fn locked<T>(&self, f: impl FnOnce() -> T) -> Result<T, StoreError> {
+        let _lock = DirLock::take(&self.dir.join(".lock"))?;
+        Ok(f())
+    }
+
     /// Whether the process named by a claim is still running it.
     fn owner_alive(&self, c: &ClaimInfo) -> bool {
         if c.host != self.host {
-            // Cannot look at another host's processes: its claim stands.
-            return true;
+            // Cannot look at another host's processes: its claim stands while its lease does.
+            return lease_alive(c, unix_now());
         }
         if c.session == self.me.session {
             return true;
@@ -599,6 +690,42 @@ pub fn foreign_entry(dir: &Path) -> Option<String> {
 
 fn read_claim(path: &Path) -> Option<ClaimInfo> {
     serde_json::from_str(&fs::read_to_string(path).ok()?).ok()
+}
+
+/// Whether a claim's lease still runs at `now` (Unix seconds). A claim without a lease (written
+/// before leases) always stands.
+pub fn lease_alive(c: &ClaimInfo, now: f64) -> bool {
+    match (c.lease_s, c.renewed_at) {
+        (Some(lease), Some(renewed)) => now - renewed <= lease,
+        _ => true,
+    }
+}
+
+/// Renew the claim at `path` if `session` still holds it.
+fn renew(lock: &Path, path: &Path, session: &str) -> Result<(), StoreError> {
+    let _lock = DirLock::take(lock)?;
+    let Some(mut c) = read_claim(path) else { return Ok(()) };
+    if c.session != session {
+        return Ok(());
+    }
+    c.renewed_at = Some(unix_now());
+    write_atomic(path, serde_json::to_string(&c).expect("claim serialises").as_bytes())
+}
+
+/// The running heartbeat of a [`Store`]; stops when dropped.
+#[derive(Debug)]
+pub struct Heartbeat {
+    stop: Option<std::sync::mpsc::Sender<()>>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Drop for Heartbeat {
+    fn drop(&mut self) {
+        drop(self.stop.take());
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
 }
 
 /// `flock(2)` on a lock file, held while the guard lives. Released by the kernel if we die.

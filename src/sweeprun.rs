@@ -60,6 +60,12 @@ impl PointExecutor {
     pub fn new(sweep: Sweep) -> Result<PointExecutor> {
         Ok(PointExecutor { ctx: PointContext::new(sweep)? })
     }
+
+    /// Run each LIGGGHTS job on `ranks` MPI ranks (`mpirun -np ranks`).
+    pub fn with_ranks(mut self, ranks: u32) -> PointExecutor {
+        self.ctx.engine.ranks = ranks.max(1);
+        self
+    }
 }
 
 impl Executor for PointExecutor {
@@ -386,7 +392,7 @@ pub fn start<E: Executor>(
         None => Ok(()),
     })?;
     let retries = sweep.file.run.retries;
-    execute(&store, &manifest, exec, jobs, retries, opts, hook, cancel)
+    execute(&store, &manifest, exec, jobs, retries, opts, None, hook, cancel)
 }
 
 /// Whether `out` can be a sweep directory: an existing directory we may write in, or a path
@@ -567,6 +573,23 @@ pub fn resume<E: Executor>(
     hook: &mut dyn SpaceHook,
     cancel: &CancelToken,
 ) -> Result<Summary> {
+    resume_share(dir, exec, opts, None, hook, cancel)
+}
+
+/// Which unfinished points a process runs, and in what order: given their indices in manifest
+/// order, the indices to queue. One array task's share of a sweep ([`crate::cluster`]).
+pub type Order<'a> = &'a dyn Fn(&[usize]) -> Vec<usize>;
+
+/// [`resume`] of the unfinished points `order` picks, in its order (all, in manifest order,
+/// without one).
+pub fn resume_share<E: Executor>(
+    dir: &Path,
+    exec: &E,
+    opts: &RunOptions,
+    order: Option<Order>,
+    hook: &mut dyn SpaceHook,
+    cancel: &CancelToken,
+) -> Result<Summary> {
     let (mut manifest, toml) = Store::read_manifest(dir)?;
     let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
     check_parameters(dir, &manifest, &sweep)?;
@@ -599,11 +622,11 @@ pub fn resume<E: Executor>(
         store.write_manifest(&toml, &manifest)?;
     }
     let retries = sweep.file.run.retries;
-    execute(&store, &manifest, exec, jobs, retries, opts, hook, cancel)
+    execute(&store, &manifest, exec, jobs, retries, opts, order, hook, cancel)
 }
 
 /// Run the unfinished points of a manifest.
-#[expect(clippy::too_many_arguments, reason = "one call site each in start and resume")]
+#[expect(clippy::too_many_arguments, reason = "one call site each in start and resume_share")]
 fn execute<E: Executor>(
     store: &Store,
     manifest: &Manifest,
@@ -611,6 +634,7 @@ fn execute<E: Executor>(
     jobs: Vec<E::Job>,
     retries: u32,
     opts: &RunOptions,
+    order: Option<Order>,
     hook: &mut dyn SpaceHook,
     cancel: &CancelToken,
 ) -> Result<Summary> {
@@ -638,6 +662,19 @@ fn execute<E: Executor>(
             }
         };
         status.push(s);
+    }
+    if let Some(order) = order {
+        let index: HashMap<&str, usize> =
+            manifest.points.iter().map(|p| (p.hash.as_str(), p.index)).collect();
+        let mut by_index: BTreeMap<usize, E::Job> = queue
+            .into_iter()
+            .map(|j| {
+                let i = index[exec.hash(&j)];
+                (i, j)
+            })
+            .collect();
+        let picked = order(&by_index.keys().copied().collect::<Vec<_>>());
+        queue = picked.into_iter().filter_map(|i| by_index.remove(&i)).collect();
     }
     let mut rep = Reporter::new(store, manifest, status, opts.progress, hook)?;
     if rep.fire_spaces() == Flow::Drain {

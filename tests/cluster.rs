@@ -1,0 +1,495 @@
+//! `sweep submit` and `sweep work` for real: a Slurm array on the local Slurm of
+//! `scripts/slurm_local.sh` (one task cancelled mid-run, then re-submitted), the PBS task body
+//! under the environment PBS gives a task, the `#PBS`/`#SBATCH` headers as text, and claim
+//! leases across (played) hosts with real processes.
+//!
+//! Every sweep result is compared with a local run of the same sweep directory (same hashes,
+//! same MFR to the last digit: LIGGGHTS is deterministic), never with copied figures. The Slurm
+//! test skips, saying so, when Slurm is not installed; `bash scripts/slurm_local.sh up` (as root)
+//! installs and starts it.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+use demsweep::store::{ClaimAttempt, ClaimInfo, Store};
+
+fn sweep_bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_sweep"))
+}
+
+fn run(cmd: &mut Command) -> Output {
+    cmd.stdin(Stdio::null()).output().unwrap()
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+/// Three points of the quick scene (D = 1.5 mm, gap and blade speed swept).
+const SWEEP: &str = r#"name = "cluster-test"
+[parameters]
+gap         = { lo = 2.0, hi = 3.0, unit = "mm" }
+blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
+diameter    = { value = 1.5, unit = "mm" }
+"#;
+const POINTS: usize = 3;
+
+/// The local run every cluster run is compared with, made once per test binary.
+fn reference() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let root = tempfile::Builder::new().prefix("cluster-ref-").tempdir().unwrap().keep();
+        std::fs::write(root.join("s.toml"), SWEEP).unwrap();
+        let dir = root.join("local");
+        let o = run(sweep_bin()
+            .args(["lds", "s.toml", "--step", "3", "--max", "3", "--jobs", "2", "-q", "--out", "local"])
+            .current_dir(&root));
+        assert!(matches!(o.status.code(), Some(0 | 1)), "local run: {}", text(&o.stderr));
+        dir
+    })
+}
+
+/// A sweep directory of the reference's sweep with nothing run: what a user takes to a cluster
+/// (its manifest and resolved sweep file).
+fn fresh_copy(name: &str) -> (tempfile::TempDir, PathBuf) {
+    let root = tempfile::Builder::new().prefix(name).tempdir().unwrap();
+    let dir = root.path().join("sweep");
+    std::fs::create_dir_all(dir.join("runs")).unwrap();
+    for f in ["manifest.json", "sweep.toml"] {
+        std::fs::copy(reference().join(f), dir.join(f)).unwrap();
+    }
+    (root, dir)
+}
+
+/// results.csv as (hash, status, failure, mfr) per point index.
+fn results(dir: &Path) -> Vec<(String, String, String, String)> {
+    let mut r = csv::Reader::from_path(dir.join("results.csv")).unwrap();
+    let h = r.headers().unwrap().clone();
+    let col = |n: &str| h.iter().position(|c| c == n).unwrap();
+    let cols = [col("hash"), col("status"), col("failure"), col("mfr")];
+    r.records()
+        .map(|rec| {
+            let rec = rec.unwrap();
+            let f = |i: usize| rec[cols[i]].to_string();
+            (f(0), f(1), f(2), f(3))
+        })
+        .collect()
+}
+
+/// Joblog statuses by hash, in order, with the host of each line.
+fn attempts(dir: &Path) -> BTreeMap<String, Vec<(String, String)>> {
+    let text = std::fs::read_to_string(dir.join("joblog.tsv")).unwrap();
+    let mut m: BTreeMap<String, Vec<(String, String)>> = BTreeMap::new();
+    for line in text.lines().filter(|l| !l.starts_with("seq\t")) {
+        let f: Vec<&str> = line.split('\t').collect();
+        m.entry(f[7].to_string()).or_default().push((f[1].to_string(), f[5].to_string()));
+    }
+    m
+}
+
+/// Every point finished once: at most one `done` or `failed` line per hash, none after it.
+fn assert_finished_once(dir: &Path) {
+    for (hash, a) in attempts(dir) {
+        let finals = a.iter().filter(|(_, s)| s == "done" || s == "failed").count();
+        assert!(finals <= 1, "run {hash} finished {finals} times: {a:?}");
+    }
+}
+
+fn assert_same_as_reference(dir: &Path) {
+    let (got, want) = (results(dir), results(reference()));
+    assert_eq!(got.len(), POINTS);
+    assert_eq!(got, want, "cluster results differ from the local run");
+    assert!(want.iter().any(|r| r.1 == "done"), "the reference has no successful run: {want:?}");
+    assert_finished_once(dir);
+}
+
+fn wait_until(what: &str, limit: Duration, mut cond: impl FnMut() -> bool) {
+    let t = Instant::now();
+    while !cond() {
+        assert!(t.elapsed() < limit, "gave up waiting for {what}");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Slurm
+
+fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Bring the local Slurm up; `None` (with the reason printed) when Slurm is not installed.
+fn local_slurm() -> Option<String> {
+    let have = |c: &str| {
+        Command::new("sh").args(["-c", &format!("command -v {c}")]).output().unwrap().status.success()
+    };
+    if !(have("slurmctld") && have("slurmd") && have("munged") && have("sbatch")) {
+        eprintln!(
+            "SKIPPED: Slurm is not installed; `bash scripts/slurm_local.sh up` (as root) installs and \
+             starts a single-node Slurm, and this test then runs"
+        );
+        return None;
+    }
+    let o = run(Command::new("bash").arg(repo().join("scripts/slurm_local.sh")).arg("up"));
+    assert!(o.status.success(), "slurm_local.sh up: {}{}", text(&o.stdout), text(&o.stderr));
+    let conf = text(&o.stdout).lines().last().unwrap().trim_start_matches("export SLURM_CONF=").to_string();
+    Some(conf)
+}
+
+/// Jobs of `job` (an array id) still known to squeue.
+fn squeue(conf: &str, job: &str) -> Vec<(String, String)> {
+    let o = run(Command::new("squeue").env("SLURM_CONF", conf).args(["-h", "-r", "-j", job, "-o", "%i %T"]));
+    text(&o.stdout)
+        .lines()
+        .filter_map(|l| l.split_once(' ').map(|(a, b)| (a.to_string(), b.to_string())))
+        .collect()
+}
+
+fn submit(conf: &str, dir: &Path, extra: &[&str]) -> (String, String) {
+    let o = run(sweep_bin()
+        .env("SLURM_CONF", conf)
+        .args(["submit", dir.to_str().unwrap(), "--scheduler", "slurm", "--walltime", "00:20:00"])
+        .args(extra));
+    assert!(o.status.success(), "submit: {}", text(&o.stderr));
+    (text(&o.stdout).trim().to_string(), text(&o.stderr))
+}
+
+/// A 3-task Slurm array, one task cancelled in mid-run; the re-submission names only that
+/// task, and the directory then equals a local run, with no run finished twice.
+///
+/// `--no-steal`, so that the other tasks leave the cancelled task's point alone (by default
+/// they would finish it: the PBS test checks that).
+#[test]
+fn slurm_array_with_a_cancelled_task_completes_on_resubmission() {
+    let Some(conf) = local_slurm() else { return };
+    let (_root, dir) = fresh_copy("cluster-slurm-");
+    let (job, msg) = submit(&conf, &dir, &["--tasks", "3", "--no-steal"]);
+    assert!(msg.contains("array tasks 0-2 (1 per task)"), "{msg}");
+    let script = std::fs::read_to_string(dir.join("cluster/array.slurm")).unwrap();
+    assert!(script.contains("#SBATCH --array=0-2\n"), "{script}");
+
+    // Cancel task 1 once its LIGGGHTS run has started (its claim is there).
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("manifest.json")).unwrap()).unwrap();
+    let hash1 = manifest["points"][1]["hash"].as_str().unwrap().to_string();
+    let claim1 = dir.join("runs").join(&hash1).join("claim");
+    wait_until("task 1 to claim its point", Duration::from_secs(120), || claim1.exists());
+    std::thread::sleep(Duration::from_secs(2));
+    let o = run(Command::new("scancel").env("SLURM_CONF", &conf).arg(format!("{job}_1")));
+    assert!(o.status.success(), "scancel: {}", text(&o.stderr));
+    wait_until("the array to end", Duration::from_secs(600), || squeue(&conf, &job).is_empty());
+
+    // Task 1's point was cut off; the others finished.
+    let first = results(&dir);
+    assert_eq!(first[1].1, "pending", "the cancelled task's point: {first:?}");
+    assert!(first.iter().enumerate().all(|(i, r)| i == 1 || r.1 != "pending"), "{first:?}");
+    assert!(!claim1.exists(), "the cancelled task released its claim");
+
+    // Re-submit: only index 1.
+    let (job2, msg) = submit(&conf, &dir, &[]);
+    assert!(msg.contains("1 points as array tasks 1 "), "{msg}");
+    let script = std::fs::read_to_string(dir.join("cluster/array.slurm")).unwrap();
+    assert!(script.contains("#SBATCH --array=1\n"), "{script}");
+    wait_until("the re-submitted array to end", Duration::from_secs(600), || squeue(&conf, &job2).is_empty());
+    assert_same_as_reference(&dir);
+    let a = &attempts(&dir)[&hash1];
+    assert_eq!(a.iter().map(|x| x.1.as_str()).collect::<Vec<_>>(), ["cancelled", "done"], "{a:?}");
+
+    // The report job ran after each array (afterany); `sweep report` itself lands with the
+    // report work.
+    let logs: Vec<String> = std::fs::read_dir(dir.join("cluster/logs"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    wait_until("the report jobs", Duration::from_secs(60), || {
+        std::fs::read_dir(dir.join("cluster/logs"))
+            .unwrap()
+            .filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().starts_with("report-"))
+            .count()
+            == 2
+    });
+    assert!(logs.iter().any(|l| l.starts_with(&format!("{job}_"))), "{logs:?}");
+    let subs = std::fs::read_to_string(dir.join("cluster/submissions.tsv")).unwrap();
+    assert_eq!(subs.lines().count(), 2, "{subs}");
+
+    // Nothing left: a third submission says so and submits nothing.
+    let o = run(sweep_bin().env("SLURM_CONF", &conf).args([
+        "submit",
+        dir.to_str().unwrap(),
+        "--scheduler",
+        "slurm",
+    ]));
+    assert!(o.status.success() && text(&o.stdout).is_empty(), "{}", text(&o.stderr));
+    assert!(text(&o.stderr).contains("nothing to submit"), "{}", text(&o.stderr));
+}
+
+// ---------------------------------------------------------------------------------------------
+// PBS
+
+/// Run a rendered PBS script as PBS would run array index `index`: its environment, a node
+/// file, and another working directory to start from.
+fn pbs_task(script: &Path, index: usize, torque: bool, workdir: &Path) -> Child {
+    let nodefile = workdir.join(format!("nodes.{index}"));
+    std::fs::write(&nodefile, "node01\nnode01\n").unwrap();
+    let mut c = Command::new("bash");
+    c.arg(script)
+        .env(if torque { "PBS_ARRAYID" } else { "PBS_ARRAY_INDEX" }, index.to_string())
+        .env("PBS_O_WORKDIR", workdir)
+        .env("PBS_NODEFILE", &nodefile)
+        .env("PBS_JOBID", format!("77[{index}].pbs"))
+        .current_dir("/")
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    c.spawn().unwrap()
+}
+
+/// The PBS Pro task body under PBS's environment, run for indices 0 and 2 at once, leaves the
+/// same directory as a local run: index 1 never ran (a lost task), and they did its point
+/// once their own were done. Then Torque's form for the failures (PBS_ARRAYID).
+#[test]
+fn pbs_task_bodies_under_the_pbs_environment_equal_a_local_run() {
+    let (root, dir) = fresh_copy("cluster-pbs-");
+    let o = run(sweep_bin().args([
+        "submit",
+        dir.to_str().unwrap(),
+        "--scheduler",
+        "pbs",
+        "--tasks",
+        "3",
+        "--dry-run",
+    ]));
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let script = PathBuf::from(text(&o.stdout).trim());
+    let body = std::fs::read_to_string(&script).unwrap();
+    assert!(body.contains("#PBS -J 0-2\n"), "{body}");
+    let tasks: Vec<(usize, Child)> =
+        [0, 2].into_iter().map(|i| (i, pbs_task(&script, i, false, root.path()))).collect();
+    for (i, t) in tasks {
+        let o = t.wait_with_output().unwrap();
+        let out = text(&o.stdout);
+        assert!(matches!(o.status.code(), Some(0 | 1)), "task {i}: {out}{}", text(&o.stderr));
+        assert!(out.starts_with(&format!("task {i} on ")) && out.contains("(node01 )"), "{out}");
+    }
+    assert_same_as_reference(&dir);
+
+    let o = run(sweep_bin().args([
+        "submit",
+        dir.to_str().unwrap(),
+        "--scheduler",
+        "torque",
+        "--dry-run",
+        "--only",
+        "missing,failed",
+    ]));
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    // With every point done, only a failed one (if the sweep has one) is left to submit.
+    let failed: Vec<usize> =
+        results(reference()).iter().enumerate().filter(|(_, r)| r.1 == "failed").map(|(i, _)| i).collect();
+    if failed.is_empty() {
+        assert!(text(&o.stderr).contains("nothing to submit"), "{}", text(&o.stderr));
+        return;
+    }
+    let script = PathBuf::from(text(&o.stdout).trim());
+    let body = std::fs::read_to_string(&script).unwrap();
+    let want = failed.iter().map(|i| i.to_string()).collect::<Vec<_>>().join(",");
+    assert!(body.contains(&format!("#PBS -t {want}\n")) && body.contains("--retry-failed"), "{body}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Headers as text
+
+/// A manifest of `n` points with made-up hashes: enough for rendering.
+fn synthetic(dir: &Path, n: usize) {
+    let points: Vec<serde_json::Value> = (0..n)
+        .map(|i| serde_json::json!({ "index": i, "values": [2.0 + i as f64 * 0.1, 1.4], "hash": format!("{i:064x}") }))
+        .collect();
+    let manifest = serde_json::json!({
+        "format": 1, "tool": "demsweep test", "name": "snap", "parameters": ["gap", "blade_speed"],
+        "design": { "kind": "lds", "step": n, "max": n, "scrambling": "random", "seed": 14 },
+        "spaces": [{ "label": format!("lds {n}"), "points": (0..n).collect::<Vec<_>>() }],
+        "points": points, "identity": {}
+    });
+    std::fs::create_dir_all(dir.join("runs")).unwrap();
+    std::fs::write(dir.join("manifest.json"), manifest.to_string()).unwrap();
+    std::fs::write(dir.join("sweep.toml"), SWEEP).unwrap();
+}
+
+/// Compare with `tests/snapshots/NAME`, paths replaced by `DIR` and `SWEEP`; with
+/// `UPDATE_SNAPSHOTS=1` write it instead.
+fn snapshot(name: &str, got: &str) {
+    let path = repo().join("tests/snapshots").join(name);
+    if std::env::var_os("UPDATE_SNAPSHOTS").is_some() {
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(&path, got).unwrap();
+        return;
+    }
+    let want = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert_eq!(got, want, "{name} changed (UPDATE_SNAPSHOTS=1 rewrites it)");
+}
+
+#[test]
+fn scripts_match_their_snapshots() {
+    for (scheduler, extra) in [
+        ("slurm", &["--partition", "short", "--account", "dem01"][..]),
+        ("pbs", &["--queue", "shortq", "--account", "dem01"][..]),
+        ("torque", &["--queue", "shortq"][..]),
+    ] {
+        let root = tempfile::tempdir().unwrap();
+        let dir = root.path().join("snap");
+        synthetic(&dir, 10);
+        let o = run(sweep_bin()
+            .args(["submit", dir.to_str().unwrap(), "--scheduler", scheduler, "--tasks", "4", "--dry-run"])
+            .args(["--jobs-per-task", "2", "--ranks", "2", "--walltime", "02:00:00"])
+            .args(extra));
+        assert!(o.status.success(), "{scheduler}: {}", text(&o.stderr));
+        let ext = if scheduler == "slurm" { "slurm" } else { "pbs" };
+        for kind in ["array", "report"] {
+            let got = std::fs::read_to_string(dir.join(format!("cluster/{kind}.{ext}"))).unwrap();
+            let got = got
+                .replace(dir.to_str().unwrap(), "DIR")
+                .replace(env!("CARGO_BIN_EXE_sweep"), "SWEEP")
+                .replace(env!("CARGO_PKG_VERSION"), "VERSION");
+            snapshot(&format!("{scheduler}-{kind}.txt"), &got);
+        }
+    }
+}
+
+#[test]
+fn bad_submit_input_is_refused_and_writes_nothing() {
+    let root = tempfile::tempdir().unwrap();
+    let dir = root.path().join("snap");
+    synthetic(&dir, 4);
+    let d = dir.to_str().unwrap();
+    for (args, needle) in [
+        (&["--scheduler", "slurm", "--dry-run"][..], "--tasks: required"),
+        (&["--scheduler", "slurm", "--tasks", "0", "--dry-run"][..], "--tasks 0"),
+        (&["--scheduler", "slurm", "--tasks", "2", "--walltime", "2h", "--dry-run"][..], "--walltime \"2h\""),
+        (&["--scheduler", "pbs", "--tasks", "2", "--queue", "a b", "--dry-run"][..], "--queue \"a b\""),
+        (&["--scheduler", "pbs", "--tasks", "2", "--ranks", "0", "--dry-run"][..], "--ranks 0"),
+    ] {
+        let o = run(sweep_bin().arg("submit").arg(d).args(args));
+        let err = text(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(needle) && err.lines().count() == 1, "{args:?}: {err}");
+        assert!(!dir.join("cluster").exists(), "{args:?} wrote something");
+    }
+    let o = run(sweep_bin().args([
+        "submit",
+        root.path().to_str().unwrap(),
+        "--scheduler",
+        "slurm",
+        "--tasks",
+        "1",
+    ]));
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
+    assert!(text(&o.stderr).contains("not a sweep directory"), "{}", text(&o.stderr));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Leases
+
+fn claim_of(dir: &Path, hash: &str) -> Option<ClaimInfo> {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("runs").join(hash).join("claim")).ok()?).ok()
+}
+
+/// A claim of another host stands while its heartbeat runs, past its lease, and is taken over
+/// once the heartbeat stops and the lease has run out.
+#[test]
+fn a_remote_claim_stands_while_renewed_and_is_taken_over_after_its_lease() {
+    let dir = tempfile::tempdir().unwrap();
+    let lease = Duration::from_millis(1200);
+    let a = Store::open(dir.path()).with_host("node-a").with_lease(lease);
+    let b = Store::open(dir.path()).with_host("node-b").with_lease(lease);
+    let ClaimAttempt::Claimed(_held, None) = a.claim("h").unwrap() else { panic!("first claim") };
+    let beat = a.heartbeat();
+    let t = Instant::now();
+    while t.elapsed() < lease * 3 {
+        assert!(matches!(b.claim("h").unwrap(), ClaimAttempt::Busy(c) if c.host == "node-a"));
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    drop(beat);
+    let stopped = Instant::now();
+    let taken = loop {
+        match b.claim("h").unwrap() {
+            ClaimAttempt::Busy(_) => std::thread::sleep(Duration::from_millis(50)),
+            ClaimAttempt::Claimed(_, stale) => break stale,
+        }
+        assert!(stopped.elapsed() < lease * 3, "never taken over");
+    };
+    // The last renewal was at most lease/4 before the heartbeat stopped.
+    assert!(stopped.elapsed() >= lease * 3 / 4, "taken over after {:?}", stopped.elapsed());
+    assert_eq!(taken.unwrap().host, "node-a");
+    assert_eq!(claim_of(dir.path(), "h").unwrap().host, "node-b");
+}
+
+/// Process groups of the children of `pid`, and `pid` itself.
+fn tree(pid: u32) -> Vec<i32> {
+    let mut out = vec![pid as i32];
+    for e in std::fs::read_dir("/proc").unwrap().flatten() {
+        let Ok(p) = e.file_name().to_string_lossy().parse::<i32>() else { continue };
+        let Ok(stat) = std::fs::read_to_string(format!("/proc/{p}/stat")) else { continue };
+        let Some(close) = stat.rfind(')') else { continue };
+        let f: Vec<&str> = stat[close + 1..].split_whitespace().collect();
+        if f[1] == pid.to_string() {
+            out.push(-f[2].parse::<i32>().unwrap());
+        }
+    }
+    out
+}
+
+fn signal(targets: &[i32], sig: i32) {
+    for &t in targets {
+        // SAFETY: kill(2) on a pid or a process group (negative).
+        unsafe { libc::kill(t, sig) };
+    }
+}
+
+/// Real `sweep work` processes playing two hosts: node-b waits on node-a's live run past the
+/// lease; when node-a freezes (a lost node: no heartbeat), node-b takes the run over after the
+/// lease and completes it with the local run's MFR.
+#[test]
+fn a_frozen_task_is_taken_over_after_its_lease_and_a_live_one_is_not() {
+    let (_root, dir) = fresh_copy("cluster-lease-");
+    let want = results(reference());
+    let k = want.iter().position(|r| r.1 == "done").expect("a successful point");
+    let hash = want[k].0.clone();
+    let task = k.to_string();
+    let work = |host: &str| {
+        sweep_bin()
+            .args(["work", dir.to_str().unwrap(), "--task", &task, "--per-task", "1", "--jobs", "1"])
+            .args(["--lease", "3", "--no-steal", "-q", "--host", host])
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let mut a = work("node-a");
+    wait_until("node-a's claim", Duration::from_secs(60), || claim_of(&dir, &hash).is_some());
+    let b = work("node-b");
+    // Live: past twice the lease, the claim is still node-a's.
+    std::thread::sleep(Duration::from_secs(7));
+    assert_eq!(claim_of(&dir, &hash).map(|c| c.host), Some("node-a".into()), "a live claim was taken over");
+    // Frozen: node-a and its LIGGGHTS stop, as on a lost node.
+    let frozen = tree(a.id());
+    signal(&frozen, libc::SIGSTOP);
+    let stopped = Instant::now();
+    wait_until("node-b's takeover", Duration::from_secs(30), || {
+        claim_of(&dir, &hash).is_some_and(|c| c.host == "node-b")
+    });
+    let after = stopped.elapsed();
+    assert!(after >= Duration::from_millis(2200), "taken over {after:?} after the heartbeat stopped");
+    let o = b.wait_with_output().unwrap();
+    signal(&frozen, libc::SIGKILL);
+    let _ = a.wait();
+    assert!(matches!(o.status.code(), Some(0 | 1)), "node-b: {}", text(&o.stderr));
+    let lines = &attempts(&dir)[&hash];
+    let last = lines.last().unwrap();
+    assert_eq!(last.0, "node-b", "{lines:?}");
+    assert!(!lines.iter().any(|(h, s)| h == "node-a" && (s == "done" || s == "failed")), "{lines:?}");
+    assert_eq!(results(&dir)[k], want[k]);
+}
