@@ -20,6 +20,7 @@ pub mod scene;
 pub mod space;
 pub mod store;
 pub mod sweep;
+pub mod stats;
 pub mod sweeprun;
 
 pub use error::{Error, Result};
