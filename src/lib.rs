@@ -5,6 +5,7 @@
 
 pub mod atomic;
 pub mod contact;
+pub mod convergence;
 pub mod deck;
 pub mod design;
 pub mod dump;
