@@ -17,11 +17,14 @@ pub mod point;
 pub mod pool;
 pub mod process;
 pub mod progress;
+pub mod quality;
 pub mod scene;
+pub mod sensitivity;
 pub mod space;
+pub mod standin;
+pub mod stats;
 pub mod store;
 pub mod sweep;
-pub mod stats;
 pub mod sweeprun;
 
 pub use error::{Error, Result};
