@@ -15,13 +15,16 @@
 //! extended sweep is judged again only past its old extent). An undefined statistic (S = 0)
 //! or a relative change from exactly zero is never "within".
 //!
-//! Not responsible for computing the statistics ([`crate::stats`]) or for stopping a sweep
-//! (the driver's hook asks [`judge`] and acts on it).
+//! [`Watch`] applies the rule while a sweep runs. Not responsible for computing the statistics
+//! ([`crate::stats`]) or for running the sweep ([`crate::sweeprun`]).
 
 use serde::Serialize;
 
+use crate::pool::Flow;
 use crate::stats::{Moments, STATISTICS};
+use crate::store::{PointRecord, PointStatus, SpaceRecord};
 use crate::sweep::ConvergenceSettings;
+use crate::sweeprun::SpaceHook;
 
 /// Which statistics must be within tolerance.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -163,6 +166,84 @@ pub fn judge(spaces: &[(usize, Moments)], c: &Criteria) -> Vec<Judgement> {
 /// The first converged space, if any.
 pub fn converged_at(judged: &[Judgement]) -> Option<usize> {
     judged.iter().position(|j| j.converged)
+}
+
+/// Command-line overrides of a sweep file's `[convergence]` (`--rule`, `--tolerance`,
+/// `--floor`, `--hold`).
+#[derive(Debug, Clone, Default)]
+pub struct Overrides {
+    pub rule: Option<String>,
+    pub tolerance: Option<f64>,
+    pub floor: Option<f64>,
+    pub hold: Option<usize>,
+}
+
+impl Overrides {
+    /// Apply to `c`, refusing values the sweep file would refuse (naming the flag).
+    pub fn apply(&self, c: &mut ConvergenceSettings) -> crate::Result<()> {
+        let bad = |flag: &str, what: String| crate::Error::input(format!("{flag} {what}"));
+        if let Some(r) = &self.rule {
+            if Rule::parse(r).is_none() {
+                return Err(bad("--rule", format!("{r}: expected \"all\" or \"any\"")));
+            }
+            c.rule = r.clone();
+        }
+        for (flag, v, slot) in
+            [("--tolerance", self.tolerance, &mut c.tolerance), ("--floor", self.floor, &mut c.floor)]
+        {
+            if let Some(v) = v {
+                if !v.is_finite() || v < 0.0 {
+                    return Err(bad(flag, format!("{v}: expected a finite number ≥ 0")));
+                }
+                *slot = v;
+            }
+        }
+        if let Some(h) = self.hold {
+            if h == 0 {
+                return Err(bad("--hold", "0: expected at least 1".into()));
+            }
+            c.hold = h;
+        }
+        Ok(())
+    }
+}
+
+/// The rule applied to a running sweep: the driver's [`SpaceHook`]. After each space completes
+/// it judges the spaces so far on their done runs' MFR (failed runs left out) and stops the
+/// sweep ([`Flow::Drain`]: no new runs start) at the first converged space.
+pub struct Watch {
+    criteria: Criteria,
+    spaces: Vec<(usize, Moments)>,
+    labels: Vec<String>,
+    /// The space (label, point count) the sweep converged at, once it has.
+    pub converged_at: Option<(String, usize)>,
+}
+
+impl Watch {
+    pub fn new(criteria: Criteria) -> Watch {
+        Watch { criteria, spaces: Vec::new(), labels: Vec::new(), converged_at: None }
+    }
+}
+
+impl SpaceHook for Watch {
+    fn space_complete(&mut self, space: &SpaceRecord, points: &[(&PointRecord, &PointStatus)]) -> Flow {
+        let mfr: Vec<f64> = points
+            .iter()
+            .filter_map(|(_, s)| match s {
+                PointStatus::Done(r) if r.mfr.is_finite() => Some(r.mfr),
+                _ => None,
+            })
+            .collect();
+        self.spaces.push((points.len(), crate::stats::moments(&mfr)));
+        self.labels.push(space.label.clone());
+        match judge(&self.spaces, &self.criteria).last() {
+            Some(j) if j.converged => {
+                self.converged_at = Some((space.label.clone(), points.len()));
+                Flow::Drain
+            }
+            _ => Flow::Continue,
+        }
+    }
 }
 
 #[cfg(test)]

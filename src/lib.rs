@@ -18,6 +18,7 @@ pub mod pool;
 pub mod process;
 pub mod progress;
 pub mod quality;
+pub mod report;
 pub mod scene;
 pub mod sensitivity;
 pub mod space;

@@ -11,7 +11,9 @@ use demsweep::process::CancelToken;
 use demsweep::progress::ProgressMode;
 use demsweep::store::DesignRecord;
 use demsweep::sweep::{Scrambling, Sweep};
-use demsweep::sweeprun::{self, RunAll, RunOptions, Summary};
+use demsweep::convergence::{Criteria, Watch};
+use demsweep::stats::Bootstrap;
+use demsweep::sweeprun::{self, RunOptions, Summary};
 
 /// Parameter sweeps of LIGGGHTS powder-spreading simulations.
 ///
@@ -38,15 +40,15 @@ enum Command {
     Resume(ResumeArgs),
     /// Counts of a sweep directory: done, failed, running, pending.
     Status(DirArgs),
-    /// (Re)write convergence.csv, summary.json and plots of a sweep directory [not yet implemented].
-    Report(DirArgs),
+    /// Write convergence.csv, summary.json and report/ (plots, report.html) of a sweep directory.
+    Report(ReportArgs),
     /// Print a design as CSV (header = swept parameter names, values in their units).
     Points(PointsArgs),
     /// Write the deck, blade mesh and initial pile of one point without running it.
     Render(RenderArgs),
     /// Run one point through LIGGGHTS and print its result.
     Run(RunArgs),
-    /// The four statistics (mean, std, skewness, kurtosis) of a CSV column, as JSON [not yet implemented].
+    /// The statistics of a CSV column (mean, std, skewness, kurtosis) with bootstrap intervals.
     Stats(StatsArgs),
     /// One single-contact case on the Hertz–Mindlin reference solver, as JSON.
     Contact(ContactArgs),
@@ -70,6 +72,8 @@ struct LatticeArgs {
     #[arg(long)]
     out: Option<PathBuf>,
     #[command(flatten)]
+    convergence: ConvergenceArgs,
+    #[command(flatten)]
     pool: PoolArgs,
 }
 
@@ -87,7 +91,50 @@ struct LdsArgs {
     #[arg(long)]
     out: Option<PathBuf>,
     #[command(flatten)]
+    convergence: ConvergenceArgs,
+    #[command(flatten)]
     pool: PoolArgs,
+}
+
+/// Overrides of the sweep file's [convergence] table. A sweep stops at the first space where the
+/// rule holds; `lattice`/`lds` record the overrides in DIR/sweep.toml, so `resume` keeps them.
+#[derive(Args)]
+struct ConvergenceArgs {
+    /// "all" (default: every statistic within the tolerance or the floor, for --hold
+    /// consecutive spaces) or "any" (the thesis's rule: any one statistic within the tolerance).
+    #[arg(long)]
+    rule: Option<String>,
+    /// Relative change between consecutive spaces that counts as converged (e.g. 0.05).
+    #[arg(long)]
+    tolerance: Option<f64>,
+    /// Absolute change that counts as converged whatever the relative one (rule "all").
+    #[arg(long)]
+    floor: Option<f64>,
+    /// Consecutive spaces the rule must hold for (rule "all").
+    #[arg(long)]
+    hold: Option<usize>,
+}
+
+impl ConvergenceArgs {
+    fn overrides(&self) -> demsweep::convergence::Overrides {
+        demsweep::convergence::Overrides {
+            rule: self.rule.clone(),
+            tolerance: self.tolerance,
+            floor: self.floor,
+            hold: self.hold,
+        }
+    }
+}
+
+#[derive(Args)]
+struct ReportArgs {
+    /// A sweep directory (holding manifest.json).
+    dir: PathBuf,
+    /// Also print summary.json to stdout.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    convergence: ConvergenceArgs,
 }
 
 #[derive(Args)]
@@ -303,11 +350,19 @@ struct ContactCheckArgs {
     keep: Option<PathBuf>,
 }
 
+/// Empty cells and cells that are not finite numbers are skipped and counted. Skewness and
+/// kurtosis are undefined (null) when every value is equal; intervals are 95% percentile
+/// bootstrap intervals (1,000 resamples, seed 14).
 #[derive(Args)]
 struct StatsArgs {
+    /// A CSV file with a header row (e.g. DIR/results.csv).
     file: PathBuf,
+    /// The column to describe, by header name (e.g. mfr).
     #[arg(long)]
     column: String,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    json: bool,
 }
 
 fn main() {
@@ -329,10 +384,10 @@ fn run(cli: Cli) -> Result<i32, Error> {
         Command::Lds(a) => lds(a),
         Command::Resume(a) => resume(a),
         Command::Status(a) => status(a),
-        Command::Report(_) => Err(Error::NotYet("report")),
+        Command::Report(a) => report(a),
         Command::Render(a) => render(a),
         Command::Run(a) => run_one(a),
-        Command::Stats(_) => Err(Error::NotYet("stats")),
+        Command::Stats(a) => stats(a),
         Command::Contact(a) => contact(a),
         Command::ContactCheck(a) => contact_check(a),
         Command::Submit => Err(Error::NotYet("submit")),
@@ -350,13 +405,15 @@ fn run_options(p: &PoolArgs, retry_failed: bool, force: bool) -> Result<RunOptio
 }
 
 fn lattice(a: LatticeArgs) -> Result<i32, Error> {
-    let sweep = Sweep::load(&a.sweep)?;
+    let mut sweep = Sweep::load(&a.sweep)?;
+    a.convergence.overrides().apply(&mut sweep.file.convergence)?;
     let levels = a.levels.unwrap_or_else(|| sweep.file.design.lattice_levels.clone());
     start(sweep, DesignRecord::Lattice { levels }, a.out, &a.pool)
 }
 
 fn lds(a: LdsArgs) -> Result<i32, Error> {
-    let sweep = Sweep::load(&a.sweep)?;
+    let mut sweep = Sweep::load(&a.sweep)?;
+    a.convergence.overrides().apply(&mut sweep.file.convergence)?;
     let l = &sweep.file.design.lds;
     let design = DesignRecord::Lds {
         step: a.step.unwrap_or(l.step),
@@ -367,26 +424,54 @@ fn lds(a: LdsArgs) -> Result<i32, Error> {
     start(sweep, design, a.out, &a.pool)
 }
 
-fn start(sweep: Sweep, design: DesignRecord, out: Option<PathBuf>, p: &PoolArgs) -> Result<i32, Error> {
+fn start(mut sweep: Sweep, design: DesignRecord, out: Option<PathBuf>, p: &PoolArgs) -> Result<i32, Error> {
     let opts = run_options(p, false, false)?;
     let out = out.unwrap_or_else(|| sweeprun::default_out(&sweep));
+    sweep.file.convergence.min_points = sweeprun::judge_from(&out, &sweep, &design)?;
     demsweep::process::install_interrupt_handler();
-    let exec = sweeprun::PointExecutor::new(sweep.clone())?;
-    let summary = sweeprun::start(&sweep, design, &out, &exec, &opts, &mut RunAll, &CancelToken::new())?;
-    Ok(finish(&summary))
+    let mut watch = Watch::new(Criteria::from_settings(&sweep.file.convergence));
+    let cancel = CancelToken::new();
+    let summary = if demsweep::standin::selected(&sweep) {
+        let exec = demsweep::standin::StandIn::new(sweep.clone());
+        sweeprun::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?
+    } else {
+        let exec = sweeprun::PointExecutor::new(sweep.clone())?;
+        sweeprun::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?
+    };
+    finish(&summary, &sweep)
 }
 
 fn resume(a: ResumeArgs) -> Result<i32, Error> {
     let opts = run_options(&a.pool, a.retry_failed, a.force)?;
     let sweep = sweeprun::load_dir_sweep(&a.dir)?;
     demsweep::process::install_interrupt_handler();
-    let exec = sweeprun::PointExecutor::new(sweep)?;
-    let summary = sweeprun::resume(&a.dir, &exec, &opts, &mut RunAll, &CancelToken::new())?;
-    Ok(finish(&summary))
+    // The same rule as the run that made the directory (DIR/sweep.toml), so a converged sweep
+    // stays stopped where it converged.
+    let mut watch = Watch::new(Criteria::from_settings(&sweep.file.convergence));
+    let cancel = CancelToken::new();
+    let summary = if demsweep::standin::selected(&sweep) {
+        let exec = demsweep::standin::StandIn::new(sweep.clone());
+        sweeprun::resume(&a.dir, &exec, &opts, &mut watch, &cancel)?
+    } else {
+        let exec = sweeprun::PointExecutor::new(sweep.clone())?;
+        sweeprun::resume(&a.dir, &exec, &opts, &mut watch, &cancel)?
+    };
+    finish(&summary, &sweep)
 }
 
-/// Say what to do next and return the exit code.
-fn finish(s: &Summary) -> i32 {
+/// Write the report, say what happened and what to do next, and return the exit code.
+fn finish(s: &Summary, sweep: &Sweep) -> Result<i32, Error> {
+    let criteria = Criteria::from_settings(&sweep.file.convergence);
+    let analysis = demsweep::report::analyse(&s.dir, &criteria, &Bootstrap::default())?;
+    let html = demsweep::report::write(&analysis)?;
+    let code = finish_runs(s);
+    eprintln!("{}: {}", analysis.verdict.status, analysis.verdict.reason);
+    eprintln!("report: {}", html.display());
+    Ok(code)
+}
+
+/// Say what to do next about the runs and return the exit code.
+fn finish_runs(s: &Summary) -> i32 {
     let dir = s.dir.display();
     if s.interrupted {
         eprintln!(
@@ -398,7 +483,7 @@ fn finish(s: &Summary) -> i32 {
         eprintln!("{} of {} runs failed; reasons: `sweep status {dir}`; re-run them: `sweep resume {dir} --retry-failed`", s.failed, s.points);
     }
     if let Some(space) = &s.stopped_after {
-        eprintln!("stopped after {space}");
+        eprintln!("converged: stopped starting runs after {space}");
     }
     s.exit_code()
 }
@@ -410,6 +495,57 @@ fn status(a: DirArgs) -> Result<i32, Error> {
         println!("{text}");
     } else {
         print!("{}", report.to_text());
+    }
+    Ok(exit::SUCCESS)
+}
+
+fn report(a: ReportArgs) -> Result<i32, Error> {
+    let sweep = sweeprun::load_dir_sweep(&a.dir)?;
+    let mut settings = sweep.file.convergence.clone();
+    a.convergence.overrides().apply(&mut settings)?;
+    let analysis = demsweep::report::analyse(&a.dir, &Criteria::from_settings(&settings), &Bootstrap::default())?;
+    let html = demsweep::report::write(&analysis)?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&analysis).map_err(|e| Error::Internal(e.to_string()))?);
+    }
+    eprintln!("{}: {}", analysis.verdict.status, analysis.verdict.reason);
+    eprintln!("report: {}", html.display());
+    Ok(exit::SUCCESS)
+}
+
+fn stats(a: StatsArgs) -> Result<i32, Error> {
+    let column = demsweep::report::read_column(&a.file, &a.column)?;
+    let m = demsweep::stats::moments(&column.values);
+    let iv = demsweep::stats::bootstrap(&column.values, &Bootstrap::default());
+    if a.json {
+        let intervals: serde_json::Map<String, serde_json::Value> = demsweep::stats::STATISTICS
+            .iter()
+            .zip(iv)
+            .map(|(s, i)| (s.name().to_string(), serde_json::json!(i)))
+            .collect();
+        let out = serde_json::json!({
+            "file": a.file.display().to_string(),
+            "column": a.column,
+            "n": m.n,
+            "skipped_empty": column.empty,
+            "skipped_non_numeric": column.non_numeric,
+            "mean": m.mean,
+            "std": m.std,
+            "skewness": m.skewness,
+            "kurtosis": m.kurtosis,
+            "moment_skewness": m.moment_skewness,
+            "median": m.median,
+            "intervals": intervals,
+        });
+        println!("{}", serde_json::to_string_pretty(&out).map_err(|e| Error::Internal(e.to_string()))?);
+    } else {
+        let f = |v: Option<f64>| v.map_or("undefined".to_string(), |v| format!("{v:.6}"));
+        println!("{} column {}: n = {} ({} empty, {} not numbers skipped)", a.file.display(), a.column, m.n, column.empty, column.non_numeric);
+        for (s, i) in demsweep::stats::STATISTICS.iter().zip(iv) {
+            println!("  {:<16} {:>12}   95% interval [{}, {}]", s.name(), f(s.of(&m)), f(i.lo), f(i.hi));
+        }
+        println!("  {:<16} {:>12}", "moment_skewness", f(m.moment_skewness));
+        println!("  {:<16} {:>12}", "median", f(m.median));
     }
     Ok(exit::SUCCESS)
 }
