@@ -150,7 +150,9 @@ impl Point {
         let g = self.gap / self.diameter;
         // Rise of v_x over the twelve layers, as a fraction of the blade speed: largest at the
         // 2:1 gap match, smaller for wide gaps and fast blades.
-        let rise = (0.25 * (-((g - 2.0) / 1.2).powi(2)).exp() + 0.01) * (1.4 / self.blade_speed).powi(2);
+        // A jammed gap passes nothing: the whole pile rides with the blade (uniform v_x).
+        let matched = if g <= JAM_RATIO { 0.0 } else { 0.25 * (-((g - 2.0) / 1.2).powi(2)).exp() };
+        let rise = (matched + 0.01) * (1.4 / self.blade_speed).powi(2);
         // Layer-to-layer fluctuation: coarse particles and high friction.
         let rough = 0.12 * ((self.diameter - 2.0) / 1.0).clamp(0.0, 1.0) * (self.friction / 0.2) + 0.003;
         let vx = (0..VX_LAYERS)

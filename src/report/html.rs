@@ -16,6 +16,42 @@ fn num(v: Option<f64>) -> String {
     v.map_or("–".into(), |v| format!("{v:.4}"))
 }
 
+/// Four significant digits, for compact interval bounds.
+fn sig(v: Option<f64>) -> String {
+    v.map_or("–".into(), |v| format!("{}", fmt_short_sig(v)))
+}
+
+fn fmt_short_sig(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    let digits = (3 - v.abs().log10().floor() as i32).clamp(0, 8) as usize;
+    format!("{v:.digits$}")
+}
+
+/// A table of the points a figure labels by `#index`.
+fn points_table(a: &Analysis, f: &Figure) -> String {
+    if f.points.is_empty() {
+        return String::new();
+    }
+    let mut h = String::from("<table><tr><th>point</th>");
+    for p in &a.parameters {
+        h.push_str(&format!("<th>{}</th>", esc(p)));
+    }
+    h.push_str("<th>MFR</th><th class=\"l\">quality</th></tr>\n");
+    for &i in &f.points {
+        let Some(p) = a.points.iter().find(|p| p.index == i) else { continue };
+        let Some((r, q)) = p.done() else { continue };
+        h.push_str(&format!("<tr><td>#{i}</td>"));
+        for v in &p.values {
+            h.push_str(&format!("<td>{}</td>", fmt_short(*v)));
+        }
+        h.push_str(&format!("<td>{:.4}</td><td class=\"l\">{}</td></tr>\n", r.mfr, q.as_str()));
+    }
+    h.push_str("</table>\n");
+    h
+}
+
 fn img(f: &Figure) -> String {
     format!(
         "<figure><img alt=\"{}\" src=\"data:image/png;base64,{}\"><figcaption>{} <span class=\"file\">(report/{}.svg, .png)</span></figcaption></figure>\n",
@@ -28,7 +64,8 @@ fn img(f: &Figure) -> String {
 
 const STYLE: &str = "body{font-family:sans-serif;max-width:1240px;margin:1em auto;padding:0 1em;color:#222}
 h1{margin-bottom:0}h2{border-bottom:1px solid #ccc;margin-top:1.6em}
-table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:2px 8px;text-align:right}
+table{border-collapse:collapse;margin:.5em 0;font-size:.9em}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right;white-space:nowrap}
+td small{color:#666}
 th{background:#f2f2f2}td.l,th.l{text-align:left}
 .verdict{padding:.7em 1em;border-radius:6px;font-size:1.1em;margin:1em 0}
 .converged{background:#e3f5e6;border:1px solid #3a3}.not-converged{background:#fde8e8;border:1px solid #c33}
@@ -98,7 +135,7 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
     }
     push(&mut h, " Intervals: 95% percentile bootstrap, 1,000 resamples.</p>\n<table><tr><th class=\"l\">space</th><th>N</th><th>done</th><th>failed</th>");
     for s in STATISTICS {
-        push(&mut h, &format!("<th>{}</th><th>95% interval</th><th>change</th>", s.name()));
+        push(&mut h, &format!("<th>{} <small>[95% interval]</small></th><th>change</th>", s.name()));
     }
     push(&mut h, "<th>rule holds</th><th>converged</th></tr>\n");
     for s in &a.spaces {
@@ -116,7 +153,13 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
             };
             push(
                 &mut h,
-                &format!("<td>{}</td><td>{} … {}</td><td>{}</td>", num(st.of(&s.statistics)), num(iv.lo), num(iv.hi), change),
+                &format!(
+                    "<td>{} <small>[{}, {}]</small></td><td>{}</td>",
+                    num(st.of(&s.statistics)),
+                    sig(iv.lo),
+                    sig(iv.hi),
+                    change
+                ),
             );
         }
         push(&mut h, &format!("<td>{}</td><td>{}</td></tr>\n", if s.holds { "yes" } else { "" }, if s.converged { "<b>yes</b>" } else { "" }));
@@ -188,6 +231,7 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
     }
     for f in figures.iter().filter(|f| f.name == "profiles") {
         push(&mut h, &img(f));
+        push(&mut h, &points_table(a, f));
     }
     let lattice: Vec<&Figure> = figures.iter().filter(|f| f.name.starts_with("lattice-")).collect();
     if !lattice.is_empty() {

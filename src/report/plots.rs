@@ -30,6 +30,8 @@ pub struct Figure {
     /// File stem in `report/`.
     pub name: String,
     pub caption: String,
+    /// Points drawn as labelled curves (`#index` in the legend), for a table beside the figure.
+    pub points: Vec<usize>,
     pub svg: String,
     pub png: Vec<u8>,
 }
@@ -70,7 +72,7 @@ fn figure(name: String, caption: String, size: (u32, u32), draw: impl FnOnce(&Ar
         root.present()?;
     }
     let png = to_png(&svg)?;
-    Ok(Figure { name, caption, svg, png })
+    Ok(Figure { name, caption, points: Vec::new(), svg, png })
 }
 
 /// Render SVG to PNG with the embedded font standing in for every generic family.
@@ -138,7 +140,7 @@ fn histogram(a: &Analysis, k: usize, members: &[usize]) -> Res<Figure> {
             .x_label_area_size(40)
             .y_label_area_size(50)
             .build_cartesian_2d(0.0..top * 1.0001, 0.0..ymax)?;
-        c.configure_mesh().max_light_lines(0).x_desc("MFR").y_desc("runs").draw()?;
+        c.configure_mesh().max_light_lines(0).x_desc("MFR").y_desc("runs").y_label_formatter(&|y| format!("{y:.0}")).draw()?;
         c.draw_series(counts.iter().enumerate().map(|(b, &n)| {
             let x0 = b as f64 * width;
             Rectangle::new([(x0, 0.0), (x0 + width, n as f64)], RGBColor(31, 119, 180).mix(0.75).filled())
@@ -179,7 +181,11 @@ fn statistics(a: &Analysis) -> Res<Figure> {
                 .x_label_area_size(35)
                 .y_label_area_size(60)
                 .build_cartesian_2d(nlo..nhi, ylo..yhi)?;
-            c.configure_mesh().max_light_lines(0).x_desc("N (runs in the space)").draw()?;
+            c.configure_mesh()
+                .max_light_lines(0)
+                .x_desc("N (runs in the space)")
+                .x_label_formatter(&|x| format!("{x:.0}"))
+                .draw()?;
             if let Some((l, h)) = band {
                 c.draw_series(std::iter::once(Rectangle::new(
                     [(nlo, l), (nhi, h)],
@@ -263,17 +269,13 @@ fn profile_panel(panel: &Area, title: &str, curves: &[(String, RGBColor, Vec<Opt
     }
     if !curves.is_empty() {
         ch.configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
+            .position(SeriesLabelPosition::LowerRight)
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK.mix(0.3))
             .label_font((FONT, 11))
             .draw()?;
     }
     Ok(())
-}
-
-fn short_params(a: &Analysis, p: &PointRow) -> String {
-    a.parameters.iter().zip(&p.values).map(|(n, v)| format!("{n} {}", fmt_short(*v))).collect::<Vec<_>>().join(", ")
 }
 
 pub fn fmt_short(v: f64) -> String {
@@ -286,38 +288,46 @@ pub fn fmt_short(v: f64) -> String {
     }
 }
 
+/// Per class, the points the profile figure shows: the best four ideal ones by MFR; for the
+/// other classes four spread over the class's MFR range.
+fn chosen_profiles(a: &Analysis, q: Quality) -> (usize, Vec<&PointRow>) {
+    let mut pts: Vec<(&PointRow, f64)> =
+        a.points.iter().filter_map(|p| p.done().filter(|(_, pq)| *pq == q).map(|(r, _)| (p, r.mfr))).collect();
+    pts.sort_by(|x, y| y.1.total_cmp(&x.1));
+    let chosen = if q == Quality::Ideal || pts.len() <= 4 {
+        pts.iter().take(4).map(|p| p.0).collect()
+    } else {
+        (0..4).map(|i| pts[i * (pts.len() - 1) / 3].0).collect()
+    };
+    (pts.len(), chosen)
+}
+
 fn profiles(a: &Analysis) -> Res<Figure> {
     let classes = [Quality::Ideal, Quality::Inefficient, Quality::Unstable];
+    let shown: Vec<usize> =
+        classes.iter().flat_map(|&q| chosen_profiles(a, q).1.into_iter().map(|p| p.index)).collect();
     let caption = "v_x profiles in front of the blade (thesis Fig. 4.2): per class, up to four \
                    points spread over its MFR range (ideal: the best by MFR)"
         .to_string();
     figure("profiles".into(), caption, (1200, 460), |root| {
         let panels = root.split_evenly((1, 3));
         for (panel, q) in panels.iter().zip(classes) {
-            let mut pts: Vec<(&PointRow, f64)> = a
-                .points
-                .iter()
-                .filter_map(|p| p.done().filter(|(_, pq)| *pq == q).map(|(r, _)| (p, r.mfr)))
-                .collect();
-            pts.sort_by(|x, y| y.1.total_cmp(&x.1));
-            let chosen: Vec<&(&PointRow, f64)> = if q == Quality::Ideal || pts.len() <= 4 {
-                pts.iter().take(4).collect()
-            } else {
-                (0..4).map(|i| &pts[i * (pts.len() - 1) / 3]).collect()
-            };
+            let (count, chosen) = chosen_profiles(a, q);
             let curves: Vec<_> = chosen
                 .iter()
                 .enumerate()
-                .filter_map(|(i, (p, mfr))| {
+                .filter_map(|(i, p)| {
                     let (r, _) = p.done()?;
+                    let mfr = r.mfr;
                     let v = r.parameters.get("blade_speed").copied().unwrap_or(1.0);
-                    Some((format!("#{}: {}, MFR {:.3}", p.index, short_params(a, p), mfr), series_colour(i), r.vx.clone(), v))
+                    Some((format!("#{}  MFR {:.3}", p.index, mfr), series_colour(i), r.vx.clone(), v))
                 })
                 .collect();
-            profile_panel(panel, &format!("{} ({} points)", q.as_str(), pts.len()), &curves)?;
+            profile_panel(panel, &format!("{} ({count} points)", q.as_str()), &curves)?;
         }
         Ok(())
     })
+    .map(|f| Figure { points: shown, ..f })
 }
 
 /// The one-factor panels of the last complete lattice level with at least 3 values per
