@@ -105,10 +105,10 @@ struct ConvergenceArgs {
     #[arg(long)]
     rule: Option<String>,
     /// Relative change between consecutive spaces that counts as converged (e.g. 0.05).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     tolerance: Option<f64>,
     /// Absolute change that counts as converged whatever the relative one (rule "all").
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     floor: Option<f64>,
     /// Consecutive spaces the rule must hold for (rule "all").
     #[arg(long)]

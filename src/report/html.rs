@@ -107,7 +107,12 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
     );
     push(
         &mut h,
-        &format!("<div class=\"verdict {}\"><b>{}</b>: {}</div>\n", a.verdict.status, a.verdict.status, esc(&a.verdict.reason)),
+        &format!(
+            "<div class=\"verdict {}\"><b>{}</b>: {}</div>\n",
+            a.verdict.status,
+            a.verdict.status,
+            esc(&a.verdict.reason)
+        ),
     );
     // Counts and cost.
     let c = &a.counts;
@@ -131,7 +136,10 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
     push(&mut h, "<h2>Convergence</h2>\n");
     push(&mut h, &format!("<p>{}.", esc(&a.criteria.describe())));
     if a.criteria.min_points > 0 {
-        push(&mut h, &format!(" Spaces below {} points are not judged (an extended sweep).", a.criteria.min_points));
+        push(
+            &mut h,
+            &format!(" Spaces below {} points are not judged (an extended sweep).", a.criteria.min_points),
+        );
     }
     push(&mut h, " Intervals: 95% percentile bootstrap, 1,000 resamples.</p>\n<table><tr><th class=\"l\">space</th><th>N</th><th>done</th><th>failed</th>");
     for s in STATISTICS {
@@ -139,7 +147,16 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
     }
     push(&mut h, "<th>rule holds</th><th>converged</th></tr>\n");
     for s in &a.spaces {
-        push(&mut h, &format!("<tr><td class=\"l\">{}</td><td>{}</td><td>{}</td><td>{}</td>", esc(&s.label), s.n, s.done, s.failed));
+        push(
+            &mut h,
+            &format!(
+                "<tr><td class=\"l\">{}</td><td>{}</td><td>{}</td><td>{}</td>",
+                esc(&s.label),
+                s.n,
+                s.done,
+                s.failed
+            ),
+        );
         for st in STATISTICS {
             let iv = s.intervals[st.name()];
             let ch = s.changes.as_ref().map(|c| c[st.name()]);
@@ -162,7 +179,14 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
                 ),
             );
         }
-        push(&mut h, &format!("<td>{}</td><td>{}</td></tr>\n", if s.holds { "yes" } else { "" }, if s.converged { "<b>yes</b>" } else { "" }));
+        push(
+            &mut h,
+            &format!(
+                "<td>{}</td><td>{}</td></tr>\n",
+                if s.holds { "yes" } else { "" },
+                if s.converged { "<b>yes</b>" } else { "" }
+            ),
+        );
     }
     push(&mut h, "</table>\n");
     for f in figures.iter().filter(|f| f.name == "statistics") {

@@ -317,7 +317,11 @@ fn verdict(spaces: &[SpaceRow], counts: &Counts, c: &Criteria) -> Verdict {
         };
     }
     let changes = |ch: &BTreeMap<&'static str, Option<f64>>| {
-        STATISTICS.iter().map(|s| format!("{} {}", s.name(), pct(ch.get(s.name()).copied().flatten()))).collect::<Vec<_>>().join(", ")
+        STATISTICS
+            .iter()
+            .map(|s| format!("{} {}", s.name(), pct(ch.get(s.name()).copied().flatten())))
+            .collect::<Vec<_>>()
+            .join(", ")
     };
     let last = match (spaces.last(), &last_changes) {
         (Some(s), Some(ch)) => format!("; last changes ({}): {}", s.label, changes(ch)),

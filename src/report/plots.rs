@@ -63,7 +63,12 @@ fn series_colour(i: usize) -> RGBColor {
 }
 
 /// Draw into an SVG string of `size`, then render it to PNG.
-fn figure(name: String, caption: String, size: (u32, u32), draw: impl FnOnce(&Area) -> Res<()>) -> Res<Figure> {
+fn figure(
+    name: String,
+    caption: String,
+    size: (u32, u32),
+    draw: impl FnOnce(&Area) -> Res<()>,
+) -> Res<Figure> {
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
@@ -140,7 +145,12 @@ fn histogram(a: &Analysis, k: usize, members: &[usize]) -> Res<Figure> {
             .x_label_area_size(40)
             .y_label_area_size(50)
             .build_cartesian_2d(0.0..top * 1.0001, 0.0..ymax)?;
-        c.configure_mesh().max_light_lines(0).x_desc("MFR").y_desc("runs").y_label_formatter(&|y| format!("{y:.0}")).draw()?;
+        c.configure_mesh()
+            .max_light_lines(0)
+            .x_desc("MFR")
+            .y_desc("runs")
+            .y_label_formatter(&|y| format!("{y:.0}"))
+            .draw()?;
         c.draw_series(counts.iter().enumerate().map(|(b, &n)| {
             let x0 = b as f64 * width;
             Rectangle::new([(x0, 0.0), (x0 + width, n as f64)], RGBColor(31, 119, 180).mix(0.75).filled())
@@ -235,8 +245,9 @@ fn scatter(a: &Analysis) -> Res<Figure> {
                 .y_desc("MFR")
                 .draw()?;
             c.draw_series(
-                done.iter()
-                    .map(|p| Circle::new((p.0.values[j], p.1), radius, quality_colour(p.2).mix(0.6).filled())),
+                done.iter().map(|p| {
+                    Circle::new((p.0.values[j], p.1), radius, quality_colour(p.2).mix(0.6).filled())
+                }),
             )?;
         }
         Ok(())
@@ -250,14 +261,19 @@ fn layer_height(k: usize) -> f64 {
 
 /// One panel of v_x profiles: v_x / blade speed against layer height, one curve per point.
 fn profile_panel(panel: &Area, title: &str, curves: &[(String, RGBColor, Vec<Option<f64>>, f64)]) -> Res<()> {
-    let (xlo, xhi) = range(curves.iter().flat_map(|c| c.2.iter().flatten().map(move |v| v / c.3)).chain([0.8, 1.0]));
+    let (xlo, xhi) =
+        range(curves.iter().flat_map(|c| c.2.iter().flatten().map(move |v| v / c.3)).chain([0.8, 1.0]));
     let mut ch = ChartBuilder::on(panel)
         .caption(title, (FONT, 14))
         .margin(8)
         .x_label_area_size(35)
         .y_label_area_size(45)
         .build_cartesian_2d(xlo..xhi, 0.0..layer_height(VX_LAYERS - 1) + 0.5)?;
-    ch.configure_mesh().max_light_lines(0).x_desc("v_x / blade speed").y_desc("height above gap (D)").draw()?;
+    ch.configure_mesh()
+        .max_light_lines(0)
+        .x_desc("v_x / blade speed")
+        .y_desc("height above gap (D)")
+        .draw()?;
     for (label, colour, vx, v) in curves {
         let pts: Vec<(f64, f64)> =
             vx.iter().enumerate().filter_map(|(k, x)| x.map(|x| (x / v, layer_height(k)))).collect();
@@ -291,8 +307,11 @@ pub fn fmt_short(v: f64) -> String {
 /// Per class, the points the profile figure shows: the best four ideal ones by MFR; for the
 /// other classes four spread over the class's MFR range.
 fn chosen_profiles(a: &Analysis, q: Quality) -> (usize, Vec<&PointRow>) {
-    let mut pts: Vec<(&PointRow, f64)> =
-        a.points.iter().filter_map(|p| p.done().filter(|(_, pq)| *pq == q).map(|(r, _)| (p, r.mfr))).collect();
+    let mut pts: Vec<(&PointRow, f64)> = a
+        .points
+        .iter()
+        .filter_map(|p| p.done().filter(|(_, pq)| *pq == q).map(|(r, _)| (p, r.mfr)))
+        .collect();
     pts.sort_by(|x, y| y.1.total_cmp(&x.1));
     let chosen = if q == Quality::Ideal || pts.len() <= 4 {
         pts.iter().take(4).map(|p| p.0).collect()
@@ -388,7 +407,12 @@ fn lattice_panels(a: &Analysis) -> Res<Vec<Figure>> {
                             let (r, q) = p.done()?;
                             let v = r.parameters.get("blade_speed").copied().unwrap_or(1.0);
                             Some((
-                                format!("{na} {} ({}, MFR {:.3})", fmt_short(levels[va][ia]), q.as_str(), r.mfr),
+                                format!(
+                                    "{na} {} ({}, MFR {:.3})",
+                                    fmt_short(levels[va][ia]),
+                                    q.as_str(),
+                                    r.mfr
+                                ),
                                 series_colour(ia),
                                 r.vx.clone(),
                                 v,
