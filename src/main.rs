@@ -360,6 +360,10 @@ struct StatsArgs {
     /// The column to describe, by header name (e.g. mfr).
     #[arg(long)]
     column: String,
+    /// Also the first-order sensitivity indices of the column to these columns (adjusted
+    /// correlation ratio, as in `sweep report`), on the rows where all are numbers.
+    #[arg(long, value_delimiter = ',', value_name = "COLUMNS")]
+    by: Vec<String>,
     /// Print JSON instead of a table.
     #[arg(long)]
     json: bool,
@@ -514,8 +518,15 @@ fn report(a: ReportArgs) -> Result<i32, Error> {
 }
 
 fn stats(a: StatsArgs) -> Result<i32, Error> {
-    let column = demsweep::report::read_column(&a.file, &a.column)?;
+    let table = demsweep::report::read_columns(&a.file, &a.column, &a.by)?;
+    let column = &table.column;
     let m = demsweep::stats::moments(&column.values);
+    let sensitivity = if a.by.is_empty() {
+        Vec::new()
+    } else {
+        let (x, y): (Vec<Vec<f64>>, Vec<f64>) = table.xy.iter().cloned().unzip();
+        demsweep::sensitivity::ranked(demsweep::sensitivity::first_order(&a.by, &x, &y))
+    };
     let iv = demsweep::stats::bootstrap(&column.values, &Bootstrap::default());
     if a.json {
         let intervals: serde_json::Map<String, serde_json::Value> = demsweep::stats::STATISTICS
@@ -536,6 +547,7 @@ fn stats(a: StatsArgs) -> Result<i32, Error> {
             "moment_skewness": m.moment_skewness,
             "median": m.median,
             "intervals": intervals,
+            "sensitivity": sensitivity,
         });
         println!("{}", serde_json::to_string_pretty(&out).map_err(|e| Error::Internal(e.to_string()))?);
     } else {
@@ -546,6 +558,12 @@ fn stats(a: StatsArgs) -> Result<i32, Error> {
         }
         println!("  {:<16} {:>12}", "moment_skewness", f(m.moment_skewness));
         println!("  {:<16} {:>12}", "median", f(m.median));
+        if !sensitivity.is_empty() {
+            println!("first-order sensitivity of {} ({} rows):", a.column, table.xy.len());
+            for s in &sensitivity {
+                println!("  {:<16} {:>12}", s.parameter, f(s.first_order));
+            }
+        }
     }
     Ok(exit::SUCCESS)
 }

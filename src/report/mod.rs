@@ -415,9 +415,19 @@ pub fn write(a: &Analysis) -> Result<PathBuf> {
     Ok(html_path)
 }
 
-/// One column of a CSV file, by header name, for `sweep stats`: empty cells and non-numbers are
-/// skipped and counted. A missing file or column, or a file with no values, is bad input.
-pub fn read_column(path: &Path, column: &str) -> Result<stats::Column> {
+/// Columns of a CSV file, by header name, for `sweep stats`.
+#[derive(Debug, Clone)]
+pub struct CsvColumns {
+    /// The described column: its numbers, with empty and non-numeric cells counted.
+    pub column: stats::Column,
+    /// Rows where the column and every `by` column are numbers: (by values, column value).
+    pub xy: Vec<(Vec<f64>, f64)>,
+}
+
+/// Read `column` (and the `by` columns) of a CSV file by header name: empty cells and
+/// non-numbers are skipped and counted. A missing file or column, or a column with no numbers,
+/// is bad input, named in one line.
+pub fn read_columns(path: &Path, column: &str, by: &[String]) -> Result<CsvColumns> {
     let p = path.display();
     let bytes = std::fs::read(path).map_err(|e| {
         Error::input(format!(
@@ -430,17 +440,30 @@ pub fn read_column(path: &Path, column: &str) -> Result<stats::Column> {
     if header.is_empty() || header.iter().all(|h| h.trim().is_empty()) {
         return Err(Error::input(format!("{p}: empty file; expected a header row with a column `{column}`")));
     }
-    let Some(i) = header.iter().position(|h| h.trim() == column) else {
-        return Err(Error::input(format!(
-            "{p}: no column `{column}`{}; columns: {}",
-            crate::error::hint(column, header.iter()),
-            header.iter().collect::<Vec<_>>().join(", ")
-        )));
+    let find = |name: &str| {
+        header.iter().position(|h| h.trim() == name).ok_or_else(|| {
+            Error::input(format!(
+                "{p}: no column `{name}`{}; columns: {}",
+                crate::error::hint(name, header.iter()),
+                header.iter().collect::<Vec<_>>().join(", ")
+            ))
+        })
     };
+    let i = find(column)?;
+    let js: Vec<usize> = by.iter().map(|b| find(b)).collect::<Result<_>>()?;
     let mut cells = Vec::new();
+    let mut xy = Vec::new();
+    let num = |s: &str| s.trim().parse::<f64>().ok().filter(|v| v.is_finite());
     for (line, rec) in r.records().enumerate() {
         let rec = rec.map_err(|e| Error::input(format!("{p}: row {}: {e}", line + 2)))?;
-        cells.push(rec.get(i).unwrap_or("").to_string());
+        let cell = rec.get(i).unwrap_or("");
+        if let Some(y) = num(cell) {
+            let x: Option<Vec<f64>> = js.iter().map(|&j| num(rec.get(j).unwrap_or(""))).collect();
+            if let Some(x) = x {
+                xy.push((x, y));
+            }
+        }
+        cells.push(cell.to_string());
     }
     let c = stats::parse_cells(cells.iter().map(String::as_str));
     if c.values.is_empty() {
@@ -449,7 +472,7 @@ pub fn read_column(path: &Path, column: &str) -> Result<stats::Column> {
             c.empty, c.non_numeric
         )));
     }
-    Ok(c)
+    Ok(CsvColumns { column: c, xy })
 }
 
 /// `convergence.csv`: one row per complete space. Empty cells where a value is undefined.
