@@ -4,15 +4,15 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
+use demsweep::convergence::{Criteria, Watch};
 use demsweep::error::{exit, Error};
 use demsweep::outcome::RunOutcome;
 use demsweep::point::{self, PointContext};
 use demsweep::process::CancelToken;
 use demsweep::progress::ProgressMode;
+use demsweep::stats::Bootstrap;
 use demsweep::store::DesignRecord;
 use demsweep::sweep::{Scrambling, Sweep};
-use demsweep::convergence::{Criteria, Watch};
-use demsweep::stats::Bootstrap;
 use demsweep::sweeprun::{self, RunOptions, Summary};
 
 /// Parameter sweeps of LIGGGHTS powder-spreading simulations.
@@ -507,7 +507,8 @@ fn report(a: ReportArgs) -> Result<i32, Error> {
     let sweep = sweeprun::load_dir_sweep(&a.dir)?;
     let mut settings = sweep.file.convergence.clone();
     a.convergence.overrides().apply(&mut settings)?;
-    let analysis = demsweep::report::analyse(&a.dir, &Criteria::from_settings(&settings), &Bootstrap::default())?;
+    let analysis =
+        demsweep::report::analyse(&a.dir, &Criteria::from_settings(&settings), &Bootstrap::default())?;
     let html = demsweep::report::write(&analysis)?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&analysis).map_err(|e| Error::Internal(e.to_string()))?);
@@ -552,7 +553,14 @@ fn stats(a: StatsArgs) -> Result<i32, Error> {
         println!("{}", serde_json::to_string_pretty(&out).map_err(|e| Error::Internal(e.to_string()))?);
     } else {
         let f = |v: Option<f64>| v.map_or("undefined".to_string(), |v| format!("{v:.6}"));
-        println!("{} column {}: n = {} ({} empty, {} not numbers skipped)", a.file.display(), a.column, m.n, column.empty, column.non_numeric);
+        println!(
+            "{} column {}: n = {} ({} empty, {} not numbers skipped)",
+            a.file.display(),
+            a.column,
+            m.n,
+            column.empty,
+            column.non_numeric
+        );
         for (s, i) in demsweep::stats::STATISTICS.iter().zip(iv) {
             println!("  {:<16} {:>12}   95% interval [{}, {}]", s.name(), f(s.of(&m)), f(i.lo), f(i.hi));
         }

@@ -420,7 +420,8 @@ pub fn judge_from(out: &Path, sweep: &Sweep, design: &DesignRecord) -> Result<us
     let Ok((old, old_toml)) = Store::read_manifest(out) else {
         return Ok(own);
     };
-    let old_min = Sweep::parse(&old_toml, &out.join("sweep.toml")).map_or(0, |s| s.file.convergence.min_points);
+    let old_min =
+        Sweep::parse(&old_toml, &out.join("sweep.toml")).map_or(0, |s| s.file.convergence.min_points);
     let extends = match (&old.design, design) {
         (DesignRecord::Lds { max: a, .. }, DesignRecord::Lds { max: b, .. }) => b > a,
         (DesignRecord::Lattice { levels: a }, DesignRecord::Lattice { levels: b }) => {

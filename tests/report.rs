@@ -174,7 +174,17 @@ fn lattice_on_the_stand_in_names_its_converged_level_and_the_thesis_rule_is_weak
     let file = standin_sweep(tmp.path(), "lat", "");
     let out = tmp.path().join("all");
     // Lattice skewness moves 5–8 % from level to level on this space, so 10 %.
-    let o = sweep(&["lattice", p(&file), "--levels", "3,4,5,6,7,8", "--tolerance", "0.1", "-q", "--out", p(&out)]);
+    let o = sweep(&[
+        "lattice",
+        p(&file),
+        "--levels",
+        "3,4,5,6,7,8",
+        "--tolerance",
+        "0.1",
+        "-q",
+        "--out",
+        p(&out),
+    ]);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(0), "{err}");
     let s = summary(&out);
@@ -257,10 +267,7 @@ fn bad_input_is_one_line_and_exit_2_with_nothing_written() {
         (vec!["report", p(&nope)], vec!["nope", "not a sweep directory"]),
         (vec!["stats", p(&csv), "--column", "mfrr"], vec![p(&csv), "`mfrr`", "did you mean `mfr`"]),
         (vec!["stats", p(&empty), "--column", "mfr"], vec![p(&empty), "empty"]),
-        (
-            vec!["stats", p(&missing), "--column", "mfr"],
-            vec!["missing.csv", "no such file"],
-        ),
+        (vec!["stats", p(&missing), "--column", "mfr"], vec!["missing.csv", "no such file"]),
         (vec!["report", p(&not_sweep), "--rule", "some"], vec![p(&not_sweep)]),
     ];
     for (args, want) in cases {

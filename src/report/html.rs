@@ -18,7 +18,7 @@ fn num(v: Option<f64>) -> String {
 
 /// Four significant digits, for compact interval bounds.
 fn sig(v: Option<f64>) -> String {
-    v.map_or("–".into(), |v| format!("{}", fmt_short_sig(v)))
+    v.map_or("–".into(), fmt_short_sig)
 }
 
 fn fmt_short_sig(v: f64) -> String {
@@ -228,11 +228,11 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
          blade speed (RMS), else <b>inefficient</b> when the top three layers move less than 6% of the blade speed \
          faster than the bottom three (nearly uniform), else <b>ideal</b>.</p>\n<table><tr>",
     );
-    for (k, _) in &a.quality {
+    for k in a.quality.keys() {
         push(&mut h, &format!("<th>{k}</th>"));
     }
     push(&mut h, "</tr><tr>");
-    for (_, v) in &a.quality {
+    for v in a.quality.values() {
         push(&mut h, &format!("<td>{v}</td>"));
     }
     push(&mut h, "</tr></table>\n");

@@ -21,6 +21,8 @@ use crate::stats::STATISTICS;
 
 type Res<T> = std::result::Result<T, Box<dyn std::error::Error>>;
 type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+/// N, the statistic, and its interval's bounds.
+type StatPoint = (f64, Option<f64>, Option<f64>, Option<f64>);
 
 const FONT: &str = "sans-serif";
 static FONT_DATA: &[u8] = include_bytes!("DejaVuSans.ttf");
@@ -169,7 +171,7 @@ fn statistics(a: &Analysis) -> Res<Figure> {
         let panels = root.split_evenly((2, 2));
         let (nlo, nhi) = range(a.spaces.iter().map(|s| s.n as f64));
         for (panel, st) in panels.iter().zip(STATISTICS) {
-            let pts: Vec<(f64, Option<f64>, Option<f64>, Option<f64>)> = a
+            let pts: Vec<StatPoint> = a
                 .spaces
                 .iter()
                 .map(|s| {
