@@ -32,15 +32,35 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run nested lattices (e.g. 5^d, 6^d, ...); a point shared by two levels runs once.
+    /// Run nested lattices (e.g. 5^d, 6^d, ...) until the MFR statistics converge; a point shared
+    /// by two levels runs once.
+    ///
+    /// Each level is one space; after each, the MFR statistics are compared with the previous
+    /// level's ([convergence] rule, or the flags below). Once the rule holds no new runs start.
+    /// Ends by writing the report (as `sweep report`) and printing the verdict, naming the level.
     Lattice(LatticeArgs),
-    /// Run scrambled-Halton points in batches of --step up to --max.
+    /// Run scrambled-Halton points in batches of --step up to --max, stopping once the MFR
+    /// statistics converge.
+    ///
+    /// Each prefix (step, 2·step, ...) is one space; after each, the MFR statistics are compared
+    /// with the previous prefix's ([convergence] rule, or the flags below). Once the rule holds no
+    /// new runs start. Ends by writing the report (as `sweep report`) and printing the verdict.
+    /// A larger --max on a converged directory extends it and judges again past its old extent.
     Lds(LdsArgs),
     /// Finish an interrupted sweep; every completed run is reused.
+    ///
+    /// Keeps the convergence rule and verdict of DIR/sweep.toml: a converged sweep runs nothing
+    /// more. Ends by writing the report.
     Resume(ResumeArgs),
     /// Counts of a sweep directory: done, failed, running, pending.
     Status(DirArgs),
     /// Write convergence.csv, summary.json and report/ (plots, report.html) of a sweep directory.
+    ///
+    /// One row per complete space in convergence.csv (statistics of the done runs' MFR with 95%
+    /// bootstrap intervals, relative changes, whether the rule holds); the verdict, counts,
+    /// timing, sensitivity indices and spreading quality in summary.json; every figure as SVG and
+    /// PNG and a self-contained report.html in DIR/report/. The rule is DIR/sweep.toml's
+    /// [convergence] unless overridden below. Prints the verdict and the path of report.html.
     Report(ReportArgs),
     /// Print a design as CSV (header = swept parameter names, values in their units).
     Points(PointsArgs),
@@ -49,6 +69,12 @@ enum Command {
     /// Run one point through LIGGGHTS and print its result.
     Run(RunArgs),
     /// The statistics of a CSV column (mean, std, skewness, kurtosis) with bootstrap intervals.
+    ///
+    /// Mean; standard deviation with divisor N; skewness as Pearson's second coefficient
+    /// 3·(mean − median)/S; kurtosis m4/S⁴ (not the excess); also the moment skewness and the
+    /// median. Empty cells and cells that are not finite numbers are skipped and counted. Skewness
+    /// and kurtosis are undefined (null) when every value is equal. Intervals: 95% percentile
+    /// bootstrap, 1,000 resamples, seed 14.
     Stats(StatsArgs),
     /// One single-contact case on the Hertz–Mindlin reference solver, as JSON.
     Contact(ContactArgs),
@@ -350,9 +376,6 @@ struct ContactCheckArgs {
     keep: Option<PathBuf>,
 }
 
-/// Empty cells and cells that are not finite numbers are skipped and counted. Skewness and
-/// kurtosis are undefined (null) when every value is equal; intervals are 95% percentile
-/// bootstrap intervals (1,000 resamples, seed 14).
 #[derive(Args)]
 struct StatsArgs {
     /// A CSV file with a header row (e.g. DIR/results.csv).

@@ -316,3 +316,59 @@ fn quick_sweep_on_liggghts_ends_with_a_report() {
     assert!(out.join("report/histogram-2.png").exists() && out.join("report/profiles.svg").exists());
     assert_self_contained(&out.join("report/report.html"));
 }
+
+/// Failed runs are left out of every statistic and counted, per space and by class.
+#[test]
+fn failed_runs_are_excluded_and_counted() {
+    use demsweep::outcome::FailureClass;
+    use demsweep::pool::fake::{fake_mfr, Behaviour, FakeExecutor};
+    use demsweep::sweeprun::{self, RunOptions};
+    let tmp = tempfile::tempdir().unwrap();
+    let text = r#"name = "fails"
+[parameters]
+gap         = { lo = 2.0, hi = 4.0, unit = "mm" }
+blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
+"#;
+    let sweep = demsweep::sweep::Sweep::parse(text, &tmp.path().join("f.toml")).unwrap();
+    // Every point at the lowest gap fails.
+    let exec = FakeExecutor::new(|v, _| {
+        if v[0] == 2.0 {
+            Behaviour::Fail(std::time::Duration::ZERO, FailureClass::EngineError)
+        } else {
+            Behaviour::Succeed(std::time::Duration::ZERO)
+        }
+    });
+    let out = tmp.path().join("out");
+    let opts = RunOptions {
+        jobs: 2,
+        progress: demsweep::progress::ProgressMode::Quiet,
+        retry_failed: false,
+        force: false,
+    };
+    let design = demsweep::store::DesignRecord::Lattice { levels: vec![3, 5] };
+    let mut hook = sweeprun::RunAll;
+    sweeprun::start(&sweep, design, &out, &exec, &opts, &mut hook, &Default::default()).unwrap();
+    let criteria = demsweep::convergence::Criteria::from_settings(&sweep.file.convergence);
+    let a = demsweep::report::analyse(&out, &criteria, &Default::default()).unwrap();
+    // Lattice 3: 3 of 9 points at gap 2; lattice 5: 5 of 25; they share the 3 points of the
+    // gap-2 edge at blade speed 1.2, 1.4, 1.6, so 3 + 5 − 3 = 5 failures among 9 + 25 − 9 = 25.
+    assert_eq!((a.counts.points, a.counts.failed, a.counts.done), (25, 5, 20));
+    assert_eq!(a.counts.failures_by_class.get("engine-error"), Some(&5));
+    assert_eq!((a.spaces[0].failed, a.spaces[0].done), (3, 6));
+    assert_eq!((a.spaces[1].failed, a.spaces[1].done), (5, 20));
+    // The statistics are those of the done points' MFR only.
+    for (space, members) in a.spaces.iter().zip([3usize, 5]) {
+        let step = 2.0 / (members - 1) as f64;
+        let speed = 0.4 / (members - 1) as f64;
+        let mfr: Vec<f64> = (1..members)
+            .flat_map(|i| {
+                (0..members).map(move |j| fake_mfr(&[2.0 + i as f64 * step, 1.2 + j as f64 * speed]))
+            })
+            .collect();
+        let mean = mfr.iter().sum::<f64>() / mfr.len() as f64;
+        assert!((space.statistics.mean.unwrap() - mean).abs() < 1e-12, "{}", space.label);
+    }
+    demsweep::report::write(&a).unwrap();
+    let conv = convergence_rows(&out);
+    assert_eq!((conv[1]["failed"].as_str(), conv[1]["done"].as_str()), ("5", "20"));
+}
