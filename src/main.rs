@@ -510,7 +510,7 @@ fn finish_runs(s: &Summary) -> i32 {
         eprintln!("{} of {} runs failed; reasons: `sweep status {dir}`; re-run them: `sweep resume {dir} --retry-failed`", s.failed, s.points);
     }
     if let Some(space) = &s.stopped_after {
-        eprintln!("converged: stopped starting runs after {space}");
+        eprintln!("the rule held after {space}: no new runs started");
     }
     s.exit_code()
 }

@@ -98,6 +98,15 @@ pub fn to_png(svg: &str) -> Res<Vec<u8>> {
     Ok(pix.encode_png()?)
 }
 
+/// A tick label for a count: the integer, or nothing between integers.
+fn integer(v: &f64) -> String {
+    if (v - v.round()).abs() < 1e-6 {
+        format!("{v:.0}")
+    } else {
+        String::new()
+    }
+}
+
 /// A padded range around values, never empty.
 fn range(vals: impl IntoIterator<Item = f64>) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -151,7 +160,7 @@ fn histogram(a: &Analysis, k: usize, members: &[usize]) -> Res<Figure> {
             .max_light_lines(0)
             .x_desc("MFR")
             .y_desc("runs")
-            .y_label_formatter(&|y| format!("{y:.0}"))
+            .y_label_formatter(&integer)
             .draw()?;
         c.draw_series(counts.iter().enumerate().map(|(b, &n)| {
             let x0 = b as f64 * width;
@@ -196,7 +205,7 @@ fn statistics(a: &Analysis) -> Res<Figure> {
             c.configure_mesh()
                 .max_light_lines(0)
                 .x_desc("N (runs in the space)")
-                .x_label_formatter(&|x| format!("{x:.0}"))
+                .x_label_formatter(&integer)
                 .draw()?;
             if let Some((l, h)) = band {
                 c.draw_series(std::iter::once(Rectangle::new(
