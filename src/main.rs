@@ -56,7 +56,7 @@ enum Command {
     Status(DirArgs),
     /// Write convergence.csv, summary.json and report/ (plots, report.html) of a sweep directory.
     ///
-    /// One row per complete space in convergence.csv (statistics of the done runs' MFR with 95%
+    /// Also rewrites results.csv from the run directories. One row per complete space in convergence.csv (statistics of the done runs' MFR with 95%
     /// bootstrap intervals, relative changes, whether the rule holds); the verdict, counts,
     /// timing, sensitivity indices and spreading quality in summary.json; every figure as SVG and
     /// PNG and a self-contained report.html in DIR/report/. The rule is DIR/sweep.toml's
@@ -532,6 +532,7 @@ fn report(a: ReportArgs) -> Result<i32, Error> {
     a.convergence.overrides().apply(&mut settings)?;
     let analysis =
         demsweep::report::analyse(&a.dir, &Criteria::from_settings(&settings), &Bootstrap::default())?;
+    demsweep::report::rewrite_results(&a.dir)?;
     let html = demsweep::report::write(&analysis)?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&analysis).map_err(|e| Error::Internal(e.to_string()))?);

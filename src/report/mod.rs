@@ -393,6 +393,24 @@ fn timing(dir: &Path) -> Timing {
     Timing { wall_time_s: wall, core_seconds, attempts }
 }
 
+/// Rewrite `DIR/results.csv` from the run dirs (`sweep report`: a directory written by an older
+/// version gains the newer columns, such as `quality`).
+pub fn rewrite_results(dir: &Path) -> Result<()> {
+    use crate::store::PointStatus;
+    let (m, _) = Store::read_manifest(dir)?;
+    let store = Store::open(dir);
+    let status: Vec<PointStatus> = m
+        .points
+        .iter()
+        .map(|p| match store.finished(&p.hash) {
+            Some(RunState::Done(r)) => PointStatus::Done(r),
+            Some(RunState::Failed(f)) => PointStatus::Failed(f),
+            _ => PointStatus::Pending,
+        })
+        .collect();
+    Ok(crate::store::write_results(dir, &m.parameters, &m.points, &status)?)
+}
+
 /// Write `convergence.csv`, `summary.json` and `report/` into the analysed directory; returns
 /// the path of `report.html`.
 pub fn write(a: &Analysis) -> Result<PathBuf> {
