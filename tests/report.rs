@@ -371,4 +371,25 @@ blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
     demsweep::report::write(&a).unwrap();
     let conv = convergence_rows(&out);
     assert_eq!((conv[1]["failed"].as_str(), conv[1]["done"].as_str()), ("5", "20"));
+
+    // Every run failed: undefined statistics, empty cells, a report all the same.
+    let exec = FakeExecutor::new(|_, _| Behaviour::Fail(std::time::Duration::ZERO, FailureClass::Unstable));
+    let out = tmp.path().join("all-failed");
+    let design = demsweep::store::DesignRecord::Lds {
+        step: 2,
+        max: 4,
+        scrambling: demsweep::sweep::Scrambling::None,
+        seed: 0,
+    };
+    sweeprun::start(&sweep, design, &out, &exec, &opts, &mut hook, &Default::default()).unwrap();
+    let a = demsweep::report::analyse(&out, &criteria, &Default::default()).unwrap();
+    assert_eq!((a.counts.failed, a.counts.done), (4, 0));
+    assert_eq!(a.verdict.status, "not-converged");
+    assert_eq!(a.spaces[1].statistics.mean, None);
+    demsweep::report::write(&a).unwrap();
+    let conv = convergence_rows(&out);
+    assert_eq!((conv[1]["mean"].as_str(), conv[1]["kurtosis"].as_str()), ("", ""));
+    let json = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    assert!(!json.contains("NaN") && !json.contains("inf"));
+    assert_self_contained(&out.join("report/report.html"));
 }
