@@ -46,8 +46,10 @@ impl Executor for TrueExecutor {
             mfr_particles: 0,
             mfr_windows: vec![],
             steady: true,
+            steady_p: 1.0,
             vx: vec![],
             particles: 0,
+            settle_steps: 0,
             steps: 0,
             simulated_time: 0.0,
             wall_time: took.as_secs_f64(),
@@ -81,7 +83,9 @@ fn ours(tmp: &Path, round: usize, jobs: usize, count: usize) -> Duration {
     let mut done = 0;
     pool::run(&exec, &store, work, &opts, &CancelToken::new(), |e| {
         match e {
-            pool::Event::Attempt { record, .. } => log.append(record).unwrap(),
+            pool::Event::Attempt { record, .. } => {
+                log.append(record).unwrap();
+            }
             pool::Event::Finished { .. } => done += 1,
             _ => {}
         }

@@ -130,12 +130,19 @@ mod tests {
     #[test]
     fn switched_off_features_leave_no_lines() {
         let t = Template::load(None).unwrap();
-        let deck = t.render(&scene(&SceneSettings::default(), &[])).unwrap();
+        let thesis = SceneSettings { layout: "thesis".into(), ..SceneSettings::default() };
+        let deck = t.render(&scene(&thesis, &[("rolling_friction", 0.0)])).unwrap();
         assert!(!deck.contains("rolling"), "{deck}");
         assert!(!deck.contains("vtk"));
+        // The thesis layout has no gate, no substrate and a fixed-time settle.
+        assert!(!deck.contains("fix gate") && !deck.contains("group           substrate") && !deck.contains("settleloop"));
+        // The default: rolling friction on every contact (pair, plate, two end walls, blade,
+        // gate), a gate, a substrate, a settle until at rest.
         let rolled = t.render(&scene(&SceneSettings::default(), &[("rolling_friction", 0.1)])).unwrap();
         assert!(rolled.contains("coefficientRollingFriction"));
-        assert_eq!(rolled.matches("rolling_friction cdt").count(), 5);
+        assert_eq!(rolled.matches("rolling_friction epsd2").count(), 6);
+        assert!(rolled.contains("unfix gate") && rolled.contains("group           substrate type 3"));
+        assert!(rolled.contains("jump SELF settleloop"));
     }
 
     #[test]

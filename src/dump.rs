@@ -33,6 +33,9 @@ use std::fs::File;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
+/// Longest line read, in bytes with its newline (a dump row is a few hundred bytes).
+pub const MAX_LINE: usize = 64 * 1024;
+
 /// Where in a dump an error was found.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Location {
@@ -78,6 +81,10 @@ pub enum DumpError {
     /// `ITEM: NUMBER OF ATOMS` does not match the number of atom rows that follow.
     #[error("atom count mismatch at {at}: NUMBER OF ATOMS says {declared}, found {found} rows")]
     AtomCount { at: Location, declared: u64, found: u64 },
+    /// A line longer than [`MAX_LINE`] bytes: not a LIGGGHTS dump (its rows are a few hundred
+    /// bytes), and not held in memory whole.
+    #[error("line too long at {at}: more than {limit} bytes without a newline; not a LIGGGHTS text dump")]
+    LineTooLong { at: Location, limit: usize },
     /// A column the caller needs is not in the `ITEM: ATOMS` header.
     #[error("missing column `{column}` at {at}: the dump has columns {available}")]
     MissingColumn { at: Location, column: String, available: String },
@@ -94,6 +101,7 @@ impl DumpError {
             | DumpError::NotANumber { at, .. }
             | DumpError::FieldCount { at, .. }
             | DumpError::AtomCount { at, .. }
+            | DumpError::LineTooLong { at, .. }
             | DumpError::MissingColumn { at, .. } => Some(at),
         }
     }
@@ -339,15 +347,19 @@ impl<R: BufRead> DumpReader<R> {
 
     /// Reads the next line into `self.line`; `false` at end of input.
     fn next_line(&mut self) -> Result<bool, DumpError> {
+        use std::io::Read;
         self.line.clear();
-        let n = self
-            .input
+        let n = (&mut self.input)
+            .take(MAX_LINE as u64 + 1)
             .read_until(b'\n', &mut self.line)
             .map_err(|source| DumpError::Io { at: self.at(), source })?;
         if n == 0 {
             return Ok(false);
         }
         self.line_no += 1;
+        if n > MAX_LINE && self.line.last() != Some(&b'\n') {
+            return Err(DumpError::LineTooLong { at: self.at(), limit: MAX_LINE });
+        }
         Ok(true)
     }
 

@@ -54,11 +54,21 @@ impl Engine {
                 .ok_or_else(|| EngineError::NotFound("`liggghts` is not on PATH".into()))?,
         };
         let identify = |reason: String| EngineError::Identify { path: path.display().to_string(), reason };
+        // `-log none`: LIGGGHTS opens `log.liggghts` in its working directory even for `-h`.
+        // And in an empty scratch directory, so that nothing is written where `sweep` was
+        // started whatever a future LIGGGHTS does with `-h`.
+        let scratch = tempfile::Builder::new()
+            .prefix("sweep-engine-")
+            .tempdir()
+            .map_err(|e| identify(format!("cannot create a scratch directory: {e}")))?;
         let out = Command::new(&path)
-            .arg("-h")
+            .args(["-log", "none", "-h"])
+            .current_dir(scratch.path())
             .stdin(Stdio::null())
+            .stderr(Stdio::null())
             .output()
             .map_err(|e| identify(e.to_string()))?;
+        drop(scratch);
         let text = String::from_utf8_lossy(&out.stdout);
         let version = text
             .lines()
@@ -190,6 +200,22 @@ pub fn command(engine: &Path, dir: &Path, deck: &str) -> std::io::Result<Command
         .stdout(screen)
         .stderr(screen_err);
     Ok(cmd)
+}
+
+/// The step at which the deck's settle ended, from the line it prints
+/// (`demsweep: settled at step N`); an error naming why when the pile did not settle or the
+/// line is missing.
+pub fn settled_at(log: &str) -> Result<u64, String> {
+    for line in log.lines() {
+        let t = line.trim();
+        if let Some(rest) = t.strip_prefix("demsweep: settled at step ") {
+            return rest.trim().parse().map_err(|_| format!("unreadable settle line in the log: {t}"));
+        }
+        if t.starts_with("demsweep: not settled") {
+            return Err(t.trim_start_matches("demsweep: ").to_string());
+        }
+    }
+    Err("the log has no settle line (demsweep: settled at step N)".into())
 }
 
 /// The first LIGGGHTS ERROR line a run in `dir` left, in its log or on its screen output.

@@ -109,8 +109,8 @@ struct LdsArgs {
     /// Points per batch (one nested space per batch); default design.lds.step.
     #[arg(long)]
     step: Option<usize>,
-    /// Most points to run; default design.lds.max. A larger --max on an existing directory
-    /// extends it, reusing its points.
+    /// Most points to run, at least the step; default design.lds.max. A larger --max on an
+    /// existing directory extends it, reusing its points.
     #[arg(long)]
     max: Option<usize>,
     /// Sweep directory (default: runs/<sweep name>).
@@ -434,26 +434,71 @@ fn run_options(p: &PoolArgs, retry_failed: bool, force: bool) -> Result<RunOptio
 fn lattice(a: LatticeArgs) -> Result<i32, Error> {
     let mut sweep = Sweep::load(&a.sweep)?;
     a.convergence.overrides().apply(&mut sweep.file.convergence)?;
-    let levels = a.levels.unwrap_or_else(|| sweep.file.design.lattice_levels.clone());
+    let levels = match a.levels {
+        Some(levels) => {
+            check_levels(sweep.dim(), &levels, "--levels")?;
+            levels
+        }
+        None => {
+            let levels = sweep.file.design.lattice_levels.clone();
+            check_levels(sweep.dim(), &levels, &format!("design.lattice_levels in {}", a.sweep.display()))?;
+            levels
+        }
+    };
     start(sweep, DesignRecord::Lattice { levels }, a.out, &a.pool)
+}
+
+/// Lattice levels: at least one, each at least 2 and at most [`sweeprun::MAX_POINTS`] points,
+/// increasing (each level is a larger space than the one before).
+fn check_levels(dim: usize, levels: &[usize], source: &str) -> Result<(), Error> {
+    let list = levels.iter().map(|l| l.to_string()).collect::<Vec<_>>().join(",");
+    if levels.is_empty() {
+        return Err(Error::input(format!("{source}: expected at least one level, e.g. 5,6,7")));
+    }
+    for &l in levels {
+        demsweep::design::lattice_size(dim, l)
+            .map_err(|e| Error::input(format!("{source} {list}: level {l}: {e}")))?;
+    }
+    if levels.windows(2).any(|w| w[1] <= w[0]) {
+        return Err(Error::input(format!(
+            "{source} {list}: expected increasing levels (each space larger than the one before)"
+        )));
+    }
+    Ok(())
 }
 
 fn lds(a: LdsArgs) -> Result<i32, Error> {
     let mut sweep = Sweep::load(&a.sweep)?;
     a.convergence.overrides().apply(&mut sweep.file.convergence)?;
     let l = &sweep.file.design.lds;
-    let design = DesignRecord::Lds {
-        step: a.step.unwrap_or(l.step),
-        max: a.max.unwrap_or(l.max),
-        scrambling: l.scrambling,
-        seed: l.seed,
+    let file = a.sweep.display();
+    let (step, step_src) = match a.step {
+        Some(s) => (s, "--step".to_string()),
+        None => (l.step, format!("design.lds.step in {file}")),
     };
+    let (max, max_src) = match a.max {
+        Some(m) => (m, "--max".to_string()),
+        None => (l.max, format!("design.lds.max in {file}")),
+    };
+    if step == 0 {
+        return Err(Error::input(format!("{step_src} 0: expected a positive number of points per batch")));
+    }
+    demsweep::design::lds_size(max).map_err(|e| Error::input(format!("{max_src} {max}: {e}")))?;
+    if max < step {
+        return Err(Error::input(format!(
+            "{max_src} {max} is less than {step_src} {step}: expected max ≥ step (a batch of \
+             {step} points never completes); lower the step or raise max"
+        )));
+    }
+    let design = DesignRecord::Lds { step, max, scrambling: l.scrambling, seed: l.seed };
     start(sweep, design, a.out, &a.pool)
 }
 
 fn start(mut sweep: Sweep, design: DesignRecord, out: Option<PathBuf>, p: &PoolArgs) -> Result<i32, Error> {
     let opts = run_options(p, false, false)?;
     let out = out.unwrap_or_else(|| sweeprun::default_out(&sweep));
+    // Every input is checked before LIGGGHTS is looked at.
+    sweeprun::check_out_dir(&out)?;
     sweep.file.convergence.min_points = sweeprun::judge_from(&out, &sweep, &design)?;
     demsweep::process::install_interrupt_handler();
     let mut watch = Watch::new(Criteria::from_settings(&sweep.file.convergence));
@@ -644,19 +689,23 @@ fn points(a: PointsArgs) -> Result<i32, Error> {
 
 fn render(a: RenderArgs) -> Result<i32, Error> {
     let sweep = Sweep::load(&a.sweep)?;
+    let values = point::swept_values_from_set(&sweep, &a.set)?;
+    if a.out.exists() && !a.out.is_dir() {
+        return Err(Error::input(format!("--out {}: exists and is not a directory", a.out.display())));
+    }
     let ctx = PointContext::new(sweep)?;
-    let values = point::swept_values_from_set(&ctx.sweep, &a.set)?;
     let prepared = point::prepare(&ctx, &values)?;
     std::fs::create_dir_all(&a.out)
         .and_then(|_| prepared.deck.write(&a.out))
         .map_err(|e| Error::Internal(format!("cannot write to {}: {e}", a.out.display())))?;
     let s = &prepared.scene;
     eprintln!(
-        "wrote {}/{{in.liggghts,blade.stl,pile.data}}: {} particles, dt = {:.3e} s, {} steps, hash {}",
+        "wrote {}/{{in.liggghts,blade.stl,pile.data}}: {} particles ({} substrate), dt = {:.3e} s, settle + {} steps, hash {}",
         a.out.display(),
         s.particles,
+        s.substrate_particles,
         s.timestep,
-        s.total_steps(),
+        s.spread_steps(),
         &prepared.hash[..16]
     );
     Ok(exit::SUCCESS)
@@ -665,8 +714,11 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
 fn run_one(a: RunArgs) -> Result<i32, Error> {
     demsweep::process::install_interrupt_handler();
     let sweep = Sweep::load(&a.sweep)?;
+    let values = point::swept_values_from_set(&sweep, &a.set)?;
+    if let Some(out) = a.out.as_ref().filter(|o| o.exists() && !o.is_dir()) {
+        return Err(Error::input(format!("--out {}: exists and is not a directory", out.display())));
+    }
     let ctx = PointContext::new(sweep)?;
-    let values = point::swept_values_from_set(&ctx.sweep, &a.set)?;
     let prepared = point::prepare(&ctx, &values)?;
     let temp;
     let dir = match &a.out {
@@ -678,9 +730,9 @@ fn run_one(a: RunArgs) -> Result<i32, Error> {
     };
     if !a.json {
         eprintln!(
-            "running {} particles, {} steps (dt = {:.3e} s) in {}",
+            "running {} particles, settle + {} steps (dt = {:.3e} s) in {}",
             prepared.scene.particles,
-            prepared.scene.total_steps(),
+            prepared.scene.spread_steps(),
             prepared.scene.timestep,
             dir.display()
         );

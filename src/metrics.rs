@@ -14,9 +14,11 @@
 //!   long after it flew (its flight takes far longer than a snapshot interval).
 //! - Flux MFR: the same count across the blade's *front* face. Both planes carry the same mass
 //!   in a steady flow; they differ by the change of what sits under the blade.
-//! - Steadiness: MFR in each sub-window; the flow is flagged unsteady when the mean of the last
-//!   half differs from the first half by more than [`UNSTEADY_CHANGE`] and by more than three
-//!   standard errors of the particle counts.
+//! - Steadiness: a test of the window's halves. Under a steady flow the masses deposited over the
+//!   two halves (equal travel) differ only by counting noise: for crossings of masses m_i, the
+//!   difference has variance Σ m_i² (compound Poisson; for one size, n·m²). The flow is
+//!   unsteady when the two-sided p-value of z = (M₁ − M₂)/√Σm_i² is below [`STEADY_ALPHA`]: a
+//!   1 % false-alarm rate on a steady Poisson flow.
 //! - v_x: in front of the blade, x_f ≤ x ≤ x_f + 6D, layer k = 1..12 centred at
 //!   z_k = h + k·D/2 with half-height b; the mean v_x of the particles in the band, pooled over
 //!   the window's snapshots. An empty layer is `None`.
@@ -27,8 +29,8 @@ use crate::dump::{DumpError, Snapshot};
 use crate::outcome::VX_LAYERS;
 use crate::scene::Scene;
 
-/// Relative change between the halves of the window above which the flow counts as unsteady.
-pub const UNSTEADY_CHANGE: f64 = 0.2;
+/// False-alarm rate of the steadiness test: the p-value below which the flow is unsteady.
+pub const STEADY_ALPHA: f64 = 0.01;
 
 /// The columns the metrics read (the deck dumps exactly these).
 pub const COLUMNS: [&str; 5] = ["id", "x", "z", "vx", "mass"];
@@ -81,6 +83,8 @@ pub struct Metrics {
     /// Particles that crossed the rear face (gross count, both directions).
     pub mfr_particles: usize,
     pub steady: bool,
+    /// Two-sided p-value of the steadiness test.
+    pub steady_p: f64,
     pub vx: Vec<Option<f64>>,
     pub particles: usize,
 }
@@ -104,20 +108,20 @@ pub fn compute(scene: &Scene, frames: &[Frame]) -> Result<Metrics, MetricsError>
             / (ideal_per_length * (scene.blade_rear_at(b) - scene.blade_rear_at(a)))
     };
     let per = crate::scene::SNAPSHOTS_PER_SUB_WINDOW;
-    let sub: Vec<(f64, usize)> = rear
+    let sub: Vec<f64> = rear
         .chunks(per)
         .zip(steps.chunks(per))
-        .map(|(c, s)| {
-            let end = s[0] + per as u64 * scene.dump_every;
-            (mfr_of(c, s[0], end), c.iter().map(|x| x.count).sum())
-        })
+        .map(|(c, s)| mfr_of(c, s[0], s[0] + per as u64 * scene.dump_every))
         .collect();
+    let half = rear.len() / 2;
+    let steady_p = halves_p_value(&rear[..half], &rear[half..]);
 
     Ok(Metrics {
         mfr: mfr_of(&rear, t1, t2),
         mfr_flux: mfr_of(&front, t1, t2),
-        steady: is_steady(&sub),
-        mfr_windows: sub.iter().map(|w| w.0).collect(),
+        steady: steady_p >= STEADY_ALPHA,
+        steady_p,
+        mfr_windows: sub,
         mfr_particles: rear.iter().map(|c| c.count).sum(),
         vx: vx_profile(scene, window.iter().copied()),
         particles: window.last().map(|f| f.len()).unwrap_or(0),
@@ -133,6 +137,8 @@ enum Face {
 /// Net mass (and gross count) that crossed a blade face from ahead to behind, below the tip.
 struct Crossing {
     mass: f64,
+    /// Σ m² over the crossings, both directions: the counting variance of `mass`.
+    mass_sq: f64,
     count: usize,
 }
 
@@ -143,7 +149,7 @@ fn crossing(scene: &Scene, a: &Frame, b: &Frame, face: Face) -> Crossing {
     };
     let (pa, pb) = (plane(a.step), plane(b.step));
     let before: HashMap<u64, usize> = a.id.iter().enumerate().map(|(i, &id)| (id, i)).collect();
-    let mut out = Crossing { mass: 0.0, count: 0 };
+    let mut out = Crossing { mass: 0.0, mass_sq: 0.0, count: 0 };
     for j in 0..b.len() {
         let Some(&i) = before.get(&b.id[j]) else {
             continue;
@@ -152,31 +158,32 @@ fn crossing(scene: &Scene, a: &Frame, b: &Frame, face: Face) -> Crossing {
         let is_ahead = b.x[j] >= pb;
         if was_ahead && !is_ahead && b.z[j] < scene.gap {
             out.mass += b.mass[j];
+            out.mass_sq += b.mass[j] * b.mass[j];
             out.count += 1;
         } else if !was_ahead && is_ahead && a.z[i] < scene.gap {
             out.mass -= b.mass[j];
+            out.mass_sq += b.mass[j] * b.mass[j];
             out.count += 1;
         }
     }
     out
 }
 
-/// Steady unless the halves of the window differ by more than [`UNSTEADY_CHANGE`] relative and
-/// by more than three standard errors (counting noise, σ_rel ≈ √(1/n₁ + 1/n₂)).
-fn is_steady(windows: &[(f64, usize)]) -> bool {
-    let half = windows.len() / 2;
-    let mean = |w: &[(f64, usize)]| w.iter().map(|x| x.0).sum::<f64>() / w.len() as f64;
-    let count = |w: &[(f64, usize)]| w.iter().map(|x| x.1).sum::<usize>();
-    let (a, b) = (&windows[..half], &windows[half..]);
-    let (ma, mb) = (mean(a), mean(b));
-    let overall = 0.5 * (ma + mb);
-    if overall <= 0.0 {
-        return true; // No flow at all is a steady state.
+/// Two-sided p-value that two spans of equal travel deposited the same mass, given counting
+/// noise: z = (M₁ − M₂)/√(Σ m²). No crossing at all is a steady (empty) flow: p = 1.
+fn halves_p_value(first: &[Crossing], second: &[Crossing]) -> f64 {
+    let mass = |c: &[Crossing]| c.iter().map(|x| x.mass).sum::<f64>();
+    let var: f64 = first.iter().chain(second).map(|x| x.mass_sq).sum();
+    if var <= 0.0 {
+        return 1.0;
     }
-    let (na, nb) = (count(a).max(1) as f64, count(b).max(1) as f64);
-    let noise = 3.0 * (1.0 / na + 1.0 / nb).sqrt();
-    let change = (ma - mb).abs() / overall;
-    change <= UNSTEADY_CHANGE.max(noise)
+    let z = (mass(first) - mass(second)).abs() / var.sqrt();
+    2.0 * (1.0 - standard_normal_cdf(z))
+}
+
+fn standard_normal_cdf(z: f64) -> f64 {
+    use statrs::distribution::{ContinuousCDF, Normal};
+    Normal::new(0.0, 1.0).expect("unit normal").cdf(z)
 }
 
 /// Mean v_x per layer, pooled over `frames`.
@@ -223,7 +230,7 @@ mod tests {
     /// Particles at rest at height `z`, `per_length` kg per metre of x, spread evenly over the
     /// whole travel of the blade, as seen at every snapshot of the window.
     fn resting_layer(s: &Scene, per_length: f64, m: f64, z: f64) -> Vec<Frame> {
-        let x_end = s.blade_front_at(s.total_steps()) + s.diameter;
+        let x_end = s.blade_front_at(s.spread_steps()) + s.diameter;
         let n = (per_length * x_end / m).round() as usize;
         let one = |step| Frame {
             step,
@@ -319,12 +326,24 @@ mod tests {
         assert_eq!(err, MetricsError::MissingSnapshot(s.window_steps().0));
     }
 
+    fn crossings(masses: &[(f64, usize)]) -> Vec<Crossing> {
+        masses.iter().map(|&(m, n)| Crossing { mass: m * n as f64, mass_sq: m * m * n as f64, count: n }).collect()
+    }
+
     #[test]
     fn steadiness_flags_a_trend_beyond_noise() {
-        assert!(is_steady(&[(0.5, 100), (0.5, 100), (0.5, 100), (0.5, 100)]));
-        assert!(!is_steady(&[(0.6, 100), (0.6, 100), (0.3, 100), (0.3, 100)]));
-        // The same trend on 5 particles per window is within counting noise.
-        assert!(is_steady(&[(0.6, 5), (0.6, 5), (0.3, 5), (0.3, 5)]));
-        assert!(is_steady(&[(0.0, 0); 4]));
+        // Equal halves: p = 1.
+        assert_eq!(halves_p_value(&crossings(&[(1.0, 50); 2]), &crossings(&[(1.0, 50); 2])), 1.0);
+        // The decay seen on the first scene, 0.212, 0.208 | 0.120, 0.116 over ~100 particles:
+        // 64 against 36 counted, z = 28/√100 = 2.8, p = 0.0051 < 1 %.
+        let p = halves_p_value(&crossings(&[(1.0, 32), (1.0, 32)]), &crossings(&[(1.0, 18), (1.0, 18)]));
+        assert!((p - 0.00511).abs() < 1e-4, "{p}");
+        // The same trend on 10 particles is within counting noise: 6.4 against 3.6 ≈ 6 vs 4.
+        assert!(halves_p_value(&crossings(&[(1.0, 6)]), &crossings(&[(1.0, 4)])) > 0.5);
+        // No flow at all is a steady state.
+        assert_eq!(halves_p_value(&crossings(&[(1.0, 0)]), &crossings(&[(1.0, 0)])), 1.0);
+        // z = 1.96 is p = 0.05: a difference of 3.8416 over a variance of 3.8416.
+        let c = |m: f64| vec![Crossing { mass: m, mass_sq: 3.8416 / 2.0, count: 1 }];
+        assert!((halves_p_value(&c(3.8416), &c(0.0)) - 0.05).abs() < 1e-3);
     }
 }

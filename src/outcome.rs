@@ -32,11 +32,15 @@ pub struct RunResult {
     pub mfr_windows: Vec<f64>,
     /// False when the sub-window MFRs show the flow had not reached a steady state.
     pub steady: bool,
+    /// Two-sided p-value of the steadiness test (the window's halves, counting noise).
+    pub steady_p: f64,
     /// Mean v_x (m/s) per layer k = 1..12 at z = gap + k·D/2; `None` for an empty layer.
     pub vx: Vec<Option<f64>>,
     /// Particles in the pile.
     pub particles: usize,
-    /// Timesteps run.
+    /// Timesteps of the settle (until at rest, or the fixed settle of the thesis layout).
+    pub settle_steps: u64,
+    /// Timesteps run in all: settle and spread.
     pub steps: u64,
     /// Simulated time, s.
     pub simulated_time: f64,
@@ -64,6 +68,11 @@ pub enum FailureClass {
     Unstable,
     /// The output (log or dump) could not be read.
     Unparsable,
+    /// The dose was still moving when the settle's time cap ran out.
+    NotSettled,
+    /// The flow through the gap was not steady over the window (its halves disagree beyond
+    /// counting noise): the MFR is not a property of the point.
+    Unsteady,
 }
 
 impl FailureClass {
@@ -81,6 +90,8 @@ impl FailureClass {
             FailureClass::LostAtoms => "lost-atoms",
             FailureClass::Unstable => "unstable",
             FailureClass::Unparsable => "unparsable",
+            FailureClass::NotSettled => "not-settled",
+            FailureClass::Unsteady => "unsteady",
         }
     }
 }
@@ -96,6 +107,10 @@ pub struct RunFailure {
     /// The last lines of the LIGGGHTS log, for diagnosis.
     pub log_tail: String,
     pub wall_time: f64,
+    /// What the run measured when it ran to the end but its answer is not valid (an unsteady
+    /// flow): kept for diagnosis, never averaged into results.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub measured: Option<Box<RunResult>>,
 }
 
 /// How one attempt at a run ended.

@@ -31,10 +31,11 @@ pub struct PointContext {
 
 impl PointContext {
     pub fn new(sweep: Sweep) -> Result<PointContext> {
-        let engine =
-            Engine::locate(sweep.file.run.engine.as_deref()).map_err(|e| Error::Engine(e.to_string()))?;
+        // The template first: a bad one is bad input, found before the engine is run.
         let template =
             Template::load(sweep.template_path().as_deref()).map_err(|e| Error::input(e.to_string()))?;
+        let engine =
+            Engine::locate(sweep.file.run.engine.as_deref()).map_err(|e| Error::Engine(e.to_string()))?;
         let timeout = Duration::from_secs_f64(sweep.file.run.timeout_s);
         Ok(PointContext { sweep, engine, template, timeout })
     }
@@ -106,6 +107,11 @@ pub fn swept_values_from_set(sweep: &Sweep, sets: &[String]) -> Result<Vec<f64>>
             .ok()
             .filter(|v: &f64| v.is_finite())
             .ok_or_else(|| Error::input(format!("--set {name}={value}: expected a finite number")))?;
+        if let Some(first) = values[i] {
+            return Err(Error::input(format!(
+                "--set {name}: given twice ({first} and {value}); give each parameter once"
+            )));
+        }
         let ParamKind::Swept { lo, hi, .. } = sweep.swept[i].kind else { unreachable!() };
         if v < lo || v > hi {
             return Err(Error::input(format!(
@@ -142,7 +148,7 @@ pub fn prepare(ctx: &PointContext, swept_values: &[f64]) -> Result<Prepared> {
 /// attempt are overwritten). Writes `result.json` or `failure.json` atomically and returns the
 /// outcome; a cancelled run writes neither, so it stays pending.
 pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &CancelToken) -> RunOutcome {
-    let fail = |class: FailureClass, reason: String, log_tail: String, wall: f64| {
+    let fail_measured = |class: FailureClass, reason: String, log_tail: String, wall: f64, measured| {
         let f = RunFailure {
             format: RESULT_FORMAT,
             hash: p.hash.clone(),
@@ -150,10 +156,12 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
             reason,
             log_tail,
             wall_time: wall,
+            measured,
         };
         let _ = write_json_atomic(&run_dir.join(FAILURE), &f);
         RunOutcome::Failed(f)
     };
+    let fail = |class, reason, log_tail, wall| fail_measured(class, reason, log_tail, wall, None);
     for stale in [RESULT, FAILURE, DUMP, crate::engine::LOG] {
         let _ = std::fs::remove_file(run_dir.join(stale));
     }
@@ -165,7 +173,7 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
             0.0,
         );
     }
-    let limits = LogLimits { ke_limit: p.scene.ke_limit, atoms: p.scene.particles as u64 };
+    let limits = LogLimits { ke_limit: p.scene.ke_limit, atoms: p.scene.atoms() as u64 };
     let run = ctx.engine.run(run_dir, Deck::INPUT, &limits, ctx.timeout, cancel);
     let wall = run.wall_time;
     match run.status {
@@ -173,6 +181,14 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
         RunStatus::Failed { class, reason, log_tail } => return fail(class, reason, log_tail, wall),
         RunStatus::Ok => {}
     }
+    let log = std::fs::read(run_dir.join(crate::engine::LOG)).unwrap_or_default();
+    let settle_steps = match crate::engine::settled_at(&String::from_utf8_lossy(&log)) {
+        Ok(steps) => steps,
+        Err(reason) => {
+            let class = if reason.contains("not settled") { FailureClass::NotSettled } else { FailureClass::Unparsable };
+            return fail(class, reason, String::new(), wall);
+        }
+    };
     let frames: Vec<Frame> = match crate::dump::read_dump(run_dir.join(DUMP), &metrics::COLUMNS)
         .and_then(|snaps| snaps.iter().map(Frame::from_snapshot).collect())
     {
@@ -183,14 +199,7 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
         Ok(m) => m,
         Err(e) => return fail(FailureClass::Unparsable, e.to_string(), String::new(), wall),
     };
-    let mut warnings = run.warnings;
-    if !m.steady {
-        warnings.push(format!(
-            "MFR not steady over the window: sub-window values {:?}",
-            m.mfr_windows.iter().map(|v| (v * 1e3).round() / 1e3).collect::<Vec<_>>()
-        ));
-    }
-    let steps = p.scene.total_steps();
+    let steps = settle_steps + p.scene.spread_steps();
     let result = RunResult {
         format: RESULT_FORMAT,
         hash: p.hash.clone(),
@@ -200,14 +209,25 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
         mfr_particles: m.mfr_particles,
         mfr_windows: m.mfr_windows,
         steady: m.steady,
+        steady_p: m.steady_p,
         vx: m.vx,
         particles: m.particles,
+        settle_steps,
         steps,
         simulated_time: steps as f64 * p.scene.timestep,
         wall_time: wall,
         engine_version: ctx.engine.version.clone(),
-        warnings,
+        warnings: run.warnings,
     };
+    if !result.steady {
+        let reason = format!(
+            "MFR not steady over the window: halves differ beyond counting noise (p = {:.2e} < {}), sub-window MFR {:?}",
+            result.steady_p,
+            metrics::STEADY_ALPHA,
+            result.mfr_windows.iter().map(|v| (v * 1e3).round() / 1e3).collect::<Vec<_>>()
+        );
+        return fail_measured(FailureClass::Unsteady, reason, String::new(), wall, Some(Box::new(result)));
+    }
     if let Err(e) = write_json_atomic(&run_dir.join(RESULT), &result) {
         return fail(FailureClass::Unparsable, format!("cannot write {RESULT}: {e}"), String::new(), wall);
     }

@@ -21,7 +21,7 @@ use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc;
 use std::sync::Mutex;
-use std::time::{Duration, Instant, SystemTime};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use crate::outcome::{FailureClass, RunOutcome};
 use crate::process::CancelToken;
@@ -155,7 +155,9 @@ impl<E: Executor> Worker<'_, E> {
             };
             let hash = self.exec.hash(&job).to_string();
             if let Err(e) = self.one(job, &hash) {
-                // Only an I/O failure of the store lands here; the job stays unfinished.
+                // Only an I/O failure of the store lands here (a full disk): the job stays
+                // unfinished, and no other starts, since its outcome could not be kept either.
+                self.drain.store(true, Ordering::SeqCst);
                 self.send(Event::StoreError { hash, error: e.to_string() });
             }
         }
@@ -168,14 +170,33 @@ impl<E: Executor> Worker<'_, E> {
 
     fn one(&self, job: E::Job, hash: &str) -> Result<(), StoreError> {
         let hash = hash.to_string();
-        let claim = match self.store.claim(&hash)? {
+        let (claim, stale) = match self.store.claim(&hash)? {
             ClaimAttempt::Busy(owner) => {
                 self.send(Event::Busy { hash: hash.clone(), owner });
                 self.busy.lock().unwrap().push_back((job, Instant::now()));
                 return Ok(());
             }
-            ClaimAttempt::Claimed(c, _) => c,
+            ClaimAttempt::Claimed(c, stale) => (c, stale),
         };
+        let outcome = self.claimed(job, &hash, stale);
+        // Give the claim back whatever happened; a store error is the one to report.
+        let released = self.store.release(claim);
+        let outcome = outcome?;
+        released?;
+        if let Some((outcome, ran)) = outcome {
+            self.send(Event::Finished { hash, outcome, ran });
+        }
+        Ok(())
+    }
+
+    /// The job under its claim: the outcome and whether it ran here, `None` if cancelled first.
+    fn claimed(
+        &self,
+        job: E::Job,
+        hash: &str,
+        stale: Option<ClaimInfo>,
+    ) -> Result<Option<(RunOutcome, bool)>, StoreError> {
+        let hash = hash.to_string();
         // Finished while we were not looking (another process), or earlier and not to retry.
         let found = match self.store.finished(&hash) {
             Some(RunState::Done(r)) => Some(RunOutcome::Done(*r)),
@@ -189,13 +210,22 @@ impl<E: Executor> Worker<'_, E> {
             _ => None,
         };
         if let Some(outcome) = found {
-            self.store.release(claim)?;
-            self.send(Event::Finished { hash, outcome, ran: false });
-            return Ok(());
+            return Ok(Some((outcome, false)));
+        }
+        if let Some(old) = stale {
+            // The trace of an attempt that was killed: its claim outlived its process.
+            let start = UNIX_EPOCH + Duration::from_secs_f64(old.claimed_at.max(0.0));
+            let record = AttemptRecord {
+                hash: hash.clone(),
+                start,
+                runtime_s: f64::NAN,
+                status: "interrupted",
+                class: None,
+            };
+            self.send(Event::Attempt { record, retrying: false });
         }
         if self.cancel.is_cancelled() {
-            self.store.release(claim)?;
-            return Ok(());
+            return Ok(None);
         }
         self.send(Event::Started { hash: hash.clone() });
         let dir = self.store.run_dir(&hash);
@@ -205,6 +235,31 @@ impl<E: Executor> Worker<'_, E> {
             let start = SystemTime::now();
             let t = Instant::now();
             let outcome = self.exec.execute(&job, &dir, self.cancel);
+            // The outcome must be on disk before it counts: write it again if it is not (the
+            // executor's write may have failed), and stop on a store error.
+            let stored = match &outcome {
+                // A run that failed on a full disk did not fail: its output could not be kept.
+                RunOutcome::Failed(_) if crate::store::low_on_space(&dir) => Err(StoreError::Io {
+                    path: dir.clone(),
+                    source: std::io::Error::from_raw_os_error(libc::ENOSPC),
+                }),
+                _ => self.store.record(&hash, &outcome),
+            };
+            if let Err(e) = stored {
+                // Free what the attempt left (it is re-run on resume) so that the joblog and
+                // results.csv can still be written.
+                let _ = self.store.clean_run_dir(&hash);
+                let record = AttemptRecord {
+                    hash: hash.clone(),
+                    start,
+                    runtime_s: t.elapsed().as_secs_f64(),
+                    status: "store-error",
+                    class: None,
+                };
+                self.send(Event::Attempt { record, retrying: false });
+                self.send(Event::Finished { hash: hash.clone(), outcome: RunOutcome::Cancelled, ran: true });
+                return Err(e);
+            }
             let (status, class) = match &outcome {
                 RunOutcome::Done(_) => ("done", None),
                 RunOutcome::Failed(f) => ("failed", Some(f.class)),
@@ -228,9 +283,7 @@ impl<E: Executor> Worker<'_, E> {
             }
             attempt += 1;
         };
-        self.store.release(claim)?;
-        self.send(Event::Finished { hash, outcome, ran: true });
-        Ok(())
+        Ok(Some((outcome, true)))
     }
 }
 
@@ -281,6 +334,9 @@ pub mod fake {
         pub timeout: Duration,
         /// Stands for the template/engine identity.
         pub identity: String,
+        /// Bytes of "log" each attempt writes in its run dir before its result (as LIGGGHTS
+        /// writes logs and dumps), to fill a small file system.
+        pub output_bytes: usize,
         attempts: Mutex<HashMap<String, usize>>,
         running: Mutex<HashMap<String, usize>>,
         now: AtomicUsize,
@@ -302,6 +358,7 @@ pub mod fake {
                 plan: Box::new(plan),
                 timeout: Duration::from_secs(30),
                 identity: "fake-1".into(),
+                output_bytes: 0,
                 attempts: Mutex::default(),
                 running: Mutex::default(),
                 now: AtomicUsize::new(0),
@@ -362,6 +419,10 @@ pub mod fake {
             let mut cmd = Command::new("sleep");
             cmd.arg(format!("{}", sleep.as_secs_f64()));
             let (p, took) = process::run(cmd, self.timeout, cancel);
+            if self.output_bytes > 0 {
+                // Like LIGGGHTS, the fake does not check that its log was written.
+                let _ = std::fs::write(run_dir.join("log.fake"), vec![b'x'; self.output_bytes]);
+            }
             self.now.fetch_sub(1, Ordering::SeqCst);
             *self.running.lock().unwrap().get_mut(&job.hash).unwrap() -= 1;
             let fail = |class, reason: String| {
@@ -372,8 +433,10 @@ pub mod fake {
                     reason,
                     log_tail: String::new(),
                     wall_time: took.as_secs_f64(),
+                    measured: None,
                 };
-                write_json_atomic(&run_dir.join("failure.json"), &f).expect("fake writes");
+                // As the real executor: a failed write is found and reported by the pool.
+                let _ = write_json_atomic(&run_dir.join("failure.json"), &f);
                 RunOutcome::Failed(f)
             };
             match (p, behaviour) {
@@ -400,15 +463,17 @@ pub mod fake {
                         mfr_particles: 0,
                         mfr_windows: vec![],
                         steady: true,
+                        steady_p: 1.0,
                         vx: vec![Some(0.5); VX_LAYERS],
                         particles: 1,
+                        settle_steps: 0,
                         steps: 1,
                         simulated_time: 0.0,
                         wall_time: took.as_secs_f64(),
                         engine_version: "fake".into(),
                         warnings: vec![],
                     };
-                    write_json_atomic(&run_dir.join("result.json"), &r).expect("fake writes");
+                    let _ = write_json_atomic(&run_dir.join("result.json"), &r);
                     RunOutcome::Done(r)
                 }
                 (other, _) => fail(FailureClass::Signalled, format!("sleep ended {other:?}")),

@@ -12,8 +12,10 @@
 //!
 //! Unstable when J > [`UNSTABLE_JITTER`]; otherwise inefficient when R < [`IDEAL_RISE`];
 //! otherwise ideal. Unknown with fewer than [`MIN_LAYERS`] filled layers or no blade speed.
-//! The thresholds were read off LIGGGHTS profiles of `sweeps/quick.toml` (README "Spreading
-//! quality"): a smooth profile there has J ≈ 0.003 and R from 0.05 (gap 1.3 D) to 0.1 (2 D).
+//! The thresholds were read off LIGGGHTS profiles of `sweeps/quick.toml` on the scene before the
+//! gated-dose rework (a smooth profile there had J ≈ 0.003 and R from 0.05 at gap 1.3 D to 0.1
+//! at 2 D). On the gated scene v_x is within a few % of the blade speed in every layer, so its
+//! points classify as inefficient (README "Spreading quality").
 
 use serde::Serialize;
 
@@ -95,7 +97,8 @@ mod tests {
 
     #[test]
     fn liggghts_profiles_of_the_quick_sweep() {
-        // `sweep run sweeps/quick.toml --set gap=G,blade_speed=1.4` (D = 1.5 mm), LIGGGHTS 3.8.
+        // `sweep run sweeps/quick.toml --set gap=G,blade_speed=1.4` (D = 1.5 mm), LIGGGHTS 3.8,
+        // on the scene before the gated-dose rework.
         let gap3 =
             some(&[1.223, 1.240, 1.289, 1.315, 1.315, 1.342, 1.355, 1.364, 1.367, 1.367, 1.376, 1.380]);
         let gap2 =
@@ -107,6 +110,18 @@ mod tests {
         assert_eq!(classify(&gap3, 1.4), Quality::Ideal);
         // gap = 1.33 D: (1.360+1.367+1.372)/3 − (1.277+1.298+1.316)/3 = 0.0693 m/s = 0.0495 v
         assert_eq!(classify(&gap2, 1.4), Quality::Inefficient);
+    }
+
+    #[test]
+    fn gated_scene_profile_is_inefficient() {
+        // The same command on the gated scene (gap 3 mm = 2 D): v_x ≈ v in every layer, falling
+        // slightly with height. Rise by hand: top three (1.415+1.416+1.408)/3 = 1.41300, bottom
+        // three (1.438+1.447+1.454)/3 = 1.44633.
+        let gated =
+            some(&[1.438, 1.447, 1.454, 1.446, 1.444, 1.437, 1.429, 1.427, 1.427, 1.415, 1.416, 1.408]);
+        let p = measure(&gated, 1.4).unwrap();
+        assert!((p.rise - (1.41300 - 1.446_333) / 1.4).abs() < 1e-5, "{p:?}");
+        assert_eq!(classify(&gated, 1.4), Quality::Inefficient);
     }
 
     #[test]

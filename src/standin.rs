@@ -98,8 +98,10 @@ impl Executor for StandIn {
             mfr_particles: 0,
             mfr_windows: vec![mfr; 4],
             steady: true,
+            steady_p: 1.0,
             vx: vx.into_iter().map(Some).collect(),
             particles: 0,
+            settle_steps: 0,
             steps: 0,
             simulated_time: 0.0,
             wall_time: 0.0,
@@ -115,6 +117,7 @@ impl Executor for StandIn {
                 reason: format!("cannot write {}: {e}", run_dir.join(RESULT).display()),
                 log_tail: String::new(),
                 wall_time: 0.0,
+                measured: None,
             }),
         }
     }

@@ -14,7 +14,12 @@
 //! when its `failure.json` does; a directory holding neither is incomplete, whatever logs it
 //! holds. Claims are created with `O_EXCL` under a short `flock` of `DIR/.lock`, so two
 //! processes never hold the same claim; a claim whose owner is gone (same host, and no live
-//! process with that pid *and* that start time) is taken over.
+//! process with that pid *and* that start time) is taken over, and until then marks the run
+//! as interrupted. The manifest is created (or extended) and each joblog line numbered under
+//! the same lock, so two processes started at once on a new directory share it, and `seq` is
+//! unique. `manifest.json` is validated when read. A write error (a full disk) is a
+//! [`StoreError`] naming the device and the file; temporaries of writes cut off are removed by
+//! [`Store::remove_stale_temporaries`].
 //!
 //! Not responsible for deciding what to run (the driver, [`crate::sweeprun`]) or running it
 //! ([`crate::pool`]).
@@ -32,12 +37,17 @@ use crate::outcome::{RunFailure, RunResult, VX_LAYERS};
 
 /// Version of `manifest.json`.
 pub const MANIFEST_FORMAT: u32 = 1;
+/// The lock file of a sweep directory: claims, joblog lines and the manifest are written under
+/// its `flock`.
+const LOCK: &str = ".lock";
+/// The joblog's file name.
+const JOBLOG: &str = "joblog.tsv";
 /// Header of `joblog.tsv` (GNU parallel's `--joblog`, plus the run hash and the failure class).
 pub const JOBLOG_HEADER: &str = "seq\thost\tpid\tstart\truntime_s\tstatus\tclass\thash";
 
 #[derive(Debug, thiserror::Error)]
 pub enum StoreError {
-    #[error("{}: {source}", path.display())]
+    #[error("{}", describe_io(path, source))]
     Io { path: PathBuf, source: std::io::Error },
     /// The directory is not a sweep directory this version can read.
     #[error("{}: {reason}", path.display())]
@@ -51,6 +61,69 @@ impl From<StoreError> for crate::Error {
             StoreError::NotASweep { .. } => crate::Error::Input(e.to_string()),
         }
     }
+}
+
+impl StoreError {
+    /// Whether the file system is full (or the quota spent): free space, then resume.
+    pub fn is_no_space(&self) -> bool {
+        matches!(self, StoreError::Io { source, .. } if is_no_space(source))
+    }
+}
+
+/// Free space under which a failed run is taken for one that ran out of disk: LIGGGHTS does
+/// not check its writes, so a full disk shows up as a cut-off dump or log, not as an error.
+pub const LOW_SPACE: u64 = 64 * 1024;
+
+/// Whether the file system holding `path` has less than [`LOW_SPACE`] left for us (counting
+/// the blocks reserved for root when we are root).
+pub fn low_on_space(path: &Path) -> bool {
+    use std::os::unix::ffi::OsStrExt;
+    let Ok(c) = std::ffi::CString::new(path.as_os_str().as_bytes()) else { return false };
+    // SAFETY: statvfs(3) fills the struct we pass for a NUL-terminated path.
+    let mut st: libc::statvfs = unsafe { std::mem::zeroed() };
+    if unsafe { libc::statvfs(c.as_ptr(), &mut st) } != 0 {
+        return false;
+    }
+    // SAFETY: geteuid cannot fail.
+    let blocks = if unsafe { libc::geteuid() } == 0 { st.f_bfree } else { st.f_bavail };
+    (blocks as u64).saturating_mul(st.f_frsize as u64) < LOW_SPACE
+}
+
+/// `ENOSPC` or `EDQUOT`.
+pub fn is_no_space(e: &std::io::Error) -> bool {
+    matches!(e.raw_os_error(), Some(libc::ENOSPC) | Some(libc::EDQUOT))
+}
+
+/// "no space left on /dev/sdb1 (/scratch) while writing PATH" for a full file system, else
+/// "PATH: the OS error".
+pub fn describe_io(path: &Path, e: &std::io::Error) -> String {
+    let what = match e.raw_os_error() {
+        Some(libc::ENOSPC) => "no space left",
+        Some(libc::EDQUOT) => "disk quota exceeded",
+        _ => return format!("{}: {e}", path.display()),
+    };
+    let on = match mount_of(path) {
+        Some((source, mount)) => format!("{source} ({})", mount.display()),
+        None => "the device".into(),
+    };
+    format!("{what} on {on} while writing {}", path.display())
+}
+
+/// The file system holding `path`: its source (device) and mount point, from
+/// `/proc/self/mountinfo` (the longest mount point that contains the path).
+fn mount_of(path: &Path) -> Option<(String, PathBuf)> {
+    let abs = path.ancestors().find_map(|p| fs::canonicalize(p).ok())?;
+    let info = fs::read_to_string("/proc/self/mountinfo").ok()?;
+    // "36 35 98:0 /mnt1 /mnt/parent rw,noatime master:1 - ext3 /dev/root rw,errors=continue"
+    let unescape = |s: &str| s.replace("\\040", " ").replace("\\011", "\t").replace("\\134", "\\");
+    info.lines()
+        .filter_map(|l| {
+            let (left, right) = l.split_once(" - ")?;
+            let mount = PathBuf::from(unescape(left.split(' ').nth(4)?));
+            let source = unescape(right.split(' ').nth(1)?);
+            abs.starts_with(&mount).then_some((source, mount))
+        })
+        .max_by_key(|(_, m)| m.components().count())
 }
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> StoreError + '_ {
@@ -99,6 +172,57 @@ pub struct Manifest {
     pub identity: serde_json::Value,
 }
 
+impl Manifest {
+    /// Check what the types cannot: every index in range, one hash per point, as many values
+    /// as parameters. The error names the field.
+    pub fn validate(&self) -> Result<(), String> {
+        let n = self.points.len();
+        if self.parameters.is_empty() {
+            return Err("parameters: expected at least one swept parameter".into());
+        }
+        let mut hashes: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
+        for (i, p) in self.points.iter().enumerate() {
+            if p.index != i {
+                return Err(format!("points[{i}].index = {}: expected {i}", p.index));
+            }
+            if p.values.len() != self.parameters.len() {
+                return Err(format!(
+                    "points[{i}].values: {} values for {} parameters",
+                    p.values.len(),
+                    self.parameters.len()
+                ));
+            }
+            // The hash names a directory under runs/: 64 hex digits, nothing else.
+            if p.hash.len() != 64 || !p.hash.bytes().all(|b| b.is_ascii_hexdigit()) {
+                return Err(format!("points[{i}].hash = {:?}: expected 64 hex digits", p.hash));
+            }
+            if let Some(j) = hashes.insert(&p.hash, i) {
+                return Err(format!("points[{i}].hash: the same as points[{j}].hash"));
+            }
+        }
+        if self.spaces.is_empty() {
+            return Err("spaces: expected at least one space".into());
+        }
+        for (k, s) in self.spaces.iter().enumerate() {
+            if s.points.is_empty() {
+                return Err(format!("spaces[{k}].points: empty"));
+            }
+            if let Some((j, &v)) = s.points.iter().enumerate().find(|(_, &v)| v >= n) {
+                return Err(format!("spaces[{k}].points[{j}] = {v}: no such point (the manifest has {n})"));
+            }
+        }
+        match &self.design {
+            DesignRecord::Lds { step, max, .. } if *step == 0 || max < step => {
+                Err(format!("design: lds step {step}, max {max}: expected 1 ≤ step ≤ max"))
+            }
+            DesignRecord::Lattice { levels } if levels.iter().any(|&l| l < 2) => {
+                Err(format!("design: lattice levels {levels:?}: expected each at least 2"))
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
 /// Who holds a claim: `runs/<hash>/claim`.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct ClaimInfo {
@@ -120,6 +244,14 @@ pub enum RunState {
     Failed(Box<RunFailure>),
     /// Claimed by a live process.
     Running(ClaimInfo),
+    /// Claimed by a process that is gone (killed): an attempt was cut off. Re-run it.
+    Interrupted(ClaimInfo),
+    /// `result.json` or `failure.json` is there but cannot be read (edited, damaged, an
+    /// older format): the file and why. Re-run it, saying so.
+    Damaged {
+        file: PathBuf,
+        reason: String,
+    },
     /// A directory without a result, not claimed by a live process: re-run it.
     Incomplete,
     /// Never started.
@@ -185,13 +317,32 @@ impl Store {
 
     /// Write `sweep.toml` and `manifest.json` (atomically each) and create `runs/` and the joblog.
     pub fn write_manifest(&self, sweep_toml: &str, manifest: &Manifest) -> Result<(), StoreError> {
+        self.write_manifest_checked(sweep_toml, manifest, |_| Ok(()))
+    }
+
+    /// [`Store::write_manifest`], creating the directory if needed, under the directory's lock,
+    /// after `check` has accepted the manifest already there (`None` for a new directory).
+    ///
+    /// `manifest.json` is written last: a directory without it holds at most `runs/`, the
+    /// joblog and `sweep.toml` of a creation that was killed, which the next creation redoes.
+    pub fn write_manifest_checked<E: From<StoreError>>(
+        &self,
+        sweep_toml: &str,
+        manifest: &Manifest,
+        check: impl FnOnce(Option<(Manifest, String)>) -> Result<(), E>,
+    ) -> Result<(), E> {
+        fs::create_dir_all(&self.dir).map_err(io(&self.dir))?;
+        let _lock = DirLock::take(&self.dir.join(LOCK))?;
+        let path = Self::manifest_path(&self.dir);
+        let old = if path.exists() { Some(Self::read_manifest(&self.dir)?) } else { None };
+        check(old)?;
         let runs = self.dir.join("runs");
         fs::create_dir_all(&runs).map_err(io(&runs))?;
+        self.joblog_header()?;
         let toml_path = self.dir.join("sweep.toml");
         write_atomic(&toml_path, sweep_toml.as_bytes())?;
-        let path = Self::manifest_path(&self.dir);
         crate::outcome::write_json_atomic(&path, manifest).map_err(io(&path))?;
-        self.joblog().map(drop)
+        Ok(())
     }
 
     /// Read `manifest.json` and `sweep.toml` of `dir`.
@@ -207,22 +358,21 @@ impl Store {
                 }
             ),
         })?;
-        let format = serde_json::from_str::<serde_json::Value>(&text)
-            .ok()
-            .and_then(|v| v.get("format").and_then(|f| f.as_u64()));
+        let not_a_sweep = |reason: String| StoreError::NotASweep { path: path.clone(), reason };
+        let value: serde_json::Value = serde_json::from_str(&text)
+            .map_err(|e| not_a_sweep(format!("truncated or not JSON ({e}); the manifest is damaged")))?;
+        let format = value.get("format").and_then(|f| f.as_u64());
         if format != Some(MANIFEST_FORMAT as u64) {
-            return Err(StoreError::NotASweep {
-                path: path.clone(),
-                reason: format!(
-                    "manifest format {}: expected {MANIFEST_FORMAT}",
-                    format.map_or("missing".into(), |f| f.to_string())
-                ),
-            });
+            return Err(not_a_sweep(format!(
+                "manifest format {}: expected {MANIFEST_FORMAT}",
+                format.map_or("missing".into(), |f| f.to_string())
+            )));
         }
-        let manifest: Manifest = serde_json::from_str(&text).map_err(|e| StoreError::NotASweep {
-            path: path.clone(),
-            reason: format!("unreadable manifest: {e}"),
-        })?;
+        let manifest: Manifest =
+            serde_json::from_str(&text).map_err(|e| not_a_sweep(format!("unreadable manifest: {e}")))?;
+        manifest
+            .validate()
+            .map_err(|e| not_a_sweep(format!("{e}; the manifest was edited or is damaged")))?;
         let toml_path = dir.join("sweep.toml");
         let sweep = fs::read_to_string(&toml_path).map_err(|e| StoreError::NotASweep {
             path: toml_path.clone(),
@@ -241,6 +391,7 @@ impl Store {
             if self.owner_alive(&c) {
                 return RunState::Running(c);
             }
+            return RunState::Interrupted(c);
         }
         if dir.exists() {
             RunState::Incomplete
@@ -265,7 +416,7 @@ impl Store {
         let dir = self.run_dir(hash);
         fs::create_dir_all(&dir).map_err(io(&dir))?;
         let path = dir.join("claim");
-        let _lock = DirLock::take(&self.dir.join(".lock"))?;
+        let _lock = DirLock::take(&self.dir.join(LOCK))?;
         let mut stale = None;
         for _ in 0..2 {
             match OpenOptions::new().write(true).create_new(true).mode(0o644).open(&path) {
@@ -300,6 +451,25 @@ impl Store {
         Ok(())
     }
 
+    /// Write the outcome of the run `hash` (`result.json` or `failure.json`) unless it is
+    /// already there: the executor writes it, and this makes sure it landed.
+    pub fn record(&self, hash: &str, outcome: &crate::outcome::RunOutcome) -> Result<(), StoreError> {
+        use crate::outcome::RunOutcome;
+        let dir = self.run_dir(hash);
+        let (name, written) = match (outcome, finished_state(&dir)) {
+            (RunOutcome::Done(r), Some(RunState::Done(d))) if *d == *r => return Ok(()),
+            (RunOutcome::Failed(f), Some(RunState::Failed(d))) if *d == *f => return Ok(()),
+            (RunOutcome::Done(r), _) => {
+                ("result.json", crate::outcome::write_json_atomic(&dir.join("result.json"), r))
+            }
+            (RunOutcome::Failed(f), _) => {
+                ("failure.json", crate::outcome::write_json_atomic(&dir.join("failure.json"), f))
+            }
+            (RunOutcome::Cancelled, _) => return Ok(()),
+        };
+        written.map_err(io(&dir.join(name)))
+    }
+
     /// Empty the run dir of a held claim (a stale attempt's files), keeping the claim.
     pub fn clean_run_dir(&self, hash: &str) -> Result<(), StoreError> {
         let dir = self.run_dir(hash);
@@ -319,6 +489,40 @@ impl Store {
         Ok(())
     }
 
+    /// Remove the temporary files of atomic writes whose writer is gone (killed mid-write, or
+    /// a write that failed), in the directory and every run dir; returns how many.
+    pub fn remove_stale_temporaries(&self) -> Result<usize, StoreError> {
+        let mut removed = 0;
+        let mut dirs = vec![self.dir.clone()];
+        let runs = self.dir.join("runs");
+        match fs::read_dir(&runs) {
+            Ok(entries) => dirs.extend(entries.flatten().map(|e| e.path())),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => return Err(io(&runs)(e)),
+        }
+        for dir in dirs {
+            let Ok(entries) = fs::read_dir(&dir) else { continue };
+            for e in entries.flatten() {
+                let name = e.file_name().to_string_lossy().into_owned();
+                let Some((host, pid)) = crate::atomic::temporary_owner(&name) else {
+                    continue;
+                };
+                // Another host's writer may be alive; a live pid here may be writing it now.
+                if host.is_some_and(|h| h != crate::atomic::temporary_host())
+                    || process_start_ticks(pid).is_some()
+                {
+                    continue;
+                }
+                match fs::remove_file(e.path()) {
+                    Ok(()) => removed += 1,
+                    Err(err) if err.kind() == std::io::ErrorKind::NotFound => {}
+                    Err(err) => return Err(io(&e.path())(err)),
+                }
+            }
+        }
+        Ok(removed)
+    }
+
     /// Whether the process named by a claim is still running it.
     fn owner_alive(&self, c: &ClaimInfo) -> bool {
         if c.host != self.host {
@@ -331,21 +535,25 @@ impl Store {
         process_start_ticks(c.pid) == Some(c.start_ticks)
     }
 
+    /// Create the joblog with its header if it is missing. Call under the lock, so that no
+    /// process appends before the header.
+    fn joblog_header(&self) -> Result<(), StoreError> {
+        let path = self.dir.join(JOBLOG);
+        let mut file = OpenOptions::new().create(true).append(true).open(&path).map_err(io(&path))?;
+        if file.metadata().map_err(io(&path))?.len() == 0 {
+            file.write_all(format!("{JOBLOG_HEADER}\n").as_bytes()).map_err(io(&path))?;
+        }
+        Ok(())
+    }
+
     /// Open the joblog for appending attempts, creating it with its header if missing.
     pub fn joblog(&self) -> Result<Joblog, StoreError> {
-        let path = self.dir.join("joblog.tsv");
-        let file = {
-            // Under the lock so that a second process cannot append before the header.
-            let _lock = DirLock::take(&self.dir.join(".lock"))?;
-            let mut file = OpenOptions::new().create(true).append(true).open(&path).map_err(io(&path))?;
-            if file.metadata().map_err(io(&path))?.len() == 0 {
-                file.write_all(format!("{JOBLOG_HEADER}\n").as_bytes()).map_err(io(&path))?;
-            }
-            file
-        };
-        let text = fs::read_to_string(&path).map_err(io(&path))?;
-        let seq = text.lines().filter(|l| !is_header(l)).count() as u64;
-        Ok(Joblog { file, path, seq, host: self.host.clone() })
+        let lock = self.dir.join(LOCK);
+        let _lock = DirLock::take(&lock)?;
+        self.joblog_header()?;
+        let path = self.dir.join(JOBLOG);
+        let file = OpenOptions::new().read(true).append(true).open(&path).map_err(io(&path))?;
+        Ok(Joblog { file, path, lock, host: self.host.clone() })
     }
 }
 
@@ -353,18 +561,40 @@ fn is_header(line: &str) -> bool {
     line.starts_with("seq\t")
 }
 
+/// Done, failed, or damaged (a result file that is there but cannot be read); `None` when the
+/// directory holds neither file.
 fn finished_state(dir: &Path) -> Option<RunState> {
-    if let Ok(text) = fs::read_to_string(dir.join("result.json")) {
-        if let Ok(r) = serde_json::from_str::<RunResult>(&text) {
-            return Some(RunState::Done(Box::new(r)));
+    fn read<T: serde::de::DeserializeOwned>(path: &Path) -> Option<Result<T, String>> {
+        match fs::read(path) {
+            Ok(bytes) => Some(serde_json::from_slice(&bytes).map_err(|e| e.to_string())),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
+            Err(e) => Some(Err(e.to_string())),
         }
     }
-    if let Ok(text) = fs::read_to_string(dir.join("failure.json")) {
-        if let Ok(f) = serde_json::from_str::<RunFailure>(&text) {
-            return Some(RunState::Failed(Box::new(f)));
-        }
+    let mut damaged = None;
+    let result = dir.join("result.json");
+    match read::<RunResult>(&result) {
+        Some(Ok(r)) => return Some(RunState::Done(Box::new(r))),
+        Some(Err(reason)) => damaged = Some(RunState::Damaged { file: result, reason }),
+        None => {}
     }
-    None
+    let failure = dir.join("failure.json");
+    match read::<RunFailure>(&failure) {
+        Some(Ok(f)) => return Some(RunState::Failed(Box::new(f))),
+        Some(Err(reason)) => damaged = damaged.or(Some(RunState::Damaged { file: failure, reason })),
+        None => {}
+    }
+    damaged
+}
+
+/// The first entry of `dir` that a sweep does not write (a user's file), if any: a directory
+/// holding only these is one whose creation was cut off before `manifest.json`.
+pub fn foreign_entry(dir: &Path) -> Option<String> {
+    let entries = fs::read_dir(dir).ok()?;
+    entries.flatten().map(|e| e.file_name().to_string_lossy().into_owned()).find(|n| {
+        !matches!(n.as_str(), LOCK | JOBLOG | "runs" | "sweep.toml" | "results.csv")
+            && crate::atomic::temporary_owner(n).is_none()
+    })
 }
 
 fn read_claim(path: &Path) -> Option<ClaimInfo> {
@@ -404,32 +634,66 @@ pub struct AttemptRecord {
     pub class: Option<&'static str>,
 }
 
-/// `joblog.tsv`, opened for appending. Each line is one `write`, so lines of two processes
-/// appending at once do not interleave.
+/// `joblog.tsv`, opened for appending. Each line is appended under the directory's lock with
+/// the next sequence number after the file's last line, so that two processes sharing the
+/// directory never write the same `seq`.
 #[derive(Debug)]
 pub struct Joblog {
     file: File,
     path: PathBuf,
-    seq: u64,
+    lock: PathBuf,
     host: String,
 }
 
 impl Joblog {
-    pub fn append(&mut self, a: &AttemptRecord) -> Result<(), StoreError> {
-        self.seq += 1;
+    /// Append one attempt; returns its sequence number.
+    pub fn append(&mut self, a: &AttemptRecord) -> Result<u64, StoreError> {
+        let _lock = DirLock::take(&self.lock)?;
+        let (last, ends_with_newline) = last_seq(&self.file).map_err(io(&self.path))?;
+        let seq = last + 1;
         let start = a.start.duration_since(UNIX_EPOCH).map(|d| d.as_secs_f64()).unwrap_or(0.0);
+        // A line cut short (a full disk) is closed first, so that ours starts a line.
+        let runtime = if a.runtime_s.is_finite() { format!("{:.3}", a.runtime_s) } else { "-".into() };
         let line = format!(
-            "{}\t{}\t{}\t{:.3}\t{:.3}\t{}\t{}\t{}\n",
-            self.seq,
+            "{}{}\t{}\t{}\t{:.3}\t{}\t{}\t{}\t{}\n",
+            if ends_with_newline { "" } else { "\n" },
+            seq,
             self.host,
             std::process::id(),
             start,
-            a.runtime_s,
+            runtime,
             a.status,
             a.class.unwrap_or("-"),
             a.hash
         );
-        self.file.write_all(line.as_bytes()).map_err(io(&self.path))
+        self.file.write_all(line.as_bytes()).map_err(io(&self.path))?;
+        Ok(seq)
+    }
+}
+
+/// The sequence number of the last whole line of a joblog (0 when it has none), and whether
+/// the file ends with a newline. Reads only the file's tail.
+fn last_seq(file: &File) -> std::io::Result<(u64, bool)> {
+    use std::os::unix::fs::FileExt;
+    let len = file.metadata()?.len();
+    let mut from = len.saturating_sub(8192);
+    loop {
+        let mut buf = vec![0u8; (len - from) as usize];
+        file.read_exact_at(&mut buf, from)?;
+        let ends = buf.last().is_none_or(|&b| b == b'\n');
+        let text = String::from_utf8_lossy(&buf);
+        // The first line of a tail may be cut; only whole lines count.
+        let whole = if from == 0 { &text[..] } else { text.split_once('\n').map_or("", |(_, r)| r) };
+        let seq = whole
+            .lines()
+            .rev()
+            .filter(|l| !is_header(l) && l.split('\t').count() == 8)
+            .find_map(|l| l.split('\t').next()?.parse::<u64>().ok());
+        match seq {
+            Some(s) => return Ok((s, ends)),
+            None if from == 0 => return Ok((0, ends)),
+            None => from = 0,
+        }
     }
 }
 
@@ -445,7 +709,7 @@ pub struct JoblogLine {
 
 /// Read `DIR/joblog.tsv`.
 pub fn read_joblog(dir: &Path) -> Result<Vec<JoblogLine>, StoreError> {
-    let path = dir.join("joblog.tsv");
+    let path = dir.join(JOBLOG);
     let text = fs::read_to_string(&path).map_err(io(&path))?;
     Ok(text
         .lines()
@@ -610,7 +874,7 @@ mod tests {
         let s = Store::open(dir.path());
         let dead = ClaimInfo { pid: dead_pid(), session: "gone".into(), ..s.me.clone() };
         claim_file(&s, "h", &dead);
-        assert_eq!(s.state("h"), RunState::Incomplete);
+        assert_eq!(s.state("h"), RunState::Interrupted(dead.clone()));
         match s.claim("h").unwrap() {
             ClaimAttempt::Claimed(_, Some(old)) => assert_eq!(old, dead),
             other => panic!("expected a takeover, got {other:?}"),

@@ -151,6 +151,22 @@ pub struct SceneSettings {
     pub depth_diameters: f64,
     /// Length of the MFR measurement window (blade travel), in diameters.
     pub window_diameters: f64,
+    /// The scene's layout: `"gated"` (default: the dose settles at rest in a closed region on a
+    /// rough substrate and is released when the blade starts) or `"thesis"` (the thesis's pile
+    /// on a smooth plate, settled for a fixed time).
+    pub layout: String,
+    /// Gated layout: `"rough"` (default: a layer of fixed spheres, as the previous powder layer
+    /// a blade spreads onto) or `"smooth"` (a flat plate).
+    pub substrate: String,
+    /// Gated layout: the pile is at rest when its rms speed is below this fraction of √(g·D).
+    pub rest_speed: f64,
+    /// Gated layout: longest settle, s; a pile still moving then fails the run (`not-settled`).
+    pub settle_max_s: f64,
+    /// Gated layout: blade travel past the opened gate before the window starts, in diameters.
+    pub window_start_diameters: f64,
+    /// Size of the heap in front of the blade, relative to the planned one (gated: gap + 10 D
+    /// tall at 30° repose; thesis: the heap left at the end, gap + 6 D tall).
+    pub supply_factor: f64,
     /// Size distribution of the particles.
     pub size_distribution: SizeDistributionSpec,
     /// Half-height of each v_x layer, in diameters (0.25 = ±D/4); `thesis_band` overrides it
@@ -171,6 +187,12 @@ impl Default for SceneSettings {
             // 40 D: measured 2.8× less seed-to-seed spread than 20 D for 1.6× the CPU
             // (BENCHMARKS.md "MFR noise").
             window_diameters: 40.0,
+            layout: "gated".into(),
+            substrate: "rough".into(),
+            rest_speed: 0.01,
+            settle_max_s: 1.0,
+            window_start_diameters: 30.0,
+            supply_factor: 1.0,
             size_distribution: SizeDistributionSpec::default(),
             vx_band_diameters: 0.25,
             thesis_band: false,
@@ -464,7 +486,17 @@ fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>, Vec<Parame
     if s.fidelity != "fast" && s.fidelity != "thesis" {
         return Err(bad("scene.fidelity", format!("\"{}\": expected \"fast\" or \"thesis\"", s.fidelity)));
     }
+    if s.layout != "gated" && s.layout != "thesis" {
+        return Err(bad("scene.layout", format!("\"{}\": expected \"gated\" or \"thesis\"", s.layout)));
+    }
+    if s.substrate != "rough" && s.substrate != "smooth" {
+        return Err(bad("scene.substrate", format!("\"{}\": expected \"rough\" or \"smooth\"", s.substrate)));
+    }
     for (k, v) in [
+        ("scene.rest_speed", s.rest_speed),
+        ("scene.settle_max_s", s.settle_max_s),
+        ("scene.window_start_diameters", s.window_start_diameters),
+        ("scene.supply_factor", s.supply_factor),
         ("scene.rayleigh_fraction", s.rayleigh_fraction),
         ("scene.depth_diameters", s.depth_diameters),
         ("scene.window_diameters", s.window_diameters),

@@ -96,6 +96,7 @@ fn point_failure(job: &PointJob, run_dir: &Path, reason: String) -> RunOutcome {
         reason,
         log_tail: String::new(),
         wall_time: 0.0,
+        measured: None,
     };
     let _ = crate::outcome::write_json_atomic(&run_dir.join(point::FAILURE), &f);
     RunOutcome::Failed(f)
@@ -182,6 +183,66 @@ pub fn plan<E: Executor>(
     design: &DesignRecord,
     cancel: &CancelToken,
 ) -> Result<Plan<E::Job>> {
+    plan_with_progress(exec, sweep, design, cancel, ProgressMode::Quiet)
+}
+
+/// Time planning may take before it says how far it is.
+const PLAN_QUIET_FOR: std::time::Duration = std::time::Duration::from_secs(1);
+
+/// Prepare (render and hash) every point on all cores; unless `progress` is quiet, say how
+/// many are done once this takes longer than [`PLAN_QUIET_FOR`], then every
+/// [`crate::progress::LINE_EVERY`] (a 10⁶-point lattice takes minutes).
+fn prepare_all<E: Executor>(
+    exec: &E,
+    values: &[Vec<f64>],
+    cancel: &CancelToken,
+    progress: ProgressMode,
+) -> Result<Vec<E::Job>> {
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    let done = AtomicUsize::new(0);
+    let over = AtomicBool::new(false);
+    let total = values.len();
+    std::thread::scope(|scope| {
+        if progress != ProgressMode::Quiet {
+            scope.spawn(|| {
+                let start = Instant::now();
+                let mut next = PLAN_QUIET_FOR;
+                while !over.load(Ordering::SeqCst) {
+                    std::thread::sleep(std::time::Duration::from_millis(50));
+                    if start.elapsed() >= next && !over.load(Ordering::SeqCst) {
+                        eprintln!(
+                            "sweep: planning: {} of {total} decks rendered and hashed",
+                            done.load(Ordering::Relaxed)
+                        );
+                        next = start.elapsed() + crate::progress::LINE_EVERY;
+                    }
+                }
+            });
+        }
+        let jobs = values
+            .par_iter()
+            .map(|v| {
+                if cancel.is_cancelled() {
+                    return Err(Error::Interrupted);
+                }
+                let job = exec.prepare(v);
+                done.fetch_add(1, Ordering::Relaxed);
+                job
+            })
+            .collect::<Result<Vec<_>>>();
+        over.store(true, Ordering::SeqCst);
+        jobs
+    })
+}
+
+/// [`plan`], showing progress on stderr as `progress` says.
+pub fn plan_with_progress<E: Executor>(
+    exec: &E,
+    sweep: &Sweep,
+    design: &DesignRecord,
+    cancel: &CancelToken,
+    progress: ProgressMode,
+) -> Result<Plan<E::Job>> {
     let dim = sweep.dim();
     // Each space as a list of unit points.
     let spaces: Vec<(String, Vec<Vec<f64>>)> = match design {
@@ -204,9 +265,9 @@ pub fn plan<E: Executor>(
             out
         }
         DesignRecord::Lds { step, max, scrambling, seed } => {
-            if *step == 0 || *max == 0 || *max > MAX_POINTS {
+            if *step == 0 || *max == 0 || *max > MAX_POINTS || max < step {
                 return Err(Error::input(format!(
-                    "lds step {step}, max {max}: expected 1 ≤ step and 1 ≤ max ≤ {MAX_POINTS}"
+                    "lds step {step}, max {max}: expected 1 ≤ step ≤ max ≤ {MAX_POINTS}"
                 )));
             }
             let all = halton(dim, *max, *scrambling, *seed);
@@ -236,10 +297,7 @@ pub fn plan<E: Executor>(
             (label, members)
         })
         .collect();
-    let prepared: Vec<E::Job> = distinct
-        .par_iter()
-        .map(|v| if cancel.is_cancelled() { Err(Error::Interrupted) } else { exec.prepare(v) })
-        .collect::<Result<_>>()?;
+    let prepared = prepare_all(exec, &distinct, cancel, progress)?;
     // Then distinct runs: two values may render the same deck.
     let mut points: Vec<PointRecord> = Vec::new();
     let mut jobs = Vec::new();
@@ -298,7 +356,17 @@ pub fn start<E: Executor>(
     hook: &mut dyn SpaceHook,
     cancel: &CancelToken,
 ) -> Result<Summary> {
-    let Plan { spaces, points, jobs } = plan(exec, sweep, &design, cancel)?;
+    check_out_dir(out)?;
+    if !Store::manifest_path(out).exists() {
+        if let Some(stranger) = store::foreign_entry(out) {
+            return Err(Error::input(format!(
+                "{}: exists and is not a sweep directory (no manifest.json, and it holds {stranger:?}); \
+                 choose another --out",
+                out.display()
+            )));
+        }
+    }
+    let Plan { spaces, points, jobs } = plan_with_progress(exec, sweep, &design, cancel, opts.progress)?;
     let toml = resolved_toml(sweep, &design)?;
     let manifest = Manifest {
         format: MANIFEST_FORMAT,
@@ -310,19 +378,74 @@ pub fn start<E: Executor>(
         points,
         identity: exec.identity(),
     };
-    if Store::manifest_path(out).exists() {
-        let (old, old_toml) = Store::read_manifest(out)?;
-        check_extension(out, &old, &old_toml, &manifest, &toml)?;
-    } else if std::fs::read_dir(out).is_ok_and(|mut d| d.next().is_some()) {
-        return Err(Error::input(format!(
-            "{}: exists and is not a sweep directory (no manifest.json); choose another --out",
-            out.display()
-        )));
-    }
+    // Created, or checked and extended, under the directory's lock: a second `sweep` on the
+    // same new directory waits, then finds the manifest and shares the work.
     let store = Store::open(out);
-    store.write_manifest(&toml, &manifest)?;
+    store.write_manifest_checked(&toml, &manifest, |old| match old {
+        Some((old, old_toml)) => check_extension(out, &old, &old_toml, &manifest, &toml),
+        None => Ok(()),
+    })?;
     let retries = sweep.file.run.retries;
     execute(&store, &manifest, exec, jobs, retries, opts, hook, cancel)
+}
+
+/// Whether `out` can be a sweep directory: an existing directory we may write in, or a path
+/// whose nearest existing ancestor is one. Checked before anything is written or run; the
+/// message names the path and what is wrong with it.
+pub fn check_out_dir(out: &Path) -> Result<()> {
+    let d = out.display();
+    let bad = |what: String| Err(Error::input(format!("{d}: {what}; choose another --out")));
+    match std::fs::metadata(out) {
+        Ok(m) if !m.is_dir() => bad("exists and is not a directory".into()),
+        Ok(_) => match writable(out) {
+            Ok(()) => Ok(()),
+            Err(e) => bad(format!("cannot write in it ({})", plain_io(&e))),
+        },
+        Err(e) if matches!(e.kind(), std::io::ErrorKind::NotFound | std::io::ErrorKind::NotADirectory) => {
+            let abs = std::path::absolute(out).map_err(|e| Error::input(format!("{d}: {e}")))?;
+            let mut up = abs.parent();
+            while let Some(p) = up {
+                match std::fs::metadata(p) {
+                    Ok(m) if m.is_dir() => {
+                        return match writable(p) {
+                            Ok(()) => Ok(()),
+                            Err(e) => bad(format!(
+                                "cannot create it: {} is not writable ({})",
+                                p.display(),
+                                plain_io(&e)
+                            )),
+                        }
+                    }
+                    Ok(_) => return bad(format!("cannot create it: {} is not a directory", p.display())),
+                    Err(e) if e.kind() == std::io::ErrorKind::NotFound => up = p.parent(),
+                    Err(e) => return bad(format!("cannot create it: {}: {}", p.display(), plain_io(&e))),
+                }
+            }
+            Ok(())
+        }
+        Err(e) => bad(plain_io(&e)),
+    }
+}
+
+/// `access(2)` for writing and entering a directory (honours read-only mounts and, for root,
+/// nothing else, exactly as a later `mkdir` would).
+fn writable(dir: &Path) -> std::io::Result<()> {
+    use std::os::unix::ffi::OsStrExt;
+    let c = std::ffi::CString::new(dir.as_os_str().as_bytes()).map_err(std::io::Error::other)?;
+    // SAFETY: access(2) on a NUL-terminated path we own.
+    if unsafe { libc::access(c.as_ptr(), libc::W_OK | libc::X_OK) } == 0 {
+        Ok(())
+    } else {
+        Err(std::io::Error::last_os_error())
+    }
+}
+
+/// "permission denied" rather than "Permission denied (os error 13)".
+fn plain_io(e: &std::io::Error) -> String {
+    let s = e.to_string();
+    let s = s.split(" (os error").next().unwrap_or(&s).to_string();
+    let mut c = s.chars();
+    c.next().map(|f| f.to_lowercase().chain(c).collect()).unwrap_or(s)
 }
 
 /// An existing directory may be run again with the same sweep, or extended: the same design
@@ -388,6 +511,11 @@ fn design_label(d: &DesignRecord) -> String {
     }
 }
 
+/// Identity keys recorded for the reader but not compared: where the engine was found (the
+/// same binary through a symlink or another PATH is the same engine; its content and version
+/// are what identify it).
+const NOT_COMPARED: &[&str] = &["engine_path"];
+
 /// `key: old → new` for every leaf that differs between two identity records.
 pub fn identity_diff(old: &serde_json::Value, new: &serde_json::Value) -> Vec<String> {
     fn walk(path: &str, a: &serde_json::Value, b: &serde_json::Value, out: &mut Vec<String>) {
@@ -395,7 +523,7 @@ pub fn identity_diff(old: &serde_json::Value, new: &serde_json::Value) -> Vec<St
             (serde_json::Value::Object(x), serde_json::Value::Object(y)) => {
                 let keys: std::collections::BTreeSet<&String> = x.keys().chain(y.keys()).collect();
                 let null = serde_json::Value::Null;
-                for k in keys {
+                for k in keys.into_iter().filter(|k| !NOT_COMPARED.contains(&k.as_str())) {
                     let p = if path.is_empty() { k.clone() } else { format!("{path}.{k}") };
                     walk(&p, x.get(k).unwrap_or(&null), y.get(k).unwrap_or(&null), out);
                 }
@@ -433,10 +561,28 @@ pub fn judge_from(out: &Path, sweep: &Sweep, design: &DesignRecord) -> Result<us
     Ok(if extends { own.max(extent + 1) } else { own.max(old_min) })
 }
 
-/// Read the sweep of an existing directory (its resolved `sweep.toml`).
+/// Read the sweep of an existing directory (its resolved `sweep.toml`), checked against its
+/// manifest.
 pub fn load_dir_sweep(dir: &Path) -> Result<Sweep> {
-    let (_, text) = Store::read_manifest(dir)?;
-    Sweep::parse(&text, &dir.join("sweep.toml"))
+    let (manifest, text) = Store::read_manifest(dir)?;
+    let sweep = Sweep::parse(&text, &dir.join("sweep.toml"))?;
+    check_parameters(dir, &manifest, &sweep)?;
+    Ok(sweep)
+}
+
+/// The manifest's `parameters` are the swept parameters of the directory's `sweep.toml`.
+fn check_parameters(dir: &Path, manifest: &Manifest, sweep: &Sweep) -> Result<()> {
+    if sweep.names() != manifest.parameters {
+        return Err(Error::input(format!(
+            "{}: parameters [{}] are not the swept parameters of {} [{}]; the manifest or the \
+             sweep file was edited",
+            Store::manifest_path(dir).display(),
+            manifest.parameters.join(", "),
+            dir.join("sweep.toml").display(),
+            sweep.names().join(", ")
+        )));
+    }
+    Ok(())
 }
 
 /// `sweep resume DIR`: re-prepare the manifest's points, refuse if the identity or the decks
@@ -450,6 +596,7 @@ pub fn resume<E: Executor>(
 ) -> Result<Summary> {
     let (mut manifest, toml) = Store::read_manifest(dir)?;
     let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
+    check_parameters(dir, &manifest, &sweep)?;
     let jobs: Vec<E::Job> = manifest
         .points
         .par_iter()
@@ -495,10 +642,16 @@ fn execute<E: Executor>(
     cancel: &CancelToken,
 ) -> Result<Summary> {
     let session_start = SystemTime::now();
+    // Leftovers of atomic writes cut off by a kill or a full disk.
+    store.remove_stale_temporaries()?;
     let mut status = Vec::with_capacity(manifest.points.len());
     let mut queue = Vec::new();
     for (p, job) in manifest.points.iter().zip(jobs) {
-        let s = match store.state(&p.hash) {
+        let state = store.state(&p.hash);
+        if let RunState::Damaged { file, reason } = &state {
+            eprintln!("warning: {}: unreadable ({reason}); point {} runs again", file.display(), p.index);
+        }
+        let s = match state {
             RunState::Done(r) => PointStatus::Done(r),
             RunState::Failed(f) => {
                 if opts.retry_failed {
@@ -653,7 +806,7 @@ impl<'a> Reporter<'a> {
                 }
             }
             Event::StoreError { hash, error } => {
-                self.errors.push(format!("run {hash}: {error}"));
+                self.errors.push(format!("{error} (run {})", &hash[..12.min(hash.len())]));
             }
             Event::Busy { .. } | Event::Tick => {}
         }
@@ -661,7 +814,14 @@ impl<'a> Reporter<'a> {
         if self.results_dirty && self.results_written.elapsed() >= RESULTS_EVERY {
             self.write_results();
         }
-        self.fire_spaces()
+        let flow = self.fire_spaces();
+        // A write error of the sweep directory stops new starts: their outcomes could not be
+        // kept either.
+        if self.errors.is_empty() {
+            flow
+        } else {
+            Flow::Drain
+        }
     }
 
     fn write_results(&mut self) {
@@ -683,9 +843,13 @@ impl<'a> Reporter<'a> {
         self.write_results();
         self.progress.finish(&self.counts);
         if let Some(e) = self.errors.first() {
+            let more = match self.errors.len() {
+                1 => String::new(),
+                n => format!(" ({n} write errors in all)"),
+            };
             return Err(Error::Internal(format!(
-                "{} error(s) writing the sweep directory; first: {e}",
-                self.errors.len()
+                "{e}{more}; started no run after it; once that is fixed, `sweep resume {}` finishes the sweep",
+                self.store.dir().display()
             )));
         }
         let c = self.counts;
@@ -715,6 +879,11 @@ pub struct StatusReport {
     /// Claimed by a live process.
     pub running: usize,
     pub pending: usize,
+    /// Of the pending runs, those whose last attempt was cut off: killed (a claim left by a
+    /// process that is gone) or cancelled (Ctrl-C, SIGTERM).
+    pub interrupted: usize,
+    /// Result files that cannot be read (their runs count as pending and run again).
+    pub damaged: Vec<String>,
     /// Failures by class: count and the first few (by point index) with their reasons.
     pub failures: BTreeMap<String, FailureGroup>,
     /// Convergence verdict of the last report (summary.json); `None` before the first.
@@ -749,9 +918,19 @@ pub fn status(dir: &Path) -> Result<StatusReport> {
         failed: 0,
         running: 0,
         pending: 0,
+        interrupted: 0,
+        damaged: Vec::new(),
         failures: BTreeMap::new(),
         converged: read_verdict(dir),
     };
+    // The last attempt of each run, for runs cancelled part-way.
+    let mut last: HashMap<String, String> = HashMap::new();
+    if let Ok(lines) = store::read_joblog(dir) {
+        for l in lines {
+            last.insert(l.hash, l.status);
+        }
+    }
+    let cut_off = |h: &str| last.get(h).is_some_and(|s| s == "cancelled" || s == "interrupted");
     for p in &manifest.points {
         match store.state(&p.hash) {
             RunState::Done(_) => r.done += 1,
@@ -768,7 +947,20 @@ pub fn status(dir: &Path) -> Result<StatusReport> {
                 }
             }
             RunState::Running(_) => r.running += 1,
-            RunState::Incomplete | RunState::Pending => r.pending += 1,
+            RunState::Interrupted(_) => {
+                r.pending += 1;
+                r.interrupted += 1;
+            }
+            RunState::Damaged { file, reason } => {
+                r.pending += 1;
+                r.damaged.push(format!("{}: unreadable ({reason})", file.display()));
+            }
+            RunState::Incomplete | RunState::Pending => {
+                r.pending += 1;
+                if cut_off(&p.hash) {
+                    r.interrupted += 1;
+                }
+            }
         }
     }
     Ok(r)
@@ -795,6 +987,15 @@ impl StatusReport {
             self.running,
             self.pending
         );
+        if self.interrupted > 0 {
+            s.insert_str(
+                s.len() - 1,
+                &format!("  ({} interrupted: killed or cancelled part-way)", self.interrupted),
+            );
+        }
+        for d in &self.damaged {
+            s.push_str(&format!("  warning: {d}\n"));
+        }
         for (class, g) in &self.failures {
             s.push_str(&format!("  {class}: {}\n", g.count));
             for n in &g.first {

@@ -5,6 +5,7 @@
 
 use demsweep::dump::{read_dump, DumpError, DumpReader, Snapshot};
 use proptest::prelude::*;
+use std::io::Read;
 use std::path::Path;
 
 const DUMP: &str = "tests/data/falling.dump";
@@ -374,4 +375,21 @@ proptest! {
         let cut = ((b.len() as f64) * (0.5 + cut / 2.0)) as usize;
         let _ = DumpReader::new(&b[..cut], Path::new("mem.dump")).collect::<Result<Vec<_>, _>>();
     }
+}
+
+#[test]
+fn a_line_of_any_length_is_refused_at_the_cap_not_held_in_memory() {
+    // A header, then an atom row that never ends: an endless stream, so that reading it whole
+    // would never return.
+    let t = text();
+    let head: String = t.lines().take(10).map(|l| format!("{l}\n")).collect();
+    let endless = std::io::Cursor::new(head.into_bytes()).chain(std::io::repeat(b'7'));
+    let mut reader = DumpReader::new(std::io::BufReader::new(endless), "mem.dump");
+    let e = reader.next().expect("a result").expect_err("an endless line parsed");
+    assert!(matches!(e, DumpError::LineTooLong { limit: demsweep::dump::MAX_LINE, .. }), "{e}");
+    assert_at(&e, 11, 0, Some(0));
+    assert!(e.to_string().contains("line too long"), "{e}");
+    // A long line that ends is still read (and fails on its content, not its length).
+    let long = with_line(&t, 10, &"1 ".repeat(1000));
+    assert!(matches!(parse_err(&long), DumpError::FieldCount { .. }));
 }

@@ -42,15 +42,18 @@ fn filled_layers(r: &Value) -> usize {
 }
 
 /// Deposited MFR and flux MFR count crossings of the rear and front faces over the same
-/// intervals; they differ only by the change of what sits under the blade.
+/// intervals; they differ only by the change of what sits under the blade: within 10 %, or
+/// within three times the counting noise 1/√n of the n particles counted when that is larger.
 const FLUX_AGREEMENT: f64 = 0.10;
 
 fn assert_open_case(r: &Value, what: &str) {
     let (mfr, flux) = (r["mfr"].as_f64().unwrap(), r["mfr_flux"].as_f64().unwrap());
+    let n = r["mfr_particles"].as_u64().unwrap() as f64;
     assert!(mfr > 0.0, "{what}: MFR {mfr}");
     // MFR is the layer's packing fraction over the gap: it cannot exceed random close packing.
     assert!(mfr < 0.64, "{what}: MFR {mfr} above random close packing");
-    assert!((mfr - flux).abs() <= FLUX_AGREEMENT * mfr, "{what}: MFR {mfr} vs flux {flux}");
+    let tolerance = FLUX_AGREEMENT.max(3.0 / n.sqrt());
+    assert!((mfr - flux).abs() <= tolerance * mfr, "{what}: MFR {mfr} vs flux {flux} ({n} counted)");
 }
 
 #[test]
@@ -79,8 +82,10 @@ fn thesis_corners_run_without_errors_or_lost_atoms() {
         let (code, r, err) = run_point(&sweep, &format!("diameter={d},gap={gap}"));
         assert_eq!(code, 0, "D = {d}, gap = {gap}: {err}");
         let mfr = r["mfr"].as_f64().unwrap();
-        if gap < d {
-            // No particle fits under the tip: zero flow, and that is a result, not a failure.
+        if gap < 0.67 * d {
+            // No particle fits under the tip, not even one resting in a pocket of the rough
+            // substrate (its top stands 0.67 D above the substrate's): zero flow, and that is a
+            // result, not a failure.
             assert_eq!(mfr, 0.0, "D = {d}, gap = {gap}");
             assert_eq!(r["mfr_flux"].as_f64().unwrap(), 0.0);
         } else if gap > d {
@@ -104,8 +109,8 @@ fn render_writes_the_three_files_of_a_point() {
     let deck = std::fs::read_to_string(out.join("in.liggghts")).unwrap();
     assert!(deck.contains("read_data       pile.data"));
     assert!(deck.contains("move/mesh"));
-    // Only what the scene needs: no VTK, no rolling friction when it is zero.
-    assert!(!deck.contains("vtk") && !deck.contains("rolling"));
+    // Only what the scene needs: no VTK; the default rolling friction on every contact.
+    assert!(!deck.contains("vtk") && deck.contains("rolling_friction epsd2"));
     assert!(std::fs::read_to_string(out.join("blade.stl")).unwrap().starts_with("solid blade"));
     assert!(out.join("pile.data").is_file());
 }
@@ -220,4 +225,48 @@ fn an_unstable_timestep_fails_the_run_instead_of_giving_a_number() {
     assert!(["unstable", "lost-atoms", "engine-error"].contains(&class), "{r}");
     assert!(!r["reason"].as_str().unwrap().is_empty());
     assert!(r.get("mfr").is_none());
+}
+
+/// A pile that is still moving when the settle's cap runs out is a failed run of its own class,
+/// never a number: here the rest criterion asks for an rms speed no pile reaches (1e-9 √(gD)).
+#[test]
+fn a_pile_still_moving_at_the_settle_cap_fails_as_not_settled() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = dir.path().join("s.toml");
+    std::fs::write(
+        &sweep,
+        "name = \"s\"\n[parameters]\ngap = { lo = 1.0, hi = 5.0 }\ndiameter = 3.0\n\
+         [scene]\nrest_speed = 1e-9\nsettle_max_s = 0.01\n",
+    )
+    .unwrap();
+    let (code, r, err) = run_point(&sweep, "gap=4");
+    assert_eq!(code, 1, "{err}\n{r}");
+    assert_eq!(r["class"], "not-settled", "{r}");
+    assert!(r["reason"].as_str().unwrap().contains("not settled after"), "{r}");
+    assert!(r.get("mfr").is_none());
+}
+
+/// The thesis's scene (a free pile on a smooth plate, no rolling friction, a fixed settle) stays
+/// reachable: its deck has no gate and no substrate, and it runs.
+#[test]
+fn the_thesis_layout_runs_on_a_smooth_plate() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = dir.path().join("s.toml");
+    std::fs::write(
+        &sweep,
+        "name = \"s\"\n[parameters]\ngap = { lo = 1.0, hi = 5.0 }\ndiameter = 3.0\nrolling_friction = 0.0\n\
+         [scene]\nlayout = \"thesis\"\n",
+    )
+    .unwrap();
+    let (code, r, err) = run_point(&sweep, "gap=4");
+    // The first scene's flow decays over the window; its run is either steady or reported
+    // unsteady with what it measured, never silently averaged.
+    match code {
+        0 => assert_open_case(&r, "thesis layout"),
+        1 => {
+            assert_eq!(r["class"], "unsteady", "{r}");
+            assert_open_case(&r["measured"], "thesis layout, unsteady");
+        }
+        _ => panic!("{err}\n{r}"),
+    }
 }

@@ -171,6 +171,10 @@ fn killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results() {
     assert_eq!(std::os::unix::process::ExitStatusExt::signal(&status), Some(libc::SIGKILL));
     wait_until("the killed sweep's jobs to die", Duration::from_secs(10), || alive_in(&groups).is_empty());
     let finished_before: Vec<String> = attempts(&killed).into_keys().collect();
+    // The run cut off by the kill left its claim: status shows it as interrupted.
+    let st = run(sweep_bin().args(["status", "--json"]).arg(&killed));
+    let st: serde_json::Value = serde_json::from_slice(&st.stdout).unwrap();
+    assert!(st["interrupted"].as_u64().unwrap() >= 1, "{st}");
     let o = run(sweep_bin().args(["resume", "--jobs", "2", "-q"]).arg(&killed));
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert_done_once(&killed);
@@ -291,4 +295,31 @@ fn a_deck_that_makes_liggghts_fail_is_reported_and_the_sweep_goes_on() {
     assert!(stderr(&o).contains("--force"), "{}", stderr(&o));
     assert_eq!(std::fs::read(out.join("manifest.json")).unwrap(), manifest);
     assert_eq!(attempts(&out).values().map(Vec::len).sum::<usize>(), 4, "nothing ran");
+}
+
+#[test]
+fn two_sweep_processes_started_at_once_on_one_new_directory_share_the_work() {
+    let tmp = tempfile::tempdir().unwrap();
+    let sweep = write_sweep(tmp.path(), "pair", "", None);
+    let out = tmp.path().join("out");
+    let spawn = || {
+        sweep_bin()
+            .args(["lds", sweep.to_str().unwrap(), "--max", "2", "--step", "2", "--jobs", "1", "-q", "--out"])
+            .arg(&out)
+            .stdin(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let (a, b) = (spawn(), spawn());
+    for c in [a, b] {
+        let o = c.wait_with_output().unwrap();
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    }
+    let a = attempts(&out);
+    assert_eq!(a.len(), 2);
+    assert!(a.values().all(|v| v == &vec!["done".to_string()]), "{a:?}");
+    let text = std::fs::read_to_string(out.join("joblog.tsv")).unwrap();
+    let seqs: BTreeSet<&str> = text.lines().skip(1).map(|l| l.split('\t').next().unwrap()).collect();
+    assert_eq!(seqs, BTreeSet::from(["1", "2"]), "{text}");
 }

@@ -45,8 +45,19 @@ const PILE_ASPECT: f64 = 1.5;
 /// Packing fraction assumed for a settled pile and an upper bound for a spread layer
 /// (random close packing ≈ 0.64; MFR cannot exceed it).
 const LAYER_FRACTION_MAX: f64 = 0.6;
+/// Gated layout: height of the heap pushed by the blade above the gap, in diameters.
+const GATED_HEAP_DIAMETERS: f64 = 10.0;
+/// Gated layout: MFR assumed when sizing the dose's deposit. The largest measured over a
+/// 24-point LDS draw of the thesis space was 0.117 (BENCHMARKS.md "Scene convergence").
+const MFR_ALLOWANCE: f64 = 0.15;
 /// Angle of repose used to size the heap the blade must still carry at the end, degrees.
 const REPOSE_DEG: f64 = 30.0;
+/// Rolling-friction model: EPSD2 (elastic-plastic spring-dashpot without the damper, Ai et al.
+/// 2011 model C), which holds a static heap still; CDT's constant torque makes resting spheres
+/// jitter.
+const ROLLING_MODEL: &str = "epsd2";
+/// Gated layout: simulated time between checks of the rest criterion, s.
+const SETTLE_CHECK_S: f64 = 0.005;
 /// Thesis fidelity: the fixed timestep of the thesis runs, s (Appendix A: 1e-5 s per step).
 pub const THESIS_TIMESTEP: f64 = 1e-5;
 /// Thesis v_x band: ±1 mm (Appendix A, `depth = 0.001`).
@@ -68,6 +79,10 @@ pub struct Scene {
     pub restitution: f64,
     pub friction: f64,
     pub rolling_friction: f64,
+    /// LIGGGHTS rolling-friction model (used when `rolling_friction` > 0).
+    pub rolling_model: &'static str,
+    /// `"gated"` or `"thesis"` (see [`crate::sweep::SceneSettings::layout`]).
+    pub layout: String,
     // Particles.
     pub size_classes: Vec<psd::SizeClass>,
     /// Seed of the pile's diameters and jitter.
@@ -90,6 +105,16 @@ pub struct Scene {
     pub x_hi: f64,
     pub depth: f64,
     pub z_hi: f64,
+    /// Bottom of the box and height of the plate: 0 on a smooth plate, minus one substrate
+    /// diameter under a rough substrate.
+    pub z_lo: f64,
+    // The rough substrate: fixed spheres on a square lattice, tops at z = 0 (none: 0 spheres).
+    pub substrate_particles: usize,
+    pub substrate_diameter: f64,
+    pub substrate_spacing: f64,
+    pub substrate_n: [usize; 2],
+    /// x of the gate closing the dose's region during the settle; 0: no gate.
+    pub gate_x: f64,
     // The initial pile: a jittered simple-cubic block nx × ny × nz with this spacing, from x0.
     pub pile_x0: f64,
     pub pile_x1: f64,
@@ -100,8 +125,18 @@ pub struct Scene {
     pub rayleigh_time: f64,
     pub timestep: f64,
     pub skin: f64,
+    /// Thesis layout: steps of the fixed-time settle. Gated: the settle runs at least this long
+    /// before the rest criterion is checked.
     pub settle_steps: u64,
-    /// Steps from the blade's start to the window's start.
+    /// Gated layout: translational kinetic energy of the powder below which it is at rest, J
+    /// (0: fixed-time settle).
+    pub rest_ke: f64,
+    /// The rms speed that `rest_ke` stands for, m/s.
+    pub rest_speed: f64,
+    /// Gated layout: steps between rest checks, and the most checks before the run fails.
+    pub settle_check_steps: u64,
+    pub settle_max_checks: u64,
+    /// Steps from the blade's start (step 0 of the spread) to the window's start.
     pub approach_steps: u64,
     /// Steps over which the blade accelerates linearly from rest to full speed.
     pub ramp_steps: u64,
@@ -168,9 +203,10 @@ impl Scene {
         }
 
         // Geometry in units of the mean diameter, so the particle count barely changes with D.
-        // The pile starts as a jittered simple-cubic block (an exact, reproducible count; no
-        // random insertion to fall short), which collapses into a heap while it settles. The
-        // depth is a whole number of lattice spacings so the periodic images keep their spacing.
+        // The dose starts as a jittered simple-cubic block (an exact, reproducible count; no
+        // random insertion to fall short). The depth is a whole number of lattice spacings so
+        // the periodic images keep their spacing.
+        let gated = settings.layout == "gated";
         let spacing = LATTICE_CLEARANCE * psd.max_diameter();
         let ny = ((settings.depth_diameters * d / spacing).round() as usize).max(3);
         let depth = ny as f64 * spacing;
@@ -178,19 +214,38 @@ impl Scene {
         let blade_x0 = d;
         let front0 = blade_x0 + blade_thickness;
         let pile_x0 = front0 + 0.5 * d;
-        // The heap the blade must still carry at the end: tall enough to fill the 12 v_x layers
-        // (z up to gap + 6 D), a triangle at the angle of repose.
-        let heap_height = gap + 6.0 * d;
-        let heap_area = heap_height.powi(2) / (2.0 * REPOSE_DEG.to_radians().tan());
-        let develop = 5.0 * d;
+        // The heap in front of the blade, a triangle at the angle of repose, times the supply
+        // factor. Thesis layout: the heap left at the window's end, tall enough to fill the 12
+        // v_x layers (z up to gap + 6 D). Gated: the heap the blade pushes through the window,
+        // gap + 10 D tall, whatever the window's length (MFR depends on the heap: the study
+        // measured +15 % at one point when a longer window's dose made the heap larger).
+        let heap_height = gap + if gated { GATED_HEAP_DIAMETERS } else { 6.0 } * d;
+        let heap_area = settings.supply_factor * heap_height.powi(2) / (2.0 * REPOSE_DEG.to_radians().tan());
         let window = settings.window_diameters * d;
-        // Travel = pile length (+ its slump) + develop + window; the pile length depends on
-        // the particle count, which depends on the travel: iterate to the fixed point.
+        // Travel of the blade's front from its start to the window's start, for a block of
+        // length `len` and height `height`. Gated: past the opened gate (the block's front) by
+        // the development length. Thesis: past the settled pile's slump (about half its
+        // height) and 5 D more.
+        let approach_travel = |len: f64, height: f64| {
+            if gated {
+                0.5 * d + len + settings.window_start_diameters * d
+            } else {
+                0.5 * d + len + 0.5 * height + 5.0 * d
+            }
+        };
+        // Travel = approach + window; the block's size depends on the particle count, which
+        // depends on the travel: iterate to the fixed point.
         let (mut nx, mut nz) = (0usize, 0usize);
         let mut pile_len = 10.0 * d;
         for _ in 0..50 {
-            let travel = pile_len + 0.5 * pile_len / PILE_ASPECT + develop + window;
-            let area = LAYER_FRACTION_MAX * (gap * travel + heap_area);
+            let travel = approach_travel(pile_len, pile_len / PILE_ASPECT) + window;
+            // Solid area (volume per depth) of the dose: the heap at a packing of 0.6, plus what
+            // the blade deposits over its travel. Thesis: at the upper bound (MFR 0.6), so the
+            // heap at the end is at least the planned one. Gated: at MFR_ALLOWANCE, the most
+            // the gated scene deposits, so the heap stays near its planned size whatever the
+            // window.
+            let deposit = if gated { MFR_ALLOWANCE } else { LAYER_FRACTION_MAX };
+            let area = LAYER_FRACTION_MAX * heap_area + deposit * gap * travel;
             let needed = (area * depth / psd.mean_volume()).ceil();
             let per_layer = needed / ny as f64;
             nz = ((per_layer / PILE_ASPECT).sqrt().ceil() as usize).max(1);
@@ -204,21 +259,22 @@ impl Scene {
         let particles = nx * ny * nz;
         let pile_x1 = pile_x0 + pile_len;
         let pile_z1 = nz as f64 * spacing;
-        // The settled pile slumps forward by about half its height; start measuring `develop`
-        // after that, with a heap fully formed in front of the blade.
-        let window_start_front = pile_x1 + 0.5 * pile_z1 + develop;
         let ramp_time = 2.0 * RAMP_DIAMETERS * d / speed;
         // Travel during the ramp is half of full speed × ramp time.
-        let approach_time = (window_start_front - front0) / speed + 0.5 * ramp_time;
+        let approach_time = approach_travel(pile_len, pile_z1) / speed + 0.5 * ramp_time;
         let window_time = window / speed;
-        // Settling: a free fall from the top of the insertion block, then as long again for
-        // the pile to come to rest.
-        let settle_time = 2.0 * (2.0 * pile_z1 / GRAVITY).sqrt() + 0.02;
+        // A free fall from the top of the block, then as long again for the pile to come to
+        // rest: the thesis layout's fixed settle, and the gated layout's least settle before
+        // the rest criterion is checked (a lattice block is briefly still before it collapses).
+        let fall_time = 2.0 * (2.0 * pile_z1 / GRAVITY).sqrt();
+        let settle_time = if gated { fall_time } else { fall_time + 0.02 };
 
         let intervals = (SUB_WINDOWS * SNAPSHOTS_PER_SUB_WINDOW) as f64;
         let dump_every = ((window_time / intervals) / timestep).ceil().max(1.0) as u64;
         let round_up = |t: f64| ((t / timestep).ceil() as u64).div_ceil(dump_every) * dump_every;
-        let settle_steps = round_up(settle_time);
+        let settle_steps = (settle_time / timestep).ceil() as u64;
+        let settle_check_steps = (SETTLE_CHECK_S / timestep).ceil() as u64;
+        let settle_max_checks = ((settings.settle_max_s - settle_time).max(0.0) / SETTLE_CHECK_S).ceil().max(1.0) as u64;
         let approach_steps = round_up(approach_time);
         let ramp_steps = ((ramp_time / timestep).ceil() as u64).max(1);
         let window_length_steps = (SUB_WINDOWS * SNAPSHOTS_PER_SUB_WINDOW) as u64 * dump_every;
@@ -233,7 +289,20 @@ impl Scene {
         // (v²/g): anything above it has exploded, and LIGGGHTS stops on the lost atom at once
         // (a shrink-wrapped top would follow an exploding particle and grow without bound).
         let z_hi = blade_top + 2.0 * d + speed * speed / GRAVITY;
-        let total_steps = settle_steps + approach_steps + window_length_steps;
+        // The rough substrate (gated layout): spheres of the mean diameter touching on a square
+        // lattice that fits the periodic depth, their tops at z = 0, so the gap is measured
+        // from the substrate's top as from the thesis's plate. The plate under it only catches
+        // a sphere small enough to fall through a pocket.
+        let rough = gated && settings.substrate == "rough";
+        let (substrate_n, substrate_spacing) = if rough {
+            let n_y = ((depth / d).floor() as usize).max(1);
+            let s = depth / n_y as f64;
+            ([(x_hi / s).floor() as usize, n_y], s)
+        } else {
+            ([0, 0], 0.0)
+        };
+        let z_lo = if rough { -d } else { 0.0 };
+        let total_steps = approach_steps + window_length_steps;
 
         let profile_diameter = if psd.is_mono() { d } else { psd.quantile(0.85) };
         let vx_band =
@@ -243,6 +312,10 @@ impl Scene {
         let mass = particles as f64 * density * psd.mean_volume();
         let v_ref = speed.max((2.0 * GRAVITY * blade_top).sqrt());
         let ke_limit = 0.5 * mass * (10.0 * v_ref).powi(2);
+        // At rest: rms speed below a small fraction of √(g·D), the speed a sphere gains
+        // falling through one diameter.
+        let rest_speed = settings.rest_speed * (GRAVITY * d).sqrt();
+        let rest_ke = if gated { 0.5 * mass * rest_speed * rest_speed } else { 0.0 };
 
         Ok(Scene {
             density,
@@ -251,6 +324,8 @@ impl Scene {
             restitution: get("restitution"),
             friction: get("friction"),
             rolling_friction: get("rolling_friction"),
+            rolling_model: ROLLING_MODEL,
+            layout: settings.layout.clone(),
             size_classes: psd.classes.clone(),
             seed: settings.seed,
             particles,
@@ -265,6 +340,12 @@ impl Scene {
             x_hi,
             depth,
             z_hi,
+            z_lo,
+            substrate_particles: substrate_n[0] * substrate_n[1],
+            substrate_diameter: if rough { d } else { 0.0 },
+            substrate_spacing,
+            substrate_n,
+            gate_x: if gated { pile_x1 } else { 0.0 },
             pile_x0,
             pile_x1,
             pile_z1,
@@ -275,6 +356,10 @@ impl Scene {
             // Half a smallest radius: particles move far less than that between list builds.
             skin: 0.25 * d_min,
             settle_steps,
+            rest_ke,
+            rest_speed,
+            settle_check_steps,
+            settle_max_checks,
             approach_steps,
             ramp_steps,
             dump_every,
@@ -287,19 +372,26 @@ impl Scene {
         })
     }
 
-    /// Timestep at which the blade starts moving.
+    /// Timestep at which the blade starts moving: the spread's steps count from it (the deck
+    /// resets the step counter once the pile has settled).
     pub fn blade_start_step(&self) -> u64 {
-        self.settle_steps
+        0
     }
 
     /// Timestep of the window's start (t1) and end (t2).
     pub fn window_steps(&self) -> (u64, u64) {
-        let t1 = self.settle_steps + self.approach_steps;
+        let t1 = self.approach_steps;
         (t1, t1 + self.window_length_steps)
     }
 
-    pub fn total_steps(&self) -> u64 {
+    /// Steps of the spread, from the blade's start to the window's end.
+    pub fn spread_steps(&self) -> u64 {
         self.window_steps().1
+    }
+
+    /// Atoms in the box: the powder and the substrate.
+    pub fn atoms(&self) -> usize {
+        self.particles + self.substrate_particles
     }
 
     /// x of the blade's rear face at timestep `step`: at rest until the blade starts, then a
@@ -370,11 +462,11 @@ mod tests {
             // The blade is at full speed when the window opens.
             assert!(t1 >= s.blade_start_step() + s.ramp_steps);
             // The blade never leaves the box.
-            assert!(s.blade_front_at(s.total_steps()) < s.x_hi);
+            assert!(s.blade_front_at(s.spread_steps()) < s.x_hi);
             assert!(s.blade_top < s.z_hi);
             // All step counts line up with the dump cadence.
             assert_eq!(t1 % s.dump_every, 0);
-            assert_eq!(s.total_steps() % s.dump_every, 0);
+            assert_eq!(s.spread_steps() % s.dump_every, 0);
         }
     }
 

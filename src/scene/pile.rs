@@ -31,7 +31,8 @@ pub fn class_counts(fractions: &[f64], n: usize) -> Vec<usize> {
 }
 
 /// The LIGGGHTS data file (atom style granular: id type diameter density x y z) of the pile,
-/// with the simulation box. Atom type 1; type 2 is the walls'.
+/// with the simulation box. Atom type 1; type 2 is the walls'; type 3 the fixed spheres of a
+/// rough substrate, numbered after the pile.
 pub fn pile_data(s: &Scene) -> String {
     let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
     let fractions: Vec<f64> = s.size_classes.iter().map(|c| c.fraction).collect();
@@ -48,9 +49,13 @@ pub fn pile_data(s: &Scene) -> String {
     let mut out = String::with_capacity(64 * s.particles + 256);
     let _ = write!(
         out,
-        "LIGGGHTS data file: demsweep initial pile\n\n{} atoms\n2 atom types\n\n\
-         0.0 {} xlo xhi\n0.0 {} ylo yhi\n0.0 {} zlo zhi\n\nAtoms\n\n",
-        s.particles, s.x_hi, s.depth, s.z_hi
+        "LIGGGHTS data file: demsweep initial pile\n\n{} atoms\n3 atom types\n\n\
+         0.0 {} xlo xhi\n0.0 {} ylo yhi\n{} {} zlo zhi\n\nAtoms\n\n",
+        s.atoms(),
+        s.x_hi,
+        s.depth,
+        s.z_lo,
+        s.z_hi
     );
     let mut id = 0;
     for k in 0..nz {
@@ -76,6 +81,19 @@ pub fn pile_data(s: &Scene) -> String {
                 );
                 id += 1;
             }
+        }
+    }
+    let [sx, sy] = s.substrate_n;
+    let h = s.substrate_spacing;
+    for i in 0..sx {
+        for j in 0..sy {
+            id += 1;
+            let c = [(i as f64 + 0.5) * h, (j as f64 + 0.5) * h, -0.5 * s.substrate_diameter];
+            let _ = writeln!(
+                out,
+                "{id} 3 {} {} {:.9e} {:.9e} {:.9e}",
+                s.substrate_diameter, s.density, c[0], c[1], c[2]
+            );
         }
     }
     out
@@ -113,15 +131,24 @@ mod tests {
         };
         let s = Scene::new(&BTreeMap::new(), &settings).unwrap();
         let a = atoms(&pile_data(&s));
-        assert_eq!(a.len(), s.particles);
+        assert_eq!(a.len(), s.atoms());
+        assert!(s.substrate_particles > 0);
         for (n, p) in a.iter().enumerate() {
             assert_eq!(p[0] as usize, n + 1);
             let r = p[2] / 2.0;
-            assert!(p[4] - r > 0.0 && p[4] + r < s.x_hi);
-            assert!(p[6] - r > 0.0 && p[6] + r < s.z_hi);
+            assert!(p[4] - r >= 0.0 && p[4] + r < s.x_hi);
+            if n < s.particles {
+                assert_eq!(p[1], 1.0);
+                assert!(p[6] - r > 0.0 && p[6] + r < s.z_hi);
+                assert!(p[4] + r < s.gate_x, "the dose lies behind the gate");
+            } else {
+                // The substrate: tops at z = 0, standing on the plate.
+                assert_eq!(p[1], 3.0);
+                assert!((p[6] + r).abs() < 1e-12 && (p[6] - r - s.z_lo).abs() < 1e-12);
+            }
         }
-        // No two spheres overlap (checked against lattice neighbours via a brute-force sample).
-        for i in (0..a.len()).step_by(7) {
+        // No sphere of the dose overlaps another or the substrate (a brute-force sample).
+        for i in (0..s.particles).step_by(7) {
             for j in 0..a.len() {
                 if i == j {
                     continue;
