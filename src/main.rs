@@ -4,14 +4,16 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
+use demsweep::convergence::{Criteria, Watch};
 use demsweep::error::{exit, Error};
 use demsweep::outcome::RunOutcome;
 use demsweep::point::{self, PointContext};
 use demsweep::process::CancelToken;
 use demsweep::progress::ProgressMode;
+use demsweep::stats::Bootstrap;
 use demsweep::store::DesignRecord;
 use demsweep::sweep::{Scrambling, Sweep};
-use demsweep::sweeprun::{self, RunAll, RunOptions, Summary};
+use demsweep::sweeprun::{self, RunOptions, Summary};
 
 /// Parameter sweeps of LIGGGHTS powder-spreading simulations.
 ///
@@ -30,23 +32,49 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run nested lattices (e.g. 5^d, 6^d, ...); a point shared by two levels runs once.
+    /// Run nested lattices (e.g. 5^d, 6^d, ...) until the MFR statistics converge; a point shared
+    /// by two levels runs once.
+    ///
+    /// Each level is one space; after each, the MFR statistics are compared with the previous
+    /// level's ([convergence] rule, or the flags below). Once the rule holds no new runs start.
+    /// Ends by writing the report (as `sweep report`) and printing the verdict, naming the level.
     Lattice(LatticeArgs),
-    /// Run scrambled-Halton points in batches of --step up to --max.
+    /// Run scrambled-Halton points in batches of --step up to --max, stopping once the MFR
+    /// statistics converge.
+    ///
+    /// Each prefix (step, 2·step, ...) is one space; after each, the MFR statistics are compared
+    /// with the previous prefix's ([convergence] rule, or the flags below). Once the rule holds no
+    /// new runs start. Ends by writing the report (as `sweep report`) and printing the verdict.
+    /// A larger --max on a converged directory extends it and judges again past its old extent.
     Lds(LdsArgs),
     /// Finish an interrupted sweep; every completed run is reused.
+    ///
+    /// Keeps the convergence rule and verdict of DIR/sweep.toml: a converged sweep runs nothing
+    /// more. Ends by writing the report.
     Resume(ResumeArgs),
     /// Counts of a sweep directory: done, failed, running, pending.
     Status(DirArgs),
-    /// (Re)write convergence.csv, summary.json and plots of a sweep directory [not yet implemented].
-    Report(DirArgs),
+    /// Write convergence.csv, summary.json and report/ (plots, report.html) of a sweep directory.
+    ///
+    /// Also rewrites results.csv from the run directories. One row per complete space in convergence.csv (statistics of the done runs' MFR with 95%
+    /// bootstrap intervals, relative changes, whether the rule holds); the verdict, counts,
+    /// timing, sensitivity indices and spreading quality in summary.json; every figure as SVG and
+    /// PNG and a self-contained report.html in DIR/report/. The rule is DIR/sweep.toml's
+    /// [convergence] unless overridden below. Prints the verdict and the path of report.html.
+    Report(ReportArgs),
     /// Print a design as CSV (header = swept parameter names, values in their units).
     Points(PointsArgs),
     /// Write the deck, blade mesh and initial pile of one point without running it.
     Render(RenderArgs),
     /// Run one point through LIGGGHTS and print its result.
     Run(RunArgs),
-    /// The four statistics (mean, std, skewness, kurtosis) of a CSV column, as JSON [not yet implemented].
+    /// The statistics of a CSV column (mean, std, skewness, kurtosis) with bootstrap intervals.
+    ///
+    /// Mean; standard deviation with divisor N; skewness as Pearson's second coefficient
+    /// 3·(mean − median)/S; kurtosis m4/S⁴ (not the excess); also the moment skewness and the
+    /// median. Empty cells and cells that are not finite numbers are skipped and counted. Skewness
+    /// and kurtosis are undefined (null) when every value is equal. Intervals: 95% percentile
+    /// bootstrap, 1,000 resamples, seed 14.
     Stats(StatsArgs),
     /// One single-contact case on the Hertz–Mindlin reference solver, as JSON.
     Contact(ContactArgs),
@@ -73,6 +101,8 @@ struct LatticeArgs {
     #[arg(long)]
     out: Option<PathBuf>,
     #[command(flatten)]
+    convergence: ConvergenceArgs,
+    #[command(flatten)]
     pool: PoolArgs,
 }
 
@@ -90,7 +120,50 @@ struct LdsArgs {
     #[arg(long)]
     out: Option<PathBuf>,
     #[command(flatten)]
+    convergence: ConvergenceArgs,
+    #[command(flatten)]
     pool: PoolArgs,
+}
+
+/// Overrides of the sweep file's [convergence] table. A sweep stops at the first space where the
+/// rule holds; `lattice`/`lds` record the overrides in DIR/sweep.toml, so `resume` keeps them.
+#[derive(Args)]
+struct ConvergenceArgs {
+    /// "all" (default: every statistic within the tolerance or the floor, for --hold
+    /// consecutive spaces) or "any" (the thesis's rule: any one statistic within the tolerance).
+    #[arg(long)]
+    rule: Option<String>,
+    /// Relative change between consecutive spaces that counts as converged (e.g. 0.05).
+    #[arg(long, allow_negative_numbers = true)]
+    tolerance: Option<f64>,
+    /// Absolute change that counts as converged whatever the relative one (rule "all").
+    #[arg(long, allow_negative_numbers = true)]
+    floor: Option<f64>,
+    /// Consecutive spaces the rule must hold for (rule "all").
+    #[arg(long)]
+    hold: Option<usize>,
+}
+
+impl ConvergenceArgs {
+    fn overrides(&self) -> demsweep::convergence::Overrides {
+        demsweep::convergence::Overrides {
+            rule: self.rule.clone(),
+            tolerance: self.tolerance,
+            floor: self.floor,
+            hold: self.hold,
+        }
+    }
+}
+
+#[derive(Args)]
+struct ReportArgs {
+    /// A sweep directory (holding manifest.json).
+    dir: PathBuf,
+    /// Also print summary.json to stdout.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    convergence: ConvergenceArgs,
 }
 
 #[derive(Args)]
@@ -403,9 +476,18 @@ struct ContactCheckArgs {
 
 #[derive(Args)]
 struct StatsArgs {
+    /// A CSV file with a header row (e.g. DIR/results.csv).
     file: PathBuf,
+    /// The column to describe, by header name (e.g. mfr).
     #[arg(long)]
     column: String,
+    /// Also the first-order sensitivity indices of the column to these columns (adjusted
+    /// correlation ratio, as in `sweep report`), on the rows where all are numbers.
+    #[arg(long, value_delimiter = ',', value_name = "COLUMNS")]
+    by: Vec<String>,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    json: bool,
 }
 
 fn main() {
@@ -427,10 +509,10 @@ fn run(cli: Cli) -> Result<i32, Error> {
         Command::Lds(a) => lds(a),
         Command::Resume(a) => resume(a),
         Command::Status(a) => status(a),
-        Command::Report(_) => Err(Error::NotYet("report")),
+        Command::Report(a) => report(a),
         Command::Render(a) => render(a),
         Command::Run(a) => run_one(a),
-        Command::Stats(_) => Err(Error::NotYet("stats")),
+        Command::Stats(a) => stats(a),
         Command::Contact(a) => contact(a),
         Command::ContactCheck(a) => contact_check(a),
         Command::Submit(a) => submit(a),
@@ -449,7 +531,8 @@ fn run_options(p: &PoolArgs, retry_failed: bool, force: bool) -> Result<RunOptio
 }
 
 fn lattice(a: LatticeArgs) -> Result<i32, Error> {
-    let sweep = Sweep::load(&a.sweep)?;
+    let mut sweep = Sweep::load(&a.sweep)?;
+    a.convergence.overrides().apply(&mut sweep.file.convergence)?;
     let levels = match a.levels {
         Some(levels) => {
             check_levels(sweep.dim(), &levels, "--levels")?;
@@ -484,7 +567,8 @@ fn check_levels(dim: usize, levels: &[usize], source: &str) -> Result<(), Error>
 }
 
 fn lds(a: LdsArgs) -> Result<i32, Error> {
-    let sweep = Sweep::load(&a.sweep)?;
+    let mut sweep = Sweep::load(&a.sweep)?;
+    a.convergence.overrides().apply(&mut sweep.file.convergence)?;
     let l = &sweep.file.design.lds;
     let file = a.sweep.display();
     let (step, step_src) = match a.step {
@@ -509,28 +593,56 @@ fn lds(a: LdsArgs) -> Result<i32, Error> {
     start(sweep, design, a.out, &a.pool)
 }
 
-fn start(sweep: Sweep, design: DesignRecord, out: Option<PathBuf>, p: &PoolArgs) -> Result<i32, Error> {
+fn start(mut sweep: Sweep, design: DesignRecord, out: Option<PathBuf>, p: &PoolArgs) -> Result<i32, Error> {
     let opts = run_options(p, false, false)?;
     let out = out.unwrap_or_else(|| sweeprun::default_out(&sweep));
     // Every input is checked before LIGGGHTS is looked at.
     sweeprun::check_out_dir(&out)?;
+    sweep.file.convergence.min_points = sweeprun::judge_from(&out, &sweep, &design)?;
     demsweep::process::install_interrupt_handler();
-    let exec = sweeprun::PointExecutor::new(sweep.clone())?;
-    let summary = sweeprun::start(&sweep, design, &out, &exec, &opts, &mut RunAll, &CancelToken::new())?;
-    Ok(finish(&summary))
+    let mut watch = Watch::new(Criteria::from_settings(&sweep.file.convergence));
+    let cancel = CancelToken::new();
+    let summary = if demsweep::standin::selected(&sweep) {
+        let exec = demsweep::standin::StandIn::new(sweep.clone());
+        sweeprun::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?
+    } else {
+        let exec = sweeprun::PointExecutor::new(sweep.clone())?;
+        sweeprun::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?
+    };
+    finish(&summary, &sweep)
 }
 
 fn resume(a: ResumeArgs) -> Result<i32, Error> {
     let opts = run_options(&a.pool, a.retry_failed, a.force)?;
     let sweep = sweeprun::load_dir_sweep(&a.dir)?;
     demsweep::process::install_interrupt_handler();
-    let exec = sweeprun::PointExecutor::new(sweep)?;
-    let summary = sweeprun::resume(&a.dir, &exec, &opts, &mut RunAll, &CancelToken::new())?;
-    Ok(finish(&summary))
+    // The same rule as the run that made the directory (DIR/sweep.toml), so a converged sweep
+    // stays stopped where it converged.
+    let mut watch = Watch::new(Criteria::from_settings(&sweep.file.convergence));
+    let cancel = CancelToken::new();
+    let summary = if demsweep::standin::selected(&sweep) {
+        let exec = demsweep::standin::StandIn::new(sweep.clone());
+        sweeprun::resume(&a.dir, &exec, &opts, &mut watch, &cancel)?
+    } else {
+        let exec = sweeprun::PointExecutor::new(sweep.clone())?;
+        sweeprun::resume(&a.dir, &exec, &opts, &mut watch, &cancel)?
+    };
+    finish(&summary, &sweep)
 }
 
-/// Say what to do next and return the exit code.
-fn finish(s: &Summary) -> i32 {
+/// Write the report, say what happened and what to do next, and return the exit code.
+fn finish(s: &Summary, sweep: &Sweep) -> Result<i32, Error> {
+    let criteria = Criteria::from_settings(&sweep.file.convergence);
+    let analysis = demsweep::report::analyse(&s.dir, &criteria, &Bootstrap::default())?;
+    let html = demsweep::report::write(&analysis)?;
+    let code = finish_runs(s);
+    eprintln!("{}: {}", analysis.verdict.status, analysis.verdict.reason);
+    eprintln!("report: {}", html.display());
+    Ok(code)
+}
+
+/// Say what to do next about the runs and return the exit code.
+fn finish_runs(s: &Summary) -> i32 {
     let dir = s.dir.display();
     if s.interrupted {
         eprintln!(
@@ -542,7 +654,7 @@ fn finish(s: &Summary) -> i32 {
         eprintln!("{} of {} runs failed; reasons: `sweep status {dir}`; re-run them: `sweep resume {dir} --retry-failed`", s.failed, s.points);
     }
     if let Some(space) = &s.stopped_after {
-        eprintln!("stopped after {space}");
+        eprintln!("the rule held after {space}: no new runs started");
     }
     s.exit_code()
 }
@@ -659,7 +771,8 @@ fn work(a: WorkArgs) -> Result<i32, Error> {
         "task {}: ran {} runs; the sweep has {} of {} points done, {} failed",
         a.task, summary.ran, summary.done, summary.points, summary.failed
     );
-    Ok(finish(&summary))
+    // A task writes no report: the dependent report job does, once every task has ended.
+    Ok(finish_runs(&summary))
 }
 
 fn status(a: DirArgs) -> Result<i32, Error> {
@@ -669,6 +782,80 @@ fn status(a: DirArgs) -> Result<i32, Error> {
         println!("{text}");
     } else {
         print!("{}", report.to_text());
+    }
+    Ok(exit::SUCCESS)
+}
+
+fn report(a: ReportArgs) -> Result<i32, Error> {
+    let sweep = sweeprun::load_dir_sweep(&a.dir)?;
+    let mut settings = sweep.file.convergence.clone();
+    a.convergence.overrides().apply(&mut settings)?;
+    let analysis =
+        demsweep::report::analyse(&a.dir, &Criteria::from_settings(&settings), &Bootstrap::default())?;
+    demsweep::report::rewrite_results(&a.dir)?;
+    let html = demsweep::report::write(&analysis)?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&analysis).map_err(|e| Error::Internal(e.to_string()))?);
+    }
+    eprintln!("{}: {}", analysis.verdict.status, analysis.verdict.reason);
+    eprintln!("report: {}", html.display());
+    Ok(exit::SUCCESS)
+}
+
+fn stats(a: StatsArgs) -> Result<i32, Error> {
+    let table = demsweep::report::read_columns(&a.file, &a.column, &a.by)?;
+    let column = &table.column;
+    let m = demsweep::stats::moments(&column.values);
+    let sensitivity = if a.by.is_empty() {
+        Vec::new()
+    } else {
+        let (x, y): (Vec<Vec<f64>>, Vec<f64>) = table.xy.iter().cloned().unzip();
+        demsweep::sensitivity::ranked(demsweep::sensitivity::first_order(&a.by, &x, &y))
+    };
+    let iv = demsweep::stats::bootstrap(&column.values, &Bootstrap::default());
+    if a.json {
+        let intervals: serde_json::Map<String, serde_json::Value> = demsweep::stats::STATISTICS
+            .iter()
+            .zip(iv)
+            .map(|(s, i)| (s.name().to_string(), serde_json::json!(i)))
+            .collect();
+        let out = serde_json::json!({
+            "file": a.file.display().to_string(),
+            "column": a.column,
+            "n": m.n,
+            "skipped_empty": column.empty,
+            "skipped_non_numeric": column.non_numeric,
+            "mean": m.mean,
+            "std": m.std,
+            "skewness": m.skewness,
+            "kurtosis": m.kurtosis,
+            "moment_skewness": m.moment_skewness,
+            "median": m.median,
+            "intervals": intervals,
+            "sensitivity": sensitivity,
+        });
+        println!("{}", serde_json::to_string_pretty(&out).map_err(|e| Error::Internal(e.to_string()))?);
+    } else {
+        let f = |v: Option<f64>| v.map_or("undefined".to_string(), |v| format!("{v:.6}"));
+        println!(
+            "{} column {}: n = {} ({} empty, {} not numbers skipped)",
+            a.file.display(),
+            a.column,
+            m.n,
+            column.empty,
+            column.non_numeric
+        );
+        for (s, i) in demsweep::stats::STATISTICS.iter().zip(iv) {
+            println!("  {:<16} {:>12}   95% interval [{}, {}]", s.name(), f(s.of(&m)), f(i.lo), f(i.hi));
+        }
+        println!("  {:<16} {:>12}", "moment_skewness", f(m.moment_skewness));
+        println!("  {:<16} {:>12}", "median", f(m.median));
+        if !sensitivity.is_empty() {
+            println!("first-order sensitivity of {} ({} rows):", a.column, table.xy.len());
+            for s in &sensitivity {
+                println!("  {:<16} {:>12}", s.parameter, f(s.first_order));
+            }
+        }
     }
     Ok(exit::SUCCESS)
 }

@@ -872,7 +872,7 @@ impl PointStatus {
 ///
 /// Columns: index, the swept parameters, status (`done`, `failed`, `pending`), failure (class),
 /// mfr, mfr_flux, mfr_particles, steady, vx_1..vx_12 (m/s, empty for an empty layer), runtime_s,
-/// hash.
+/// hash, quality (of the v_x profile, [`crate::quality`]; empty unless done).
 pub fn write_results(
     dir: &Path,
     parameters: &[String],
@@ -885,7 +885,7 @@ pub fn write_results(
     header.extend(parameters.iter().cloned());
     header.extend(["status", "failure", "mfr", "mfr_flux", "mfr_particles", "steady"].map(String::from));
     header.extend((1..=VX_LAYERS).map(|k| format!("vx_{k}")));
-    header.extend(["runtime_s", "hash"].map(String::from));
+    header.extend(["runtime_s", "hash", "quality"].map(String::from));
     w.write_record(&header).expect("in-memory csv");
     for (p, s) in points.iter().zip(status) {
         let mut row: Vec<String> = vec![p.index.to_string()];
@@ -917,6 +917,10 @@ pub fn write_results(
             }
         }
         row.push(p.hash.clone());
+        row.push(match s {
+            PointStatus::Done(r) => crate::quality::of_result(r).as_str().into(),
+            _ => String::new(),
+        });
         w.write_record(&row).expect("in-memory csv");
     }
     let bytes = w.into_inner().expect("in-memory csv");

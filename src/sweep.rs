@@ -116,7 +116,9 @@ pub enum Scrambling {
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct ConvergenceSettings {
-    /// `"all"` (default: every statistic within tolerance) or `"any"` (the thesis's rule).
+    /// `"all"` (default: every statistic within tolerance, with the floor, held for `hold`
+    /// spaces) or `"any"` (the thesis's rule: any one statistic within tolerance; floor and hold
+    /// do not apply). See [`crate::convergence`].
     pub rule: String,
     /// Relative change of a statistic between consecutive spaces that counts as converged.
     pub tolerance: f64,
@@ -124,11 +126,14 @@ pub struct ConvergenceSettings {
     pub floor: f64,
     /// Consecutive spaces the rule must hold for.
     pub hold: usize,
+    /// No space with fewer points counts as converged. `sweep lds --max M` on a converged
+    /// directory sets it to the old extent, so that the extension is judged on its own.
+    pub min_points: usize,
 }
 
 impl Default for ConvergenceSettings {
     fn default() -> Self {
-        ConvergenceSettings { rule: "all".into(), tolerance: 0.05, floor: 0.01, hold: 2 }
+        ConvergenceSettings { rule: "all".into(), tolerance: 0.05, floor: 0.01, hold: 2, min_points: 0 }
     }
 }
 

@@ -458,9 +458,12 @@ fn plain_io(e: &std::io::Error) -> String {
 /// kind and sweep apart from the design, the same identity, and its points a prefix of ours.
 fn check_extension(dir: &Path, old: &Manifest, old_toml: &str, new: &Manifest, new_toml: &str) -> Result<()> {
     let d = dir.display();
+    // The design may grow; the convergence rule may change (it decides when to stop, not what
+    // a run gives).
     let without_design = |t: &str| -> Option<toml::Table> {
         let mut v: toml::Table = toml::from_str(t).ok()?;
         v.remove("design");
+        v.remove("convergence");
         Some(v)
     };
     if std::mem::discriminant(&old.design) != std::mem::discriminant(&new.design) {
@@ -538,6 +541,30 @@ pub fn identity_diff(old: &serde_json::Value, new: &serde_json::Value) -> Vec<St
     let mut out = Vec::new();
     walk("", old, new, &mut out);
     out
+}
+
+/// The `min_points` a run of `design` into `out` judges convergence from.
+///
+/// Extending an existing directory (a larger `--max`, more levels) is asked for on purpose, so
+/// no space it already had may stop the extension: judging starts past its largest space. Running
+/// the same design again keeps the directory's own `min_points`. A new directory (or one that is
+/// not a sweep: `start` refuses it) uses the sweep file's.
+pub fn judge_from(out: &Path, sweep: &Sweep, design: &DesignRecord) -> Result<usize> {
+    let own = sweep.file.convergence.min_points;
+    let Ok((old, old_toml)) = Store::read_manifest(out) else {
+        return Ok(own);
+    };
+    let old_min =
+        Sweep::parse(&old_toml, &out.join("sweep.toml")).map_or(0, |s| s.file.convergence.min_points);
+    let extends = match (&old.design, design) {
+        (DesignRecord::Lds { max: a, .. }, DesignRecord::Lds { max: b, .. }) => b > a,
+        (DesignRecord::Lattice { levels: a }, DesignRecord::Lattice { levels: b }) => {
+            b.len() > a.len() && b.starts_with(a)
+        }
+        _ => false,
+    };
+    let extent = old.spaces.iter().map(|s| s.points.len()).max().unwrap_or(0);
+    Ok(if extends { own.max(extent + 1) } else { own.max(old_min) })
 }
 
 /// Read the sweep of an existing directory (its resolved `sweep.toml`), checked against its
@@ -896,7 +923,7 @@ pub struct StatusReport {
     pub damaged: Vec<String>,
     /// Failures by class: count and the first few (by point index) with their reasons.
     pub failures: BTreeMap<String, FailureGroup>,
-    /// Convergence verdict; `None` until convergence checking exists.
+    /// Convergence verdict of the last report (summary.json); `None` before the first.
     pub converged: Option<bool>,
 }
 
@@ -931,7 +958,7 @@ pub fn status(dir: &Path) -> Result<StatusReport> {
         interrupted: 0,
         damaged: Vec::new(),
         failures: BTreeMap::new(),
-        converged: None,
+        converged: read_verdict(dir),
     };
     // The last attempt of each run, for runs cancelled part-way.
     let mut last: HashMap<String, String> = HashMap::new();
@@ -974,6 +1001,13 @@ pub fn status(dir: &Path) -> Result<StatusReport> {
         }
     }
     Ok(r)
+}
+
+/// The verdict of the last report (`DIR/summary.json`), if one was written.
+fn read_verdict(dir: &Path) -> Option<bool> {
+    let text = std::fs::read_to_string(dir.join("summary.json")).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    v.get("verdict")?.get("converged")?.as_bool()
 }
 
 impl StatusReport {

@@ -1,0 +1,522 @@
+//! The report of a sweep directory: `convergence.csv`, `summary.json` and `report/` (plots as
+//! SVG and PNG, and a self-contained `report.html`), DESIGN §4 and §6.
+//!
+//! [`analyse`] reads the directory (manifest, run dirs, joblog) and computes everything: the
+//! statistics of each complete space with bootstrap intervals, the convergence verdict, counts,
+//! timing, sensitivity indices, spreading quality and the best points. [`write`] turns that into
+//! files. Reading fails before anything is written, so a bad directory changes nothing.
+//!
+//! Not responsible for running anything or for the statistics themselves ([`crate::stats`],
+//! [`crate::convergence`], [`crate::sensitivity`], [`crate::quality`]).
+
+mod html;
+mod plots;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use crate::convergence::{self, Change, Criteria, Judgement};
+use crate::error::{Error, Result};
+use crate::outcome::RunResult;
+use crate::quality::{self, Quality};
+use crate::sensitivity;
+use crate::stats::{self, Bootstrap, Interval, Moments, STATISTICS};
+use crate::store::{DesignRecord, Manifest, RunState, Store};
+use crate::sweep::Sweep;
+
+/// Version of `summary.json`.
+pub const SUMMARY_FORMAT: u32 = 1;
+/// Points listed as the best ideal ones.
+const BEST: usize = 5;
+
+/// One design point as the report sees it.
+#[derive(Debug, Clone)]
+pub struct PointRow {
+    pub index: usize,
+    pub values: Vec<f64>,
+    pub state: PointState,
+}
+
+#[derive(Debug, Clone)]
+pub enum PointState {
+    Done { result: Box<RunResult>, quality: Quality },
+    Failed { class: String },
+    Pending,
+}
+
+impl PointRow {
+    pub fn done(&self) -> Option<(&RunResult, Quality)> {
+        match &self.state {
+            PointState::Done { result, quality } => Some((result, *quality)),
+            _ => None,
+        }
+    }
+}
+
+/// One complete space (all its points finished), as judged.
+#[derive(Debug, Clone, Serialize)]
+pub struct SpaceRow {
+    pub label: String,
+    /// Points in the space.
+    pub n: usize,
+    pub done: usize,
+    pub failed: usize,
+    /// Statistics of the done runs' MFR.
+    pub statistics: Moments,
+    /// Bootstrap intervals of mean, std, skewness, kurtosis.
+    pub intervals: BTreeMap<&'static str, Interval>,
+    /// Changes from the previous space (`None` for the first).
+    pub changes: Option<BTreeMap<&'static str, Change>>,
+    pub holds: bool,
+    pub converged: bool,
+    /// Indices (into the manifest's points) of the space's points: for plots, not the JSON.
+    #[serde(skip)]
+    pub members: Vec<usize>,
+}
+
+/// The verdict in words and numbers.
+#[derive(Debug, Clone, Serialize)]
+pub struct Verdict {
+    /// `converged`, `not-converged` (every space finished, the rule never held) or `unfinished`
+    /// (spaces still have pending points: an interrupted or stopped sweep).
+    pub status: &'static str,
+    pub converged: bool,
+    /// The first space where the rule held.
+    pub space: Option<String>,
+    pub n: Option<usize>,
+    /// One sentence: where and by which rule, or the last changes.
+    pub reason: String,
+    /// Relative changes of the last judged space from the one before (null where undefined).
+    pub last_changes: Option<BTreeMap<&'static str, Option<f64>>>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Counts {
+    pub points: usize,
+    pub done: usize,
+    pub failed: usize,
+    pub pending: usize,
+    pub failures_by_class: BTreeMap<String, usize>,
+    /// Spaces whose every point finished, of all spaces.
+    pub spaces_complete: usize,
+    pub spaces: usize,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Timing {
+    /// Time during which at least one run was going (union of the joblog's attempts), s.
+    pub wall_time_s: f64,
+    /// Sum of every attempt's run time, s.
+    pub core_seconds: f64,
+    pub attempts: usize,
+}
+
+/// A point worth recommending.
+#[derive(Debug, Clone, Serialize)]
+pub struct BestPoint {
+    pub index: usize,
+    pub parameters: BTreeMap<String, f64>,
+    pub mfr: f64,
+    pub quality: Quality,
+}
+
+/// Everything the report says: `summary.json` is this, serialised.
+#[derive(Debug, Clone, Serialize)]
+pub struct Analysis {
+    pub format: u32,
+    pub tool: String,
+    pub name: String,
+    pub description: String,
+    #[serde(skip)]
+    pub dir: PathBuf,
+    pub design: DesignRecord,
+    pub parameters: Vec<String>,
+    /// Units of the parameters, in the same order.
+    pub units: Vec<String>,
+    pub engine: String,
+    pub criteria: Criteria,
+    pub verdict: Verdict,
+    /// Statistics of the converged space, or of the last complete one.
+    pub statistics: Option<Moments>,
+    pub counts: Counts,
+    pub timing: Timing,
+    pub spaces: Vec<SpaceRow>,
+    /// First-order indices of MFR over every done point, largest first.
+    pub sensitivity: Vec<sensitivity::Index>,
+    /// Done points per spreading-quality class.
+    pub quality: BTreeMap<&'static str, usize>,
+    /// Highest MFR among the ideal points.
+    pub best_ideal: Vec<BestPoint>,
+    #[serde(skip)]
+    pub points: Vec<PointRow>,
+}
+
+/// Read a sweep directory and analyse it with `criteria`.
+pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Analysis> {
+    let (manifest, toml) = Store::read_manifest(dir)?;
+    let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
+    let store = Store::open(dir);
+    let points: Vec<PointRow> = manifest
+        .points
+        .iter()
+        .map(|p| PointRow {
+            index: p.index,
+            values: p.values.clone(),
+            state: match store.finished(&p.hash) {
+                Some(RunState::Done(r)) => {
+                    let quality = quality::of_result(&r);
+                    PointState::Done { result: r, quality }
+                }
+                Some(RunState::Failed(f)) => PointState::Failed { class: f.class.as_str().to_string() },
+                _ => PointState::Pending,
+            },
+        })
+        .collect();
+    let spaces = judge_spaces(&manifest, &points, criteria, boot);
+    let counts = count(&manifest, &points, spaces.len());
+    let verdict = verdict(&spaces, &counts, criteria);
+    let statistics = spaces.iter().find(|s| s.converged).or(spaces.last()).map(|s| s.statistics);
+    let done: Vec<(&PointRow, &RunResult, Quality)> =
+        points.iter().filter_map(|p| p.done().map(|(r, q)| (p, r, q))).collect();
+    let x: Vec<Vec<f64>> = done.iter().map(|(p, _, _)| p.values.clone()).collect();
+    let y: Vec<f64> = done.iter().map(|(_, r, _)| r.mfr).collect();
+    let sensitivity = sensitivity::ranked(sensitivity::first_order(&manifest.parameters, &x, &y));
+    let mut quality: BTreeMap<&'static str, usize> = Quality::ALL.iter().map(|q| (q.as_str(), 0)).collect();
+    for (_, _, q) in &done {
+        *quality.entry(q.as_str()).or_default() += 1;
+    }
+    let mut ideal: Vec<&(&PointRow, &RunResult, Quality)> =
+        done.iter().filter(|(_, _, q)| *q == Quality::Ideal).collect();
+    ideal.sort_by(|a, b| b.1.mfr.total_cmp(&a.1.mfr));
+    let best_ideal = ideal
+        .iter()
+        .take(BEST)
+        .map(|(p, r, q)| BestPoint {
+            index: p.index,
+            parameters: manifest.parameters.iter().cloned().zip(p.values.iter().copied()).collect(),
+            mfr: r.mfr,
+            quality: *q,
+        })
+        .collect();
+    let units = sweep.swept.iter().map(|p| p.unit.to_string()).collect();
+    let engine = manifest
+        .identity
+        .get("engine")
+        .or_else(|| manifest.identity.get("engine_version"))
+        .map(|v| v.as_str().map(String::from).unwrap_or_else(|| v.to_string()))
+        .unwrap_or_else(|| "unknown".into());
+    Ok(Analysis {
+        format: SUMMARY_FORMAT,
+        tool: format!("demsweep {}", env!("CARGO_PKG_VERSION")),
+        name: manifest.name.clone(),
+        description: sweep.file.description.clone(),
+        dir: dir.to_path_buf(),
+        design: manifest.design.clone(),
+        parameters: manifest.parameters.clone(),
+        units,
+        engine,
+        criteria: *criteria,
+        verdict,
+        statistics,
+        counts,
+        timing: timing(dir),
+        spaces,
+        sensitivity,
+        quality,
+        best_ideal,
+        points,
+    })
+}
+
+/// Statistics, intervals and judgements of the complete spaces, in order, up to the first
+/// space that still has pending points.
+fn judge_spaces(manifest: &Manifest, points: &[PointRow], c: &Criteria, boot: &Bootstrap) -> Vec<SpaceRow> {
+    let mut rows = Vec::new();
+    let mut judged: Vec<(usize, Moments)> = Vec::new();
+    for space in &manifest.spaces {
+        let members: Vec<&PointRow> = space.points.iter().map(|&i| &points[i]).collect();
+        if members.iter().any(|p| matches!(p.state, PointState::Pending)) {
+            break;
+        }
+        let mfr: Vec<f64> =
+            members.iter().filter_map(|p| p.done().map(|(r, _)| r.mfr)).filter(|v| v.is_finite()).collect();
+        let m = stats::moments(&mfr);
+        let iv = stats::bootstrap(&mfr, boot);
+        judged.push((members.len(), m));
+        rows.push(SpaceRow {
+            label: space.label.clone(),
+            n: members.len(),
+            done: mfr.len(),
+            failed: members.iter().filter(|p| matches!(p.state, PointState::Failed { .. })).count(),
+            statistics: m,
+            intervals: STATISTICS.iter().zip(iv).map(|(s, i)| (s.name(), i)).collect(),
+            changes: None,
+            holds: false,
+            converged: false,
+            members: space.points.clone(),
+        });
+    }
+    let j: Vec<Judgement> = convergence::judge(&judged, c);
+    for (row, j) in rows.iter_mut().zip(j) {
+        row.changes = j.changes.map(|ch| STATISTICS.iter().zip(ch).map(|(s, c)| (s.name(), c)).collect());
+        row.holds = j.holds;
+        row.converged = j.converged;
+    }
+    rows
+}
+
+fn count(manifest: &Manifest, points: &[PointRow], complete: usize) -> Counts {
+    let mut c = Counts {
+        points: points.len(),
+        done: 0,
+        failed: 0,
+        pending: 0,
+        failures_by_class: BTreeMap::new(),
+        spaces_complete: complete,
+        spaces: manifest.spaces.len(),
+    };
+    for p in points {
+        match &p.state {
+            PointState::Done { .. } => c.done += 1,
+            PointState::Failed { class } => {
+                c.failed += 1;
+                *c.failures_by_class.entry(class.clone()).or_default() += 1;
+            }
+            PointState::Pending => c.pending += 1,
+        }
+    }
+    c
+}
+
+fn pct(v: Option<f64>) -> String {
+    v.map_or("undefined".into(), |v| format!("{:.1}%", v * 100.0))
+}
+
+fn verdict(spaces: &[SpaceRow], counts: &Counts, c: &Criteria) -> Verdict {
+    let last_changes = spaces
+        .last()
+        .and_then(|s| s.changes.as_ref())
+        .map(|ch| ch.iter().map(|(k, v)| (*k, v.rel)).collect::<BTreeMap<_, _>>());
+    let failures = |s: &SpaceRow| {
+        if s.failed > 0 {
+            format!(" ({} failed run(s) left out; judged on {} done)", s.failed, s.done)
+        } else {
+            String::new()
+        }
+    };
+    if let Some(s) = spaces.iter().find(|s| s.converged) {
+        return Verdict {
+            status: "converged",
+            converged: true,
+            space: Some(s.label.clone()),
+            n: Some(s.n),
+            reason: format!("converged at N = {} ({}) by {}{}", s.n, s.label, c.describe(), failures(s)),
+            last_changes,
+        };
+    }
+    let changes = |ch: &BTreeMap<&'static str, Option<f64>>| {
+        STATISTICS
+            .iter()
+            .map(|s| format!("{} {}", s.name(), pct(ch.get(s.name()).copied().flatten())))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let last = match (spaces.last(), &last_changes) {
+        (Some(s), Some(ch)) => format!("; last changes ({}): {}", s.label, changes(ch)),
+        _ => String::new(),
+    };
+    if counts.spaces_complete < counts.spaces {
+        Verdict {
+            status: "unfinished",
+            converged: false,
+            space: None,
+            n: None,
+            reason: format!(
+                "not converged so far: {} of {} spaces complete, {} point(s) pending{last}",
+                counts.spaces_complete, counts.spaces, counts.pending
+            ),
+            last_changes,
+        }
+    } else {
+        Verdict {
+            status: "not-converged",
+            converged: false,
+            space: None,
+            n: None,
+            reason: format!(
+                "not converged after N = {} by {}{last}",
+                spaces.last().map_or(0, |s| s.n),
+                c.describe()
+            ),
+            last_changes,
+        }
+    }
+}
+
+/// Wall time (union of attempts) and core-seconds from `joblog.tsv`, read by column name.
+fn timing(dir: &Path) -> Timing {
+    let text = std::fs::read_to_string(dir.join("joblog.tsv")).unwrap_or_default();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or("").split('\t').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name);
+    let (Some(si), Some(ri)) = (col("start"), col("runtime_s")) else {
+        return Timing { wall_time_s: 0.0, core_seconds: 0.0, attempts: 0 };
+    };
+    let mut spans: Vec<(f64, f64)> = lines
+        .filter_map(|l| {
+            let f: Vec<&str> = l.split('\t').collect();
+            let s: f64 = f.get(si)?.parse().ok()?;
+            let r: f64 = f.get(ri)?.parse().ok()?;
+            (s.is_finite() && r.is_finite()).then_some((s, s + r.max(0.0)))
+        })
+        .collect();
+    let core_seconds = spans.iter().map(|(a, b)| b - a).sum();
+    let attempts = spans.len();
+    spans.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut wall = 0.0;
+    let mut cur: Option<(f64, f64)> = None;
+    for (a, b) in spans {
+        cur = match cur {
+            Some((ca, cb)) if a <= cb => Some((ca, cb.max(b))),
+            Some((ca, cb)) => {
+                wall += cb - ca;
+                Some((a, b))
+            }
+            None => Some((a, b)),
+        };
+    }
+    if let Some((a, b)) = cur {
+        wall += b - a;
+    }
+    Timing { wall_time_s: wall, core_seconds, attempts }
+}
+
+/// Rewrite `DIR/results.csv` from the run dirs (`sweep report`: a directory written by an older
+/// version gains the newer columns, such as `quality`).
+pub fn rewrite_results(dir: &Path) -> Result<()> {
+    use crate::store::PointStatus;
+    let (m, _) = Store::read_manifest(dir)?;
+    let store = Store::open(dir);
+    let status: Vec<PointStatus> = m
+        .points
+        .iter()
+        .map(|p| match store.finished(&p.hash) {
+            Some(RunState::Done(r)) => PointStatus::Done(r),
+            Some(RunState::Failed(f)) => PointStatus::Failed(f),
+            _ => PointStatus::Pending,
+        })
+        .collect();
+    Ok(crate::store::write_results(dir, &m.parameters, &m.points, &status)?)
+}
+
+/// Write `convergence.csv`, `summary.json` and `report/` into the analysed directory; returns
+/// the path of `report.html`.
+pub fn write(a: &Analysis) -> Result<PathBuf> {
+    let io = |p: &Path, e: std::io::Error| Error::Internal(format!("cannot write {}: {e}", p.display()));
+    let csv_path = a.dir.join("convergence.csv");
+    crate::atomic::write(&csv_path, convergence_csv(a).as_bytes()).map_err(|e| io(&csv_path, e))?;
+    let json_path = a.dir.join("summary.json");
+    crate::outcome::write_json_atomic(&json_path, a).map_err(|e| io(&json_path, e))?;
+    let out = a.dir.join("report");
+    std::fs::create_dir_all(&out).map_err(|e| io(&out, e))?;
+    let figures = plots::draw_all(a).map_err(|e| Error::Internal(format!("cannot draw the plots: {e}")))?;
+    for f in &figures {
+        for (ext, bytes) in [("svg", f.svg.as_bytes()), ("png", f.png.as_slice())] {
+            let p = out.join(format!("{}.{ext}", f.name));
+            crate::atomic::write(&p, bytes).map_err(|e| io(&p, e))?;
+        }
+    }
+    let html_path = out.join("report.html");
+    crate::atomic::write(&html_path, html::render(a, &figures).as_bytes()).map_err(|e| io(&html_path, e))?;
+    Ok(html_path)
+}
+
+/// Columns of a CSV file, by header name, for `sweep stats`.
+#[derive(Debug, Clone)]
+pub struct CsvColumns {
+    /// The described column: its numbers, with empty and non-numeric cells counted.
+    pub column: stats::Column,
+    /// Rows where the column and every `by` column are numbers: (by values, column value).
+    pub xy: Vec<(Vec<f64>, f64)>,
+}
+
+/// Read `column` (and the `by` columns) of a CSV file by header name: empty cells and
+/// non-numbers are skipped and counted. A missing file or column, or a column with no numbers,
+/// is bad input, named in one line.
+pub fn read_columns(path: &Path, column: &str, by: &[String]) -> Result<CsvColumns> {
+    let p = path.display();
+    let bytes = std::fs::read(path).map_err(|e| {
+        Error::input(format!(
+            "cannot read {p}: {}",
+            if e.kind() == std::io::ErrorKind::NotFound { "no such file".to_string() } else { e.to_string() }
+        ))
+    })?;
+    let mut r = csv::ReaderBuilder::new().flexible(true).from_reader(bytes.as_slice());
+    let header = r.headers().map_err(|e| Error::input(format!("{p}: not a CSV file: {e}")))?.clone();
+    if header.is_empty() || header.iter().all(|h| h.trim().is_empty()) {
+        return Err(Error::input(format!("{p}: empty file; expected a header row with a column `{column}`")));
+    }
+    let find = |name: &str| {
+        header.iter().position(|h| h.trim() == name).ok_or_else(|| {
+            Error::input(format!(
+                "{p}: no column `{name}`{}; columns: {}",
+                crate::error::hint(name, header.iter()),
+                header.iter().collect::<Vec<_>>().join(", ")
+            ))
+        })
+    };
+    let i = find(column)?;
+    let js: Vec<usize> = by.iter().map(|b| find(b)).collect::<Result<_>>()?;
+    let mut cells = Vec::new();
+    let mut xy = Vec::new();
+    let num = |s: &str| s.trim().parse::<f64>().ok().filter(|v| v.is_finite());
+    for (line, rec) in r.records().enumerate() {
+        let rec = rec.map_err(|e| Error::input(format!("{p}: row {}: {e}", line + 2)))?;
+        let cell = rec.get(i).unwrap_or("");
+        if let Some(y) = num(cell) {
+            let x: Option<Vec<f64>> = js.iter().map(|&j| num(rec.get(j).unwrap_or(""))).collect();
+            if let Some(x) = x {
+                xy.push((x, y));
+            }
+        }
+        cells.push(cell.to_string());
+    }
+    let c = stats::parse_cells(cells.iter().map(String::as_str));
+    if c.values.is_empty() {
+        return Err(Error::input(format!(
+            "{p}: column `{column}` has no numbers ({} empty, {} not numbers)",
+            c.empty, c.non_numeric
+        )));
+    }
+    Ok(CsvColumns { column: c, xy })
+}
+
+/// `convergence.csv`: one row per complete space. Empty cells where a value is undefined.
+pub fn convergence_csv(a: &Analysis) -> String {
+    let opt = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let mut header: Vec<String> = ["space", "n", "done", "failed"].map(String::from).to_vec();
+    for s in STATISTICS {
+        header.extend([s.name().to_string(), format!("{}_lo", s.name()), format!("{}_hi", s.name())]);
+    }
+    header.extend(["moment_skewness", "median"].map(String::from));
+    header.extend(STATISTICS.iter().map(|s| format!("change_{}", s.name())));
+    header.extend(["holds", "converged"].map(String::from));
+    w.write_record(&header).expect("in-memory csv");
+    for s in &a.spaces {
+        let mut row = vec![s.label.clone(), s.n.to_string(), s.done.to_string(), s.failed.to_string()];
+        for st in STATISTICS {
+            let iv = s.intervals[st.name()];
+            row.extend([opt(st.of(&s.statistics)), opt(iv.lo), opt(iv.hi)]);
+        }
+        row.extend([opt(s.statistics.moment_skewness), opt(s.statistics.median)]);
+        for st in STATISTICS {
+            row.push(opt(s.changes.as_ref().and_then(|c| c[st.name()].rel)));
+        }
+        row.extend([s.holds.to_string(), s.converged.to_string()]);
+        w.write_record(&row).expect("in-memory csv");
+    }
+    String::from_utf8(w.into_inner().expect("in-memory csv")).expect("utf-8")
+}

@@ -1,0 +1,398 @@
+//! Convergence and the report end to end, through the `sweep` binary: the stand-in engine
+//! (`[run] engine = "stand-in"`) for sweeps that stop by themselves, resume and extension, and
+//! real LIGGGHTS on `sweeps/quick.toml` for one sweep that ends with a report. Statistics are
+//! checked against values recomputed here from results.csv, never against our own output.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+fn sweep(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sweep")).args(args).stdin(Stdio::null()).output().unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn p(path: &Path) -> &str {
+    path.to_str().unwrap()
+}
+
+/// The thesis's 4-D space on the stand-in.
+fn standin_sweep(dir: &Path, name: &str, convergence: &str) -> PathBuf {
+    let text = format!(
+        r#"name = "{name}"
+[parameters]
+friction    = {{ lo = 0.1, hi = 0.3 }}
+diameter    = {{ lo = 1.0, hi = 3.0, unit = "mm" }}
+gap         = {{ lo = 1.0, hi = 5.0, unit = "mm" }}
+blade_speed = {{ lo = 1.2, hi = 1.6, unit = "m/s" }}
+[convergence]
+{convergence}
+[run]
+engine = "stand-in"
+"#
+    );
+    let path = dir.join(format!("{name}.toml"));
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// results.csv by header name: one map per row.
+fn results(dir: &Path) -> Vec<BTreeMap<String, String>> {
+    let mut r = csv::Reader::from_path(dir.join("results.csv")).unwrap();
+    let h = r.headers().unwrap().clone();
+    r.records()
+        .map(|rec| h.iter().zip(rec.unwrap().iter()).map(|(k, v)| (k.into(), v.into())).collect())
+        .collect()
+}
+
+fn convergence_rows(dir: &Path) -> Vec<BTreeMap<String, String>> {
+    let mut r = csv::Reader::from_path(dir.join("convergence.csv")).unwrap();
+    let h = r.headers().unwrap().clone();
+    r.records()
+        .map(|rec| h.iter().zip(rec.unwrap().iter()).map(|(k, v)| (k.into(), v.into())).collect())
+        .collect()
+}
+
+fn summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+}
+
+fn joblog_lines(dir: &Path) -> usize {
+    std::fs::read_to_string(dir.join("joblog.tsv")).unwrap().lines().count() - 1
+}
+
+/// Mean, std (divisor N), median, Pearson 2 and m4/S⁴ written out plainly.
+fn plain_stats(x: &[f64]) -> [f64; 4] {
+    let n = x.len() as f64;
+    let mean = x.iter().sum::<f64>() / n;
+    let s = (x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt();
+    let mut sorted = x.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let k = sorted.len();
+    let median = if k % 2 == 1 { sorted[k / 2] } else { 0.5 * (sorted[k / 2 - 1] + sorted[k / 2]) };
+    let kurt = x.iter().map(|v| (v - mean).powi(4)).sum::<f64>() / n / s.powi(4);
+    [mean, s, 3.0 * (mean - median) / s, kurt]
+}
+
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-9 * (1.0 + b.abs())
+}
+
+/// Every `src=` and `href=` of report.html points inside the file itself.
+fn assert_self_contained(html_path: &Path) {
+    let html = std::fs::read_to_string(html_path).unwrap();
+    for attr in ["src=", "href=", "srcset="] {
+        for (i, _) in html.match_indices(attr) {
+            let rest = html[i + attr.len()..].trim_start_matches(['"', '\'']);
+            assert!(
+                rest.starts_with("data:") || rest.starts_with('#'),
+                "external {attr} at {i}: {}",
+                &rest[..40.min(rest.len())]
+            );
+        }
+    }
+    for bad in ["@import", "url(", "<link", "<script", "<iframe"] {
+        assert!(!html.contains(bad), "report.html holds {bad}");
+    }
+}
+
+#[test]
+fn lds_on_the_stand_in_stops_by_itself_and_its_statistics_are_the_prefixes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = standin_sweep(tmp.path(), "stop", "");
+    let out = tmp.path().join("out");
+    let o =
+        sweep(&["lds", p(&file), "--step", "200", "--max", "4000", "--jobs", "2", "-q", "--out", p(&out)]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    let s = summary(&out);
+    let n = s["verdict"]["n"].as_u64().expect("converged") as usize;
+    assert_eq!(s["verdict"]["status"], "converged");
+    assert!(err.contains(&format!("converged at N = {n} (lds {n})")), "{err}");
+    assert!(err.contains("report.html"), "{err}");
+    // It stopped: far fewer runs than --max, and no space past the converged one was judged.
+    let rows = results(&out);
+    let done: Vec<&BTreeMap<String, String>> = rows.iter().filter(|r| r["status"] == "done").collect();
+    assert!(done.len() >= n && done.len() < n + 50 && n < 4000, "done {} n {n}", done.len());
+    assert_eq!(joblog_lines(&out), done.len());
+    let conv = convergence_rows(&out);
+    assert_eq!(conv.last().unwrap()["space"], format!("lds {n}"));
+    assert_eq!(conv.iter().filter(|r| r["converged"] == "true").count(), 1);
+    // The default rule needs two consecutive spaces that hold.
+    assert!(conv.len() >= 3);
+    assert_eq!(conv[conv.len() - 2]["holds"], "true");
+    // Each space's statistics are those of the first n points' MFR, recomputed here.
+    for row in &conv {
+        let k: usize = row["n"].parse().unwrap();
+        let mfr: Vec<f64> = rows[..k].iter().map(|r| r["mfr"].parse().unwrap()).collect();
+        let want = plain_stats(&mfr);
+        for (name, w) in ["mean", "std", "skewness", "kurtosis"].iter().zip(want) {
+            let got: f64 = row[*name].parse().unwrap();
+            assert!(close(got, w), "{} {name}: {got} vs {w}", row["space"]);
+            let (lo, hi): (f64, f64) =
+                (row[&format!("{name}_lo")].parse().unwrap(), row[&format!("{name}_hi")].parse().unwrap());
+            assert!(lo <= got && got <= hi, "{name} interval [{lo}, {hi}] misses {got}");
+        }
+    }
+    // Quality column filled for every done point; the report is there and self-contained.
+    assert!(done.iter().all(|r| ["ideal", "inefficient", "unstable"].contains(&r["quality"].as_str())));
+    for f in ["statistics.svg", "statistics.png", "histogram-1.png", "scatter.svg", "profiles.png"] {
+        assert!(out.join("report").join(f).exists(), "{f}");
+    }
+    assert_self_contained(&out.join("report/report.html"));
+    // The stand-in's MFR depends on gap and diameter far more than on friction or speed.
+    let sens = s["sensitivity"].as_array().unwrap();
+    let top: Vec<&str> = sens[..2].iter().map(|v| v["parameter"].as_str().unwrap()).collect();
+    assert!(top.contains(&"gap") && top.contains(&"diameter"), "{sens:?}");
+
+    // Resume respects the verdict: nothing new runs.
+    let before = joblog_lines(&out);
+    let o = sweep(&["resume", p(&out), "-q"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(joblog_lines(&out), before, "resume ran points past a converged space");
+    assert!(stderr(&o).contains(&format!("converged at N = {n}")), "{}", stderr(&o));
+
+    // A larger --max extends on purpose and judges again past the old extent.
+    let o =
+        sweep(&["lds", p(&file), "--step", "200", "--max", "6000", "--jobs", "2", "-q", "--out", p(&out)]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let s2 = summary(&out);
+    let n2 = s2["verdict"]["n"].as_u64().map(|v| v as usize);
+    match n2 {
+        Some(n2) => assert!(n2 > 4000, "re-judged at {n2}, inside the old extent"),
+        None => assert_eq!(s2["verdict"]["status"], "not-converged"),
+    }
+    assert!(joblog_lines(&out) > 4000);
+}
+
+#[test]
+fn lattice_on_the_stand_in_names_its_converged_level_and_the_thesis_rule_is_weaker() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = standin_sweep(tmp.path(), "lat", "");
+    let out = tmp.path().join("all");
+    // Lattice skewness moves 5–8 % from level to level on this space, so 10 %.
+    let o = sweep(&[
+        "lattice",
+        p(&file),
+        "--levels",
+        "3,4,5,6,7,8",
+        "--tolerance",
+        "0.1",
+        "-q",
+        "--out",
+        p(&out),
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    let s = summary(&out);
+    let level = s["verdict"]["space"].as_str().expect("converged").to_string();
+    assert!(err.contains(&format!("({level})")), "{err}");
+    let conv = convergence_rows(&out);
+    assert_eq!(conv.last().unwrap()["space"], level);
+    assert_ne!(level, "lattice 8", "stopped before the last level");
+    assert!(s["counts"]["pending"].as_u64().unwrap() > 0);
+    // Under the thesis rule (any one statistic) on the same points, convergence comes no later.
+    let o = sweep(&["report", p(&out), "--rule", "any"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let any_n = summary(&out)["verdict"]["n"].as_u64().unwrap();
+    assert!(any_n <= s["verdict"]["n"].as_u64().unwrap());
+    assert_eq!(summary(&out)["criteria"]["rule"], "any");
+    // The one-factor panels of the last level with ≥ 3 values per dimension.
+    assert!(out.join("report/lattice-friction-by-gap.png").exists());
+    assert_self_contained(&out.join("report/report.html"));
+}
+
+#[test]
+fn a_tolerance_nothing_meets_is_not_converged_with_its_last_changes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = standin_sweep(tmp.path(), "never", "tolerance = 0.0\nfloor = 0.0");
+    let out = tmp.path().join("out");
+    let o = sweep(&["lds", p(&file), "--step", "50", "--max", "200", "-q", "--out", p(&out)]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(err.contains("not converged after N = 200") && err.contains("last changes (lds 200)"), "{err}");
+    let s = summary(&out);
+    assert_eq!(s["verdict"]["status"], "not-converged");
+    assert!(s["verdict"]["last_changes"]["mean"].as_f64().unwrap() > 0.0);
+    assert_eq!(s["counts"]["done"], 200);
+}
+
+#[test]
+fn stats_of_a_column_hand_worked_with_skipped_cells() {
+    let tmp = tempfile::tempdir().unwrap();
+    let csv = tmp.path().join("t.csv");
+    // 1, 2, 3, 4, 10 plus an empty cell and a word: mean 4, S = √10, median 3,
+    // Pearson 2 = 3/√10, m4/S⁴ = 278.8/100.
+    std::fs::write(&csv, "a,x\n1,1\n2,\n3,abc\n4,4\n10,10\n,\nfoo,\n").unwrap();
+    let o = sweep(&["stats", p(&csv), "--column", "a", "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["n"], 5);
+    assert_eq!((v["skipped_empty"].as_u64(), v["skipped_non_numeric"].as_u64()), (Some(1), Some(1)));
+    assert!(close(v["mean"].as_f64().unwrap(), 4.0));
+    assert!(close(v["std"].as_f64().unwrap(), 10f64.sqrt()));
+    assert!(close(v["skewness"].as_f64().unwrap(), 3.0 / 10f64.sqrt()));
+    assert!(close(v["kurtosis"].as_f64().unwrap(), 2.788));
+    assert!(v["intervals"]["mean"]["lo"].as_f64().unwrap() < 4.0);
+    // Equal values: defined mean, undefined shape (null, never NaN).
+    std::fs::write(&csv, "a\n0\n0\n0\n").unwrap();
+    let o = sweep(&["stats", p(&csv), "--column", "a", "--json"]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(
+        (v["mean"].as_f64(), v["skewness"].is_null(), v["kurtosis"].is_null()),
+        (Some(0.0), true, true)
+    );
+    assert!(!text.contains("NaN"));
+    let o = sweep(&["stats", p(&csv), "--column", "a"]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("undefined"));
+}
+
+#[test]
+fn bad_input_is_one_line_and_exit_2_with_nothing_written() {
+    let tmp = tempfile::tempdir().unwrap();
+    let not_sweep = tmp.path().join("plain");
+    std::fs::create_dir(&not_sweep).unwrap();
+    let csv = tmp.path().join("r.csv");
+    std::fs::write(&csv, "index,mfr\n0,0.1\n").unwrap();
+    let empty = tmp.path().join("empty.csv");
+    std::fs::write(&empty, "").unwrap();
+    let nope = tmp.path().join("nope");
+    let missing = tmp.path().join("missing.csv");
+    let cases: Vec<(Vec<&str>, Vec<&str>)> = vec![
+        (vec!["report", p(&not_sweep)], vec![p(&not_sweep), "not a sweep directory"]),
+        (vec!["report", p(&nope)], vec!["nope", "not a sweep directory"]),
+        (vec!["stats", p(&csv), "--column", "mfrr"], vec![p(&csv), "`mfrr`", "did you mean `mfr`"]),
+        (vec!["stats", p(&empty), "--column", "mfr"], vec![p(&empty), "empty"]),
+        (vec!["stats", p(&missing), "--column", "mfr"], vec!["missing.csv", "no such file"]),
+        (vec!["report", p(&not_sweep), "--rule", "some"], vec![p(&not_sweep)]),
+    ];
+    for (args, want) in cases {
+        let o = sweep(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        for w in want {
+            assert!(err.contains(w), "{args:?}: {err} lacks {w}");
+        }
+        assert!(!err.contains("panicked"));
+    }
+    assert_eq!(std::fs::read_dir(&not_sweep).unwrap().count(), 0, "nothing written");
+    // A bad override is refused before anything runs or is written.
+    let file = standin_sweep(tmp.path(), "bad", "");
+    let out = tmp.path().join("out");
+    let o = sweep(&["lds", p(&file), "--tolerance", "-1", "--out", p(&out)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--tolerance -1"), "{}", stderr(&o));
+    assert!(!out.exists());
+}
+
+/// The README's main command on real LIGGGHTS: a small sweep that ends with a report.
+#[test]
+fn quick_sweep_on_liggghts_ends_with_a_report() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("quick");
+    let quick = Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps/quick.toml");
+    let o = sweep(&["lds", p(&quick), "--max", "4", "--step", "2", "--jobs", "2", "-q", "--out", p(&out)]);
+    let err = stderr(&o);
+    assert!(matches!(o.status.code(), Some(0) | Some(1)), "{err}");
+    let s = summary(&out);
+    assert!(["converged", "not-converged"].contains(&s["verdict"]["status"].as_str().unwrap()), "{s}");
+    assert!(err.contains(&format!("report: {}", out.join("report/report.html").display())), "{err}");
+    let rows = results(&out);
+    let done: Vec<f64> =
+        rows.iter().filter(|r| r["status"] == "done").map(|r| r["mfr"].parse().unwrap()).collect();
+    assert_eq!(s["counts"]["done"].as_u64().unwrap() as usize, done.len());
+    // The last space is all four points: its mean is the mean of results.csv's MFR.
+    let conv = convergence_rows(&out);
+    let last = conv.last().unwrap();
+    assert_eq!(last["n"], "4");
+    assert_eq!(last["done"], done.len().to_string());
+    if !done.is_empty() {
+        let mean: f64 = last["mean"].parse().unwrap();
+        assert!(close(mean, done.iter().sum::<f64>() / done.len() as f64));
+    }
+    assert!(rows.iter().filter(|r| r["status"] == "done").all(|r| !r["quality"].is_empty()));
+    assert!(out.join("report/histogram-2.png").exists() && out.join("report/profiles.svg").exists());
+    assert_self_contained(&out.join("report/report.html"));
+}
+
+/// Failed runs are left out of every statistic and counted, per space and by class.
+#[test]
+fn failed_runs_are_excluded_and_counted() {
+    use demsweep::outcome::FailureClass;
+    use demsweep::pool::fake::{fake_mfr, Behaviour, FakeExecutor};
+    use demsweep::sweeprun::{self, RunOptions};
+    let tmp = tempfile::tempdir().unwrap();
+    let text = r#"name = "fails"
+[parameters]
+gap         = { lo = 2.0, hi = 4.0, unit = "mm" }
+blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
+"#;
+    let sweep = demsweep::sweep::Sweep::parse(text, &tmp.path().join("f.toml")).unwrap();
+    // Every point at the lowest gap fails.
+    let exec = FakeExecutor::new(|v, _| {
+        if v[0] == 2.0 {
+            Behaviour::Fail(std::time::Duration::ZERO, FailureClass::EngineError)
+        } else {
+            Behaviour::Succeed(std::time::Duration::ZERO)
+        }
+    });
+    let out = tmp.path().join("out");
+    let opts = RunOptions {
+        jobs: 2,
+        progress: demsweep::progress::ProgressMode::Quiet,
+        retry_failed: false,
+        force: false,
+    };
+    let design = demsweep::store::DesignRecord::Lattice { levels: vec![3, 5] };
+    let mut hook = sweeprun::RunAll;
+    sweeprun::start(&sweep, design, &out, &exec, &opts, &mut hook, &Default::default()).unwrap();
+    let criteria = demsweep::convergence::Criteria::from_settings(&sweep.file.convergence);
+    let a = demsweep::report::analyse(&out, &criteria, &Default::default()).unwrap();
+    // Lattice 3: 3 of 9 points at gap 2; lattice 5: 5 of 25; they share the 3 points of the
+    // gap-2 edge at blade speed 1.2, 1.4, 1.6, so 3 + 5 − 3 = 5 failures among 9 + 25 − 9 = 25.
+    assert_eq!((a.counts.points, a.counts.failed, a.counts.done), (25, 5, 20));
+    assert_eq!(a.counts.failures_by_class.get("engine-error"), Some(&5));
+    assert_eq!((a.spaces[0].failed, a.spaces[0].done), (3, 6));
+    assert_eq!((a.spaces[1].failed, a.spaces[1].done), (5, 20));
+    // The statistics are those of the done points' MFR only.
+    for (space, members) in a.spaces.iter().zip([3usize, 5]) {
+        let step = 2.0 / (members - 1) as f64;
+        let speed = 0.4 / (members - 1) as f64;
+        let mfr: Vec<f64> = (1..members)
+            .flat_map(|i| {
+                (0..members).map(move |j| fake_mfr(&[2.0 + i as f64 * step, 1.2 + j as f64 * speed]))
+            })
+            .collect();
+        let mean = mfr.iter().sum::<f64>() / mfr.len() as f64;
+        assert!((space.statistics.mean.unwrap() - mean).abs() < 1e-12, "{}", space.label);
+    }
+    demsweep::report::write(&a).unwrap();
+    let conv = convergence_rows(&out);
+    assert_eq!((conv[1]["failed"].as_str(), conv[1]["done"].as_str()), ("5", "20"));
+
+    // Every run failed: undefined statistics, empty cells, a report all the same.
+    let exec = FakeExecutor::new(|_, _| Behaviour::Fail(std::time::Duration::ZERO, FailureClass::Unstable));
+    let out = tmp.path().join("all-failed");
+    let design = demsweep::store::DesignRecord::Lds {
+        step: 2,
+        max: 4,
+        scrambling: demsweep::sweep::Scrambling::None,
+        seed: 0,
+    };
+    sweeprun::start(&sweep, design, &out, &exec, &opts, &mut hook, &Default::default()).unwrap();
+    let a = demsweep::report::analyse(&out, &criteria, &Default::default()).unwrap();
+    assert_eq!((a.counts.failed, a.counts.done), (4, 0));
+    assert_eq!(a.verdict.status, "not-converged");
+    assert_eq!(a.spaces[1].statistics.mean, None);
+    demsweep::report::write(&a).unwrap();
+    let conv = convergence_rows(&out);
+    assert_eq!((conv[1]["mean"].as_str(), conv[1]["kurtosis"].as_str()), ("", ""));
+    let json = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    assert!(!json.contains("NaN") && !json.contains("inf"));
+    assert_self_contained(&out.join("report/report.html"));
+}
