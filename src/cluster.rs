@@ -24,7 +24,7 @@ use std::time::Duration;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::store::{Manifest, PointStatus, RunState, Store};
+use crate::store::{Manifest, RunState, Store};
 
 /// The built-in Slurm template.
 pub const SLURM_TEMPLATE: &str = include_str!("../templates/slurm.tera");
@@ -478,21 +478,7 @@ pub fn held_points(manifest: &Manifest, store: &Store) -> BTreeSet<usize> {
 /// task's pool wrote it from its own view, and the last task to end must leave every task's
 /// points in it.
 pub fn refresh_results(dir: &Path) -> Result<()> {
-    let (manifest, _) = Store::read_manifest(dir)?;
-    let store = Store::open(dir);
-    store.locked(|| {
-        let status: Vec<PointStatus> = manifest
-            .points
-            .iter()
-            .map(|p| match store.finished(&p.hash) {
-                Some(RunState::Done(r)) => PointStatus::Done(r),
-                Some(RunState::Failed(f)) => PointStatus::Failed(f),
-                _ => PointStatus::Pending,
-            })
-            .collect();
-        crate::store::write_results(dir, &manifest.parameters, &manifest.points, &status)
-    })??;
-    Ok(())
+    Store::open(dir).locked(|| crate::report::rewrite_results(dir))?
 }
 
 /// What one array task runs (`sweep work`).

@@ -8,6 +8,8 @@
 //! test skips, saying so, when Slurm is not installed; `bash scripts/slurm_local.sh up` (as root)
 //! installs and starts it.
 
+mod common;
+use common::results;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
@@ -62,21 +64,6 @@ fn fresh_copy(name: &str) -> (tempfile::TempDir, PathBuf) {
         std::fs::copy(reference().join(f), dir.join(f)).unwrap();
     }
     (root, dir)
-}
-
-/// results.csv as (hash, status, failure, mfr) per point index.
-fn results(dir: &Path) -> Vec<(String, String, String, String)> {
-    let mut r = csv::Reader::from_path(dir.join("results.csv")).unwrap();
-    let h = r.headers().unwrap().clone();
-    let col = |n: &str| h.iter().position(|c| c == n).unwrap();
-    let cols = [col("hash"), col("status"), col("failure"), col("mfr")];
-    r.records()
-        .map(|rec| {
-            let rec = rec.unwrap();
-            let f = |i: usize| rec[cols[i]].to_string();
-            (f(0), f(1), f(2), f(3))
-        })
-        .collect()
 }
 
 /// Joblog statuses by hash, in order, with the host of each line.

@@ -4,6 +4,8 @@
 //! Small on purpose (3 points of the quick scene); every check compares with an uninterrupted
 //! run of the same sweep or with the joblog, never with figures copied from our own output.
 
+mod common;
+use common::results;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
@@ -39,21 +41,6 @@ fn run(cmd: &mut Command) -> Output {
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// results.csv as (hash, status, failure, mfr) per point index.
-fn results(dir: &Path) -> Vec<(String, String, String, String)> {
-    let mut r = csv::Reader::from_path(dir.join("results.csv")).unwrap();
-    let h = r.headers().unwrap().clone();
-    let col = |n: &str| h.iter().position(|c| c == n).unwrap();
-    let cols = [col("hash"), col("status"), col("failure"), col("mfr")];
-    r.records()
-        .map(|rec| {
-            let rec = rec.unwrap();
-            let f = |i: usize| rec[cols[i]].to_string();
-            (f(0), f(1), f(2), f(3))
-        })
-        .collect()
 }
 
 /// Joblog lines by hash: the statuses of its attempts in order.
