@@ -417,6 +417,15 @@ mod tests {
     }
 
     #[test]
+    fn the_settle_line_gives_the_step_or_says_why_not() {
+        assert_eq!(settled_at("x\ndemsweep: settled at step 11822\nmore\n"), Ok(11822));
+        let e = settled_at("demsweep: not settled after 62500 steps, kinetic energy 1e-3 J\n").unwrap_err();
+        assert!(e.starts_with("not settled after 62500 steps"), "{e}");
+        assert!(settled_at("no marker\n").unwrap_err().contains("no settle line"));
+        assert!(settled_at("demsweep: settled at step x\n").unwrap_err().contains("unreadable"));
+    }
+
+    #[test]
     fn errors_are_found_in_either_form() {
         assert_eq!(
             first_error("x\nERROR on proc 0: Mesh elements have been lost\n").unwrap(),

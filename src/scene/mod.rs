@@ -489,6 +489,23 @@ mod tests {
     }
 
     #[test]
+    fn the_rest_criterion_is_an_rms_speed_of_one_percent_of_sqrt_g_d() {
+        // D = 2 mm: v_rest = 0.01 √(9.81 · 0.002) = 1.4007e-3 m/s; KE_rest = ½ M v², with M the
+        // dose's mass, n · ρ · π D³ / 6.
+        let s = scene(&[("diameter", 2.0)]);
+        let v = 0.01 * (9.81f64 * 0.002).sqrt();
+        assert!((s.rest_speed - v).abs() < 1e-12);
+        let mass = s.particles as f64 * 7980.0 * std::f64::consts::PI * 0.002f64.powi(3) / 6.0;
+        assert!((s.rest_ke / (0.5 * mass * v * v) - 1.0).abs() < 1e-9);
+        // The thesis layout has no rest criterion, gate or substrate.
+        let values = [("diameter".to_string(), 2.0)].into_iter().collect();
+        let thesis = SceneSettings { layout: "thesis".into(), ..SceneSettings::default() };
+        let t = Scene::new(&values, &thesis).unwrap();
+        assert_eq!((t.rest_ke, t.gate_x, t.substrate_particles, t.z_lo), (0.0, 0.0, 0, 0.0));
+        assert!(s.gate_x > 0.0 && s.substrate_particles > 0 && s.z_lo == -s.diameter);
+    }
+
+    #[test]
     fn out_of_domain_values_name_the_parameter() {
         let values = [("restitution".to_string(), 0.0)].into_iter().collect();
         let err = Scene::new(&values, &SceneSettings::default()).unwrap_err();
