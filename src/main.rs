@@ -594,7 +594,10 @@ fn bench_stability(a: StabilityArgs) -> Result<i32, Error> {
     let sweep = Sweep::load(&a.sweep)?;
     let bad = |m: String| Err(Error::input(m));
     if a.fractions.is_empty() || a.fractions.iter().any(|f| !(f.is_finite() && *f > 0.0 && *f <= 1.0)) {
-        return bad(format!("--fractions {:?}: expected fractions of the Rayleigh time in (0, 1]", a.fractions));
+        return bad(format!(
+            "--fractions {:?}: expected fractions of the Rayleigh time in (0, 1]",
+            a.fractions
+        ));
     }
     if a.fractions.windows(2).any(|w| w[1] <= w[0]) {
         return bad(format!("--fractions {:?}: expected increasing fractions", a.fractions));
@@ -630,7 +633,10 @@ fn bench_stability(a: StabilityArgs) -> Result<i32, Error> {
     std::fs::create_dir_all(&plan.out)
         .map_err(|e| Error::Internal(format!("cannot create {}: {e}", plan.out.display())))?;
     println!("harshest corner: {heading}; {} seeds per level", plan.seeds);
-    println!("{:<9} {:>8} {:>8} {:>10} {:>8} {:>7} {:>8} {:>7} {:>7}  verdict", "ladder", "dt/T_R", "E MPa", "dt s", "MFR", "SE", "drift", "bound", "wall s");
+    println!(
+        "{:<9} {:>8} {:>8} {:>10} {:>8} {:>7} {:>8} {:>7} {:>7}  verdict",
+        "ladder", "dt/T_R", "E MPa", "dt s", "MFR", "SE", "drift", "bound", "wall s"
+    );
     let cancel = CancelToken::new();
     let show = |r: &stability::LevelResult| {
         let pct = |v: Option<f64>| v.map(|v| format!("{:+.1}%", 100.0 * v)).unwrap_or_else(|| "-".into());
@@ -657,8 +663,13 @@ fn bench_stability(a: StabilityArgs) -> Result<i32, Error> {
             "timestep: safe up to {} × T_R ({:.2}× the default {default}); edge {}",
             s.level.fraction,
             s.level.fraction / default,
-            e.map(|e| format!("{} × T_R ({:.2}× the default): {}", e.level.fraction, e.level.fraction / default, e.verdict))
-                .unwrap_or_else(|| "not reached".into())
+            e.map(|e| format!(
+                "{} × T_R ({:.2}× the default): {}",
+                e.level.fraction,
+                e.level.fraction / default,
+                e.verdict
+            ))
+            .unwrap_or_else(|| "not reached".into())
         ),
         (None, _) => println!("timestep: even the first level failed"),
     }
@@ -667,7 +678,8 @@ fn bench_stability(a: StabilityArgs) -> Result<i32, Error> {
         (Some(s), e) => println!(
             "stiffness: safe down to {} MPa at {default} × T_R; edge {}",
             s.level.youngs_mpa,
-            e.map(|e| format!("{} MPa: {}", e.level.youngs_mpa, e.verdict)).unwrap_or_else(|| "not reached".into())
+            e.map(|e| format!("{} MPa: {}", e.level.youngs_mpa, e.verdict))
+                .unwrap_or_else(|| "not reached".into())
         ),
         (None, _) => println!("stiffness: even the first level failed"),
     }
