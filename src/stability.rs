@@ -492,19 +492,20 @@ pub fn plot_svg(results: &[LevelResult], title: &str) -> Res<String> {
     Ok(svg)
 }
 
-/// Write stability.csv, stability-runs.csv and stability.svg in `out`.
+/// Write stability.csv, stability-runs.csv, stability.svg and stability.png in `out`.
 pub fn write(out: &Path, results: &[LevelResult], title: &str) -> Result<Vec<PathBuf>> {
+    let plot_err = |e: Box<dyn std::error::Error>| Error::Internal(format!("stability plot: {e}"));
+    let svg = plot_svg(results, title).map_err(plot_err)?;
+    let png = crate::report::to_png(&svg).map_err(plot_err)?;
     let files = [
-        (out.join("stability.csv"), levels_csv(results)),
-        (out.join("stability-runs.csv"), runs_csv(results)),
-        (
-            out.join("stability.svg"),
-            plot_svg(results, title).map_err(|e| Error::Internal(format!("stability plot: {e}")))?,
-        ),
+        (out.join("stability.csv"), levels_csv(results).into_bytes()),
+        (out.join("stability-runs.csv"), runs_csv(results).into_bytes()),
+        (out.join("stability.svg"), svg.into_bytes()),
+        (out.join("stability.png"), png),
     ];
     let mut paths = Vec::new();
-    for (p, text) in files {
-        crate::atomic::write(&p, text.as_bytes())
+    for (p, bytes) in files {
+        crate::atomic::write(&p, &bytes)
             .map_err(|e| Error::Internal(format!("cannot write {}: {e}", p.display())))?;
         paths.push(p);
     }
@@ -587,6 +588,7 @@ restitution = 0.5
         assert!(drifted.verdict.starts_with("MFR drift"), "{}", drifted.verdict);
         let csv = levels_csv(&[drifted]);
         assert_eq!(csv.lines().count(), 2);
-        assert!(plot_svg(&[judge("timestep", l, vec![run(None)], None)], "t").unwrap().contains("<svg"));
+        let svg = plot_svg(&[judge("timestep", l, vec![run(None)], None)], "t").unwrap();
+        assert!(crate::report::to_png(&svg).unwrap().starts_with(b"\x89PNG"));
     }
 }

@@ -85,9 +85,12 @@ fn bad_bench_input_is_one_line_and_writes_nothing() {
 }
 
 /// The default timestep and 1.5× it, at the harshest corner (D 1 mm, gap 5 mm, v 1.6 m/s,
-/// μ 0.3), two pile seeds each, on a window of 20 D starting 15 D past the gate (about a third
-/// of the default run's CPU): every run must end cleanly (no lost atoms, no exploding energy,
-/// no LIGGGHTS error, a settled pile) and the mean MFR must stay within the bench's drift bound.
+/// μ 0.3), two pile seeds each, on a window of 20 D starting 15 D past the gate (about half the
+/// default run's CPU): every run must end cleanly — no lost atoms, no exploding energy, no
+/// LIGGGHTS error, a pile that comes to rest — with a positive MFR. The MFR drift is not judged
+/// here: two seeds on a 20 D window scatter by more than the drift the bench resolves with three
+/// seeds on the full window (BENCHMARKS.md "Stability edge"). It fails if the default is raised
+/// to 0.4 (1.5× = 0.6, where every seed lost atoms when measured).
 #[test]
 fn the_default_timestep_has_a_margin_of_1_5_below_the_edge_at_the_harshest_corner() {
     let default = SceneSettings::default().rayleigh_fraction;
@@ -122,7 +125,11 @@ fn the_default_timestep_has_a_margin_of_1_5_below_the_edge_at_the_harshest_corne
     let timestep: Vec<&str> = csv.lines().filter(|l| l.starts_with("timestep,")).collect();
     assert_eq!(timestep.len(), 2, "{csv}");
     for row in timestep {
-        assert!(row.ends_with("\"pass\""), "a level failed at the corner:\n{csv}\n{stdout}");
+        let cells: Vec<&str> = row.split(',').collect();
+        // ladder,rayleigh_fraction,youngs_modulus_mpa,timestep_s,runs,failed,mfr_mean,...
+        assert_eq!((cells[4], cells[5]), ("2", "0"), "a run failed at the corner:\n{csv}\n{stdout}");
+        let mfr: f64 = cells[6].parse().unwrap();
+        assert!(mfr > 0.0, "{csv}");
     }
     assert!(out.join("stability.svg").exists());
 }
