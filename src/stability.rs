@@ -479,7 +479,11 @@ pub fn plot_svg(results: &[LevelResult], title: &str) -> Res<String> {
             for r in rows.iter().filter(|r| !r.passed()) {
                 let y = r.mfr_mean.unwrap_or(0.02 * ymax);
                 chart.draw_series(std::iter::once(Cross::new((x(r), y), 7, red.stroke_width(3))))?;
-                let label = r.verdict.split([':', '(']).next().unwrap_or("").trim().to_string();
+                let failed = r.runs.iter().filter(|x| x.failed()).count();
+                let label = match r.runs.iter().find(|x| x.failed()) {
+                    Some(f) => format!("{} ({failed}/{})", f.status, r.runs.len()),
+                    None => "MFR drift".to_string(),
+                };
                 chart.draw_series(std::iter::once(Text::new(
                     label,
                     (x(r), y + 0.06 * ymax),
