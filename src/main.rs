@@ -104,7 +104,7 @@ enum BenchCommand {
     /// exploding energy, a LIGGGHTS error, a pile that never settles) or where the mean MFR
     /// differs from the first level's by more than max(10 %, 2 SE of the difference). An
     /// unsteady flow keeps its MFR. Writes DIR/stability.csv (per level), stability-runs.csv
-    /// (per run), stability.svg and the run directories in DIR/runs/.
+    /// (per run), the map stability.svg and .png, and the run directories in DIR/runs/.
     Stability(StabilityArgs),
 }
 
@@ -593,6 +593,13 @@ fn bench_stability(a: StabilityArgs) -> Result<i32, Error> {
     use demsweep::stability;
     let sweep = Sweep::load(&a.sweep)?;
     let bad = |m: String| Err(Error::input(m));
+    if sweep.file.scene.fidelity == "thesis" {
+        return bad(format!(
+            "{}: scene.fidelity = \"thesis\" fixes the timestep at 1e-5 s; the stability bench drives \
+             scene.rayleigh_fraction, so use the default fidelity",
+            a.sweep.display()
+        ));
+    }
     if a.fractions.is_empty() || a.fractions.iter().any(|f| !(f.is_finite() && *f > 0.0 && *f <= 1.0)) {
         return bad(format!(
             "--fractions {:?}: expected fractions of the Rayleigh time in (0, 1]",

@@ -82,6 +82,11 @@ fn bad_bench_input_is_one_line_and_writes_nothing() {
         assert_eq!(err.trim_end().lines().count(), 1, "{extra:?}: {err}");
         assert!(!out.exists());
     }
+    let thesis = thesis_space(tmp.path(), "fidelity = \"thesis\"");
+    let r = sweep(&["bench", "stability", thesis.to_str().unwrap(), "--out", o]);
+    assert_eq!(r.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("fidelity"));
+    assert!(!out.exists());
 }
 
 /// The default timestep and 1.5× it, at the harshest corner (D 1 mm, gap 5 mm, v 1.6 m/s,

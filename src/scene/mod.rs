@@ -76,8 +76,8 @@ pub fn check_rayleigh_fraction(fraction: f64) -> Result<(), String> {
     if fraction > MAX_RAYLEIGH_FRACTION * (1.0 + 1e-9) {
         return Err(format!(
             "timestep {fraction:.3} × the Rayleigh time is beyond the measured safe bound \
-             {MAX_RAYLEIGH_FRACTION} (runs lose atoms or drift in MFR past it at the harshest corner, \
-             BENCHMARKS.md \"Stability edge\"); lower scene.rayleigh_fraction, or pass --force"
+             {MAX_RAYLEIGH_FRACTION} (at 0.6 every seed lost atoms at the harshest corner of the thesis \
+             space, BENCHMARKS.md \"Stability edge\"); lower scene.rayleigh_fraction, or pass --force"
         ));
     }
     Ok(())
