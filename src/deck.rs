@@ -23,6 +23,7 @@ pub enum DeckError {
 }
 
 /// A parsed template, ready to render many points.
+#[derive(Clone)]
 pub struct Template {
     name: String,
     source: String,

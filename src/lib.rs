@@ -23,6 +23,7 @@ pub mod report;
 pub mod scene;
 pub mod sensitivity;
 pub mod space;
+pub mod stability;
 pub mod standin;
 pub mod stats;
 pub mod store;

@@ -85,8 +85,48 @@ enum Command {
     /// One array task of `sweep submit`: run the task's share of a sweep directory.
     #[command(hide = true)]
     Work(WorkArgs),
-    /// Run-time-against-error and overhead benchmarks [not yet implemented].
-    Bench,
+    /// Benchmarks of the scene's numerics (`stability`; run time against error is to come).
+    #[command(subcommand)]
+    Bench(BenchCommand),
+}
+
+#[derive(Subcommand)]
+enum BenchCommand {
+    /// The stability edge: at the harshest corner of the sweep's space, drive the timestep up
+    /// and the stiffness down until runs fail or MFR drifts.
+    ///
+    /// The corner: the smallest particles (diameter, weibull_scale, weibull_shape at lo), the
+    /// softest (youngs_modulus lo), the largest blade speed, friction, rolling friction,
+    /// restitution, density and gap (hi); other swept parameters at their middle, fixed ones as
+    /// given. The timestep ladder runs --fractions of the Rayleigh time at the corner's modulus;
+    /// the stiffness ladder runs --moduli at the sweep's rayleigh_fraction. Each level runs
+    /// --seeds pile seeds; a ladder stops at its first level where a run fails (lost atoms,
+    /// exploding energy, a LIGGGHTS error, a pile that never settles) or where the mean MFR
+    /// differs from the first level's by more than max(10 %, 2 SE of the difference). An
+    /// unsteady flow keeps its MFR. Writes DIR/stability.csv (per level), stability-runs.csv
+    /// (per run), the map stability.svg and .png, and the run directories in DIR/runs/.
+    Stability(StabilityArgs),
+}
+
+#[derive(Args)]
+struct StabilityArgs {
+    sweep: PathBuf,
+    /// Timestep ladder, fractions of the Rayleigh time, increasing, each in (0, 1].
+    #[arg(long, value_delimiter = ',', default_value = "0.2,0.3,0.4,0.5,0.6,0.8,1.0")]
+    fractions: Vec<f64>,
+    /// Stiffness ladder, Young's modulus in MPa, decreasing, each in [5, 1000] (default: the
+    /// corner's modulus halved down to 5).
+    #[arg(long, value_delimiter = ',')]
+    moduli: Option<Vec<f64>>,
+    /// Pile seeds per level (the sweep's scene.seed and the next ones).
+    #[arg(long, default_value_t = 3)]
+    seeds: u64,
+    /// Concurrent LIGGGHTS runs (default: the machine's cores).
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Output directory (default: runs/<sweep name>-stability); must be new or empty.
+    #[arg(long)]
+    out: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -104,6 +144,10 @@ struct LatticeArgs {
     convergence: ConvergenceArgs,
     #[command(flatten)]
     pool: PoolArgs,
+    /// Accept a timestep beyond the measured safe bound (scene.rayleigh_fraction above
+    /// MAX_RAYLEIGH_FRACTION; BENCHMARKS.md "Stability edge").
+    #[arg(long)]
+    force: bool,
 }
 
 #[derive(Args)]
@@ -123,6 +167,10 @@ struct LdsArgs {
     convergence: ConvergenceArgs,
     #[command(flatten)]
     pool: PoolArgs,
+    /// Accept a timestep beyond the measured safe bound (scene.rayleigh_fraction above
+    /// MAX_RAYLEIGH_FRACTION; BENCHMARKS.md "Stability edge").
+    #[arg(long)]
+    force: bool,
 }
 
 /// Overrides of the sweep file's [convergence] table. A sweep stops at the first space where the
@@ -173,7 +221,7 @@ struct ResumeArgs {
     #[arg(long)]
     retry_failed: bool,
     /// Resume even if templates, mesh or engine changed since the manifest (changed points
-    /// run again under their new hashes).
+    /// run again under their new hashes), and accept a timestep beyond the measured safe bound.
     #[arg(long)]
     force: bool,
     #[command(flatten)]
@@ -321,6 +369,9 @@ struct RenderArgs {
     set: Vec<String>,
     #[arg(long)]
     out: PathBuf,
+    /// Accept a timestep beyond the measured safe bound (BENCHMARKS.md "Stability edge").
+    #[arg(long)]
+    force: bool,
 }
 
 #[derive(Args)]
@@ -334,6 +385,9 @@ struct RunArgs {
     /// Keep the run directory here (default: a temporary directory, removed afterwards).
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Accept a timestep beyond the measured safe bound (BENCHMARKS.md "Stability edge").
+    #[arg(long)]
+    force: bool,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -517,8 +571,129 @@ fn run(cli: Cli) -> Result<i32, Error> {
         Command::ContactCheck(a) => contact_check(a),
         Command::Submit(a) => submit(a),
         Command::Work(a) => work(a),
-        Command::Bench => Err(Error::NotYet("bench")),
+        Command::Bench(BenchCommand::Stability(a)) => bench_stability(a),
     }
+}
+
+/// Refuse a sweep whose timestep fraction is beyond the measured safe bound, before anything is
+/// written; `--force` accepts it (and any point's, for the thesis fidelity's fixed step).
+fn check_timestep(sweep: &mut Sweep, force: bool) -> Result<(), Error> {
+    if force {
+        sweep.file.scene.force_timestep = true;
+        return Ok(());
+    }
+    if sweep.file.scene.fidelity != "thesis" {
+        demsweep::scene::check_rayleigh_fraction(sweep.file.scene.rayleigh_fraction)
+            .map_err(|e| Error::input(format!("{}: scene.rayleigh_fraction: {e}", sweep.path.display())))?;
+    }
+    Ok(())
+}
+
+fn bench_stability(a: StabilityArgs) -> Result<i32, Error> {
+    use demsweep::stability;
+    let sweep = Sweep::load(&a.sweep)?;
+    let bad = |m: String| Err(Error::input(m));
+    if sweep.file.scene.fidelity == "thesis" {
+        return bad(format!(
+            "{}: scene.fidelity = \"thesis\" fixes the timestep at 1e-5 s; the stability bench drives \
+             scene.rayleigh_fraction, so use the default fidelity",
+            a.sweep.display()
+        ));
+    }
+    if a.fractions.is_empty() || a.fractions.iter().any(|f| !(f.is_finite() && *f > 0.0 && *f <= 1.0)) {
+        return bad(format!(
+            "--fractions {:?}: expected fractions of the Rayleigh time in (0, 1]",
+            a.fractions
+        ));
+    }
+    if a.fractions.windows(2).any(|w| w[1] <= w[0]) {
+        return bad(format!("--fractions {:?}: expected increasing fractions", a.fractions));
+    }
+    let corner = stability::harshest_corner(&sweep);
+    let e0 = point::resolve(&sweep, &corner)["youngs_modulus"];
+    let moduli = a.moduli.unwrap_or_else(|| stability::default_moduli(e0));
+    if moduli.is_empty() || moduli.iter().any(|e| !(e.is_finite() && (5.0..=1000.0).contains(e))) {
+        return bad(format!("--moduli {moduli:?}: expected Young's moduli in [5, 1000] MPa"));
+    }
+    if moduli.windows(2).any(|w| w[1] >= w[0]) {
+        return bad(format!("--moduli {moduli:?}: expected decreasing moduli"));
+    }
+    if a.seeds == 0 {
+        return bad("--seeds 0: expected at least 1".into());
+    }
+    let jobs = match a.jobs {
+        Some(0) => return bad("--jobs 0: expected at least 1".into()),
+        Some(n) => n,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    let out = a.out.unwrap_or_else(|| PathBuf::from("runs").join(format!("{}-stability", sweep.file.name)));
+    sweeprun::check_out_dir(&out)?;
+    if std::fs::read_dir(&out).map(|mut d| d.next().is_some()).unwrap_or(false) {
+        return bad(format!("{}: not empty; choose another --out", out.display()));
+    }
+    let ctx = PointContext::new(sweep)?;
+    // Every level's scene must build (the bound aside) before anything is written.
+    let plan = stability::Plan { corner, fractions: a.fractions, moduli, seeds: a.seeds, jobs, out };
+    stability::check(&ctx, &plan)?;
+    let heading = stability::describe_corner(&ctx.sweep, &plan.corner);
+    demsweep::process::install_interrupt_handler();
+    std::fs::create_dir_all(&plan.out)
+        .map_err(|e| Error::Internal(format!("cannot create {}: {e}", plan.out.display())))?;
+    println!("harshest corner: {heading}; {} seeds per level", plan.seeds);
+    println!(
+        "{:<9} {:>8} {:>8} {:>10} {:>8} {:>7} {:>8} {:>7} {:>7}  verdict",
+        "ladder", "dt/T_R", "E MPa", "dt s", "MFR", "SE", "drift", "bound", "wall s"
+    );
+    let cancel = CancelToken::new();
+    let show = |r: &stability::LevelResult| {
+        let pct = |v: Option<f64>| v.map(|v| format!("{:+.1}%", 100.0 * v)).unwrap_or_else(|| "-".into());
+        println!(
+            "{:<9} {:>8} {:>8} {:>10.3e} {:>8} {:>7} {:>8} {:>7} {:>7.1}  {}",
+            r.ladder,
+            r.level.fraction,
+            r.level.youngs_mpa,
+            r.runs.first().map_or(f64::NAN, |x| x.timestep),
+            r.mfr_mean.map(|v| format!("{v:.4}")).unwrap_or_else(|| "-".into()),
+            r.mfr_se.map(|v| format!("{v:.4}")).unwrap_or_else(|| "-".into()),
+            pct(r.drift),
+            r.bound.map(|v| format!("±{:.1}%", 100.0 * v)).unwrap_or_else(|| "-".into()),
+            r.runs.iter().map(|x| x.wall).sum::<f64>(),
+            r.verdict
+        );
+    };
+    let results = stability::run(&ctx, &plan, &cancel, &show)?;
+    let files = stability::write(&plan.out, &results, &format!("Stability map at {heading}"))?;
+    let default = ctx.sweep.file.scene.rayleigh_fraction;
+    let (safe, edge) = stability::edge(&results, "timestep");
+    match (safe, edge) {
+        (Some(s), e) => println!(
+            "timestep: safe up to {} × T_R ({:.2}× the default {default}); edge {}",
+            s.level.fraction,
+            s.level.fraction / default,
+            e.map(|e| format!(
+                "{} × T_R ({:.2}× the default): {}",
+                e.level.fraction,
+                e.level.fraction / default,
+                e.verdict
+            ))
+            .unwrap_or_else(|| "not reached".into())
+        ),
+        (None, _) => println!("timestep: even the first level failed"),
+    }
+    let (safe, edge) = stability::edge(&results, "stiffness");
+    match (safe, edge) {
+        (Some(s), e) => println!(
+            "stiffness: safe down to {} MPa at {default} × T_R; edge {}",
+            s.level.youngs_mpa,
+            e.map(|e| format!("{} MPa: {}", e.level.youngs_mpa, e.verdict))
+                .unwrap_or_else(|| "not reached".into())
+        ),
+        (None, _) => println!("stiffness: even the first level failed"),
+    }
+    for f in files {
+        eprintln!("wrote {}", f.display());
+    }
+    Ok(exit::SUCCESS)
 }
 
 fn run_options(p: &PoolArgs, retry_failed: bool, force: bool) -> Result<RunOptions, Error> {
@@ -532,6 +707,7 @@ fn run_options(p: &PoolArgs, retry_failed: bool, force: bool) -> Result<RunOptio
 
 fn lattice(a: LatticeArgs) -> Result<i32, Error> {
     let mut sweep = Sweep::load(&a.sweep)?;
+    check_timestep(&mut sweep, a.force)?;
     a.convergence.overrides().apply(&mut sweep.file.convergence)?;
     let levels = match a.levels {
         Some(levels) => {
@@ -568,6 +744,7 @@ fn check_levels(dim: usize, levels: &[usize], source: &str) -> Result<(), Error>
 
 fn lds(a: LdsArgs) -> Result<i32, Error> {
     let mut sweep = Sweep::load(&a.sweep)?;
+    check_timestep(&mut sweep, a.force)?;
     a.convergence.overrides().apply(&mut sweep.file.convergence)?;
     let l = &sweep.file.design.lds;
     let file = a.sweep.display();
@@ -614,7 +791,8 @@ fn start(mut sweep: Sweep, design: DesignRecord, out: Option<PathBuf>, p: &PoolA
 
 fn resume(a: ResumeArgs) -> Result<i32, Error> {
     let opts = run_options(&a.pool, a.retry_failed, a.force)?;
-    let sweep = sweeprun::load_dir_sweep(&a.dir)?;
+    let mut sweep = sweeprun::load_dir_sweep(&a.dir)?;
+    sweep.file.scene.force_timestep = a.force;
     demsweep::process::install_interrupt_handler();
     // The same rule as the run that made the directory (DIR/sweep.toml), so a converged sweep
     // stays stopped where it converged.
@@ -903,7 +1081,8 @@ fn points(a: PointsArgs) -> Result<i32, Error> {
 }
 
 fn render(a: RenderArgs) -> Result<i32, Error> {
-    let sweep = Sweep::load(&a.sweep)?;
+    let mut sweep = Sweep::load(&a.sweep)?;
+    check_timestep(&mut sweep, a.force)?;
     let values = point::swept_values_from_set(&sweep, &a.set)?;
     if a.out.exists() && !a.out.is_dir() {
         return Err(Error::input(format!("--out {}: exists and is not a directory", a.out.display())));
@@ -928,7 +1107,8 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
 
 fn run_one(a: RunArgs) -> Result<i32, Error> {
     demsweep::process::install_interrupt_handler();
-    let sweep = Sweep::load(&a.sweep)?;
+    let mut sweep = Sweep::load(&a.sweep)?;
+    check_timestep(&mut sweep, a.force)?;
     let values = point::swept_values_from_set(&sweep, &a.set)?;
     if let Some(out) = a.out.as_ref().filter(|o| o.exists() && !o.is_dir()) {
         return Err(Error::input(format!("--out {}: exists and is not a directory", out.display())));

@@ -175,6 +175,10 @@ pub struct SceneSettings {
     pub thesis_band: bool,
     /// Seed of the initial pile: diameters and lattice jitter.
     pub seed: u64,
+    /// Accept a timestep beyond [`crate::scene::MAX_RAYLEIGH_FRACTION`] (`--force`; never read
+    /// from a sweep file).
+    #[serde(skip)]
+    pub force_timestep: bool,
 }
 
 impl Default for SceneSettings {
@@ -197,6 +201,7 @@ impl Default for SceneSettings {
             vx_band_diameters: 0.25,
             thesis_band: false,
             seed: 12345,
+            force_timestep: false,
         }
     }
 }

@@ -11,6 +11,7 @@
 
 mod html;
 mod plots;
+pub use plots::to_png;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

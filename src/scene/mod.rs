@@ -65,6 +65,23 @@ const SETTLE_CHECK_S: f64 = 0.005;
 pub const THESIS_TIMESTEP: f64 = 1e-5;
 /// Thesis v_x band: ±1 mm (Appendix A, `depth = 0.001`).
 pub const THESIS_BAND: f64 = 1e-3;
+/// The largest timestep, as a fraction of the Rayleigh time, that `sweep` accepts without
+/// `--force`: the largest fraction that ran clean and kept MFR within its error bound at the
+/// harshest corner of the thesis space (D 1 mm, gap 5 mm, v 1.6 m/s, μ 0.3), measured by
+/// `sweep bench stability sweeps/thesis-lds.toml` (BENCHMARKS.md "Stability edge").
+pub const MAX_RAYLEIGH_FRACTION: f64 = 0.5;
+
+/// Refuse a timestep beyond [`MAX_RAYLEIGH_FRACTION`] of the Rayleigh time, saying why.
+pub fn check_rayleigh_fraction(fraction: f64) -> Result<(), String> {
+    if fraction > MAX_RAYLEIGH_FRACTION * (1.0 + 1e-9) {
+        return Err(format!(
+            "timestep {fraction:.3} × the Rayleigh time is beyond the measured safe bound \
+             {MAX_RAYLEIGH_FRACTION} (at 0.6 every seed lost atoms at the harshest corner of the thesis \
+             space, BENCHMARKS.md \"Stability edge\"); lower scene.rayleigh_fraction, or pass --force"
+        ));
+    }
+    Ok(())
+}
 
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum SceneError {
@@ -197,12 +214,10 @@ impl Scene {
         } else {
             settings.rayleigh_fraction * rayleigh_time
         };
-        if timestep > 0.5 * rayleigh_time {
-            return Err(SceneError::Invalid {
-                name: "timestep".into(),
-                value: timestep,
-                why: format!("above half the Rayleigh time {rayleigh_time:.3e} s: unstable"),
-            });
+        if !settings.force_timestep {
+            if let Err(why) = check_rayleigh_fraction(timestep / rayleigh_time) {
+                return Err(SceneError::Invalid { name: "timestep".into(), value: timestep, why });
+            }
         }
 
         // Geometry in units of the mean diameter, so the particle count barely changes with D.
