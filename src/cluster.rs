@@ -241,10 +241,12 @@ pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendere
         (Some(l), _) => l,
         (None, Some(0)) => return Err(Error::input("--tasks 0: expected at least 1")),
         (None, Some(t)) => Layout { format: LAYOUT_FORMAT, per_task: n.div_ceil(t.min(n).max(1)) },
-        (None, None) => return Err(Error::input(format!(
+        (None, None) => {
+            return Err(Error::input(format!(
             "--tasks: required for the first submission of {} ({n} points): how many array tasks share them",
             dir.display()
-        ))),
+        )))
+        }
     };
     let counts = counts(&dir, &manifest);
     let store = Store::open(&dir);

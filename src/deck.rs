@@ -136,7 +136,11 @@ mod tests {
         assert!(!deck.contains("rolling"), "{deck}");
         assert!(!deck.contains("vtk"));
         // The thesis layout has no gate, no substrate and a fixed-time settle.
-        assert!(!deck.contains("fix gate") && !deck.contains("group           substrate") && !deck.contains("settleloop"));
+        assert!(
+            !deck.contains("fix gate")
+                && !deck.contains("group           substrate")
+                && !deck.contains("settleloop")
+        );
         // The default: rolling friction on every contact (pair, plate, two end walls, blade,
         // gate), a gate, a substrate, a settle until at rest.
         let rolled = t.render(&scene(&SceneSettings::default(), &[("rolling_friction", 0.1)])).unwrap();

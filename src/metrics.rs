@@ -327,7 +327,10 @@ mod tests {
     }
 
     fn crossings(masses: &[(f64, usize)]) -> Vec<Crossing> {
-        masses.iter().map(|&(m, n)| Crossing { mass: m * n as f64, mass_sq: m * m * n as f64, count: n }).collect()
+        masses
+            .iter()
+            .map(|&(m, n)| Crossing { mass: m * n as f64, mass_sq: m * m * n as f64, count: n })
+            .collect()
     }
 
     #[test]

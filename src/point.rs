@@ -185,7 +185,11 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
     let settle_steps = match crate::engine::settled_at(&String::from_utf8_lossy(&log)) {
         Ok(steps) => steps,
         Err(reason) => {
-            let class = if reason.contains("not settled") { FailureClass::NotSettled } else { FailureClass::Unparsable };
+            let class = if reason.contains("not settled") {
+                FailureClass::NotSettled
+            } else {
+                FailureClass::Unparsable
+            };
             return fail(class, reason, String::new(), wall);
         }
     };

@@ -291,7 +291,8 @@ impl Scene {
         let round_up = |t: f64| ((t / timestep).ceil() as u64).div_ceil(dump_every) * dump_every;
         let settle_steps = (settle_time / timestep).ceil() as u64;
         let settle_check_steps = (SETTLE_CHECK_S / timestep).ceil() as u64;
-        let settle_max_checks = ((settings.settle_max_s - settle_time).max(0.0) / SETTLE_CHECK_S).ceil().max(1.0) as u64;
+        let settle_max_checks =
+            ((settings.settle_max_s - settle_time).max(0.0) / SETTLE_CHECK_S).ceil().max(1.0) as u64;
         let approach_steps = round_up(approach_time);
         let ramp_steps = ((ramp_time / timestep).ceil() as u64).max(1);
         let window_length_steps = (SUB_WINDOWS * SNAPSHOTS_PER_SUB_WINDOW) as u64 * dump_every;
