@@ -149,7 +149,12 @@ impl Engine {
                 )
             }
             ProcessOutcome::Cancelled => {
-                return EngineRun { wall_time: wall, status: RunStatus::Cancelled, warnings: Vec::new() }
+                return EngineRun {
+                    wall_time: wall,
+                    status: RunStatus::Cancelled,
+                    warnings: Vec::new(),
+                    log: String::new(),
+                }
             }
             ProcessOutcome::Signalled(sig) => {
                 // LIGGGHTS may have printed an ERROR before dying.
@@ -176,7 +181,7 @@ impl Engine {
         let analysis = analyse_log(&log, limits);
         match analysis.failure {
             Some((class, reason)) => fail(class, reason),
-            None => EngineRun { wall_time: wall, status: RunStatus::Ok, warnings: analysis.warnings },
+            None => EngineRun { wall_time: wall, status: RunStatus::Ok, warnings: analysis.warnings, log },
         }
     }
 }
@@ -223,19 +228,22 @@ pub fn command_ranks(engine: &Path, dir: &Path, deck: &str, ranks: u32) -> std::
 }
 
 /// The step at which the deck's settle ended, from the line it prints
-/// (`demsweep: settled at step N`); an error naming why when the pile did not settle or the
-/// line is missing.
-pub fn settled_at(log: &str) -> Result<u64, String> {
+/// (`demsweep: settled at step N`); otherwise the failure: `not-settled` when the deck says the
+/// pile was still moving at its cap, `unparsable` when the line is missing or unreadable.
+pub fn settled_at(log: &str) -> Result<u64, (FailureClass, String)> {
     for line in log.lines() {
         let t = line.trim();
         if let Some(rest) = t.strip_prefix("demsweep: settled at step ") {
-            return rest.trim().parse().map_err(|_| format!("unreadable settle line in the log: {t}"));
+            return rest
+                .trim()
+                .parse()
+                .map_err(|_| (FailureClass::Unparsable, format!("unreadable settle line in the log: {t}")));
         }
-        if t.starts_with("demsweep: not settled") {
-            return Err(t.trim_start_matches("demsweep: ").to_string());
+        if let Some(why) = t.strip_prefix("demsweep: not settled") {
+            return Err((FailureClass::NotSettled, format!("not settled{why}")));
         }
     }
-    Err("the log has no settle line (demsweep: settled at step N)".into())
+    Err((FailureClass::Unparsable, "the log has no settle line (demsweep: settled at step N)".into()))
 }
 
 /// The first LIGGGHTS ERROR line a run in `dir` left, in its log or on its screen output.
@@ -276,11 +284,19 @@ pub struct EngineRun {
     pub wall_time: f64,
     /// Distinct LIGGGHTS warnings, in order.
     pub warnings: Vec<String>,
+    /// The log as read once the run ended (empty unless the run succeeded): what the caller
+    /// reads of it, without reading the file again.
+    pub log: String,
 }
 
 impl EngineRun {
     fn failed(class: FailureClass, reason: String, log_tail: String, wall_time: f64) -> Self {
-        EngineRun { status: RunStatus::Failed { class, reason, log_tail }, wall_time, warnings: Vec::new() }
+        EngineRun {
+            status: RunStatus::Failed { class, reason, log_tail },
+            wall_time,
+            warnings: Vec::new(),
+            log: String::new(),
+        }
     }
 }
 
@@ -419,10 +435,12 @@ mod tests {
     #[test]
     fn the_settle_line_gives_the_step_or_says_why_not() {
         assert_eq!(settled_at("x\ndemsweep: settled at step 11822\nmore\n"), Ok(11822));
-        let e = settled_at("demsweep: not settled after 62500 steps, kinetic energy 1e-3 J\n").unwrap_err();
+        let (class, e) =
+            settled_at("demsweep: not settled after 62500 steps, kinetic energy 1e-3 J\n").unwrap_err();
+        assert_eq!(class, FailureClass::NotSettled);
         assert!(e.starts_with("not settled after 62500 steps"), "{e}");
-        assert!(settled_at("no marker\n").unwrap_err().contains("no settle line"));
-        assert!(settled_at("demsweep: settled at step x\n").unwrap_err().contains("unreadable"));
+        assert!(settled_at("no marker\n").unwrap_err().1.contains("no settle line"));
+        assert!(settled_at("demsweep: settled at step x\n").unwrap_err().1.contains("unreadable"));
     }
 
     #[test]

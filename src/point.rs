@@ -181,17 +181,9 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
         RunStatus::Failed { class, reason, log_tail } => return fail(class, reason, log_tail, wall),
         RunStatus::Ok => {}
     }
-    let log = std::fs::read(run_dir.join(crate::engine::LOG)).unwrap_or_default();
-    let settle_steps = match crate::engine::settled_at(&String::from_utf8_lossy(&log)) {
+    let settle_steps = match crate::engine::settled_at(&run.log) {
         Ok(steps) => steps,
-        Err(reason) => {
-            let class = if reason.contains("not settled") {
-                FailureClass::NotSettled
-            } else {
-                FailureClass::Unparsable
-            };
-            return fail(class, reason, String::new(), wall);
-        }
+        Err((class, reason)) => return fail(class, reason, String::new(), wall),
     };
     let frames: Vec<Frame> = match crate::dump::read_dump(run_dir.join(DUMP), &metrics::COLUMNS)
         .and_then(|snaps| snaps.iter().map(Frame::from_snapshot).collect())

@@ -39,6 +39,17 @@ fn run(cmd: &mut Command) -> Output {
     cmd.stdin(Stdio::null()).output().unwrap()
 }
 
+/// Start `sweep ARGS DIR` twice at once; both must succeed.
+fn run_two_at_once(args: &[&str], dir: &Path) {
+    let spawn =
+        || sweep_bin().args(args).arg(dir).stdin(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    let (a, b) = (spawn(), spawn());
+    for c in [a, b] {
+        let o = c.wait_with_output().unwrap();
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    }
+}
+
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
@@ -193,20 +204,7 @@ fn killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results() {
     for f in ["sweep.toml", "manifest.json"] {
         std::fs::copy(reference.join(f), pair.join(f)).unwrap();
     }
-    let spawn = || {
-        sweep_bin()
-            .args(["resume", "--jobs", "1", "-q"])
-            .arg(&pair)
-            .stdin(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap()
-    };
-    let (a, b) = (spawn(), spawn());
-    for c in [a, b] {
-        let o = c.wait_with_output().unwrap();
-        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    }
+    run_two_at_once(&["resume", "--jobs", "1", "-q"], &pair);
     let a = attempts(&pair);
     assert_eq!(a.len(), 3);
     assert!(a.values().all(|v| v == &vec!["done".to_string()]), "{a:?}");
@@ -289,20 +287,10 @@ fn two_sweep_processes_started_at_once_on_one_new_directory_share_the_work() {
     let tmp = tempfile::tempdir().unwrap();
     let sweep = write_sweep(tmp.path(), "pair", "", None);
     let out = tmp.path().join("out");
-    let spawn = || {
-        sweep_bin()
-            .args(["lds", sweep.to_str().unwrap(), "--max", "2", "--step", "2", "--jobs", "1", "-q", "--out"])
-            .arg(&out)
-            .stdin(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap()
-    };
-    let (a, b) = (spawn(), spawn());
-    for c in [a, b] {
-        let o = c.wait_with_output().unwrap();
-        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    }
+    run_two_at_once(
+        &["lds", sweep.to_str().unwrap(), "--max", "2", "--step", "2", "--jobs", "1", "-q", "--out"],
+        &out,
+    );
     let a = attempts(&out);
     assert_eq!(a.len(), 2);
     assert!(a.values().all(|v| v == &vec!["done".to_string()]), "{a:?}");
