@@ -53,6 +53,7 @@ impl Executor for TrueExecutor {
             steps: 0,
             simulated_time: 0.0,
             wall_time: took.as_secs_f64(),
+            cpu_time: None,
             engine_version: "true".into(),
             warnings: vec![],
         };

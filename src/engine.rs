@@ -124,8 +124,9 @@ impl Engine {
                 _ => None,
             }
         };
-        let (outcome, took) = process::run_watched(cmd, timeout, cancel, &mut watch);
-        let wall = took.as_secs_f64();
+        let finished = process::run_watched(cmd, timeout, cancel, &mut watch);
+        let (outcome, wall) = (finished.outcome, finished.wall.as_secs_f64());
+        let cpu_time = finished.cpu.map(|c| c.as_secs_f64());
         let log = read_lossy(&dir.join(LOG));
         let tail = tail(&log, TAIL_LINES);
         let fail = |class, reason: String| EngineRun::failed(class, reason, tail.clone(), wall);
@@ -151,6 +152,7 @@ impl Engine {
             ProcessOutcome::Cancelled => {
                 return EngineRun {
                     wall_time: wall,
+                    cpu_time,
                     status: RunStatus::Cancelled,
                     warnings: Vec::new(),
                     log: String::new(),
@@ -181,7 +183,13 @@ impl Engine {
         let analysis = analyse_log(&log, limits);
         match analysis.failure {
             Some((class, reason)) => fail(class, reason),
-            None => EngineRun { wall_time: wall, status: RunStatus::Ok, warnings: analysis.warnings, log },
+            None => EngineRun {
+                wall_time: wall,
+                cpu_time,
+                status: RunStatus::Ok,
+                warnings: analysis.warnings,
+                log,
+            },
         }
     }
 }
@@ -282,6 +290,8 @@ pub enum RunStatus {
 pub struct EngineRun {
     pub status: RunStatus,
     pub wall_time: f64,
+    /// CPU seconds of the LIGGGHTS process (and its ranks), when it ended by itself.
+    pub cpu_time: Option<f64>,
     /// Distinct LIGGGHTS warnings, in order.
     pub warnings: Vec<String>,
     /// The log as read once the run ended (empty unless the run succeeded): what the caller
@@ -294,6 +304,7 @@ impl EngineRun {
         EngineRun {
             status: RunStatus::Failed { class, reason, log_tail },
             wall_time,
+            cpu_time: None,
             warnings: Vec::new(),
             log: String::new(),
         }

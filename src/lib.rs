@@ -12,6 +12,7 @@ pub mod design;
 pub mod dump;
 pub mod engine;
 pub mod error;
+pub mod fidelity;
 pub mod metrics;
 pub mod outcome;
 pub mod point;

@@ -106,6 +106,46 @@ enum BenchCommand {
     /// unsteady flow keeps its MFR. Writes DIR/stability.csv (per level), stability-runs.csv
     /// (per run), the map stability.svg and .png, and the run directories in DIR/runs/.
     Stability(StabilityArgs),
+    /// Run time against error: K points of the sweep's space under each fidelity preset.
+    ///
+    /// A fixed seeded draw (the first K points of the sweep's scrambled-Halton design) is run
+    /// under each of --presets, and under each --variant (the fast preset with some of its
+    /// numerical knobs changed: rayleigh_fraction, timestep_s, stiffness_factor,
+    /// mesh_cells_across, depth_diameters, window_diameters, rest_speed, settle_min_falls,
+    /// skin_diameters, full_dump_every_s, run_to_end), with --seeds pile seeds each. The
+    /// presets set every knob whatever the sweep file sets; the rest of [scene] (layout,
+    /// substrate, supply, window start, size distribution) is the file's. Runs are interleaved so
+    /// that the machine's load falls on every variant alike; speed-ups are ratios of CPU seconds
+    /// summed over the same points in the same run. Errors are against the `reference` preset:
+    /// MFR (the difference of seed means, with its standard error) and the v_x profile (rms over
+    /// the layers of the difference over the blade speed). Writes DIR/fidelity-runs.csv (per
+    /// run), fidelity.csv (per point and variant), fidelity-summary.csv (per variant), the
+    /// frontier plot fidelity.svg and .png, and the runs in DIR/runs/<hash>; a finished run
+    /// found there is read back, not re-run (so an interrupted bench resumes).
+    Fidelity(FidelityArgs),
+}
+
+#[derive(Args)]
+struct FidelityArgs {
+    sweep: PathBuf,
+    /// Points of the draw.
+    #[arg(long, default_value_t = 8)]
+    points: usize,
+    /// Pile seeds per point and variant (the sweep's scene.seed and the next ones).
+    #[arg(long, default_value_t = 2)]
+    seeds: u64,
+    /// Presets to run; errors need `reference`, speed-ups over the thesis need `thesis`.
+    #[arg(long, value_delimiter = ',', default_value = "fast,reference,thesis")]
+    presets: Vec<String>,
+    /// An extra variant, NAME:key=value,key=value (knobs of the fast preset); repeatable.
+    #[arg(long)]
+    variant: Vec<String>,
+    /// Concurrent LIGGGHTS runs (default: the machine's cores).
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Output directory (default: runs/<sweep name>-fidelity); an existing one is continued.
+    #[arg(long)]
+    out: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -572,6 +612,7 @@ fn run(cli: Cli) -> Result<i32, Error> {
         Command::Submit(a) => submit(a),
         Command::Work(a) => work(a),
         Command::Bench(BenchCommand::Stability(a)) => bench_stability(a),
+        Command::Bench(BenchCommand::Fidelity(a)) => bench_fidelity(a),
     }
 }
 
@@ -582,22 +623,103 @@ fn check_timestep(sweep: &mut Sweep, force: bool) -> Result<(), Error> {
         sweep.file.scene.force_timestep = true;
         return Ok(());
     }
-    if sweep.file.scene.fidelity != "thesis" {
+    if sweep.file.scene.timestep_s == 0.0 {
         demsweep::scene::check_rayleigh_fraction(sweep.file.scene.rayleigh_fraction)
             .map_err(|e| Error::input(format!("{}: scene.rayleigh_fraction: {e}", sweep.path.display())))?;
     }
     Ok(())
 }
 
+fn bench_fidelity(a: FidelityArgs) -> Result<i32, Error> {
+    use demsweep::fidelity;
+    let sweep = Sweep::load(&a.sweep)?;
+    let bad = |m: String| Err(Error::input(m));
+    if a.points == 0 {
+        return bad("--points 0: expected at least 1".into());
+    }
+    if a.seeds == 0 {
+        return bad("--seeds 0: expected at least 1".into());
+    }
+    let jobs = match a.jobs {
+        Some(0) => return bad("--jobs 0: expected at least 1".into()),
+        Some(n) => n,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    let variants = fidelity::variants(&sweep, &a.presets, &a.variant)?;
+    if variants.is_empty() {
+        return bad("--presets: expected at least one preset or --variant".into());
+    }
+    let lds = &sweep.file.design.lds;
+    let unit = demsweep::design::halton::halton(sweep.dim(), a.points, lds.scrambling, lds.seed);
+    let points: Vec<Vec<f64>> = unit.iter().map(|p| demsweep::space::scale_point(&sweep, p)).collect();
+    let out = a.out.unwrap_or_else(|| PathBuf::from("runs").join(format!("{}-fidelity", sweep.file.name)));
+    sweeprun::check_out_dir(&out)?;
+    let mut contexts = Vec::new();
+    for v in &variants {
+        contexts.push(PointContext::new(v.sweep.clone())?);
+    }
+    let plan = fidelity::Plan { points, seeds: a.seeds, jobs, out };
+    demsweep::process::install_interrupt_handler();
+    let cancel = CancelToken::new();
+    let started = std::time::Instant::now();
+    let show = |r: &fidelity::Run, n: usize, total: usize| {
+        eprintln!(
+            "[{n}/{total} {:.0} s] point {} {} seed {}: {} MFR {} cpu {:.1} s{}",
+            started.elapsed().as_secs_f64(),
+            r.point,
+            variants[r.variant].name,
+            r.seed,
+            r.status,
+            r.mfr().map(|m| format!("{m:.4}")).unwrap_or_else(|| "-".into()),
+            r.cpu,
+            if r.reused { " (read back)" } else { "" }
+        )
+    };
+    std::fs::create_dir_all(&plan.out)
+        .map_err(|e| Error::Internal(format!("cannot create {}: {e}", plan.out.display())))?;
+    let runs = fidelity::run(&variants, &contexts, &plan, &cancel, &show)?;
+    let find = |n: &str| variants.iter().position(|v| v.name == n);
+    let (cells, summaries) =
+        fidelity::analyse(&runs, &variants, plan.points.len(), find("reference"), find("thesis"));
+    let names = sweep.names();
+    let title = format!("{}: {} points × {} seeds", sweep.file.name, plan.points.len(), plan.seeds);
+    let files = fidelity::write(&plan, &runs, &cells, &summaries, &variants, &names, &title)?;
+    let x = |v: Option<f64>, d: usize| v.map(|v| format!("{v:.d$}")).unwrap_or_else(|| "-".into());
+    println!(
+        "{:<14} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7}",
+        "variant", "cpu s/pt", "×thesis", "×ref", "worst|e|", "mean|e|", "noise", "vx err", "failed"
+    );
+    for m in &summaries {
+        println!(
+            "{:<14} {:>9.2} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7}",
+            variants[m.variant].name,
+            m.cpu_per_point,
+            x(m.speedup_vs_thesis, 2),
+            x(m.speedup_vs_reference, 2),
+            x(m.worst_error, 4),
+            x(m.mean_abs_error, 4),
+            x(m.mean_error_se, 4),
+            x(m.mean_vx_error, 4),
+            m.failed
+        );
+    }
+    for f in files {
+        eprintln!("wrote {}", f.display());
+    }
+    Ok(exit::SUCCESS)
+}
+
 fn bench_stability(a: StabilityArgs) -> Result<i32, Error> {
     use demsweep::stability;
     let sweep = Sweep::load(&a.sweep)?;
     let bad = |m: String| Err(Error::input(m));
-    if sweep.file.scene.fidelity == "thesis" {
+    if sweep.file.scene.timestep_s > 0.0 {
         return bad(format!(
-            "{}: scene.fidelity = \"thesis\" fixes the timestep at 1e-5 s; the stability bench drives \
-             scene.rayleigh_fraction, so use the default fidelity",
-            a.sweep.display()
+            "{}: scene.timestep_s = {} fixes the timestep (fidelity \"{}\"); the stability bench drives \
+             scene.rayleigh_fraction, so use a fidelity without a fixed step (\"fast\" or \"reference\")",
+            a.sweep.display(),
+            sweep.file.scene.timestep_s,
+            sweep.file.scene.fidelity
         ));
     }
     if a.fractions.is_empty() || a.fractions.iter().any(|f| !(f.is_finite() && *f > 0.0 && *f <= 1.0)) {

@@ -46,6 +46,9 @@ pub struct RunResult {
     pub simulated_time: f64,
     /// Wall-clock time of the LIGGGHTS process, s.
     pub wall_time: f64,
+    /// CPU time of the LIGGGHTS process, s (absent in results written before it was measured).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cpu_time: Option<f64>,
     pub engine_version: String,
     pub warnings: Vec<String>,
 }

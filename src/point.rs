@@ -212,6 +212,7 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
         steps,
         simulated_time: steps as f64 * p.scene.timestep,
         wall_time: wall,
+        cpu_time: run.cpu_time,
         engine_version: ctx.engine.version.clone(),
         warnings: run.warnings,
     };

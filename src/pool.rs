@@ -472,6 +472,7 @@ pub mod fake {
                         steps: 1,
                         simulated_time: 0.0,
                         wall_time: took.as_secs_f64(),
+                        cpu_time: None,
                         engine_version: "fake".into(),
                         warnings: vec![],
                     };

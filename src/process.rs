@@ -58,7 +58,18 @@ pub enum ProcessOutcome {
 /// PR_SET_PDEATHSIG fires when the *thread* that forked the child exits, so call this from a
 /// thread that outlives the child (a pool worker, the main thread).
 pub fn run(cmd: Command, timeout: Duration, cancel: &CancelToken) -> (ProcessOutcome, Duration) {
-    run_watched(cmd, timeout, cancel, &mut || None)
+    let f = run_watched(cmd, timeout, cancel, &mut || None);
+    (f.outcome, f.wall)
+}
+
+/// How a child ended and what it cost.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Finished {
+    pub outcome: ProcessOutcome,
+    pub wall: Duration,
+    /// User + system CPU time of the child and the descendants it waited for; `None` when the
+    /// child was killed by us (its cost is then not a property of the job).
+    pub cpu: Option<Duration>,
 }
 
 /// How often [`run_watched`] calls its watcher.
@@ -71,7 +82,7 @@ pub fn run_watched(
     timeout: Duration,
     cancel: &CancelToken,
     watch: &mut dyn FnMut() -> Option<String>,
-) -> (ProcessOutcome, Duration) {
+) -> Finished {
     let start = Instant::now();
     // SAFETY: only async-signal-safe calls (setpgid, prctl, getppid) between fork and exec.
     unsafe {
@@ -94,13 +105,21 @@ pub fn run_watched(
     }
     let mut child = match cmd.spawn() {
         Ok(c) => c,
-        Err(e) => return (ProcessOutcome::SpawnFailed(e.to_string()), start.elapsed()),
+        Err(e) => {
+            return Finished {
+                outcome: ProcessOutcome::SpawnFailed(e.to_string()),
+                wall: start.elapsed(),
+                cpu: None,
+            }
+        }
     };
     let mut poll = POLL_MIN;
     let mut last_watch = Instant::now();
+    let mut cpu = None;
     let outcome = loop {
-        match child.try_wait() {
-            Ok(Some(status)) => {
+        match reap(&child) {
+            Ok(Some((status, used))) => {
+                cpu = Some(used);
                 break match (status.code(), status.signal()) {
                     (Some(code), _) => ProcessOutcome::Exited(code),
                     (None, Some(sig)) => ProcessOutcome::Signalled(sig),
@@ -131,7 +150,28 @@ pub fn run_watched(
         std::thread::sleep(poll);
         poll = (poll * 2).min(POLL);
     };
-    (outcome, start.elapsed())
+    Finished { outcome, wall: start.elapsed(), cpu }
+}
+
+/// `try_wait` that also returns the child's CPU time (wait4(2)'s rusage: the child and every
+/// descendant it waited for, so an `mpirun` launcher counts its ranks). The child is reaped:
+/// `Child` is not asked about it again.
+fn reap(child: &Child) -> std::io::Result<Option<(std::process::ExitStatus, Duration)>> {
+    let mut status: libc::c_int = 0;
+    // SAFETY: wait4 on our own child's pid with valid pointers to locals.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    let pid = unsafe { libc::wait4(child.id() as libc::pid_t, &mut status, libc::WNOHANG, &mut usage) };
+    match pid {
+        0 => Ok(None),
+        p if p < 0 => Err(std::io::Error::last_os_error()),
+        _ => {
+            let tv = |t: libc::timeval| {
+                Duration::from_secs(t.tv_sec as u64) + Duration::from_micros(t.tv_usec as u64)
+            };
+            let used = tv(usage.ru_utime) + tv(usage.ru_stime);
+            Ok(Some((std::process::ExitStatus::from_raw(status), used)))
+        }
+    }
 }
 
 /// SIGTERM the child's process group, wait [`KILL_GRACE`], then SIGKILL it, and reap the child.
@@ -215,15 +255,33 @@ mod tests {
     }
 
     #[test]
+    fn the_cpu_time_of_a_busy_child_is_measured_and_an_idle_one_costs_none() {
+        // A shell loop burns CPU for about as long as it runs; `sleep` burns nearly none.
+        let busy = run_watched(
+            sh("i=0; while [ $i -lt 300000 ]; do i=$((i+1)); done"),
+            Duration::from_secs(60),
+            &CancelToken::new(),
+            &mut || None,
+        );
+        assert_eq!(busy.outcome, ProcessOutcome::Exited(0));
+        let cpu = busy.cpu.expect("an exited child has a CPU time");
+        assert!(cpu > Duration::from_millis(50), "{cpu:?}");
+        assert!(cpu <= busy.wall + Duration::from_millis(20), "{cpu:?} > {:?}", busy.wall);
+        let idle = run_watched(sh("sleep 0.3"), Duration::from_secs(60), &CancelToken::new(), &mut || None);
+        assert!(idle.cpu.unwrap() < Duration::from_millis(100), "{:?}", idle.cpu);
+    }
+
+    #[test]
     fn a_watcher_stops_a_job_that_went_wrong() {
         let mut calls = 0;
         let mut watch = || {
             calls += 1;
             (calls == 2).then(|| "energy exploded".to_string())
         };
-        let (o, took) = run_watched(sh("sleep 30"), Duration::from_secs(60), &CancelToken::new(), &mut watch);
-        assert_eq!(o, ProcessOutcome::Stopped("energy exploded".into()));
-        assert!(took < Duration::from_secs(10));
+        let f = run_watched(sh("sleep 30"), Duration::from_secs(60), &CancelToken::new(), &mut watch);
+        assert_eq!(f.outcome, ProcessOutcome::Stopped("energy exploded".into()));
+        assert!(f.wall < Duration::from_secs(10));
+        assert_eq!(f.cpu, None);
     }
 
     #[test]

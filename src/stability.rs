@@ -26,8 +26,7 @@ pub const DRIFT_FLOOR: f64 = 0.10;
 /// Median seed-to-seed spread of MFR at one point (sd / mean; BENCHMARKS.md "Scene
 /// convergence"): the standard error used when a level has a single seed.
 pub const MEDIAN_SEED_SPREAD: f64 = 0.08;
-/// The catalogue's least Young's modulus, MPa (LIGGGHTS refuses less without hard_particles).
-pub const MIN_YOUNGS_MPA: f64 = 5.0;
+use crate::scene::MIN_YOUNGS_MPA;
 
 /// Which way each parameter makes the scene harsher for the integrator. Smaller and softer
 /// particles have shorter, deeper contacts; faster blades, more friction, more restitution

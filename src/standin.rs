@@ -105,6 +105,7 @@ impl Executor for StandIn {
             steps: 0,
             simulated_time: 0.0,
             wall_time: 0.0,
+            cpu_time: None,
             engine_version: format!("{NAME} {MODEL_VERSION}"),
             warnings: vec![format!("{NAME}: a made-up model, not LIGGGHTS")],
         };

@@ -143,14 +143,37 @@ pub struct SceneSettings {
     /// A path to a Tera template overriding the built-in `spreading.liggghts.tera`
     /// (relative to the sweep file).
     pub template: Option<PathBuf>,
-    /// Fidelity preset: `"fast"` (default) or `"thesis"` (the thesis's 1e-5 s step, full run).
+    /// Fidelity preset (see [`FIDELITIES`] and [`SceneSettings::preset`]): it sets every
+    /// numerical knob ([`KNOBS`]) the file does not set itself.
     pub fidelity: String,
+    // The numerical knobs: how finely a point is computed, not what it is.
     /// Timestep as a fraction of the Rayleigh time.
     pub rayleigh_fraction: f64,
+    /// A fixed timestep, s, in place of `rayleigh_fraction` (0: use the fraction).
+    pub timestep_s: f64,
+    /// Young's modulus in the deck over the point's `youngs_modulus` (a softer contact allows a
+    /// longer step; never below LIGGGHTS's floor of 5 MPa).
+    pub stiffness_factor: f64,
+    /// Blade mesh resolution: cells across the domain depth (the other faces use the same cell).
+    pub mesh_cells_across: usize,
     /// Domain depth across the blade (periodic y), in particle diameters.
     pub depth_diameters: f64,
     /// Length of the MFR measurement window (blade travel), in diameters.
     pub window_diameters: f64,
+    /// Gated layout: the pile is at rest when its rms speed is below this fraction of √(g·D).
+    pub rest_speed: f64,
+    /// Gated layout: the least settle before the rest criterion is first checked, in free-fall
+    /// times of the dose block (a lattice block is still for an instant before it collapses).
+    pub settle_min_falls: f64,
+    /// Neighbour-list skin, in smallest diameters.
+    pub skin_diameters: f64,
+    /// Interval of a dump of every per-particle column over the whole run, s (0: none; only the
+    /// window's snapshots of the columns the metrics read are written).
+    pub full_dump_every_s: f64,
+    /// Keep the blade going after the window to the end of the domain (the thesis's full
+    /// traverse) instead of stopping once the window is measured.
+    pub run_to_end: bool,
+    // What the point is.
     /// The scene's layout: `"gated"` (default: the dose settles at rest in a closed region on a
     /// rough substrate and is released when the blade starts) or `"thesis"` (the thesis's pile
     /// on a smooth plate, settled for a fixed time).
@@ -158,8 +181,6 @@ pub struct SceneSettings {
     /// Gated layout: `"rough"` (default: a layer of fixed spheres, as the previous powder layer
     /// a blade spreads onto) or `"smooth"` (a flat plate).
     pub substrate: String,
-    /// Gated layout: the pile is at rest when its rms speed is below this fraction of √(g·D).
-    pub rest_speed: f64,
     /// Gated layout: longest settle, s; a pile still moving then fails the run (`not-settled`).
     pub settle_max_s: f64,
     /// Gated layout: blade travel past the opened gate before the window starts, in diameters.
@@ -181,19 +202,148 @@ pub struct SceneSettings {
     pub force_timestep: bool,
 }
 
+/// The fidelity presets, fastest first.
+pub const FIDELITIES: [&str; 3] = ["fast", "reference", "thesis"];
+
+/// The numerical knobs a preset sets (field names of [`SceneSettings`]); everything else in
+/// `[scene]` says what the point is and is the same in every preset.
+pub const KNOBS: [&str; 11] = [
+    "rayleigh_fraction",
+    "timestep_s",
+    "stiffness_factor",
+    "mesh_cells_across",
+    "depth_diameters",
+    "window_diameters",
+    "rest_speed",
+    "settle_min_falls",
+    "skin_diameters",
+    "full_dump_every_s",
+    "run_to_end",
+];
+
+impl SceneSettings {
+    /// The settings of a fidelity preset (docs/scene.md "Fidelity"; BENCHMARKS.md "Fidelity").
+    ///
+    /// - `fast` (default): the measured fastest settings whose MFR stays within the stated error
+    ///   of `reference`.
+    /// - `reference`: what errors are measured against: a fine step, a domain twice as deep,
+    ///   a window twice as long, a stricter rest criterion, a fine blade mesh.
+    /// - `thesis`: the thesis's way (the baseline every speed-up is quoted against): its fixed
+    ///   1e-5 s step, every column dumped every 2,000 steps (0.02 s, Appendix A), the blade
+    ///   driven to the end of the domain; every run settles its own pile.
+    pub fn preset(fidelity: &str) -> Option<SceneSettings> {
+        let fast = SceneSettings::default();
+        match fidelity {
+            "fast" => Some(fast),
+            "reference" => Some(SceneSettings {
+                fidelity: fidelity.into(),
+                rayleigh_fraction: 0.1,
+                stiffness_factor: 1.0,
+                mesh_cells_across: 12,
+                depth_diameters: 12.0,
+                window_diameters: 80.0,
+                rest_speed: 0.005,
+                settle_min_falls: 2.0,
+                skin_diameters: 0.25,
+                ..fast
+            }),
+            "thesis" => Some(SceneSettings {
+                fidelity: fidelity.into(),
+                timestep_s: crate::scene::THESIS_TIMESTEP,
+                stiffness_factor: 1.0,
+                mesh_cells_across: 6,
+                settle_min_falls: 2.0,
+                skin_diameters: 0.25,
+                full_dump_every_s: 0.02,
+                run_to_end: true,
+                ..fast
+            }),
+            _ => None,
+        }
+    }
+
+    /// These settings with every knob the file did not write (`written`: keys of `[scene]`)
+    /// taken from the preset named by `fidelity`.
+    pub fn resolve_preset(&self, written: &[String]) -> std::result::Result<SceneSettings, String> {
+        let preset = SceneSettings::preset(&self.fidelity)
+            .ok_or_else(|| format!("\"{}\": expected one of {}", self.fidelity, quoted(&FIDELITIES)))?;
+        let mut table = toml::Table::try_from(&preset).map_err(|e| e.to_string())?;
+        let mine = toml::Table::try_from(self).map_err(|e| e.to_string())?;
+        for key in written {
+            if let Some(v) = mine.get(key) {
+                table.insert(key.clone(), v.clone());
+            }
+        }
+        let mut resolved: SceneSettings = table.try_into().map_err(|e: toml::de::Error| e.to_string())?;
+        resolved.force_timestep = self.force_timestep;
+        Ok(resolved)
+    }
+}
+
+impl SceneSettings {
+    /// These settings with every knob ([`KNOBS`]) and the fidelity's name taken from `preset`:
+    /// the same point computed another way.
+    pub fn with_knobs_of(&self, preset: &SceneSettings) -> SceneSettings {
+        let mut s = preset.clone();
+        s.template = self.template.clone();
+        s.layout = self.layout.clone();
+        s.substrate = self.substrate.clone();
+        s.settle_max_s = self.settle_max_s;
+        s.window_start_diameters = self.window_start_diameters;
+        s.supply_factor = self.supply_factor;
+        s.size_distribution = self.size_distribution.clone();
+        s.vx_band_diameters = self.vx_band_diameters;
+        s.thesis_band = self.thesis_band;
+        s.seed = self.seed;
+        s.force_timestep = self.force_timestep;
+        s
+    }
+
+    /// These settings with `key = value` (TOML syntax) set, for a knob only.
+    pub fn with_knob(&self, key: &str, value: &str) -> std::result::Result<SceneSettings, String> {
+        if !KNOBS.contains(&key) {
+            return Err(format!(
+                "`{key}` is not a numerical knob{}; knobs: {}",
+                hint(key, KNOBS),
+                KNOBS.join(", ")
+            ));
+        }
+        let parsed: toml::Table = toml::from_str(&format!("{key} = {value}"))
+            .map_err(|_| format!("{key} = {value}: not a TOML value"))?;
+        let mut table = toml::Table::try_from(self).map_err(|e| e.to_string())?;
+        table.extend(parsed);
+        let mut s: SceneSettings = table
+            .try_into()
+            .map_err(|e: toml::de::Error| format!("{key} = {value}: {}", e.message().trim()))?;
+        s.force_timestep = self.force_timestep;
+        Ok(s)
+    }
+}
+
+fn quoted(names: &[&str]) -> String {
+    names.iter().map(|n| format!("\"{n}\"")).collect::<Vec<_>>().join(", ")
+}
+
 impl Default for SceneSettings {
     fn default() -> Self {
         SceneSettings {
             template: None,
             fidelity: "fast".into(),
             rayleigh_fraction: 0.2,
+            timestep_s: 0.0,
+            stiffness_factor: 1.0,
+            mesh_cells_across: 6,
             depth_diameters: 6.0,
             // 40 D: measured 2.8× less seed-to-seed spread than 20 D for 1.6× the CPU
             // (BENCHMARKS.md "MFR noise").
             window_diameters: 40.0,
+            rest_speed: 0.01,
+            settle_min_falls: 2.0,
+            skin_diameters: 0.25,
+            full_dump_every_s: 0.0,
+            run_to_end: false,
             layout: "gated".into(),
             substrate: "rough".into(),
-            rest_speed: 0.01,
             settle_max_s: 1.0,
             window_start_diameters: 30.0,
             supply_factor: 1.0,
@@ -290,9 +440,28 @@ impl Sweep {
 
     /// Parse and validate; `path` is only used in messages and to resolve relative paths.
     pub fn parse(text: &str, path: &Path) -> Result<Sweep> {
-        let file: SweepFile = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
+        let mut file: SweepFile = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
+        // The preset fills the knobs the file leaves out (the file parsed, so this parses too).
+        let raw: toml::Table = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
+        let written: Vec<String> = raw
+            .get("scene")
+            .and_then(|v| v.as_table())
+            .map(|t| t.keys().cloned().collect())
+            .unwrap_or_default();
+        file.scene = file
+            .scene
+            .resolve_preset(&written)
+            .map_err(|e| Error::input(format!("{}: scene.fidelity: {e}", path.display())))?;
         let (swept, fixed) = validate(&file, path)?;
         Ok(Sweep { path: path.to_path_buf(), file, swept, fixed })
+    }
+
+    /// This sweep with other scene settings, validated as if they had been written in the file.
+    pub fn with_scene(&self, scene: SceneSettings) -> Result<Sweep> {
+        let mut file = self.file.clone();
+        file.scene = scene;
+        let (swept, fixed) = validate(&file, &self.path)?;
+        Ok(Sweep { path: self.path.clone(), file, swept, fixed })
     }
 
     pub fn names(&self) -> Vec<&str> {
@@ -488,8 +657,11 @@ fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>, Vec<Parame
         return Err(bad("convergence.hold", "expected at least 1".into()));
     }
     let s = &file.scene;
-    if s.fidelity != "fast" && s.fidelity != "thesis" {
-        return Err(bad("scene.fidelity", format!("\"{}\": expected \"fast\" or \"thesis\"", s.fidelity)));
+    if !FIDELITIES.contains(&s.fidelity.as_str()) {
+        return Err(bad(
+            "scene.fidelity",
+            format!("\"{}\": expected one of {}", s.fidelity, quoted(&FIDELITIES)),
+        ));
     }
     if s.layout != "gated" && s.layout != "thesis" {
         return Err(bad("scene.layout", format!("\"{}\": expected \"gated\" or \"thesis\"", s.layout)));
@@ -506,10 +678,27 @@ fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>, Vec<Parame
         ("scene.depth_diameters", s.depth_diameters),
         ("scene.window_diameters", s.window_diameters),
         ("scene.vx_band_diameters", s.vx_band_diameters),
+        ("scene.stiffness_factor", s.stiffness_factor),
+        ("scene.settle_min_falls", s.settle_min_falls),
+        ("scene.skin_diameters", s.skin_diameters),
     ] {
         if !v.is_finite() || v <= 0.0 {
             return Err(bad(k, format!("{v}: expected a finite number > 0")));
         }
+    }
+    for (k, v) in [("scene.timestep_s", s.timestep_s), ("scene.full_dump_every_s", s.full_dump_every_s)] {
+        if !v.is_finite() || v < 0.0 {
+            return Err(bad(k, format!("{v}: expected a finite number ≥ 0 (0: off)")));
+        }
+    }
+    if s.stiffness_factor > 1.0 {
+        return Err(bad(
+            "scene.stiffness_factor",
+            format!("{}: expected at most 1 (a reduction)", s.stiffness_factor),
+        ));
+    }
+    if s.mesh_cells_across == 0 {
+        return Err(bad("scene.mesh_cells_across", "expected at least 1".into()));
     }
     if s.rayleigh_fraction > 1.0 {
         return Err(bad("scene.rayleigh_fraction", format!("{}: expected at most 1", s.rayleigh_fraction)));
@@ -546,5 +735,69 @@ fn as_f64(v: &toml::Value) -> Option<f64> {
         toml::Value::Float(f) => Some(*f),
         toml::Value::Integer(i) => Some(*i as f64),
         _ => None,
+    }
+}
+
+#[cfg(test)]
+mod preset_tests {
+    use super::*;
+
+    fn scene_of(scene: &str) -> Result<SceneSettings> {
+        let text = format!("name = \"t\"\n[parameters]\ngap = {{ lo = 1.0, hi = 2.0 }}\n[scene]\n{scene}\n");
+        Sweep::parse(&text, Path::new("t.toml")).map(|s| s.file.scene)
+    }
+
+    #[test]
+    fn a_preset_sets_the_knobs_the_file_leaves_out_and_the_file_wins_where_it_speaks() {
+        let r = scene_of("fidelity = \"reference\"").unwrap();
+        assert_eq!(r, SceneSettings::preset("reference").unwrap());
+        // The reference is finer in every knob it changes.
+        let fast = SceneSettings::default();
+        assert!(r.rayleigh_fraction < fast.rayleigh_fraction);
+        assert!(r.depth_diameters > fast.depth_diameters && r.window_diameters > fast.window_diameters);
+        assert!(r.rest_speed < fast.rest_speed && r.stiffness_factor >= fast.stiffness_factor);
+        let mine = scene_of("fidelity = \"reference\"\ndepth_diameters = 5\nseed = 7").unwrap();
+        assert_eq!((mine.depth_diameters, mine.seed, mine.window_diameters), (5.0, 7, r.window_diameters));
+        let thesis = scene_of("fidelity = \"thesis\"").unwrap();
+        assert_eq!(thesis.timestep_s, crate::scene::THESIS_TIMESTEP);
+        assert!(thesis.run_to_end && thesis.full_dump_every_s > 0.0);
+        assert_eq!(scene_of("").unwrap(), SceneSettings::default());
+    }
+
+    #[test]
+    fn the_resolved_settings_read_back_to_themselves() {
+        // DIR/sweep.toml holds every key: a resume must see the same knobs.
+        let text = "name = \"t\"\n[parameters]\ngap = { lo = 1.0, hi = 2.0 }\n[scene]\nfidelity = \"thesis\"\nwindow_diameters = 30\n";
+        let first = Sweep::parse(text, Path::new("t.toml")).unwrap();
+        let body = toml::to_string(&first.file).unwrap();
+        let again = Sweep::parse(&body, Path::new("sweep.toml")).unwrap();
+        assert_eq!(again.file.scene, first.file.scene);
+        assert_eq!(again.file.scene.window_diameters, 30.0);
+    }
+
+    #[test]
+    fn a_bad_fidelity_or_knob_is_one_line_naming_the_key() {
+        for (scene, key) in [
+            ("fidelity = \"fastest\"", "scene.fidelity"),
+            ("stiffness_factor = 2", "scene.stiffness_factor"),
+            ("mesh_cells_across = 0", "scene.mesh_cells_across"),
+            ("timestep_s = -1", "scene.timestep_s"),
+        ] {
+            let e = scene_of(scene).unwrap_err().to_string();
+            assert!(e.contains(key) && !e.contains('\n'), "{scene}: {e}");
+        }
+    }
+
+    #[test]
+    fn knobs_of_a_preset_replace_only_the_knobs() {
+        let mine =
+            SceneSettings { supply_factor: 1.5, seed: 3, depth_diameters: 4.0, ..SceneSettings::default() };
+        let r = mine.with_knobs_of(&SceneSettings::preset("reference").unwrap());
+        assert_eq!((r.supply_factor, r.seed, r.fidelity.as_str()), (1.5, 3, "reference"));
+        assert_eq!(r.depth_diameters, 12.0);
+        let k = mine.with_knob("rayleigh_fraction", "0.3").unwrap();
+        assert_eq!((k.rayleigh_fraction, k.supply_factor), (0.3, 1.5));
+        assert!(mine.with_knob("supply_factor", "2").unwrap_err().contains("not a numerical knob"));
+        assert!(mine.with_knob("run_to_end", "maybe").is_err());
     }
 }

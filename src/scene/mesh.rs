@@ -9,8 +9,8 @@ pub const MESH_VERSION: u32 = 3;
 
 /// The blade as a box open at its two y ends, outward normals: x from the rear face to the
 /// front face, y across the whole periodic depth (inset from the periodic faces, as a mesh must
-/// lie inside the box), z from the tip (gap) to the top. Faces are split into triangles no
-/// larger than a sixth of the depth.
+/// lie inside the box), z from the tip (gap) to the top. Faces are split into cells no larger
+/// than the scene's `mesh_cell` (a whole fraction of the depth), two triangles each.
 ///
 /// Both choices work around LIGGGHTS 3.8's mesh topology build (surface_mesh_I.h), which bins
 /// the elements by their bounding radius over the whole box and fails with "assertion failed
@@ -21,7 +21,7 @@ pub fn blade_stl(s: &Scene) -> String {
     let (x0, x1) = (s.blade_x0, s.blade_x0 + s.blade_thickness);
     let (y0, y1) = (s.blade_y_inset, s.depth - s.blade_y_inset);
     let (z0, z1) = (s.gap, s.blade_top);
-    box_stl("blade", [x0, y0, z0], [x1, y1, z1], false, s.depth / 6.0)
+    box_stl("blade", [x0, y0, z0], [x1, y1, z1], false, s.mesh_cell)
 }
 
 /// An axis-aligned box [lo, hi] as ASCII STL, each face split into a grid of cells no larger

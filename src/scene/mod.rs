@@ -70,6 +70,8 @@ pub const THESIS_BAND: f64 = 1e-3;
 /// harshest corner of the thesis space (D 1 mm, gap 5 mm, v 1.6 m/s, μ 0.3), measured by
 /// `sweep bench stability sweeps/thesis-lds.toml` (BENCHMARKS.md "Stability edge").
 pub const MAX_RAYLEIGH_FRACTION: f64 = 0.5;
+/// LIGGGHTS's least Young's modulus without `hard_particles yes`, MPa (global_properties.cpp).
+pub const MIN_YOUNGS_MPA: f64 = 5.0;
 
 /// Refuse a timestep beyond [`MAX_RAYLEIGH_FRACTION`] of the Rayleigh time, saying why.
 pub fn check_rayleigh_fraction(fraction: f64) -> Result<(), String> {
@@ -164,6 +166,13 @@ pub struct Scene {
     pub dump_every: u64,
     /// Steps of the measurement window.
     pub window_length_steps: u64,
+    /// Steps after the window to the end of the domain (`run_to_end`; 0: stop at the window's
+    /// end).
+    pub traverse_steps: u64,
+    /// Steps between dumps of every column over the whole run (0: none).
+    pub full_dump_every: u64,
+    /// Largest cell of the blade mesh, m.
+    pub mesh_cell: f64,
     pub thermo_every: u64,
     // Measurement.
     /// Half-height of a v_x layer, m.
@@ -205,12 +214,13 @@ impl Scene {
         let gap = get("gap") * mm;
         let speed = get("blade_speed");
         let density = get("density");
-        let youngs = get("youngs_modulus") * 1e6;
+        // The stiffness reduction stops at LIGGGHTS's floor (it refuses a softer modulus).
+        let youngs = (get("youngs_modulus") * settings.stiffness_factor).max(MIN_YOUNGS_MPA) * 1e6;
         let poisson = get("poisson");
 
         let rayleigh_time = rayleigh_time(d_min / 2.0, density, youngs, poisson);
-        let timestep = if settings.fidelity == "thesis" {
-            THESIS_TIMESTEP
+        let timestep = if settings.timestep_s > 0.0 {
+            settings.timestep_s
         } else {
             settings.rayleigh_fraction * rayleigh_time
         };
@@ -284,7 +294,7 @@ impl Scene {
         // rest: the thesis layout's fixed settle, and the gated layout's least settle before
         // the rest criterion is checked (a lattice block is briefly still before it collapses).
         let fall_time = 2.0 * (2.0 * pile_z1 / GRAVITY).sqrt();
-        let settle_time = if gated { fall_time } else { fall_time + 0.02 };
+        let settle_time = if gated { 0.5 * settings.settle_min_falls * fall_time } else { fall_time + 0.02 };
 
         let intervals = (SUB_WINDOWS * SNAPSHOTS_PER_SUB_WINDOW) as f64;
         let dump_every = ((window_time / intervals) / timestep).ceil().max(1.0) as u64;
@@ -321,6 +331,19 @@ impl Scene {
         };
         let z_lo = if rough { -d } else { 0.0 };
         let total_steps = approach_steps + window_length_steps;
+        // The thesis's full traverse: on after the window until the blade's front is two heap
+        // heights from the far wall (the heap it pushes fills the rest).
+        let traverse_steps = if settings.run_to_end {
+            let travel = (3.0 * heap_height + 5.0 * d) - 2.0 * heap_height;
+            (travel / (speed * timestep)).ceil() as u64
+        } else {
+            0
+        };
+        let full_dump_every = if settings.full_dump_every_s > 0.0 {
+            (settings.full_dump_every_s / timestep).round().max(1.0) as u64
+        } else {
+            0
+        };
 
         let profile_diameter = if psd.is_mono() { d } else { psd.quantile(0.85) };
         let vx_band =
@@ -371,8 +394,9 @@ impl Scene {
             pile_n: [nx, ny, nz],
             rayleigh_time,
             timestep,
-            // Half a smallest radius: particles move far less than that between list builds.
-            skin: 0.25 * d_min,
+            // A quarter of the smallest diameter (default): particles move far less than that
+            // between list builds (`neigh_modify delay 0` rebuilds as soon as one has).
+            skin: settings.skin_diameters * d_min,
             settle_steps,
             rest_ke,
             rest_speed,
@@ -382,6 +406,9 @@ impl Scene {
             ramp_steps,
             dump_every,
             window_length_steps,
+            traverse_steps,
+            full_dump_every,
+            mesh_cell: depth / settings.mesh_cells_across as f64,
             // Frequent enough for the engine's watcher to stop an exploding run early.
             thermo_every: (total_steps / 40).clamp(1, 200),
             vx_band,
@@ -459,10 +486,26 @@ mod tests {
     #[test]
     fn timestep_is_the_rayleigh_fraction_or_the_thesis_step() {
         let s = scene(&[("diameter", 1.0)]);
-        assert!((s.timestep - 0.2 * s.rayleigh_time).abs() < 1e-18);
-        let settings = SceneSettings { fidelity: "thesis".into(), ..SceneSettings::default() };
+        let fraction = SceneSettings::default().rayleigh_fraction;
+        assert!((s.timestep - fraction * s.rayleigh_time).abs() < 1e-18);
+        let settings = SceneSettings::preset("thesis").unwrap();
         let t = Scene::new(&BTreeMap::new(), &settings).unwrap();
         assert_eq!(t.timestep, THESIS_TIMESTEP);
+    }
+
+    #[test]
+    fn the_stiffness_reduction_lengthens_the_rayleigh_time_and_stops_at_the_floor() {
+        // T_R ∝ 1/√E: a quarter of the modulus doubles it.
+        let values: BTreeMap<String, f64> = [("youngs_modulus".to_string(), 21.0)].into_iter().collect();
+        let full = Scene::new(&values, &SceneSettings { stiffness_factor: 1.0, ..SceneSettings::default() })
+            .unwrap();
+        let soft = Scene::new(&values, &SceneSettings { stiffness_factor: 0.25, ..SceneSettings::default() })
+            .unwrap();
+        assert!((soft.youngs_modulus - 5.25e6).abs() < 1e-6);
+        assert!((soft.rayleigh_time / full.rayleigh_time - 2.0).abs() < 1e-12);
+        let floor = Scene::new(&values, &SceneSettings { stiffness_factor: 0.1, ..SceneSettings::default() })
+            .unwrap();
+        assert_eq!(floor.youngs_modulus, MIN_YOUNGS_MPA * 1e6);
     }
 
     #[test]
