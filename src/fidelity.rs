@@ -137,6 +137,8 @@ pub fn run(
         let prep = point::prepare(&c, &plan.points[p])?;
         prepared.push((c, prep));
     }
+    std::fs::create_dir_all(&plan.out)
+        .map_err(|e| Error::Internal(format!("cannot create {}: {e}", plan.out.display())))?;
     let next = AtomicUsize::new(0);
     let done = AtomicUsize::new(0);
     let runs: Mutex<Vec<Run>> = Mutex::new(Vec::new());

@@ -675,8 +675,6 @@ fn bench_fidelity(a: FidelityArgs) -> Result<i32, Error> {
             if r.reused { " (read back)" } else { "" }
         )
     };
-    std::fs::create_dir_all(&plan.out)
-        .map_err(|e| Error::Internal(format!("cannot create {}: {e}", plan.out.display())))?;
     let runs = fidelity::run(&variants, &contexts, &plan, &cancel, &show)?;
     let find = |n: &str| variants.iter().position(|v| v.name == n);
     let (cells, summaries) =
