@@ -822,6 +822,10 @@ fn finish(s: &Summary, sweep: &Sweep) -> Result<i32, Error> {
 /// Say what to do next about the runs and return the exit code.
 fn finish_runs(s: &Summary) -> i32 {
     let dir = s.dir.display();
+    if let Some(line) = s.screen.sentence() {
+        let warning = if s.screen.verdict == demsweep::screen::Verdict::Refuted { "warning: " } else { "" };
+        eprintln!("{warning}{line}");
+    }
     if s.interrupted {
         eprintln!(
             "interrupted: {} of {} points finished; continue with `sweep resume {dir}`",
@@ -879,9 +883,10 @@ fn submit(a: SubmitArgs) -> Result<i32, Error> {
         Ok(r) => r,
         Err(c) => {
             eprintln!(
-                "nothing to submit: {} of {} points done, {} failed{}",
+                "nothing to submit: {} of {} points done, {} screened, {} failed{}",
                 c.done,
                 c.points,
+                c.screened,
                 c.failed,
                 if c.failed > 0 && !opts.only.failed { " (`--only failed` re-runs them)" } else { "" }
             );
@@ -946,8 +951,8 @@ fn work(a: WorkArgs) -> Result<i32, Error> {
     };
     let summary = demsweep::cluster::work(&a.dir, &w, &opts, &CancelToken::new())?;
     eprintln!(
-        "task {}: ran {} runs; the sweep has {} of {} points done, {} failed",
-        a.task, summary.ran, summary.done, summary.points, summary.failed
+        "task {}: ran {} runs; the sweep has {} of {} points done, {} screened, {} failed",
+        a.task, summary.ran, summary.done, summary.points, summary.screened, summary.failed
     );
     // A task writes no report: the dependent report job does, once every task has ended.
     Ok(finish_runs(&summary))
