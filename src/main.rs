@@ -359,6 +359,11 @@ struct PointsArgs {
     /// qmc.discrepancy(method="CD") convention) in unit coordinates to stderr.
     #[arg(long)]
     discrepancy: bool,
+    /// Add a `screen` column: `closed` where nothing can pass under the blade (skipped as
+    /// MFR = 0 once the screen is verified), `verification` for its verification sample (run
+    /// anyway), empty where the point runs; and a count on stderr.
+    #[arg(long)]
+    screen: bool,
 }
 
 #[derive(Args)]
@@ -1067,14 +1072,27 @@ fn points(a: PointsArgs) -> Result<i32, Error> {
             demsweep::design::discrepancy::centred_l2(&unit)
         );
     }
+    let values: Vec<Vec<f64>> = unit.iter().map(|p| demsweep::space::scale_point(&sweep, p)).collect();
+    let screen = if a.screen { Some(demsweep::screen::preview(&sweep, &values)?) } else { None };
+    if let Some(col) = &screen {
+        let count = |w: &str| col.iter().filter(|c| **c == w).count();
+        eprintln!(
+            "screen: {} of {} points closed; {} skipped as MFR = 0 once the {} of the verification sample give MFR = 0",
+            count("closed") + count("verification"),
+            col.len(),
+            count("closed"),
+            count("verification")
+        );
+    }
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
     let write = |out: &mut dyn Write| -> std::io::Result<()> {
-        writeln!(out, "{}", sweep.names().join(","))?;
-        for p in &unit {
-            let row: Vec<String> =
-                demsweep::space::scale_point(&sweep, p).iter().map(|v| format!("{v}")).collect();
-            writeln!(out, "{}", row.join(","))?;
+        let extra = if screen.is_some() { ",screen" } else { "" };
+        writeln!(out, "{}{extra}", sweep.names().join(","))?;
+        for (k, v) in values.iter().enumerate() {
+            let row: Vec<String> = v.iter().map(|v| format!("{v}")).collect();
+            let extra = screen.as_ref().map_or(String::new(), |c| format!(",{}", c[k]));
+            writeln!(out, "{}{extra}", row.join(","))?;
         }
         out.flush()
     };

@@ -90,14 +90,10 @@ pub struct ScreenReport {
 impl ScreenReport {
     /// One line for the terminal, `None` when the screen did nothing.
     pub fn sentence(&self) -> Option<String> {
-        let first = self
-            .refuted_by
-            .first()
-            .map_or(String::new(), |r| format!("point {} gave {}", r.index, r.outcome));
         match self.verdict {
             Verdict::Off | Verdict::NoneClosed => None,
             Verdict::Pending => Some(format!(
-                "screen pending: {} closed point(s) wait for the verification sample ({} run of {})",
+                "screen pending: {} closed point(s) wait for the verification sample ({} of {} ran)",
                 self.closed, self.ran, self.sample
             )),
             Verdict::Verified => Some(format!(
@@ -105,16 +101,25 @@ impl ScreenReport {
                 self.ran, self.closed, self.skipped
             )),
             Verdict::Refuted => Some(format!(
-                "SCREEN REFUTED: {first}{}; every closed point runs for real ({} of {} ran)",
-                match self.refuted_by.len() {
-                    1 => String::new(),
-                    n => format!(" ({n} closed points contradict it)"),
-                },
+                "SCREEN REFUTED: {}; every closed point runs for real ({} of {} ran)",
+                refutation(&self.refuted_by),
                 self.ran,
                 self.closed
             )),
         }
     }
+}
+
+/// "point 4, which the screen closes, gave MFR 0.0779 (and 2 more closed point(s))", or
+/// "... closes, failed (unsteady)".
+pub fn refutation(by: &[Refutation]) -> String {
+    let Some(first) = by.first() else { return "no closed point contradicts it".into() };
+    let more = match by.len() {
+        1 => String::new(),
+        n => format!(" (and {} more closed point(s))", n - 1),
+    };
+    let verb = if first.outcome.starts_with("MFR") { "gave " } else { "" };
+    format!("point {}, which the screen closes, {verb}{}{more}", first.index, first.outcome)
 }
 
 impl Screen {
@@ -231,6 +236,36 @@ impl Screen {
         let report = self.report(&manifest.points, &status, &sample, judged);
         (status, sample, report)
     }
+}
+
+/// The screen's column of a design before anything runs (`sweep points --screen`): per point
+/// (swept values, in file order), `closed`, `verification` or empty, as results.csv's `screen`
+/// will say. The stand-in engine models no scene and closes nothing.
+pub fn preview(sweep: &Sweep, values: &[Vec<f64>]) -> crate::Result<Vec<&'static str>> {
+    let screen = Screen::of(sweep);
+    let closes = screen.enabled && !crate::standin::selected(sweep);
+    let points = values
+        .iter()
+        .enumerate()
+        .map(|(index, v)| {
+            let closed = closes && {
+                let parameters = crate::point::resolve(sweep, v);
+                crate::scene::Scene::new(&parameters, &sweep.file.scene)
+                    .map_err(|e| crate::Error::input(format!("{}: {e}", sweep.path.display())))?
+                    .nothing_passes()
+            };
+            Ok(PointRecord { index, values: v.clone(), hash: String::new(), closed })
+        })
+        .collect::<crate::Result<Vec<_>>>()?;
+    let sample = screen.sample(&points);
+    Ok(points
+        .iter()
+        .map(|p| match (p.closed, sample.contains(&p.index)) {
+            (true, true) => "verification",
+            (true, false) => "closed",
+            (false, _) => "",
+        })
+        .collect())
 }
 
 /// The number in [0, 1) a closed point draws for the sample: the first 8 bytes of

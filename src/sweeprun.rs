@@ -864,20 +864,14 @@ impl<'a> Reporter<'a> {
             // A closed point still queued may yet contradict it.
             Verdict::Verified | Verdict::Pending => {}
             Verdict::Refuted => {
-                let report = self.screen.report(
-                    &self.manifest.points,
-                    &self.status,
-                    &self.sample,
-                    (verdict, refuted_by),
-                );
                 let held = (self.manifest.points.iter())
                     .filter(|p| p.closed && !self.awaiting.contains(&p.index))
                     .filter(|p| matches!(self.status[p.index], PointStatus::Pending))
                     .count();
                 self.progress.warn(&format!(
-                    "warning: {}; the screen is not trusted in this sweep: the {held} closed point(s) it \
-                     would skip run for real",
-                    report.sentence().unwrap_or_default()
+                    "warning: SCREEN REFUTED: {}; it is not trusted in this sweep: the {held} closed \
+                     point(s) it would skip run for real",
+                    crate::screen::refutation(&refuted_by)
                 ));
                 self.verdict = verdict;
             }

@@ -330,3 +330,73 @@ screen_sample_min = 1
     assert_eq!(std::fs::read_to_string(out.join("joblog.tsv")).unwrap(), joblog);
     assert_eq!(rows(&out), table);
 }
+
+#[test]
+fn the_points_preview_marks_the_closed_points_of_the_thesis_space() {
+    // `sweep points --screen`: closed exactly where gap/D is below 0.670 D less the margin,
+    // 0.1472 D × (v / 1.6 m/s)^0.8 (v 1.2–1.6 m/s: the bound is 0.523–0.553 D).
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps/thesis-lds.toml");
+    let o = sweep_bin(&["points", file.to_str().unwrap(), "--lds", "400", "--screen"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let text = String::from_utf8(o.stdout.clone()).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next().unwrap(), "friction,diameter,gap,blade_speed,screen");
+    let (mut closed, mut sample) = (0, 0);
+    for line in lines {
+        let f: Vec<&str> = line.split(',').collect();
+        let (d, gap, v): (f64, f64, f64) =
+            (f[1].parse().unwrap(), f[2].parse().unwrap(), f[3].parse().unwrap());
+        let bound = 0.44875f64.sqrt() - 0.147234 * (v / 1.6).powf(0.8);
+        let is_closed = !f[4].is_empty();
+        assert_eq!(is_closed, gap / d < bound, "{line}: gap/D {} bound {bound}", gap / d);
+        closed += is_closed as usize;
+        sample += (f[4] == "verification") as usize;
+    }
+    // A tenth of the closed points, at least 3.
+    assert!(closed > 5 && sample >= 3 && sample < closed, "{closed} {sample}");
+    let err = stderr(&o);
+    assert!(err.contains(&format!("{closed} of 400 points closed; {} skipped", closed - sample)), "{err}");
+}
+
+#[test]
+fn on_liggghts_a_failed_verification_run_refutes_the_screen_loudly() {
+    // Every run is cut off at 0.3 s (LIGGGHTS takes seconds), so the verification run fails:
+    // the screen is refuted, said so on stderr and in summary.json, and the other closed point
+    // runs too (here, failing the same way) instead of being counted as MFR = 0.
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("refuted.toml");
+    std::fs::write(
+        &file,
+        r#"name = "refuted"
+[parameters]
+gap      = { lo = 0.5, hi = 2.75, unit = "mm" }
+diameter = { value = 2.5, unit = "mm" }
+[scene]
+depth_diameters = 3
+[run]
+screen_sample = 0.0
+screen_sample_min = 1
+timeout_s = 0.3
+retries = 0
+"#,
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    let o = out.to_str().unwrap();
+    let run =
+        sweep_bin(&["lattice", file.to_str().unwrap(), "--levels", "4", "--jobs", "2", "-q", "--out", o]);
+    let err = stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{err}");
+    assert!(err.contains("warning: SCREEN REFUTED: point ") && err.contains("failed (timed-out)"), "{err}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["screen"]["verdict"], "refuted", "{}", summary["screen"]);
+    assert_eq!(
+        (summary["screen"]["ran"].as_u64(), summary["counts"]["screened"].as_u64()),
+        (Some(2), Some(0))
+    );
+    let table = rows(&out);
+    assert!(table.iter().all(|r| r["status"] == "failed"), "{table:?}");
+    let joblog = std::fs::read_to_string(out.join("joblog.tsv")).unwrap();
+    assert!(table.iter().all(|r| joblog.contains(&r["hash"])), "every point was attempted");
+}
