@@ -38,6 +38,8 @@ enum Command {
     /// Each level is one space; after each, the MFR statistics are compared with the previous
     /// level's ([convergence] rule, or the flags below). Once the rule holds no new runs start.
     /// Ends by writing the report (as `sweep report`) and printing the verdict, naming the level.
+    /// Points where nothing can pass under the blade are screened as MFR = 0 once a sample of
+    /// them ran with MFR = 0 ([run] screen; `sweep points --screen` shows which).
     Lattice(LatticeArgs),
     /// Run scrambled-Halton points in batches of --step up to --max, stopping once the MFR
     /// statistics converge.
@@ -46,13 +48,15 @@ enum Command {
     /// with the previous prefix's ([convergence] rule, or the flags below). Once the rule holds no
     /// new runs start. Ends by writing the report (as `sweep report`) and printing the verdict.
     /// A larger --max on a converged directory extends it and judges again past its old extent.
+    /// Points where nothing can pass under the blade are screened as MFR = 0 once a sample of
+    /// them ran with MFR = 0 ([run] screen; `sweep points --screen` shows which).
     Lds(LdsArgs),
     /// Finish an interrupted sweep; every completed run is reused.
     ///
     /// Keeps the convergence rule and verdict of DIR/sweep.toml: a converged sweep runs nothing
     /// more. Ends by writing the report.
     Resume(ResumeArgs),
-    /// Counts of a sweep directory: done, failed, running, pending.
+    /// Counts of a sweep directory: done, failed, running, screened, pending; the screen's verdict.
     Status(DirArgs),
     /// Write convergence.csv, summary.json and report/ (plots, report.html) of a sweep directory.
     ///
@@ -1076,13 +1080,15 @@ fn points(a: PointsArgs) -> Result<i32, Error> {
     let screen = if a.screen { Some(demsweep::screen::preview(&sweep, &values)?) } else { None };
     if let Some(col) = &screen {
         let count = |w: &str| col.iter().filter(|c| **c == w).count();
-        eprintln!(
-            "screen: {} of {} points closed; {} skipped as MFR = 0 once the {} of the verification sample give MFR = 0",
-            count("closed") + count("verification"),
-            col.len(),
-            count("closed"),
-            count("verification")
-        );
+        match count("closed") + count("verification") {
+            0 => eprintln!("screen: none of the {} points is closed", col.len()),
+            closed => eprintln!(
+                "screen: {closed} of {} points closed; {} skipped as MFR = 0 once the {} of the verification sample give MFR = 0",
+                col.len(),
+                count("closed"),
+                count("verification")
+            ),
+        }
     }
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
