@@ -1160,6 +1160,9 @@ fn run_one(a: RunArgs) -> Result<i32, Error> {
             prepared.scene.timestep,
             dir.display()
         );
+        if prepared.scene.nothing_passes() {
+            eprintln!("the screen closes this point: nothing can pass under the blade (a sweep counts it as MFR = 0)");
+        }
     }
     let cancel = demsweep::process::CancelToken::new();
     match point::execute(&ctx, &prepared, &dir, &cancel) {
