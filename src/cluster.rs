@@ -24,7 +24,7 @@ use std::time::Duration;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::store::{Manifest, RunState, Store};
+use crate::store::{Manifest, PointStatus, RunState, Store};
 
 /// The built-in Slurm template.
 pub const SLURM_TEMPLATE: &str = include_str!("../templates/slurm.tera");
@@ -220,13 +220,16 @@ pub struct Counts {
     pub points: usize,
     pub done: usize,
     pub failed: usize,
+    /// Skipped by a verified screen.
+    pub screened: usize,
     pub missing: usize,
 }
 
 /// Plan a submission of `dir`: the layout (read, or made from `--tasks`), the array indices to
 /// run, and both scripts. Writes nothing. `Ok(Err(counts))` when no point needs running.
 pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendered, Counts>> {
-    let (manifest, _) = Store::read_manifest(dir)?;
+    let (manifest, toml) = Store::read_manifest(dir)?;
+    let sweep = crate::sweep::Sweep::parse(&toml, &dir.join("sweep.toml"))?;
     let dir = std::path::absolute(dir).map_err(|e| Error::input(format!("{}: {e}", dir.display())))?;
     check_word("DIR", &dir.display().to_string())?;
     check_word("the sweep executable", &o.exe.display().to_string())?;
@@ -248,17 +251,19 @@ pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendere
         )))
         }
     };
-    let counts = counts(&dir, &manifest);
-    let store = Store::open(&dir);
-    let wanted: Vec<usize> = manifest
-        .points
+    // Points a verified screen skipped need no task; while it is pending, the closed points do
+    // (their tasks run them if the sample refutes it).
+    let (status, _, _) = crate::screen::Screen::of(&sweep).statuses(&Store::open(&dir), &manifest);
+    let counts = counts(&status);
+    let wanted: Vec<usize> = status
         .iter()
-        .filter(|p| match store.state(&p.hash) {
-            RunState::Done(_) => false,
-            RunState::Failed(_) => o.only.failed,
-            _ => o.only.missing,
+        .enumerate()
+        .filter(|(_, s)| match s {
+            PointStatus::Done(_) | PointStatus::Screened => false,
+            PointStatus::Failed(_) => o.only.failed,
+            PointStatus::Pending => o.only.missing,
         })
-        .map(|p| p.index)
+        .map(|(i, _)| i)
         .collect();
     if wanted.is_empty() {
         return Ok(Err(counts));
@@ -371,14 +376,14 @@ fn tera_chain(e: &tera::Error) -> String {
     s
 }
 
-fn counts(dir: &Path, manifest: &Manifest) -> Counts {
-    let store = Store::open(dir);
-    let mut c = Counts { points: manifest.points.len(), ..Counts::default() };
-    for p in &manifest.points {
-        match store.state(&p.hash) {
-            RunState::Done(_) => c.done += 1,
-            RunState::Failed(_) => c.failed += 1,
-            _ => c.missing += 1,
+fn counts(status: &[PointStatus]) -> Counts {
+    let mut c = Counts { points: status.len(), ..Counts::default() };
+    for s in status {
+        match s {
+            PointStatus::Done(_) => c.done += 1,
+            PointStatus::Failed(_) => c.failed += 1,
+            PointStatus::Screened => c.screened += 1,
+            PointStatus::Pending => c.missing += 1,
         }
     }
     c

@@ -209,8 +209,8 @@ impl Overrides {
 }
 
 /// The rule applied to a running sweep: the driver's [`SpaceHook`]. After each space completes
-/// it judges the spaces so far on their done runs' MFR (failed runs left out) and stops the
-/// sweep ([`Flow::Drain`]: no new runs start) at the first converged space.
+/// it judges the spaces so far on their done runs' MFR (screened points as 0, failed runs left
+/// out) and stops the sweep ([`Flow::Drain`]: no new runs start) at the first converged space.
 pub struct Watch {
     criteria: Criteria,
     spaces: Vec<(usize, Moments)>,
@@ -231,6 +231,8 @@ impl SpaceHook for Watch {
             .iter()
             .filter_map(|(_, s)| match s {
                 PointStatus::Done(r) if r.mfr.is_finite() => Some(r.mfr),
+                // A closed gap passes nothing: a real zero, not a missing value.
+                PointStatus::Screened => Some(0.0),
                 _ => None,
             })
             .collect();

@@ -22,6 +22,7 @@ pub mod progress;
 pub mod quality;
 pub mod report;
 pub mod scene;
+pub mod screen;
 pub mod sensitivity;
 pub mod space;
 pub mod stability;

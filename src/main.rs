@@ -38,6 +38,8 @@ enum Command {
     /// Each level is one space; after each, the MFR statistics are compared with the previous
     /// level's ([convergence] rule, or the flags below). Once the rule holds no new runs start.
     /// Ends by writing the report (as `sweep report`) and printing the verdict, naming the level.
+    /// Points where nothing can pass under the blade are screened as MFR = 0 once a sample of
+    /// them ran with MFR = 0 ([run] screen; `sweep points --screen` shows which).
     Lattice(LatticeArgs),
     /// Run scrambled-Halton points in batches of --step up to --max, stopping once the MFR
     /// statistics converge.
@@ -46,13 +48,15 @@ enum Command {
     /// with the previous prefix's ([convergence] rule, or the flags below). Once the rule holds no
     /// new runs start. Ends by writing the report (as `sweep report`) and printing the verdict.
     /// A larger --max on a converged directory extends it and judges again past its old extent.
+    /// Points where nothing can pass under the blade are screened as MFR = 0 once a sample of
+    /// them ran with MFR = 0 ([run] screen; `sweep points --screen` shows which).
     Lds(LdsArgs),
     /// Finish an interrupted sweep; every completed run is reused.
     ///
     /// Keeps the convergence rule and verdict of DIR/sweep.toml: a converged sweep runs nothing
     /// more. Ends by writing the report.
     Resume(ResumeArgs),
-    /// Counts of a sweep directory: done, failed, running, pending.
+    /// Counts of a sweep directory: done, failed, running, screened, pending; the screen's verdict.
     Status(DirArgs),
     /// Write convergence.csv, summary.json and report/ (plots, report.html) of a sweep directory.
     ///
@@ -399,6 +403,11 @@ struct PointsArgs {
     /// qmc.discrepancy(method="CD") convention) in unit coordinates to stderr.
     #[arg(long)]
     discrepancy: bool,
+    /// Add a `screen` column: `closed` where nothing can pass under the blade (skipped as
+    /// MFR = 0 once the screen is verified), `verification` for its verification sample (run
+    /// anyway), empty where the point runs; and a count on stderr.
+    #[arg(long)]
+    screen: bool,
 }
 
 #[derive(Args)]
@@ -942,6 +951,10 @@ fn finish(s: &Summary, sweep: &Sweep) -> Result<i32, Error> {
 /// Say what to do next about the runs and return the exit code.
 fn finish_runs(s: &Summary) -> i32 {
     let dir = s.dir.display();
+    if let Some(line) = s.screen.sentence() {
+        let warning = if s.screen.verdict == demsweep::screen::Verdict::Refuted { "warning: " } else { "" };
+        eprintln!("{warning}{line}");
+    }
     if s.interrupted {
         eprintln!(
             "interrupted: {} of {} points finished; continue with `sweep resume {dir}`",
@@ -999,9 +1012,10 @@ fn submit(a: SubmitArgs) -> Result<i32, Error> {
         Ok(r) => r,
         Err(c) => {
             eprintln!(
-                "nothing to submit: {} of {} points done, {} failed{}",
+                "nothing to submit: {} of {} points done, {} screened, {} failed{}",
                 c.done,
                 c.points,
+                c.screened,
                 c.failed,
                 if c.failed > 0 && !opts.only.failed { " (`--only failed` re-runs them)" } else { "" }
             );
@@ -1066,8 +1080,8 @@ fn work(a: WorkArgs) -> Result<i32, Error> {
     };
     let summary = demsweep::cluster::work(&a.dir, &w, &opts, &CancelToken::new())?;
     eprintln!(
-        "task {}: ran {} runs; the sweep has {} of {} points done, {} failed",
-        a.task, summary.ran, summary.done, summary.points, summary.failed
+        "task {}: ran {} runs; the sweep has {} of {} points done, {} screened, {} failed",
+        a.task, summary.ran, summary.done, summary.points, summary.screened, summary.failed
     );
     // A task writes no report: the dependent report job does, once every task has ended.
     Ok(finish_runs(&summary))
@@ -1182,14 +1196,29 @@ fn points(a: PointsArgs) -> Result<i32, Error> {
             demsweep::design::discrepancy::centred_l2(&unit)
         );
     }
+    let values: Vec<Vec<f64>> = unit.iter().map(|p| demsweep::space::scale_point(&sweep, p)).collect();
+    let screen = if a.screen { Some(demsweep::screen::preview(&sweep, &values)?) } else { None };
+    if let Some(col) = &screen {
+        let count = |w: &str| col.iter().filter(|c| **c == w).count();
+        match count("closed") + count("verification") {
+            0 => eprintln!("screen: none of the {} points is closed", col.len()),
+            closed => eprintln!(
+                "screen: {closed} of {} points closed; {} skipped as MFR = 0 once the {} of the verification sample give MFR = 0",
+                col.len(),
+                count("closed"),
+                count("verification")
+            ),
+        }
+    }
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
     let write = |out: &mut dyn Write| -> std::io::Result<()> {
-        writeln!(out, "{}", sweep.names().join(","))?;
-        for p in &unit {
-            let row: Vec<String> =
-                demsweep::space::scale_point(&sweep, p).iter().map(|v| format!("{v}")).collect();
-            writeln!(out, "{}", row.join(","))?;
+        let extra = if screen.is_some() { ",screen" } else { "" };
+        writeln!(out, "{}{extra}", sweep.names().join(","))?;
+        for (k, v) in values.iter().enumerate() {
+            let row: Vec<String> = v.iter().map(|v| format!("{v}")).collect();
+            let extra = screen.as_ref().map_or(String::new(), |c| format!(",{}", c[k]));
+            writeln!(out, "{}{extra}", row.join(","))?;
         }
         out.flush()
     };
@@ -1251,6 +1280,9 @@ fn run_one(a: RunArgs) -> Result<i32, Error> {
             prepared.scene.timestep,
             dir.display()
         );
+        if prepared.scene.nothing_passes() {
+            eprintln!("the screen closes this point: nothing can pass under the blade (a sweep counts it as MFR = 0)");
+        }
     }
     let cancel = demsweep::process::CancelToken::new();
     match point::execute(&ctx, &prepared, &dir, &cancel) {

@@ -44,6 +44,11 @@ pub trait Executor: Sync {
     fn prepare(&self, swept: &[f64]) -> crate::Result<Self::Job>;
     /// The content hash naming the job's run dir.
     fn hash<'a>(&self, job: &'a Self::Job) -> &'a str;
+    /// Whether nothing can pass under the blade at this job's point, so that a verified screen
+    /// may skip it as MFR = 0 ([`crate::screen`]). Engines that model no scene close nothing.
+    fn closed(&self, _job: &Self::Job) -> bool {
+        false
+    }
     /// Run one attempt in `run_dir` (existing, empty but for the claim), writing `result.json`
     /// or `failure.json` there before returning `Done` or `Failed`; `Cancelled` when `cancel`
     /// fired.
@@ -329,10 +334,16 @@ pub mod fake {
     }
 
     type Plan = dyn Fn(&[f64], usize) -> Behaviour + Send + Sync;
+    type Closed = dyn Fn(&[f64]) -> bool + Send + Sync;
+    type Mfr = dyn Fn(&[f64]) -> f64 + Send + Sync;
 
     pub struct FakeExecutor {
         /// Behaviour of attempt `n` (0-based) of the point with these values.
         plan: Box<Plan>,
+        /// Which points the fake's screen closes (none by default).
+        closed: Box<Closed>,
+        /// The MFR of a point ([`fake_mfr`] by default).
+        mfr: Box<Mfr>,
         pub timeout: Duration,
         /// Stands for the template/engine identity.
         pub identity: String,
@@ -358,6 +369,8 @@ pub mod fake {
         pub fn new(plan: impl Fn(&[f64], usize) -> Behaviour + Send + Sync + 'static) -> Self {
             FakeExecutor {
                 plan: Box::new(plan),
+                closed: Box::new(|_| false),
+                mfr: Box::new(fake_mfr),
                 timeout: Duration::from_secs(30),
                 identity: "fake-1".into(),
                 output_bytes: 0,
@@ -367,6 +380,18 @@ pub mod fake {
                 peak: AtomicUsize::new(0),
                 overlap: AtomicUsize::new(0),
             }
+        }
+
+        /// Close the points (swept values) for which `closed` holds, as a screen would.
+        pub fn with_closed(mut self, closed: impl Fn(&[f64]) -> bool + Send + Sync + 'static) -> Self {
+            self.closed = Box::new(closed);
+            self
+        }
+
+        /// Give the points this MFR instead of [`fake_mfr`].
+        pub fn with_mfr(mut self, mfr: impl Fn(&[f64]) -> f64 + Send + Sync + 'static) -> Self {
+            self.mfr = Box::new(mfr);
+            self
         }
 
         /// Attempts made so far, by hash.
@@ -394,6 +419,10 @@ pub mod fake {
 
         fn hash<'a>(&self, job: &'a FakeJob) -> &'a str {
             &job.hash
+        }
+
+        fn closed(&self, job: &FakeJob) -> bool {
+            (self.closed)(&job.values)
         }
 
         fn execute(&self, job: &FakeJob, run_dir: &Path, cancel: &CancelToken) -> RunOutcome {
@@ -460,8 +489,8 @@ pub mod fake {
                             .zip(names)
                             .map(|(v, n)| (n.to_string(), *v))
                             .collect::<BTreeMap<_, _>>(),
-                        mfr: fake_mfr(&job.values),
-                        mfr_flux: fake_mfr(&job.values),
+                        mfr: (self.mfr)(&job.values),
+                        mfr_flux: (self.mfr)(&job.values),
                         mfr_particles: 0,
                         mfr_windows: vec![],
                         steady: true,

@@ -40,11 +40,13 @@ pub struct Counts {
     pub running: usize,
     /// Finished before this session started (reused).
     pub reused: usize,
+    /// Skipped by a verified screen (MFR = 0 without a run).
+    pub screened: usize,
 }
 
 impl Counts {
     fn finished(&self) -> usize {
-        self.done + self.failed
+        self.done + self.failed + self.screened
     }
 }
 
@@ -88,14 +90,23 @@ impl Progress {
         }
     }
 
+    /// A line that must be seen (the screen refuted), above the bar, whatever the mode.
+    pub fn warn(&self, line: &str) {
+        match &self.bar {
+            Some(b) => b.suspend(|| eprintln!("{line}")),
+            None => eprintln!("{line}"),
+        }
+    }
+
     /// The final line.
     pub fn finish(&mut self, c: &Counts) {
         if let Some(b) = self.bar.take() {
             b.finish_and_clear();
         }
         if self.mode != ProgressMode::Quiet {
+            let screened = if c.screened > 0 { format!(", {} screened", c.screened) } else { String::new() };
             eprintln!(
-                "sweep: {}/{} finished ({} done, {} failed, {} reused) in {}",
+                "sweep: {}/{} finished ({} done, {} failed{screened}, {} reused) in {}",
                 c.finished(),
                 c.total,
                 c.done,
@@ -108,14 +119,16 @@ impl Progress {
 
     fn message(&self, c: &Counts) -> String {
         let eta = eta(c, self.start.elapsed()).map_or("?".to_string(), human);
-        format!("done {} failed {} running {} ETA {eta}", c.done, c.failed, c.running)
+        let screened = if c.screened > 0 { format!(" screened {}", c.screened) } else { String::new() };
+        format!("done {} failed {}{screened} running {} ETA {eta}", c.done, c.failed, c.running)
     }
 }
 
 /// Remaining time at this session's rate: elapsed / finished-here × left. Runs reused from an
 /// earlier session finish instantly and are left out of the rate.
 pub fn eta(c: &Counts, elapsed: Duration) -> Option<Duration> {
-    let here = c.finished().checked_sub(c.reused)?;
+    // Screened points cost nothing: they are no part of the rate.
+    let here = c.finished().checked_sub(c.reused + c.screened)?;
     if here == 0 {
         return None;
     }
@@ -141,7 +154,7 @@ mod tests {
     #[test]
     fn eta_uses_only_this_sessions_rate() {
         // 10 reused + 10 run here in 100 s; 20 left → 200 s.
-        let c = Counts { total: 40, done: 18, failed: 2, running: 2, reused: 10 };
+        let c = Counts { total: 40, done: 18, failed: 2, running: 2, reused: 10, screened: 0 };
         assert_eq!(eta(&c, Duration::from_secs(100)), Some(Duration::from_secs(200)));
         let fresh = Counts { reused: 20, ..c };
         assert_eq!(eta(&fresh, Duration::from_secs(100)), None);

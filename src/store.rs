@@ -160,6 +160,10 @@ pub struct PointRecord {
     /// Swept parameter values in file order, in the sweep file's units.
     pub values: Vec<f64>,
     pub hash: String,
+    /// Nothing can pass under the blade here ([`crate::screen`]): skipped as MFR = 0 once the
+    /// screen is verified. Absent (false) in manifests written before the screen.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub closed: bool,
 }
 
 /// `manifest.json`.
@@ -860,6 +864,8 @@ pub enum PointStatus {
     Pending,
     Done(Box<RunResult>),
     Failed(Box<RunFailure>),
+    /// Closed by a verified screen and not run: MFR = 0 ([`crate::screen`]).
+    Screened,
 }
 
 impl PointStatus {
@@ -870,14 +876,17 @@ impl PointStatus {
 
 /// Write `DIR/results.csv`: one row per design point, in index order, atomically.
 ///
-/// Columns: index, the swept parameters, status (`done`, `failed`, `pending`), failure (class),
-/// mfr, mfr_flux, mfr_particles, steady, vx_1..vx_12 (m/s, empty for an empty layer), runtime_s,
-/// hash, quality (of the v_x profile, [`crate::quality`]; empty unless done).
+/// Columns: index, the swept parameters, status (`done`, `failed`, `pending`, `screened`),
+/// failure (class), mfr (0 when screened), mfr_flux, mfr_particles, steady, vx_1..vx_12 (m/s,
+/// empty for an empty layer), runtime_s, hash, quality (of the v_x profile, [`crate::quality`];
+/// empty unless done), screen (`closed` for a point the screen closes, `verification` for one of
+/// its verification sample, empty for an open point).
 pub fn write_results(
     dir: &Path,
     parameters: &[String],
     points: &[PointRecord],
     status: &[PointStatus],
+    sample: &std::collections::BTreeSet<usize>,
 ) -> Result<(), StoreError> {
     let path = dir.join("results.csv");
     let mut w = csv::Writer::from_writer(Vec::new());
@@ -885,7 +894,7 @@ pub fn write_results(
     header.extend(parameters.iter().cloned());
     header.extend(["status", "failure", "mfr", "mfr_flux", "mfr_particles", "steady"].map(String::from));
     header.extend((1..=VX_LAYERS).map(|k| format!("vx_{k}")));
-    header.extend(["runtime_s", "hash", "quality"].map(String::from));
+    header.extend(["runtime_s", "hash", "quality", "screen"].map(String::from));
     w.write_record(&header).expect("in-memory csv");
     for (p, s) in points.iter().zip(status) {
         let mut row: Vec<String> = vec![p.index.to_string()];
@@ -915,11 +924,20 @@ pub fn write_results(
                 row.extend(std::iter::repeat_n(String::new(), 4 + VX_LAYERS));
                 row.push(format!("{:.3}", f.wall_time));
             }
+            PointStatus::Screened => {
+                row.extend(["screened".into(), String::new(), "0".into()]);
+                row.extend(std::iter::repeat_n(String::new(), 3 + VX_LAYERS + 1));
+            }
         }
         row.push(p.hash.clone());
         row.push(match s {
             PointStatus::Done(r) => crate::quality::of_result(r).as_str().into(),
             _ => String::new(),
+        });
+        row.push(match (p.closed, sample.contains(&p.index)) {
+            (true, true) => "verification".into(),
+            (true, false) => "closed".into(),
+            (false, _) => String::new(),
         });
         w.write_record(&row).expect("in-memory csv");
     }

@@ -398,11 +398,28 @@ pub struct RunSettings {
     pub timeout_s: f64,
     /// Retries of transient failures (could not start, killed by a signal, timed out).
     pub retries: u32,
+    /// Skip the points where nothing can pass under the blade ([`crate::scene::screen`]),
+    /// counting them as MFR = 0, once a seeded sample of them has run and given MFR = 0
+    /// ([`crate::screen`]).
+    pub screen: bool,
+    /// Fraction of the closed points run anyway to verify the screen (seeded by
+    /// `design.lds.seed`).
+    pub screen_sample: f64,
+    /// ... and at least this many (every closed point when fewer).
+    pub screen_sample_min: usize,
 }
 
 impl Default for RunSettings {
     fn default() -> Self {
-        RunSettings { engine: None, timeout_s: 600.0, retries: 1 }
+        RunSettings {
+            engine: None,
+            timeout_s: 600.0,
+            retries: 1,
+            screen: true,
+            // A tenth: on a 2,400-point sweep of the thesis space about 12 of ~120 closed points.
+            screen_sample: 0.1,
+            screen_sample_min: 3,
+        }
     }
 }
 
@@ -733,6 +750,17 @@ fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>, Vec<Parame
     }
     if !(file.run.timeout_s.is_finite() && file.run.timeout_s > 0.0) {
         return Err(bad("run.timeout_s", format!("{}: expected seconds > 0", file.run.timeout_s)));
+    }
+    let r = &file.run;
+    if !(r.screen_sample.is_finite() && (0.0..=1.0).contains(&r.screen_sample)) {
+        return Err(bad("run.screen_sample", format!("{}: expected a fraction in [0, 1]", r.screen_sample)));
+    }
+    if r.screen_sample_min == 0 {
+        return Err(bad(
+            "run.screen_sample_min",
+            "0: expected at least 1 (a screen is trusted only once verified; `screen = false` runs every point)"
+                .into(),
+        ));
     }
     Ok((swept, fixed))
 }

@@ -17,7 +17,7 @@
 //! Not responsible for running one point (the [`Executor`]), for scheduling ([`crate::pool`]) or
 //! for the directory's formats ([`crate::store`]); no statistics here.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 use std::time::{Instant, SystemTime};
 
@@ -31,6 +31,7 @@ use crate::point::{self, PointContext};
 use crate::pool::{self, Event, Executor, Flow, PoolOptions};
 use crate::process::CancelToken;
 use crate::progress::{Counts, Progress, ProgressMode};
+use crate::screen::{Screen, ScreenReport, Verdict};
 use crate::store::{
     self, DesignRecord, Manifest, PointRecord, PointStatus, RunState, SpaceRecord, Store, MANIFEST_FORMAT,
 };
@@ -53,6 +54,8 @@ pub struct PointExecutor {
 pub struct PointJob {
     values: Vec<f64>,
     hash: String,
+    /// Nothing can pass under the blade here ([`crate::scene::Scene::nothing_passes`]).
+    closed: bool,
 }
 
 impl PointExecutor {
@@ -77,11 +80,15 @@ impl Executor for PointExecutor {
 
     fn prepare(&self, swept: &[f64]) -> Result<PointJob> {
         let p = point::prepare(&self.ctx, swept)?;
-        Ok(PointJob { values: swept.to_vec(), hash: p.hash })
+        Ok(PointJob { values: swept.to_vec(), hash: p.hash, closed: p.scene.nothing_passes() })
     }
 
     fn hash<'a>(&self, job: &'a PointJob) -> &'a str {
         &job.hash
+    }
+
+    fn closed(&self, job: &PointJob) -> bool {
+        job.closed
     }
 
     fn execute(&self, job: &PointJob, run_dir: &Path, cancel: &CancelToken) -> RunOutcome {
@@ -142,6 +149,8 @@ pub struct Summary {
     pub points: usize,
     pub done: usize,
     pub failed: usize,
+    /// Closed points skipped by a verified screen (MFR = 0).
+    pub screened: usize,
     pub pending: usize,
     /// Runs executed by this process (not counting retries).
     pub ran: usize,
@@ -150,6 +159,8 @@ pub struct Summary {
     pub interrupted: bool,
     /// The space after which the hook stopped the sweep.
     pub stopped_after: Option<String>,
+    /// What the screen did.
+    pub screen: ScreenReport,
 }
 
 impl Summary {
@@ -311,8 +322,9 @@ pub fn plan_with_progress<E: Executor>(
     let mut point_of_value = Vec::with_capacity(distinct.len());
     for (values, job) in distinct.into_iter().zip(prepared) {
         let hash = exec.hash(&job).to_string();
+        let closed = sweep.file.run.screen && exec.closed(&job);
         let index = *by_hash.entry(hash.clone()).or_insert_with(|| {
-            points.push(PointRecord { index: points.len(), values, hash });
+            points.push(PointRecord { index: points.len(), values, hash, closed });
             jobs.push(job);
             points.len() - 1
         });
@@ -391,8 +403,7 @@ pub fn start<E: Executor>(
         Some((old, old_toml)) => check_extension(out, &old, &old_toml, &manifest, &toml),
         None => Ok(()),
     })?;
-    let retries = sweep.file.run.retries;
-    execute(&store, &manifest, exec, jobs, retries, opts, None, hook, cancel)
+    execute(&store, &manifest, exec, jobs, sweep, opts, None, hook, cancel)
 }
 
 /// Whether `out` can be a sweep directory: an existing directory we may write in, or a path
@@ -460,8 +471,11 @@ fn check_extension(dir: &Path, old: &Manifest, old_toml: &str, new: &Manifest, n
     let d = dir.display();
     // The design may grow; the convergence rule may change (it decides when to stop, not what
     // a run gives).
+    // Compared with defaults filled in, so that a key added since (such as `run.screen`) does
+    // not make an older directory's sweep file look different.
     let without_design = |t: &str| -> Option<toml::Table> {
-        let mut v: toml::Table = toml::from_str(t).ok()?;
+        let file: crate::sweep::SweepFile = toml::from_str(t).ok()?;
+        let mut v = toml::Table::try_from(&file).ok()?;
         v.remove("design");
         v.remove("convergence");
         Some(v)
@@ -641,25 +655,38 @@ pub fn resume_share<E: Executor>(
         )));
     }
     let store = Store::open(dir);
-    if changed > 0 || !diff.is_empty() {
+    // The screen is decided again from each point (a pure function of the point and the
+    // settings); a directory written before the screen gains it here.
+    let reclosed = manifest
+        .points
+        .iter()
+        .zip(&jobs)
+        .filter(|(p, j)| p.closed != (sweep.file.run.screen && exec.closed(j)))
+        .count();
+    if changed > 0 || !diff.is_empty() || reclosed > 0 {
         manifest.identity = identity;
         for (p, j) in manifest.points.iter_mut().zip(&jobs) {
             p.hash = exec.hash(j).to_string();
+            p.closed = sweep.file.run.screen && exec.closed(j);
         }
         store.write_manifest(&toml, &manifest)?;
     }
-    let retries = sweep.file.run.retries;
-    execute(&store, &manifest, exec, jobs, retries, opts, order, hook, cancel)
+    execute(&store, &manifest, exec, jobs, &sweep, opts, order, hook, cancel)
 }
 
 /// Run the unfinished points of a manifest.
+///
+/// The screen ([`crate::screen`]): the unfinished points of its verification sample go first in
+/// the queue, whatever `order` picks (an array task waits for them before it trusts the screen);
+/// the other closed points are held back. Once the sample has run with MFR = 0 they are screened;
+/// if any closed point's run contradicts the screen, they run after the rest.
 #[expect(clippy::too_many_arguments, reason = "one call site each in start and resume_share")]
 fn execute<E: Executor>(
     store: &Store,
     manifest: &Manifest,
     exec: &E,
     jobs: Vec<E::Job>,
-    retries: u32,
+    sweep: &Sweep,
     opts: &RunOptions,
     order: Option<Order>,
     hook: &mut dyn SpaceHook,
@@ -668,8 +695,11 @@ fn execute<E: Executor>(
     let session_start = SystemTime::now();
     // Leftovers of atomic writes cut off by a kill or a full disk.
     store.remove_stale_temporaries()?;
+    let screen = Screen::of(sweep);
+    let sample = screen.sample(&manifest.points);
     let mut status = Vec::with_capacity(manifest.points.len());
-    let mut queue = Vec::new();
+    let mut queued: BTreeMap<usize, E::Job> = BTreeMap::new();
+    let mut held: BTreeMap<usize, E::Job> = BTreeMap::new();
     for (p, job) in manifest.points.iter().zip(jobs) {
         let state = store.state(&p.hash);
         if let RunState::Damaged { file, reason } = &state {
@@ -679,44 +709,57 @@ fn execute<E: Executor>(
             RunState::Done(r) => PointStatus::Done(r),
             RunState::Failed(f) => {
                 if opts.retry_failed {
-                    queue.push(job);
+                    queued.insert(p.index, job);
                 }
                 PointStatus::Failed(f)
             }
             _ => {
-                queue.push(job);
+                if p.closed && !sample.contains(&p.index) {
+                    held.insert(p.index, job);
+                } else {
+                    queued.insert(p.index, job);
+                }
                 PointStatus::Pending
             }
         };
         status.push(s);
     }
-    if let Some(order) = order {
-        let index: HashMap<&str, usize> =
-            manifest.points.iter().map(|p| (p.hash.as_str(), p.index)).collect();
-        let mut by_index: BTreeMap<usize, E::Job> = queue
-            .into_iter()
-            .map(|j| {
-                let i = index[exec.hash(&j)];
-                (i, j)
-            })
-            .collect();
-        let picked = order(&by_index.keys().copied().collect::<Vec<_>>());
-        queue = picked.into_iter().filter_map(|i| by_index.remove(&i)).collect();
+    // Closed points about to run (again): their present status is no evidence.
+    let awaiting: BTreeSet<usize> = queued.keys().copied().filter(|&i| manifest.points[i].closed).collect();
+    let mut rep =
+        Reporter::new(store, manifest, status, opts.progress, hook, screen, sample.clone(), awaiting)?;
+    if rep.verdict == Verdict::Refuted {
+        queued.append(&mut held);
     }
-    let mut rep = Reporter::new(store, manifest, status, opts.progress, hook)?;
+    let pick = |all: &mut BTreeMap<usize, E::Job>, sample_first: bool| -> Vec<E::Job> {
+        let (first, rest): (Vec<usize>, Vec<usize>) =
+            all.keys().copied().partition(|i| sample_first && sample.contains(i));
+        let rest = match order {
+            Some(order) => order(&rest),
+            None => rest,
+        };
+        first.into_iter().chain(rest).filter_map(|i| all.remove(&i)).collect()
+    };
+    let mut queue = pick(&mut queued, true);
     if rep.fire_spaces() == Flow::Drain {
         queue.clear();
     }
     let popts = PoolOptions {
         slots: opts.jobs.max(1),
-        retries,
+        retries: sweep.file.run.retries,
         retry_failed_before: opts.retry_failed.then_some(session_start),
     };
     pool::run(exec, store, queue, &popts, cancel, |e| rep.event(e));
+    // Refuted while the pool ran: the held-back closed points run now, for real.
+    let go_on = !cancel.is_cancelled() && rep.stopped_after.is_none() && rep.errors.is_empty();
+    if go_on && rep.verdict == Verdict::Refuted && !held.is_empty() {
+        let queue = pick(&mut held, false);
+        pool::run(exec, store, queue, &popts, cancel, |e| rep.event(e));
+    }
     rep.finish(cancel.is_cancelled())
 }
 
-/// The one consumer of pool events: joblog, results.csv, progress, spaces.
+/// The one consumer of pool events: joblog, results.csv, progress, spaces, the screen's verdict.
 struct Reporter<'a> {
     store: &'a Store,
     manifest: &'a Manifest,
@@ -735,33 +778,42 @@ struct Reporter<'a> {
     results_dirty: bool,
     results_written: Instant,
     errors: Vec<String>,
+    screen: Screen,
+    /// The screen's verification sample (point indices).
+    sample: BTreeSet<usize>,
+    /// Closed points queued to run (again) and not finished yet.
+    awaiting: BTreeSet<usize>,
+    verdict: Verdict,
 }
 
 impl<'a> Reporter<'a> {
+    #[expect(clippy::too_many_arguments, reason = "the reporter's whole starting state, one call site")]
     fn new(
         store: &'a Store,
         manifest: &'a Manifest,
         status: Vec<PointStatus>,
         mode: ProgressMode,
         hook: &'a mut dyn SpaceHook,
+        screen: Screen,
+        sample: BTreeSet<usize>,
+        awaiting: BTreeSet<usize>,
     ) -> Result<Reporter<'a>> {
         let mut member_of = vec![Vec::new(); manifest.points.len()];
-        let mut unfinished = Vec::with_capacity(manifest.spaces.len());
         for (k, s) in manifest.spaces.iter().enumerate() {
-            unfinished.push(s.points.iter().filter(|&&i| !status[i].is_finished()).count());
             for &i in &s.points {
                 member_of[i].push(k);
             }
         }
         let done = status.iter().filter(|s| matches!(s, PointStatus::Done(_))).count();
         let failed = status.iter().filter(|s| matches!(s, PointStatus::Failed(_))).count();
-        let counts = Counts { total: status.len(), done, failed, running: 0, reused: done + failed };
-        let rep = Reporter {
+        let counts =
+            Counts { total: status.len(), done, failed, running: 0, reused: done + failed, screened: 0 };
+        let mut rep = Reporter {
             store,
             manifest,
             by_hash: manifest.points.iter().map(|p| (p.hash.as_str(), p.index)).collect(),
             status,
-            unfinished,
+            unfinished: vec![0; manifest.spaces.len()],
             member_of,
             next_space: 0,
             hook,
@@ -773,9 +825,58 @@ impl<'a> Reporter<'a> {
             results_dirty: true,
             results_written: Instant::now(),
             errors: Vec::new(),
+            screen,
+            sample,
+            awaiting,
+            verdict: Verdict::Pending,
         };
-        store::write_results(store.dir(), &manifest.parameters, &manifest.points, &rep.status)?;
+        rep.judge_screen();
+        for (k, s) in manifest.spaces.iter().enumerate() {
+            rep.unfinished[k] = s.points.iter().filter(|&&i| !rep.status[i].is_finished()).count();
+        }
+        store::write_results(store.dir(), &manifest.parameters, &manifest.points, &rep.status, &rep.sample)?;
         Ok(rep)
+    }
+
+    /// Judge the screen while it is pending; once verified, screen the held-back closed points
+    /// (they finish, as MFR = 0); once refuted, say so loudly (the driver runs them). Both
+    /// verdicts are final for the session: after either no closed point's outcome is awaited.
+    fn judge_screen(&mut self) {
+        if self.verdict != Verdict::Pending {
+            return;
+        }
+        let (verdict, refuted_by) =
+            self.screen.judge(&self.manifest.points, &self.status, &self.sample, &self.awaiting);
+        match verdict {
+            Verdict::Verified if self.awaiting.is_empty() => {
+                let before: Vec<bool> = self.status.iter().map(PointStatus::is_finished).collect();
+                self.counts.screened = self.screen.apply(verdict, &self.manifest.points, &mut self.status);
+                for (i, was) in before.into_iter().enumerate() {
+                    if !was && self.status[i].is_finished() {
+                        for &k in &self.member_of[i] {
+                            self.unfinished[k] = self.unfinished[k].saturating_sub(1);
+                        }
+                    }
+                }
+                self.results_dirty = true;
+                self.verdict = verdict;
+            }
+            // A closed point still queued may yet contradict it.
+            Verdict::Verified | Verdict::Pending => {}
+            Verdict::Refuted => {
+                let held = (self.manifest.points.iter())
+                    .filter(|p| p.closed && !self.awaiting.contains(&p.index))
+                    .filter(|p| matches!(self.status[p.index], PointStatus::Pending))
+                    .count();
+                self.progress.warn(&format!(
+                    "warning: SCREEN REFUTED: {}; it is not trusted in this sweep: the {held} closed \
+                     point(s) it would skip run for real",
+                    crate::screen::refutation(&refuted_by)
+                ));
+                self.verdict = verdict;
+            }
+            Verdict::Off | Verdict::NoneClosed => self.verdict = verdict,
+        }
     }
 
     /// Call the hook for every space, in order, whose points have all finished.
@@ -825,11 +926,13 @@ impl<'a> Reporter<'a> {
                         match &self.status[i] {
                             PointStatus::Done(_) => self.counts.done -= 1,
                             PointStatus::Failed(_) => self.counts.failed -= 1,
+                            PointStatus::Screened => self.counts.screened -= 1,
                             PointStatus::Pending => {}
                         }
                         match &new {
                             PointStatus::Done(_) => self.counts.done += 1,
                             PointStatus::Failed(_) => self.counts.failed += 1,
+                            PointStatus::Screened => self.counts.screened += 1,
                             PointStatus::Pending => {}
                         }
                         self.status[i] = new;
@@ -838,6 +941,9 @@ impl<'a> Reporter<'a> {
                             for &k in &self.member_of[i] {
                                 self.unfinished[k] -= 1;
                             }
+                        }
+                        if self.awaiting.remove(&i) || self.manifest.points[i].closed {
+                            self.judge_screen();
                         }
                     }
                 }
@@ -867,6 +973,7 @@ impl<'a> Reporter<'a> {
             &self.manifest.parameters,
             &self.manifest.points,
             &self.status,
+            &self.sample,
         ) {
             Ok(()) => {
                 self.results_dirty = false;
@@ -890,16 +997,20 @@ impl<'a> Reporter<'a> {
             )));
         }
         let c = self.counts;
+        let judged = self.screen.judge(&self.manifest.points, &self.status, &self.sample, &BTreeSet::new());
+        let screen = self.screen.report(&self.manifest.points, &self.status, &self.sample, judged);
         Ok(Summary {
             dir: self.store.dir().to_path_buf(),
             points: c.total,
             done: c.done,
             failed: c.failed,
-            pending: c.total - c.done - c.failed,
+            screened: c.screened,
+            pending: c.total - c.done - c.failed - c.screened,
             ran: self.ran,
             reused: c.reused,
             interrupted,
             stopped_after: self.stopped_after,
+            screen,
         })
     }
 }
@@ -915,6 +1026,8 @@ pub struct StatusReport {
     pub failed: usize,
     /// Claimed by a live process.
     pub running: usize,
+    /// Closed points skipped by a verified screen (MFR = 0, no run).
+    pub screened: usize,
     pub pending: usize,
     /// Of the pending runs, those whose last attempt was cut off: killed (a claim left by a
     /// process that is gone) or cancelled (Ctrl-C, SIGTERM).
@@ -925,6 +1038,8 @@ pub struct StatusReport {
     pub failures: BTreeMap<String, FailureGroup>,
     /// Convergence verdict of the last report (summary.json); `None` before the first.
     pub converged: Option<bool>,
+    /// What the screen did.
+    pub screen: ScreenReport,
 }
 
 #[derive(Debug, Clone, Default, Serialize)]
@@ -944,8 +1059,10 @@ pub struct FailureNote {
 const FIRST_FAILURES: usize = 3;
 
 pub fn status(dir: &Path) -> Result<StatusReport> {
-    let (manifest, _) = Store::read_manifest(dir)?;
+    let (manifest, toml) = Store::read_manifest(dir)?;
+    let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
     let store = Store::open(dir);
+    let (statuses, _, screen) = Screen::of(&sweep).statuses(&store, &manifest);
     let mut r = StatusReport {
         dir: dir.to_path_buf(),
         name: manifest.name.clone(),
@@ -954,11 +1071,13 @@ pub fn status(dir: &Path) -> Result<StatusReport> {
         done: 0,
         failed: 0,
         running: 0,
+        screened: 0,
         pending: 0,
         interrupted: 0,
         damaged: Vec::new(),
         failures: BTreeMap::new(),
         converged: read_verdict(dir),
+        screen,
     };
     // The last attempt of each run, for runs cancelled part-way.
     let mut last: HashMap<String, String> = HashMap::new();
@@ -992,6 +1111,11 @@ pub fn status(dir: &Path) -> Result<StatusReport> {
                 r.pending += 1;
                 r.damaged.push(format!("{}: unreadable ({reason})", file.display()));
             }
+            RunState::Incomplete | RunState::Pending
+                if matches!(statuses[p.index], PointStatus::Screened) =>
+            {
+                r.screened += 1
+            }
             RunState::Incomplete | RunState::Pending => {
                 r.pending += 1;
                 if cut_off(&p.hash) {
@@ -1014,7 +1138,7 @@ impl StatusReport {
     /// The human-readable form.
     pub fn to_text(&self) -> String {
         let mut s = format!(
-            "{} ({}, {}): {} points\n  done     {}\n  failed   {}\n  running  {}\n  pending  {}\n",
+            "{} ({}, {}): {} points\n  done     {}\n  failed   {}\n  running  {}\n",
             self.dir.display(),
             self.name,
             design_label(&self.design),
@@ -1022,8 +1146,11 @@ impl StatusReport {
             self.done,
             self.failed,
             self.running,
-            self.pending
         );
+        if self.screened > 0 {
+            s.push_str(&format!("  screened {} (closed, MFR = 0 without a run)\n", self.screened));
+        }
+        s.push_str(&format!("  pending  {}\n", self.pending));
         if self.interrupted > 0 {
             s.insert_str(
                 s.len() - 1,
@@ -1043,6 +1170,9 @@ impl StatusReport {
                     n.reason
                 ));
             }
+        }
+        if let Some(line) = self.screen.sentence() {
+            s.push_str(&format!("  {line}\n"));
         }
         s.push_str(&format!(
             "  converged: {}\n",

@@ -199,3 +199,18 @@ fn lds_prefixes_are_designs_and_discrepancy_goes_to_stderr() {
     assert!((plain[0][0] - 0.2).abs() < 1e-12);
     assert!((plain[1][0] - 0.15).abs() < 1e-12);
 }
+
+#[test]
+fn screen_settings_that_make_no_sense_are_named() {
+    let run = |body: &str| format!("{BASE}[run]\n{body}\n");
+    rejects(
+        &run("screen_sample = 1.5"),
+        &["--lds", "2"],
+        &["bad-sweep.toml", "run.screen_sample", "1.5", "[0, 1]"],
+    );
+    rejects(&run("screen_sample = -0.1"), &["--lds", "2"], &["run.screen_sample", "-0.1"]);
+    rejects(&run("screen_sample = nan"), &["--lds", "2"], &["run.screen_sample", "NaN"]);
+    rejects(&run("screen_sample_min = 0"), &["--lds", "2"], &["run.screen_sample_min", "at least 1"]);
+    rejects(&run("screen = \"yes\""), &["--lds", "2"], &["bad-sweep.toml:5", "run.screen"]);
+    rejects(&run("scren = true"), &["--lds", "2"], &["run.scren", "did you mean `screen`"]);
+}

@@ -126,12 +126,16 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
         &format!(
             "<table><tr><th class=\"l\">points</th><td>{}</td></tr><tr><th class=\"l\">done</th><td>{}</td></tr>\
              <tr><th class=\"l\">failed (left out of every statistic)</th><td>{} ({})</td></tr>\
+             <tr><th class=\"l\">screened (closed gap, MFR = 0 without a run)</th><td>{}</td></tr>\
              <tr><th class=\"l\">pending</th><td>{}</td></tr><tr><th class=\"l\">spaces complete</th><td>{} of {}</td></tr>\
              <tr><th class=\"l\">wall time (runs going)</th><td>{:.0} s</td></tr><tr><th class=\"l\">core-seconds</th><td>{:.0}</td></tr></table>\n",
-            c.points, c.done, c.failed, esc(&failures), c.pending, c.spaces_complete, c.spaces,
+            c.points, c.done, c.failed, esc(&failures), c.screened, c.pending, c.spaces_complete, c.spaces,
             a.timing.wall_time_s, a.timing.core_seconds
         ),
     );
+    if let Some(line) = a.screen.sentence() {
+        push(&mut h, &format!("<p>{}.</p>\n", esc(&line)));
+    }
     // Convergence table.
     push(&mut h, "<h2>Convergence</h2>\n");
     push(&mut h, &format!("<p>{}.", esc(&a.criteria.describe())));

@@ -22,9 +22,10 @@ use crate::convergence::{self, Change, Criteria, Judgement};
 use crate::error::{Error, Result};
 use crate::outcome::RunResult;
 use crate::quality::{self, Quality};
+use crate::screen::{Screen, ScreenReport};
 use crate::sensitivity;
 use crate::stats::{self, Bootstrap, Interval, Moments, STATISTICS};
-use crate::store::{DesignRecord, Manifest, RunState, Store};
+use crate::store::{DesignRecord, Manifest, PointStatus, Store};
 use crate::sweep::Sweep;
 
 /// Version of `summary.json`.
@@ -42,8 +43,15 @@ pub struct PointRow {
 
 #[derive(Debug, Clone)]
 pub enum PointState {
-    Done { result: Box<RunResult>, quality: Quality },
-    Failed { class: String },
+    Done {
+        result: Box<RunResult>,
+        quality: Quality,
+    },
+    Failed {
+        class: String,
+    },
+    /// Closed by a verified screen, not run: MFR = 0 ([`crate::screen`]).
+    Screened,
     Pending,
 }
 
@@ -51,6 +59,16 @@ impl PointRow {
     pub fn done(&self) -> Option<(&RunResult, Quality)> {
         match &self.state {
             PointState::Done { result, quality } => Some((result, *quality)),
+            _ => None,
+        }
+    }
+
+    /// The point's MFR for the statistics: its run's, or 0 when the screen closed it (a gap
+    /// that passes nothing is a real zero, thesis Fig. 4.19).
+    pub fn mfr(&self) -> Option<f64> {
+        match &self.state {
+            PointState::Done { result, .. } => Some(result.mfr).filter(|v| v.is_finite()),
+            PointState::Screened => Some(0.0),
             _ => None,
         }
     }
@@ -98,6 +116,8 @@ pub struct Counts {
     pub points: usize,
     pub done: usize,
     pub failed: usize,
+    /// Closed points skipped by a verified screen, counted as MFR = 0.
+    pub screened: usize,
     pub pending: usize,
     pub failures_by_class: BTreeMap<String, usize>,
     /// Spaces whose every point finished, of all spaces.
@@ -139,6 +159,8 @@ pub struct Analysis {
     pub engine: String,
     pub criteria: Criteria,
     pub verdict: Verdict,
+    /// What the screen did: closed points, its verification sample, verified or refuted.
+    pub screen: ScreenReport,
     /// Statistics of the converged space, or of the last complete one.
     pub statistics: Option<Moments>,
     pub counts: Counts,
@@ -159,19 +181,22 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
     let (manifest, toml) = Store::read_manifest(dir)?;
     let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
     let store = Store::open(dir);
+    let (statuses, _, screen) = Screen::of(&sweep).statuses(&store, &manifest);
     let points: Vec<PointRow> = manifest
         .points
         .iter()
-        .map(|p| PointRow {
+        .zip(statuses)
+        .map(|(p, s)| PointRow {
             index: p.index,
             values: p.values.clone(),
-            state: match store.finished(&p.hash) {
-                Some(RunState::Done(r)) => {
+            state: match s {
+                PointStatus::Done(r) => {
                     let quality = quality::of_result(&r);
                     PointState::Done { result: r, quality }
                 }
-                Some(RunState::Failed(f)) => PointState::Failed { class: f.class.as_str().to_string() },
-                _ => PointState::Pending,
+                PointStatus::Failed(f) => PointState::Failed { class: f.class.as_str().to_string() },
+                PointStatus::Screened => PointState::Screened,
+                PointStatus::Pending => PointState::Pending,
             },
         })
         .collect();
@@ -181,8 +206,9 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
     let statistics = spaces.iter().find(|s| s.converged).or(spaces.last()).map(|s| s.statistics);
     let done: Vec<(&PointRow, &RunResult, Quality)> =
         points.iter().filter_map(|p| p.done().map(|(r, q)| (p, r, q))).collect();
-    let x: Vec<Vec<f64>> = done.iter().map(|(p, _, _)| p.values.clone()).collect();
-    let y: Vec<f64> = done.iter().map(|(_, r, _)| r.mfr).collect();
+    // Screened points are real zeros of MFR, and part of how it depends on the parameters.
+    let (x, y): (Vec<Vec<f64>>, Vec<f64>) =
+        points.iter().filter_map(|p| p.mfr().map(|m| (p.values.clone(), m))).unzip();
     let sensitivity = sensitivity::ranked(sensitivity::first_order(&manifest.parameters, &x, &y));
     let mut quality: BTreeMap<&'static str, usize> = Quality::ALL.iter().map(|q| (q.as_str(), 0)).collect();
     for (_, _, q) in &done {
@@ -220,6 +246,7 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
         engine,
         criteria: *criteria,
         verdict,
+        screen,
         statistics,
         counts,
         timing: timing(dir),
@@ -241,14 +268,14 @@ fn judge_spaces(manifest: &Manifest, points: &[PointRow], c: &Criteria, boot: &B
         if members.iter().any(|p| matches!(p.state, PointState::Pending)) {
             break;
         }
-        let mfr: Vec<f64> =
-            members.iter().filter_map(|p| p.done().map(|(r, _)| r.mfr)).filter(|v| v.is_finite()).collect();
+        let mfr: Vec<f64> = members.iter().filter_map(|p| p.mfr()).collect();
         let m = stats::moments(&mfr);
         let iv = stats::bootstrap(&mfr, boot);
         judged.push((members.len(), m));
         rows.push(SpaceRow {
             label: space.label.clone(),
             n: members.len(),
+            // Done runs and screened points: the MFR values judged.
             done: mfr.len(),
             failed: members.iter().filter(|p| matches!(p.state, PointState::Failed { .. })).count(),
             statistics: m,
@@ -273,6 +300,7 @@ fn count(manifest: &Manifest, points: &[PointRow], complete: usize) -> Counts {
         points: points.len(),
         done: 0,
         failed: 0,
+        screened: 0,
         pending: 0,
         failures_by_class: BTreeMap::new(),
         spaces_complete: complete,
@@ -285,6 +313,7 @@ fn count(manifest: &Manifest, points: &[PointRow], complete: usize) -> Counts {
                 c.failed += 1;
                 *c.failures_by_class.entry(class.clone()).or_default() += 1;
             }
+            PointState::Screened => c.screened += 1,
             PointState::Pending => c.pending += 1,
         }
     }
@@ -397,19 +426,10 @@ fn timing(dir: &Path) -> Timing {
 /// Rewrite `DIR/results.csv` from the run dirs (`sweep report`: a directory written by an older
 /// version gains the newer columns, such as `quality`).
 pub fn rewrite_results(dir: &Path) -> Result<()> {
-    use crate::store::PointStatus;
-    let (m, _) = Store::read_manifest(dir)?;
-    let store = Store::open(dir);
-    let status: Vec<PointStatus> = m
-        .points
-        .iter()
-        .map(|p| match store.finished(&p.hash) {
-            Some(RunState::Done(r)) => PointStatus::Done(r),
-            Some(RunState::Failed(f)) => PointStatus::Failed(f),
-            _ => PointStatus::Pending,
-        })
-        .collect();
-    Ok(crate::store::write_results(dir, &m.parameters, &m.points, &status)?)
+    let (m, toml) = Store::read_manifest(dir)?;
+    let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
+    let (status, sample, _) = Screen::of(&sweep).statuses(&Store::open(dir), &m);
+    Ok(crate::store::write_results(dir, &m.parameters, &m.points, &status, &sample)?)
 }
 
 /// Write `convergence.csv`, `summary.json` and `report/` into the analysed directory; returns

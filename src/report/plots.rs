@@ -139,8 +139,8 @@ pub fn draw_all(a: &Analysis) -> Res<Vec<Figure>> {
 
 fn histogram(a: &Analysis, k: usize, members: &[usize]) -> Res<Figure> {
     let s = &a.spaces[k];
-    let mfr: Vec<f64> = members.iter().filter_map(|&i| a.points[i].done().map(|(r, _)| r.mfr)).collect();
-    let top = a.points.iter().filter_map(|p| p.done().map(|(r, _)| r.mfr)).fold(0.0f64, f64::max).max(1e-3);
+    let mfr: Vec<f64> = members.iter().filter_map(|&i| a.points[i].mfr()).collect();
+    let top = a.points.iter().filter_map(|p| p.mfr()).fold(0.0f64, f64::max).max(1e-3);
     let bins = 30usize;
     let width = top * 1.0001 / bins as f64;
     let mut counts = vec![0usize; bins];
@@ -234,8 +234,12 @@ fn scatter(a: &Analysis) -> Res<Figure> {
     let d = a.parameters.len();
     let cols = if d == 1 { 1 } else { 2 };
     let rows = d.div_ceil(cols);
-    let done: Vec<(&PointRow, f64, Quality)> =
-        a.points.iter().filter_map(|p| p.done().map(|(r, q)| (p, r.mfr, q))).collect();
+    // Screened points at MFR = 0, grey (no v_x profile).
+    let done: Vec<(&PointRow, f64, Quality)> = a
+        .points
+        .iter()
+        .filter_map(|p| p.mfr().map(|m| (p, m, p.done().map_or(Quality::Unknown, |(_, q)| q))))
+        .collect();
     let (mlo, mhi) = range(done.iter().map(|p| p.1));
     let caption = "MFR against each parameter; colour: spreading quality (green ideal, orange \
                    inefficient, red unstable, grey unknown)"

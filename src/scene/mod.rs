@@ -20,6 +20,7 @@ pub mod mesh;
 pub mod params;
 pub mod pile;
 pub mod psd;
+pub mod screen;
 
 use std::collections::BTreeMap;
 
