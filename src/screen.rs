@@ -320,6 +320,7 @@ mod tests {
             steps: 0,
             simulated_time: 0.0,
             wall_time: 1.0,
+            cpu_time: None,
             engine_version: String::new(),
             warnings: vec![],
         }))

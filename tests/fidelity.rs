@@ -28,7 +28,9 @@ fn rows(path: &Path) -> Vec<HashMap<String, String>> {
     let mut r = csv::Reader::from_path(path).unwrap();
     let headers = r.headers().unwrap().clone();
     r.records()
-        .map(|rec| headers.iter().zip(rec.unwrap().iter()).map(|(h, v)| (h.to_string(), v.to_string())).collect())
+        .map(|rec| {
+            headers.iter().zip(rec.unwrap().iter()).map(|(h, v)| (h.to_string(), v.to_string())).collect()
+        })
         .collect()
 }
 
@@ -44,7 +46,17 @@ fn one_point_under_each_preset_is_measured_against_the_reference_and_read_back_o
     let out = tmp.path().join("bench");
     let bench = || {
         Command::new(env!("CARGO_BIN_EXE_sweep"))
-            .args(["bench", "fidelity", file.to_str().unwrap(), "--points", "1", "--seeds", "1", "--jobs", "2"])
+            .args([
+                "bench",
+                "fidelity",
+                file.to_str().unwrap(),
+                "--points",
+                "1",
+                "--seeds",
+                "1",
+                "--jobs",
+                "2",
+            ])
             .args(["--out", out.to_str().unwrap()])
             .output()
             .unwrap()
@@ -57,7 +69,8 @@ fn one_point_under_each_preset_is_measured_against_the_reference_and_read_back_o
     }
     let runs = rows(&out.join("fidelity-runs.csv"));
     assert_eq!(runs.len(), 3, "{runs:?}");
-    let by: HashMap<&str, &HashMap<String, String>> = runs.iter().map(|r| (r["variant"].as_str(), r)).collect();
+    let by: HashMap<&str, &HashMap<String, String>> =
+        runs.iter().map(|r| (r["variant"].as_str(), r)).collect();
     for r in &runs {
         assert_eq!(r["status"], "ok", "{r:?}");
         assert_eq!(r["reused"], "false");
@@ -67,7 +80,12 @@ fn one_point_under_each_preset_is_measured_against_the_reference_and_read_back_o
     let thesis = result(&out, &by["thesis"]["hash"]);
     // The reference: twice the depth (and a longer window) at a finer step.
     let particles = |r: &serde_json::Value| r["particles"].as_f64().unwrap();
-    assert!(particles(&reference) > 1.8 * particles(&fast), "{} vs {}", particles(&reference), particles(&fast));
+    assert!(
+        particles(&reference) > 1.8 * particles(&fast),
+        "{} vs {}",
+        particles(&reference),
+        particles(&fast)
+    );
     let dt = |r: &serde_json::Value| r["simulated_time"].as_f64().unwrap() / r["steps"].as_f64().unwrap();
     assert!(dt(&reference) < dt(&fast));
     // The thesis: its fixed 1e-5 s step, every column dumped over the whole run, the full
