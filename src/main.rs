@@ -1192,7 +1192,7 @@ fn contact_check(a: ContactCheckArgs) -> Result<i32, Error> {
 fn contact_error(e: demsweep::contact::ContactError) -> Error {
     use demsweep::contact::ContactError as C;
     match e {
-        C::Input { .. } => Error::Input(e.to_string()),
+        C::Input { .. } | C::PassedThrough { .. } => Error::Input(e.to_string()),
         C::Engine(_) | C::Output { .. } => Error::Engine(e.to_string()),
         C::NoSeparation { .. } | C::Analysis(_) | C::Io(_) => Error::Internal(e.to_string()),
     }

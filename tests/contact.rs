@@ -4,7 +4,7 @@
 use std::path::Path;
 use std::process::Command;
 
-use demsweep::contact::{self, check, solver, Case, Material, Outcome, Regime, Target};
+use demsweep::contact::{self, check, solver, Case, ContactError, Material, Outcome, Regime, Target};
 
 /// Glass (LIGGGHTS-NOTES closed-form check).
 const GLASS: Material = Material { youngs: 48e9, poisson: 0.2 };
@@ -263,6 +263,36 @@ fn contact_check_passes_against_liggghts() {
     }
     assert!(cases.iter().any(|(_, c)| matches!(c.target, Target::Wall(_))));
     assert!(cases.iter().any(|(_, c)| matches!(c.target, Target::Sphere { .. })));
+}
+
+#[test]
+fn a_centre_that_would_cross_the_wall_is_refused_at_the_closed_form_modulus() {
+    // δmax = (15 m v²/(16 Y* √R))^(2/5) reaches R at Y* = (5π/4) ρ v², whatever R.
+    let (r, rho, v) = (1e-3, 7980.0, 1.0);
+    let y_cross = 1.25 * std::f64::consts::PI * rho * v * v;
+    let wall_for = |y: f64| (1.0 - 0.09) / (1.0 / y - (1.0 - 0.09) / SPREAD.youngs);
+    let at = |f: f64| {
+        let wall = Material { youngs: wall_for(f * y_cross), poisson: 0.3 };
+        contact::run(&case(Target::Wall(wall), r, rho, SPREAD, 1.0, 0.0, v, 0.0, 0.0))
+    };
+    match at(0.9) {
+        Err(ContactError::PassedThrough { hertz_overlap, reach }) => {
+            assert!(hertz_overlap > r && reach == r, "{hertz_overlap} {reach}")
+        }
+        other => panic!("expected the centre to cross: {other:?}"),
+    }
+    let o = at(1.1).expect("just stiff enough");
+    assert!((0.9..1.0).contains(&(o.max_overlap / r)), "{o:?}");
+    // From the command line: a bad-input error naming the flags to change.
+    let wall = format!("{}", wall_for(0.9 * y_cross));
+    let mut args = vec!["contact"];
+    args.extend(WALL_ARGS);
+    args.extend(["--wall-youngs", &wall]);
+    args[12] = "1";
+    let out = sweep(&args);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("passed through") && err.contains("--wall-youngs"), "{err}");
 }
 
 fn sweep(args: &[&str]) -> std::process::Output {
