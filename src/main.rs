@@ -1194,6 +1194,8 @@ fn contact_error(e: demsweep::contact::ContactError) -> Error {
     match e {
         C::Input { .. } | C::PassedThrough { .. } => Error::Input(e.to_string()),
         C::Engine(_) | C::Output { .. } => Error::Engine(e.to_string()),
-        C::NoSeparation { .. } | C::Analysis(_) | C::Io(_) => Error::Internal(e.to_string()),
+        C::NoSeparation { .. } | C::Analysis(_) | C::Unsupported(_) | C::Io(_) => {
+            Error::Internal(e.to_string())
+        }
     }
 }

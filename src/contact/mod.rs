@@ -15,6 +15,7 @@
 //! mesh walls. All quantities are SI.
 
 pub mod analysis;
+pub mod bounce;
 pub mod check;
 pub mod model;
 pub mod solver;
@@ -39,6 +40,9 @@ pub enum ContactError {
          {reach:.3e} m (the centre crosses); stiffen --youngs/--wall-youngs or lower --vn"
     )]
     PassedThrough { hertz_overlap: f64, reach: f64 },
+    /// The operation does not apply to this kind of case.
+    #[error("{0}")]
+    Unsupported(&'static str),
     /// LIGGGHTS could not be started or failed on a case.
     #[error("{0}")]
     Engine(String),
