@@ -19,6 +19,7 @@ pub mod bounce;
 pub mod check;
 pub mod model;
 pub mod solver;
+pub mod stability;
 
 pub use analysis::{Outcome, Regime};
 pub use model::Material;
