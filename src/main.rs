@@ -115,7 +115,7 @@ enum BenchCommand {
     /// (head-on, oblique with spin, with friction μ 0.3), at t_c/1000 (the default) to t_c/10;
     /// the kinetic energy against the closed form. Stiffness: particle moduli 5 MPa, 21 MPa,
     /// 1 GPa against walls 1e-3 to 1e3 times as stiff and rigid; Y*, contact time, overlap and
-    /// restitution against Hertz theory. Ladder: four impacts at t_c/10000 to t_c/1 through both,
+    /// restitution against Hertz theory. Ladder: four impacts at t_c/10000 to 2 t_c through both,
     /// where they differ beyond 1e-9 and where each leaves the closed form by 1 %. Writes
     /// DIR/contact-drift.csv, contact-stiffness.csv and contact-timestep.csv and prints the
     /// tables (BENCHMARKS.md "Reference solver stability").
