@@ -89,7 +89,8 @@ enum Command {
     /// One array task of `sweep submit`: run the task's share of a sweep directory.
     #[command(hide = true)]
     Work(WorkArgs),
-    /// Benchmarks of the scene's numerics (`stability`; run time against error is to come).
+    /// Benchmarks of the scene's numerics (`stability`) and of the contact reference solver
+    /// (`contact`); run time against error is to come.
     #[command(subcommand)]
     Bench(BenchCommand),
 }
@@ -127,6 +128,19 @@ enum BenchCommand {
     /// frontier plot fidelity.svg and .png, and the runs in DIR/runs/<hash>; a finished run
     /// found there is read back, not re-run (so an interrupted bench resumes).
     Fidelity(FidelityArgs),
+    /// The contact reference solver's own stability: energy drift at e = 1 over --contacts
+    /// consecutive impacts, particle against wall moduli over six decades, and a timestep ladder
+    /// through the solver and LIGGGHTS.
+    ///
+    /// Drift: the scene's D 2 mm particle (E 21 MPa) bouncing between two walls at 1 m/s
+    /// (head-on, oblique with spin, with friction μ 0.3), at t_c/1000 (the default) to t_c/10;
+    /// the kinetic energy against the closed form. Stiffness: particle moduli 5 MPa, 21 MPa,
+    /// 1 GPa against walls 1e-3 to 1e3 times as stiff and rigid; Y*, contact time, overlap and
+    /// restitution against Hertz theory. Ladder: four impacts at t_c/10000 to 2 t_c through both,
+    /// where they differ beyond 1e-9 and where each leaves the closed form by 1 %. Writes
+    /// DIR/contact-drift.csv, contact-stiffness.csv and contact-timestep.csv and prints the
+    /// tables (BENCHMARKS.md "Reference solver stability").
+    Contact(BenchContactArgs),
 }
 
 #[derive(Args)]
@@ -150,6 +164,19 @@ struct FidelityArgs {
     /// Output directory (default: runs/<sweep name>-fidelity); an existing one is continued.
     #[arg(long)]
     out: Option<PathBuf>,
+}
+
+#[derive(Args)]
+struct BenchContactArgs {
+    /// Consecutive impacts per energy-drift run.
+    #[arg(long, default_value_t = 10_000)]
+    contacts: usize,
+    /// The LIGGGHTS executable for the timestep ladder.
+    #[arg(long, default_value = "liggghts")]
+    engine: PathBuf,
+    /// Output directory for the CSV files (created if missing; the three files are replaced).
+    #[arg(long, default_value = "runs/contact-bench")]
+    out: PathBuf,
 }
 
 #[derive(Args)]
@@ -622,6 +649,7 @@ fn run(cli: Cli) -> Result<i32, Error> {
         Command::Work(a) => work(a),
         Command::Bench(BenchCommand::Stability(a)) => bench_stability(a),
         Command::Bench(BenchCommand::Fidelity(a)) => bench_fidelity(a),
+        Command::Bench(BenchCommand::Contact(a)) => bench_contact(a),
     }
 }
 
@@ -821,6 +849,47 @@ fn bench_stability(a: StabilityArgs) -> Result<i32, Error> {
     }
     for f in files {
         eprintln!("wrote {}", f.display());
+    }
+    Ok(exit::SUCCESS)
+}
+
+fn bench_contact(a: BenchContactArgs) -> Result<i32, Error> {
+    use demsweep::contact::stability::{drift, stiffness, timestep, to_csv};
+    if a.contacts == 0 {
+        return Err(Error::input("--contacts 0: expected at least 1"));
+    }
+    if a.out.exists() && !a.out.is_dir() {
+        return Err(Error::input(format!("--out {}: not a directory", a.out.display())));
+    }
+    std::fs::create_dir_all(&a.out)
+        .map_err(|e| Error::Internal(format!("cannot create {}: {e}", a.out.display())))?;
+    let write = |name: &str, text: String| -> Result<(), Error> {
+        let path = a.out.join(name);
+        demsweep::atomic::write(&path, text.as_bytes())
+            .map_err(|e| Error::Internal(format!("cannot write {}: {e}", path.display())))?;
+        eprintln!("wrote {}", path.display());
+        Ok(())
+    };
+
+    println!("Energy drift at e = 1 over {} contacts (E_N/E_0* = closed form)", a.contacts);
+    let rows =
+        drift::run(&drift::default_cases(), &drift::DEFAULT_LADDER, a.contacts).map_err(contact_error)?;
+    print!("{}", drift::table(&rows));
+    write("contact-drift.csv", to_csv(&rows).map_err(contact_error)?)?;
+
+    println!("\nStiffness ratios (q = wall/particle modulus; errors against Hertz theory)");
+    let rows = stiffness::run(&stiffness::PARTICLE_MODULI, &stiffness::RATIOS);
+    print!("{}", stiffness::table(&rows));
+    write("contact-stiffness.csv", to_csv(&rows).map_err(contact_error)?)?;
+
+    println!("\nTimestep ladder, reference solver against {}", a.engine.display());
+    let rows = timestep::run(&timestep::default_cases(), &timestep::DEFAULT_LADDER, &a.engine)
+        .map_err(contact_error)?;
+    print!("{}", timestep::table(&rows));
+    write("contact-timestep.csv", to_csv(&rows).map_err(contact_error)?)?;
+    if rows.iter().all(|r| r.liggghts_restitution_n.is_none()) {
+        let first = rows.first().map_or("", |r| r.error.as_str());
+        return Err(Error::Engine(format!("LIGGGHTS failed on every ladder case: {first}")));
     }
     Ok(exit::SUCCESS)
 }
@@ -1344,8 +1413,10 @@ fn contact_check(a: ContactCheckArgs) -> Result<i32, Error> {
 fn contact_error(e: demsweep::contact::ContactError) -> Error {
     use demsweep::contact::ContactError as C;
     match e {
-        C::Input { .. } => Error::Input(e.to_string()),
+        C::Input { .. } | C::PassedThrough { .. } => Error::Input(e.to_string()),
         C::Engine(_) | C::Output { .. } => Error::Engine(e.to_string()),
-        C::NoSeparation { .. } | C::Analysis(_) | C::Io(_) => Error::Internal(e.to_string()),
+        C::NoSeparation { .. } | C::Analysis(_) | C::Unsupported(_) | C::Io(_) => {
+            Error::Internal(e.to_string())
+        }
     }
 }

@@ -4,7 +4,8 @@
 use std::path::Path;
 use std::process::Command;
 
-use demsweep::contact::{self, check, solver, Case, Material, Outcome, Regime, Target};
+use demsweep::contact::stability::timestep::{self, ClosedForm};
+use demsweep::contact::{self, bounce, check, solver, Case, ContactError, Material, Outcome, Regime, Target};
 
 /// Glass (LIGGGHTS-NOTES closed-form check).
 const GLASS: Material = Material { youngs: 48e9, poisson: 0.2 };
@@ -263,6 +264,163 @@ fn contact_check_passes_against_liggghts() {
     }
     assert!(cases.iter().any(|(_, c)| matches!(c.target, Target::Wall(_))));
     assert!(cases.iter().any(|(_, c)| matches!(c.target, Target::Sphere { .. })));
+}
+
+/// The scene particle (D 2 mm, 21 MPa, ρ 7980) on a same-material wall at 1 m/s, e = 1.
+fn bouncing(mu: f64, vt: f64, spin: f64) -> Case {
+    case(Target::Wall(SPREAD), 1e-3, 7980.0, SPREAD, 1.0, mu, 1.0, vt, spin)
+}
+
+#[test]
+fn energy_drift_at_e_one_over_ten_thousand_contacts_is_bounded_at_the_default_timestep() {
+    // Closed form: without damping or friction the kinetic energy after every contact is the
+    // initial one, and v_t and ω never change. The bound: 1e-9 per contact on average (1e-5
+    // over the 10^4 contacts, the accuracy the default timestep is documented to), 1e-7 for
+    // any single contact.
+    let c = bouncing(0.0, 1.0, 300.0);
+    let (m, r) = (c.mass(), c.radius);
+    let e0 = 0.5 * m * (1.0 + 1.0) + 0.5 * 0.4 * m * r * r * 300.0 * 300.0;
+    let b = bounce::bounce(&c, c.timestep(), 10_000).unwrap();
+    assert_eq!(b.energy.len(), 10_000);
+    assert!(rel(b.initial_energy, e0) < 1e-14);
+    let drift = b.energy.last().unwrap() / e0 - 1.0;
+    assert!(drift.abs() < 1e-5, "cumulative drift {drift:e}");
+    let worst = b.energy.windows(2).map(|w| rel(w[1], w[0])).fold(0.0, f64::max);
+    assert!(worst < 1e-7, "worst contact {worst:e}");
+    assert!(b.energy.iter().all(|e| e.is_finite()));
+    // Each contact also came back: ~1000 steps per contact.
+    assert!(b.steps > 10_000 * 900, "{}", b.steps);
+    assert_eq!(b.last.v1[0], 1.0);
+    assert_eq!(b.last.w1[1].abs(), 300.0);
+    // The measure sees integration error: ten times the step drifts far more (second order:
+    // ~100 times).
+    let coarse = bounce::bounce(&c, c.pair().hertz_time(1.0) / 100.0, 10_000).unwrap();
+    let coarse_drift = coarse.energy.last().unwrap() / e0 - 1.0;
+    assert!(coarse_drift.abs() > 10.0 * drift.abs(), "{coarse_drift:e} vs {drift:e}");
+}
+
+#[test]
+fn friction_sheds_exactly_the_tangential_energy_over_many_contacts() {
+    // Between two walls, rolling without slip on both at once needs v_t = 0 and ω = 0, so
+    // friction (Coulomb slip and the tangential spring's reset) takes all of the tangential and
+    // rotational energy and, at e = 1, none of the normal: E -> ½ m vn².
+    let c = bouncing(0.3, 0.5, 200.0);
+    let b = bounce::bounce(&c, c.timestep(), 10_000).unwrap();
+    let normal = 0.5 * c.mass() * c.vn * c.vn;
+    assert!(b.initial_energy > 1.2 * normal);
+    assert!(rel(*b.energy.last().unwrap(), normal) < 1e-5, "{:e}", rel(*b.energy.last().unwrap(), normal));
+    assert!(b.last.v1[0].abs() < 1e-9 && (b.last.w1[1] * c.radius).abs() < 1e-9, "{:?}", b.last);
+    // Energy only leaves: no contact gains more than the integrator's own error.
+    assert!(b.energy.windows(2).all(|w| w[1] < w[0] * (1.0 + 1e-7)));
+}
+
+/// Y* of a particle of modulus `e_p` on a wall q times as stiff, both ν = 0.3.
+fn youngs_on_wall(e_p: f64, q: f64) -> f64 {
+    let share = if q.is_infinite() { 1.0 } else { q / (1.0 + q) };
+    e_p * share / 0.91
+}
+
+#[test]
+fn stiffness_ratios_over_six_decades_match_hertz_theory() {
+    let (r, rho, v) = (1e-3, 7980.0, 1.0);
+    let m = mass(r, rho);
+    let mut damped = Vec::new();
+    let mut times = Vec::new();
+    for e_p in [5e6, 21e6, 1e9] {
+        for q in [1e-2, 1e-1, 1.0, 1e1, 1e2, 1e3, f64::INFINITY] {
+            let particle = Material { youngs: e_p, poisson: 0.3 };
+            let wall = Material { youngs: q * e_p, poisson: 0.3 };
+            let c = case(Target::Wall(wall), r, rho, particle, 1.0, 0.0, v, 0.0, 0.0);
+            let y = youngs_on_wall(e_p, q);
+            assert!(rel(c.pair().y_eff, y) < 1e-12, "{e_p} {q}");
+            let t_hertz = 2.86827 * (m * m / (r * y * y * v)).powf(0.2);
+            let overlap = (15.0 * m * v * v / (16.0 * y * r.sqrt())).powf(0.4);
+            let o = run(&c);
+            let name = format!("E_p {e_p:e}, q {q:e}");
+            assert!(o.contact_time.is_finite() && o.max_overlap.is_finite(), "{name}: {o:?}");
+            assert!(rel(o.contact_time, t_hertz) < 1e-4, "{name}: {o:?}");
+            assert!(rel(o.max_overlap, overlap) < 1e-5, "{name}: {o:?}");
+            assert!((o.restitution_n - 1.0).abs() < 1e-6, "{name}: {o:?}");
+            let d = run(&Case { restitution: 0.5, ..c });
+            assert!((d.restitution_n - 0.5).abs() < 2e-4, "{name}: {d:?}");
+            damped.push(d.restitution_n);
+            times.push(o.contact_time / t_hertz);
+        }
+    }
+    // Hertz contact has no stiffness scale: at dt = t_c/1000 the impact is the same impact in
+    // other units, so every ratio gives the same numbers (to rounding).
+    let spread =
+        |v: &[f64]| v.iter().fold(f64::MIN, |a, &b| a.max(b)) - v.iter().fold(f64::MAX, |a, &b| a.min(b));
+    assert!(spread(&damped) < 1e-9, "{damped:?}");
+    assert!(spread(&times) < 1e-9, "{times:?}");
+}
+
+#[test]
+fn a_centre_that_would_cross_the_wall_is_refused_at_the_closed_form_modulus() {
+    // δmax = (15 m v²/(16 Y* √R))^(2/5) reaches R at Y* = (5π/4) ρ v², whatever R.
+    let (r, rho, v) = (1e-3, 7980.0, 1.0);
+    let y_cross = 1.25 * std::f64::consts::PI * rho * v * v;
+    let wall_for = |y: f64| (1.0 - 0.09) / (1.0 / y - (1.0 - 0.09) / SPREAD.youngs);
+    let at = |f: f64| {
+        let wall = Material { youngs: wall_for(f * y_cross), poisson: 0.3 };
+        contact::run(&case(Target::Wall(wall), r, rho, SPREAD, 1.0, 0.0, v, 0.0, 0.0))
+    };
+    match at(0.9) {
+        Err(ContactError::PassedThrough { hertz_overlap, reach }) => {
+            assert!(hertz_overlap > r && reach == r, "{hertz_overlap} {reach}")
+        }
+        other => panic!("expected the centre to cross: {other:?}"),
+    }
+    let o = at(1.1).expect("just stiff enough");
+    assert!((0.9..1.0).contains(&(o.max_overlap / r)), "{o:?}");
+    // From the command line: a bad-input error naming the flags to change.
+    let wall = format!("{}", wall_for(0.9 * y_cross));
+    let mut args = vec!["contact"];
+    args.extend(WALL_ARGS);
+    args.extend(["--wall-youngs", &wall]);
+    args[12] = "1";
+    let out = sweep(&args);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("passed through") && err.contains("--wall-youngs"), "{err}");
+}
+
+#[test]
+fn solver_and_liggghts_agree_along_a_timestep_ladder_while_both_leave_the_closed_form() {
+    // D 2 mm scene particle, e = 0.5, at t_c/1000 (the default), t_c/10 and t_c/1.
+    let c = case(Target::Wall(SPREAD), 1e-3, 7980.0, SPREAD, 0.5, 0.0, 1.0, 0.0, 0.0);
+    let rows = timestep::run(
+        &[("damped", c, ClosedForm::Restitution(0.5))],
+        &[1000.0, 10.0, 1.0],
+        Path::new("liggghts"),
+    )
+    .expect("the ladder runs");
+    assert_eq!(rows.len(), 3);
+    for r in &rows {
+        assert!(r.error.is_empty(), "{r:?}");
+        assert!(r.engine_diff.unwrap() <= check::TOLERANCE, "{r:?}");
+    }
+    let err = |r: &timestep::LadderRow| {
+        [r.solver_restitution_n.unwrap(), r.liggghts_restitution_n.unwrap()].map(|e| (e - 0.5).abs())
+    };
+    let (fine, coarse, broken) = (err(&rows[0]), err(&rows[1]), err(&rows[2]));
+    for side in 0..2 {
+        assert!(fine[side] < 1e-3, "{fine:?}");
+        // First order in dt (docs/contact.md): 100× the step, far more than 10× the error.
+        assert!(coarse[side] > 10.0 * fine[side] && coarse[side] > 1e-3, "{coarse:?} vs {fine:?}");
+    }
+    // At dt = t_c the impact gains energy (e > 1), the same way in both.
+    assert!(rows[2].solver_restitution_n.unwrap() > 1.0, "{broken:?}");
+    let d = timestep::divergence(&rows);
+    assert_eq!(d[0].engines, (Some(1.0), None));
+    assert_eq!(d[0].solver_closed_form, (Some(1000.0), Some(10.0)));
+}
+
+#[test]
+fn sweep_bench_contact_rejects_bad_input_with_exit_2() {
+    let out = sweep(&["bench", "contact", "--contacts", "0"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--contacts 0: expected at least 1"));
 }
 
 fn sweep(args: &[&str]) -> std::process::Output {

@@ -97,6 +97,15 @@ fn contact(case: &Case, s: &Sample) -> Contact {
     Contact { overlap, un, ut }
 }
 
+/// Whether sphere 1's centre is at or past the wall plane, or below sphere 2's centre (sphere 1
+/// starts straight above it): in contact, the contact normal has turned over.
+pub fn centres_crossed(case: &Case, s: &Sample) -> bool {
+    match case.sphere2() {
+        None => s.x1[2] <= 0.0,
+        Some(_) => s.x1[2] - s.x2[2] <= 0.0,
+    }
+}
+
 /// Time where the overlap crosses zero between samples a and b (linear interpolation).
 fn crossing(a: (&Sample, f64), b: (&Sample, f64)) -> f64 {
     let (sa, da) = a;
@@ -108,6 +117,10 @@ fn crossing(a: (&Sample, f64), b: (&Sample, f64)) -> f64 {
 pub fn analyse(case: &Case, samples: &[Sample], steps: usize) -> Result<Outcome, ContactError> {
     let fail = |message: &str| ContactError::Analysis(message.to_string());
     let contacts: Vec<Contact> = samples.iter().map(|s| contact(case, s)).collect();
+    // Only in contact: after a glancing impact two spheres may fly on past each other.
+    if samples.iter().zip(&contacts).any(|(s, c)| c.overlap > 0.0 && centres_crossed(case, s)) {
+        return Err(case.passed_through());
+    }
     let first =
         contacts.iter().position(|c| c.overlap > 0.0).ok_or_else(|| fail("the bodies never touched"))?;
     if first == 0 {

@@ -209,7 +209,8 @@ fn compare(name: &str, case: &Case, engine: &Path, dir: &Path) -> Result<CaseRep
     let trajectory = simulate(case, dt)?;
     let reference = analyse(case, &trajectory.samples, trajectory.steps)?;
     let steps = liggghts_steps(trajectory.steps);
-    let deck = render(name, case, dt, steps)?;
+    let deck =
+        render(name, case, dt, steps, reach(&trajectory.samples, (steps - trajectory.steps) as f64 * dt))?;
     std::fs::write(dir.join("in.contact"), deck)?;
     run_liggghts(engine, dir)?;
     let samples = read_trajectory(&dir.join(TRAJECTORY), case, dt)?;
@@ -259,8 +260,23 @@ fn trajectory_deviation(case: &Case, a: &[Sample], b: &[Sample]) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// The LIGGGHTS deck of `case` at timestep `dt`, running `steps` steps.
-pub fn render(name: &str, case: &Case, dt: f64, steps: usize) -> Result<String, ContactError> {
+/// How far from the origin the bodies of `samples` get, plus what their fastest speed covers in
+/// `extra` more seconds, m: the box must hold the LIGGGHTS run however much energy a coarse
+/// timestep adds (an atom that leaves it is lost).
+pub fn reach(samples: &[Sample], extra: f64) -> f64 {
+    let far = |x: [f64; 3]| x.iter().fold(0.0, |m: f64, c| m.max(c.abs()));
+    let speed = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    let (mut extent, mut fastest) = (0.0f64, 0.0f64);
+    for s in samples {
+        extent = extent.max(far(s.x1)).max(far(s.x2));
+        fastest = fastest.max(speed(s.v1)).max(speed(s.v2));
+    }
+    extent + fastest * extra
+}
+
+/// The LIGGGHTS deck of `case` at timestep `dt`, running `steps` steps, in a box that holds
+/// the bodies out to `reach` m from the origin ([`reach`]).
+pub fn render(name: &str, case: &Case, dt: f64, steps: usize, reach: f64) -> Result<String, ContactError> {
     let s0 = initial_state(case, dt);
     let (wall, wall_material, r2, m2_density) = match case.target {
         Target::Wall(w) => (true, w, 0.0, case.density),
@@ -279,7 +295,7 @@ pub fn render(name: &str, case: &Case, dt: f64, steps: usize) -> Result<String, 
     let hard = case.material.youngs > 1e9 || wall_material.youngs > 1e9;
     let duration = steps as f64 * dt;
     let speed = case.vn.abs() + case.vt.abs() + case.spin.abs() * case.radius;
-    let half = 4.0 * (case.radius + r2) + 2.0 * speed * duration;
+    let half = 4.0 * (case.radius + r2) + (2.0 * speed * duration).max(reach);
     let num = |v: f64| format!("{v:e}");
     let mut ctx = tera::Context::new();
     ctx.insert("name", name);
@@ -359,6 +375,14 @@ pub fn read_trajectory(path: &Path, case: &Case, dt: f64) -> Result<Vec<Sample>,
         for (k, f) in fields[1..].iter().enumerate() {
             v[k] = f.parse().map_err(|_| err(format!("column {} `{f}` is not a number", k + 2)))?;
         }
+        // LIGGGHTS evaluates x[i], vx[i], ... of an atom that left the box as 0; a body of a case
+        // is never exactly at rest at the origin (sphere 1 starts above it, moving).
+        if let Some(k) = (0..atoms).find(|k| v[9 * k..9 * k + 9].iter().all(|&x| x == 0.0)) {
+            return Err(err(format!(
+                "atom {} is gone at step {step} (LIGGGHTS prints 0 for a lost atom): it left the deck's box",
+                k + 1
+            )));
+        }
         let three = |k: usize| [v[k], v[k + 1], v[k + 2]];
         samples.push(Sample {
             t: step as f64 * dt,
@@ -416,10 +440,33 @@ mod tests {
     }
 
     #[test]
+    fn a_lost_atom_is_an_error_not_a_state_at_the_origin() {
+        // wall-normal-D1-e0.4: one atom, 9 columns after the step.
+        let (_, case) = default_cases().remove(0);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join(TRAJECTORY);
+        std::fs::write(&path, "1 0 0 5e-4 0 0 -0.1 0 0 0\n2 0 0 0 0 0 0 0 0 0\n").unwrap();
+        let err = read_trajectory(&path, &case, 1e-7).unwrap_err().to_string();
+        assert!(err.contains(":2: atom 1 is gone at step 2"), "{err}");
+    }
+
+    #[test]
+    fn the_box_reaches_as_far_as_the_fastest_body_can_fly() {
+        let (_, case) = default_cases().remove(7);
+        let mut s = initial_state(&case, 1e-7);
+        s.x1 = [0.0, 0.0, 3e-3];
+        s.v1 = [0.0, 0.0, 4.0];
+        // 3 mm out, then 4 m/s for 1 ms.
+        assert!((reach(&[s], 1e-3) - 7e-3).abs() < 1e-15);
+        let deck = render("pair", &case, 1e-7, 10, 1.0).unwrap();
+        assert!(deck.contains("region box block -1.0"), "{deck}");
+    }
+
+    #[test]
     fn the_deck_renders_with_the_case_numbers() {
         // pair-oblique-slide.
         let (_, case) = default_cases().remove(7);
-        let deck = render("pair", &case, 1e-7, 1234).unwrap();
+        let deck = render("pair", &case, 1e-7, 1234, 0.01).unwrap();
         assert!(deck.contains("pair_style gran model hertz tangential history"));
         assert!(!deck.contains("wall/gran"));
         assert!(deck.contains("run 1234"));

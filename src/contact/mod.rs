@@ -15,9 +15,11 @@
 //! mesh walls. All quantities are SI.
 
 pub mod analysis;
+pub mod bounce;
 pub mod check;
 pub mod model;
 pub mod solver;
+pub mod stability;
 
 pub use analysis::{Outcome, Regime};
 pub use model::Material;
@@ -31,6 +33,17 @@ pub enum ContactError {
     /// The bodies were still in contact after the step limit (should not happen for e > 0.05).
     #[error("the bodies did not separate within {steps} steps of {dt:e} s")]
     NoSeparation { steps: usize, dt: f64 },
+    /// The centres passed through each other (a wall: sphere 1's centre crossed the wall
+    /// plane), where the contact normal flips and the contact law means nothing. Hertz's
+    /// elastic estimate of the maximum overlap says how far out of range the case is.
+    #[error(
+        "the bodies passed through each other: the Hertz overlap {hertz_overlap:.3e} m reaches \
+         {reach:.3e} m (the centre crosses); stiffen --youngs/--wall-youngs or lower --vn"
+    )]
+    PassedThrough { hertz_overlap: f64, reach: f64 },
+    /// The operation does not apply to this kind of case.
+    #[error("{0}")]
+    Unsupported(&'static str),
     /// LIGGGHTS could not be started or failed on a case.
     #[error("{0}")]
     Engine(String),
@@ -151,6 +164,20 @@ impl Case {
     /// Sphere 1 mass in kg: 4/3 π r³ ρ (LIGGGHTS `set density` for a sphere).
     pub fn mass(&self) -> f64 {
         sphere_mass(self.radius, self.density)
+    }
+
+    /// The overlap at which the centres cross: sphere 1's radius against a wall (its centre
+    /// reaches the wall plane), r1 + r2 for two spheres.
+    pub fn crossing_overlap(&self) -> f64 {
+        self.radius + self.sphere2().map_or(0.0, |(r2, _)| r2)
+    }
+
+    /// The error for a case whose bodies passed through each other.
+    pub fn passed_through(&self) -> ContactError {
+        ContactError::PassedThrough {
+            hertz_overlap: self.pair().hertz_max_overlap(self.vn),
+            reach: self.crossing_overlap(),
+        }
     }
 
     /// Sphere 2 radius and mass, if there is a sphere 2.

@@ -126,54 +126,99 @@ pub fn initial_state(case: &Case, dt: f64) -> Sample {
     }
 }
 
+/// The bodies, the shear history and the contact coefficients of one case, advanced one
+/// velocity-Verlet step at a time. [`simulate`] drives it through one impact; a driver of many
+/// impacts (`super::bounce`) steps it the same way, so there is one integrator.
+#[derive(Debug, Clone)]
+pub struct Integrator {
+    pair: super::model::Pair,
+    dt: f64,
+    wall: bool,
+    b1: Body,
+    b2: Option<Body>,
+    shear: V3,
+    steps: usize,
+}
+
+impl Integrator {
+    /// The bodies of `case` at [`initial_state`], at rest from forces, for timestep `dt`.
+    pub fn new(case: &Case, dt: f64) -> Self {
+        let s0 = initial_state(case, dt);
+        let body = |x, v, w, radius, mass| Body { x, v, w, f: [0.0; 3], torque: [0.0; 3], radius, mass };
+        Integrator {
+            pair: case.pair(),
+            dt,
+            wall: matches!(case.target, Target::Wall(_)),
+            b1: body(s0.x1, s0.v1, s0.w1, case.radius, case.mass()),
+            b2: case.sphere2().map(|(radius, mass)| body(s0.x2, s0.v2, s0.w2, radius, mass)),
+            shear: [0.0; 3],
+            steps: 0,
+        }
+    }
+
+    /// One step: half kick, drift, contact force, half kick. Returns whether the bodies touch.
+    pub fn step(&mut self) -> bool {
+        let (dtf, dtv) = (0.5 * self.dt, self.dt);
+        self.b1.initial_integrate(dtf, dtv);
+        if let Some(b2) = self.b2.as_mut() {
+            b2.initial_integrate(dtf, dtv);
+        }
+        let in_contact =
+            contact_force(&self.pair, self.dt, self.wall, &mut self.b1, self.b2.as_mut(), &mut self.shear);
+        self.b1.final_integrate(dtf);
+        if let Some(b2) = self.b2.as_mut() {
+            b2.final_integrate(dtf);
+        }
+        self.steps += 1;
+        in_contact
+    }
+
+    /// The state after the last step (t = steps·dt).
+    pub fn sample(&self) -> Sample {
+        let b1 = &self.b1;
+        let (x2, v2, w2) = self.b2.map_or(([0.0; 3], [0.0; 3], [0.0; 3]), |b| (b.x, b.v, b.w));
+        Sample { t: self.steps as f64 * self.dt, x1: b1.x, v1: b1.v, w1: b1.w, x2, v2, w2 }
+    }
+
+    /// Steps taken so far.
+    pub fn steps(&self) -> usize {
+        self.steps
+    }
+
+    /// Replaces positions, velocities and spins by those of `s` (its time is ignored). Only
+    /// valid while the bodies are apart: the forces of the last step are kept, and apart they
+    /// are zero, so the next half kick is the one the new state would have had.
+    pub fn set_state(&mut self, s: &Sample) {
+        debug_assert!(self.b1.f == [0.0; 3] && self.b1.torque == [0.0; 3], "set_state in contact");
+        (self.b1.x, self.b1.v, self.b1.w) = (s.x1, s.v1, s.w1);
+        if let Some(b2) = self.b2.as_mut() {
+            (b2.x, b2.v, b2.w) = (s.x2, s.v2, s.w2);
+        }
+    }
+}
+
 /// Integrates `case` at timestep `dt` from [`initial_state`] until the bodies have separated
 /// after contact (one sample past separation).
 pub fn simulate(case: &Case, dt: f64) -> Result<Trajectory, ContactError> {
-    let pair = case.pair();
-    let s0 = initial_state(case, dt);
-    let mut b1 = Body {
-        x: s0.x1,
-        v: s0.v1,
-        w: s0.w1,
-        f: [0.0; 3],
-        torque: [0.0; 3],
-        radius: case.radius,
-        mass: case.mass(),
-    };
-    let mut b2 = case.sphere2().map(|(radius, mass)| Body {
-        x: s0.x2,
-        v: s0.v2,
-        w: s0.w2,
-        f: [0.0; 3],
-        torque: [0.0; 3],
-        radius,
-        mass,
-    });
-    let wall = matches!(case.target, Target::Wall(_));
-    let mut shear = [0.0; 3];
+    let mut integrator = Integrator::new(case, dt);
+    let mut samples = vec![integrator.sample()];
     let mut touched = false;
-    let mut samples = vec![s0];
     // Free flight to contact plus a contact (the elastic Hertz time is the longest) with room.
-    let max_steps = (10.0 * pair.hertz_time(case.vn) / dt) as usize + 1000;
-    let (dtf, dtv) = (0.5 * dt, dt);
+    let max_steps = max_steps_per_impact(case, dt);
     for step in 1..=max_steps {
-        b1.initial_integrate(dtf, dtv);
-        if let Some(b2) = b2.as_mut() {
-            b2.initial_integrate(dtf, dtv);
-        }
-        let in_contact = contact_force(&pair, dt, wall, &mut b1, b2.as_mut(), &mut shear);
-        b1.final_integrate(dtf);
-        if let Some(b2) = b2.as_mut() {
-            b2.final_integrate(dtf);
-        }
-        let (x2, v2, w2) = b2.map_or(([0.0; 3], [0.0; 3], [0.0; 3]), |b| (b.x, b.v, b.w));
-        samples.push(Sample { t: step as f64 * dt, x1: b1.x, v1: b1.v, w1: b1.w, x2, v2, w2 });
+        let in_contact = integrator.step();
+        samples.push(integrator.sample());
         touched |= in_contact;
         if touched && !in_contact {
             return Ok(Trajectory { samples, steps: step });
         }
     }
     Err(ContactError::NoSeparation { steps: max_steps, dt })
+}
+
+/// The most steps one impact may take: ten elastic Hertz times plus 1000 steps of approach.
+pub fn max_steps_per_impact(case: &Case, dt: f64) -> usize {
+    (10.0 * case.pair().hertz_time(case.vn) / dt) as usize + 1000
 }
 
 /// Sets the contact force and torques on the bodies (zero when apart) and updates the shear
