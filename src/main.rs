@@ -89,8 +89,9 @@ enum Command {
     /// One array task of `sweep submit`: run the task's share of a sweep directory.
     #[command(hide = true)]
     Work(WorkArgs),
-    /// Benchmarks of the scene's numerics (`stability`) and of the contact reference solver
-    /// (`contact`); run time against error is to come.
+    /// Benchmarks: run time against error of the fidelity presets (`fidelity`), the scene's
+    /// stability edge (`stability`), and the contact reference solver's own stability
+    /// (`contact`).
     #[command(subcommand)]
     Bench(BenchCommand),
 }
