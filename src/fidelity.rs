@@ -21,6 +21,7 @@ use crate::error::{Error, Result};
 use crate::outcome::{FailureClass, RunOutcome, RunResult};
 use crate::point::{self, PointContext};
 use crate::process::CancelToken;
+use crate::stability::opt;
 use crate::sweep::{SceneSettings, Sweep};
 
 /// A way of computing the points: a preset, or the fast preset with knobs changed.
@@ -153,57 +154,44 @@ pub fn run(
                 let (p, v, _) = jobs[i];
                 let (c, prep) = &prepared[i];
                 let dir = plan.out.join("runs").join(&prep.hash);
-                let seed = c.sweep.file.scene.seed;
+                let base = Run {
+                    point: p,
+                    variant: v,
+                    seed: c.sweep.file.scene.seed,
+                    hash: prep.hash.clone(),
+                    status: "ok".into(),
+                    reason: String::new(),
+                    result: None,
+                    wall: 0.0,
+                    cpu: 0.0,
+                    reused: false,
+                };
+                let done_run = |r: RunResult, reused: bool| Run {
+                    wall: r.wall_time,
+                    cpu: r.cpu_time.unwrap_or(r.wall_time),
+                    result: Some(r),
+                    reused,
+                    ..base.clone()
+                };
                 let run = match read_result(&dir) {
-                    Some(r) => Run {
-                        point: p,
-                        variant: v,
-                        seed,
-                        hash: prep.hash.clone(),
-                        status: "ok".into(),
-                        reason: String::new(),
-                        wall: r.wall_time,
-                        cpu: r.cpu_time.unwrap_or(r.wall_time),
-                        result: Some(r),
-                        reused: true,
-                    },
-                    None => {
-                        let outcome = point::execute(c, prep, &dir, cancel);
-                        let base = Run {
-                            point: p,
-                            variant: v,
-                            seed,
-                            hash: prep.hash.clone(),
-                            status: String::new(),
-                            reason: String::new(),
-                            result: None,
-                            wall: 0.0,
-                            cpu: 0.0,
-                            reused: false,
-                        };
-                        match outcome {
-                            RunOutcome::Done(r) => Run {
-                                status: "ok".into(),
-                                wall: r.wall_time,
-                                cpu: r.cpu_time.unwrap_or(r.wall_time),
-                                result: Some(r),
-                                ..base
-                            },
-                            RunOutcome::Failed(f) => {
-                                let measured =
-                                    (f.class == FailureClass::Unsteady).then_some(f.measured).flatten();
-                                Run {
-                                    status: f.class.as_str().into(),
-                                    reason: f.reason,
-                                    wall: f.wall_time,
-                                    cpu: measured.as_ref().and_then(|m| m.cpu_time).unwrap_or(f.wall_time),
-                                    result: measured.map(|m| *m),
-                                    ..base
-                                }
+                    Some(r) => done_run(r, true),
+                    None => match point::execute(c, prep, &dir, cancel) {
+                        RunOutcome::Done(r) => done_run(r, false),
+                        RunOutcome::Failed(f) => {
+                            // An unsteady run keeps its MFR: the reference may be unsteady too.
+                            let measured =
+                                (f.class == FailureClass::Unsteady).then_some(f.measured).flatten();
+                            Run {
+                                status: f.class.as_str().into(),
+                                reason: f.reason,
+                                wall: f.wall_time,
+                                cpu: measured.as_ref().and_then(|m| m.cpu_time).unwrap_or(f.wall_time),
+                                result: measured.map(|m| *m),
+                                ..base.clone()
                             }
-                            RunOutcome::Cancelled => continue,
                         }
-                    }
+                        RunOutcome::Cancelled => continue,
+                    },
                 };
                 let n = done.fetch_add(1, Ordering::SeqCst) + 1;
                 progress(&run, n, total);
@@ -265,6 +253,10 @@ fn mean(v: &[f64]) -> Option<f64> {
     (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
 }
 
+fn max(v: impl IntoIterator<Item = f64>) -> Option<f64> {
+    v.into_iter().reduce(f64::max)
+}
+
 /// Per (point, variant) cells and per variant summaries; `reference` is the variant errors are
 /// measured against, `thesis` the one speed-ups are quoted over.
 pub fn analyse(
@@ -323,17 +315,11 @@ pub fn analyse(
                 wall_per_point: cs.iter().map(|c| c.wall).sum::<f64>() / points.max(1) as f64,
                 speedup_vs_thesis: ratio(thesis),
                 speedup_vs_reference: ratio(reference),
-                worst_error: errs
-                    .iter()
-                    .map(|e| e.abs())
-                    .fold(None, |a: Option<f64>, e| Some(a.map_or(e, |a| a.max(e)))),
+                worst_error: max(errs.iter().map(|e| e.abs())),
                 mean_abs_error: mean(&errs.iter().map(|e| e.abs()).collect::<Vec<_>>()),
                 mean_error_se: mean(&cs.iter().filter_map(|c| c.mfr_error_se).collect::<Vec<_>>()),
                 mean_vx_error: mean(&vx),
-                worst_vx_error: vx
-                    .iter()
-                    .copied()
-                    .fold(None, |a: Option<f64>, e| Some(a.map_or(e, |a| a.max(e)))),
+                worst_vx_error: max(vx.iter().copied()),
                 failed: cs.iter().map(|c| c.failed).sum(),
             }
         })
@@ -362,10 +348,6 @@ pub fn profile_error(a: &[Option<f64>], b: &[Option<f64>], speed: f64) -> Option
     let d: Vec<f64> =
         a.iter().zip(b).filter_map(|(x, y)| Some(((*x)? - (*y)?) / speed)).map(|e| e * e).collect();
     mean(&d).map(f64::sqrt)
-}
-
-fn opt(v: Option<f64>, digits: usize) -> String {
-    v.map(|v| format!("{v:.digits$}")).unwrap_or_default()
 }
 
 /// One row per run.

@@ -374,7 +374,8 @@ pub fn edge<'a>(
     (rows.iter().rev().find(|r| r.passed()).copied(), rows.iter().find(|r| !r.passed()).copied())
 }
 
-fn opt(v: Option<f64>, digits: usize) -> String {
+/// An optional number with `digits` decimals, empty when absent (a CSV cell).
+pub fn opt(v: Option<f64>, digits: usize) -> String {
     v.map(|v| format!("{v:.digits$}")).unwrap_or_default()
 }
 
