@@ -18,9 +18,9 @@
 
 pub mod mesh;
 pub mod params;
+pub mod passage;
 pub mod pile;
 pub mod psd;
-pub mod screen;
 
 use std::collections::BTreeMap;
 

@@ -3,18 +3,22 @@
 //! [`prepare`] is pure and fast (render and hash in memory); [`execute`] does the I/O and the
 //! run in a directory it is given. The pool calls both; `sweep render` and `sweep run` too.
 
+pub mod deck;
+pub mod metrics;
+pub mod quality;
+
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Duration;
 
-use crate::deck::{Deck, Template};
 use crate::engine::{Engine, LogLimits, RunStatus};
 use crate::error::{hint, Error, Result};
-use crate::metrics::{self, Frame};
 use crate::outcome::{write_json_atomic, FailureClass, RunFailure, RunOutcome, RunResult, RESULT_FORMAT};
-use crate::process::CancelToken;
+use crate::point::deck::{Deck, Template};
+use crate::point::metrics::Frame;
 use crate::scene::{mesh, params, Scene};
 use crate::sweep::{ParamKind, Sweep};
+use crate::sys::process::CancelToken;
 
 /// File names in a run directory.
 pub const RESULT: &str = "result.json";
@@ -185,7 +189,7 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
         Ok(steps) => steps,
         Err((class, reason)) => return fail(class, reason, String::new(), wall),
     };
-    let frames: Vec<Frame> = match crate::dump::read_dump(run_dir.join(DUMP), &metrics::COLUMNS)
+    let frames: Vec<Frame> = match crate::engine::dump::read_dump(run_dir.join(DUMP), &metrics::COLUMNS)
         .and_then(|snaps| snaps.iter().map(Frame::from_snapshot).collect())
     {
         Ok(f) => f,

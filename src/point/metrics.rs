@@ -25,7 +25,7 @@
 
 use std::collections::HashMap;
 
-use crate::dump::{DumpError, Snapshot};
+use crate::engine::dump::{DumpError, Snapshot};
 use crate::outcome::VX_LAYERS;
 use crate::scene::Scene;
 

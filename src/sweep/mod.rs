@@ -5,6 +5,8 @@
 //! key. Not responsible for the physics meaning of parameters: that is the scene's catalogue
 //! ([`crate::scene::params`]), which this module consults for names and units.
 
+pub mod space;
+
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
@@ -118,7 +120,7 @@ pub enum Scrambling {
 pub struct ConvergenceSettings {
     /// `"all"` (default: every statistic within tolerance, with the floor, held for `hold`
     /// spaces) or `"any"` (the thesis's rule: any one statistic within tolerance; floor and hold
-    /// do not apply). See [`crate::convergence`].
+    /// do not apply). See [`crate::analysis::convergence`].
     pub rule: String,
     /// Relative change of a statistic between consecutive spaces that counts as converged.
     pub tolerance: f64,
@@ -398,9 +400,9 @@ pub struct RunSettings {
     pub timeout_s: f64,
     /// Retries of transient failures (could not start, killed by a signal, timed out).
     pub retries: u32,
-    /// Skip the points where nothing can pass under the blade ([`crate::scene::screen`]),
+    /// Skip the points where nothing can pass under the blade ([`crate::scene::passage`]),
     /// counting them as MFR = 0, once a seeded sample of them has run and given MFR = 0
-    /// ([`crate::screen`]).
+    /// ([`crate::run::screen`]).
     pub screen: bool,
     /// Fraction of the closed points run anyway to verify the screen (seeded by
     /// `design.lds.seed`).

@@ -16,7 +16,7 @@ pub mod drift;
 pub mod stiffness;
 pub mod timestep;
 
-use super::{Case, ContactError, Material, Target};
+use crate::contact::{Case, ContactError, Material, Target};
 
 /// The spreading scene's particle (thesis Table 3.1): E 21 MPa, ν 0.3.
 pub const SCENE_MATERIAL: Material = Material { youngs: 21e6, poisson: 0.3 };

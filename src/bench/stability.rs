@@ -16,8 +16,8 @@ use plotters::prelude::*;
 use crate::error::{Error, Result};
 use crate::outcome::{FailureClass, RunOutcome};
 use crate::point::{self, PointContext};
-use crate::process::CancelToken;
 use crate::sweep::{ParamKind, Parameter, Sweep};
+use crate::sys::process::CancelToken;
 
 /// Default timestep ladder, fractions of the Rayleigh time.
 pub const DEFAULT_FRACTIONS: [f64; 7] = [0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0];
@@ -509,7 +509,7 @@ pub fn write(out: &Path, results: &[LevelResult], title: &str) -> Result<Vec<Pat
     ];
     let mut paths = Vec::new();
     for (p, bytes) in files {
-        crate::atomic::write(&p, &bytes)
+        crate::sys::atomic::write(&p, &bytes)
             .map_err(|e| Error::Internal(format!("cannot write {}: {e}", p.display())))?;
         paths.push(p);
     }

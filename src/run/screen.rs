@@ -3,7 +3,7 @@
 //! engine and given MFR = 0.
 //!
 //! - **Closed points.** Whether a point is closed is the scene's geometric criterion
-//!   ([`crate::scene::screen`]), decided when the design is planned (and again on a resume) and
+//!   ([`crate::scene::passage`]), decided when the design is planned (and again on a resume) and
 //!   recorded per point in the manifest (`closed`). With `run.screen = false` no point is closed.
 //! - **The verification sample**: each closed point draws a number in [0, 1) from a hash of
 //!   `design.lds.seed` and its parameter values; the sample is the points whose number is below
@@ -15,7 +15,7 @@
 //!   skips points; a refuted one runs every closed point for real.
 //!
 //! Not responsible for the criterion (the scene) or for running anything (the driver,
-//! [`crate::sweeprun`], queues the sample first and the held-back points once refuted).
+//! [`crate::run`], queues the sample first and the held-back points once refuted).
 
 use std::collections::BTreeSet;
 
@@ -243,7 +243,7 @@ impl Screen {
 /// will say. The stand-in engine models no scene and closes nothing.
 pub fn preview(sweep: &Sweep, values: &[Vec<f64>]) -> crate::Result<Vec<&'static str>> {
     let screen = Screen::of(sweep);
-    let closes = screen.enabled && !crate::standin::selected(sweep);
+    let closes = screen.enabled && !crate::run::standin::selected(sweep);
     let points = values
         .iter()
         .enumerate()

@@ -16,15 +16,15 @@
 //! or a relative change from exactly zero is never "within".
 //!
 //! [`Watch`] applies the rule while a sweep runs. Not responsible for computing the statistics
-//! ([`crate::stats`]) or for running the sweep ([`crate::sweeprun`]).
+//! ([`crate::analysis::stats`]) or for running the sweep ([`crate::run`]).
 
 use serde::Serialize;
 
-use crate::pool::Flow;
-use crate::stats::{Moments, STATISTICS};
+use crate::analysis::stats::{Moments, STATISTICS};
+use crate::run::pool::Flow;
+use crate::run::SpaceHook;
 use crate::store::{PointRecord, PointStatus, SpaceRecord};
 use crate::sweep::ConvergenceSettings;
-use crate::sweeprun::SpaceHook;
 
 /// Which statistics must be within tolerance.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -236,7 +236,7 @@ impl SpaceHook for Watch {
                 _ => None,
             })
             .collect();
-        self.spaces.push((points.len(), crate::stats::moments(&mfr)));
+        self.spaces.push((points.len(), crate::analysis::stats::moments(&mfr)));
         self.labels.push(space.label.clone());
         match judge(&self.spaces, &self.criteria).last() {
             Some(j) if j.converged => {

@@ -5,7 +5,7 @@
 //! skewness of one value, the kurtosis of a set with S = 0) is `None`, which the report writes
 //! as an empty CSV cell or JSON `null`: never NaN or inf in a file.
 //!
-//! Not responsible for deciding convergence ([`crate::convergence`]) or for which values go in
+//! Not responsible for deciding convergence ([`crate::analysis::convergence`]) or for which values go in
 //! (the report filters failed runs out before calling here).
 
 use rand::{Rng, SeedableRng};

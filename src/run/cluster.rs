@@ -12,7 +12,7 @@
 //! and let a task take over what a lost task left. After the array, a dependent job
 //! (`afterany`) runs `sweep report`.
 //!
-//! Not responsible for running points (that is [`crate::sweeprun`] and the pool) or for the
+//! Not responsible for running points (that is [`crate::run`] and the pool) or for the
 //! directory's formats ([`crate::store`]).
 
 use std::collections::BTreeSet;
@@ -27,9 +27,9 @@ use crate::error::{Error, Result};
 use crate::store::{Manifest, PointStatus, RunState, Store};
 
 /// The built-in Slurm template.
-pub const SLURM_TEMPLATE: &str = include_str!("../templates/slurm.tera");
+pub const SLURM_TEMPLATE: &str = include_str!("../../templates/slurm.tera");
 /// The built-in PBS template (PBS Pro and Torque).
-pub const PBS_TEMPLATE: &str = include_str!("../templates/pbs.tera");
+pub const PBS_TEMPLATE: &str = include_str!("../../templates/pbs.tera");
 /// Version of `cluster/layout.json`.
 pub const LAYOUT_FORMAT: u32 = 1;
 
@@ -253,7 +253,7 @@ pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendere
     };
     // Points a verified screen skipped need no task; while it is pending, the closed points do
     // (their tasks run them if the sample refutes it).
-    let (status, _, _) = crate::screen::Screen::of(&sweep).statuses(&Store::open(&dir), &manifest);
+    let (status, _, _) = crate::run::screen::Screen::of(&sweep).statuses(&Store::open(&dir), &manifest);
     let counts = counts(&status);
     let wanted: Vec<usize> = status
         .iter()
@@ -403,13 +403,13 @@ pub fn write(dir: &Path, r: &Rendered) -> Result<(PathBuf, PathBuf)> {
     let lpath = Layout::path(dir);
     if !lpath.exists() {
         let text = serde_json::to_string_pretty(&r.layout).expect("layout serialises");
-        crate::atomic::write(&lpath, text.as_bytes()).map_err(|e| io(&lpath, e))?;
+        crate::sys::atomic::write(&lpath, text.as_bytes()).map_err(|e| io(&lpath, e))?;
     }
     let ext = r.scheduler.script_ext();
     let array = cdir.join(format!("array.{ext}"));
     let report = cdir.join(format!("report.{ext}"));
     for (p, text) in [(&array, &r.array_script), (&report, &r.report_script)] {
-        crate::atomic::write(p, text.as_bytes()).map_err(|e| io(p, e))?;
+        crate::sys::atomic::write(p, text.as_bytes()).map_err(|e| io(p, e))?;
     }
     Ok((array, report))
 }
@@ -506,9 +506,9 @@ pub struct WorkOptions {
 pub fn work(
     dir: &Path,
     w: &WorkOptions,
-    opts: &crate::sweeprun::RunOptions,
-    cancel: &crate::process::CancelToken,
-) -> Result<crate::sweeprun::Summary> {
+    opts: &crate::run::RunOptions,
+    cancel: &crate::sys::process::CancelToken,
+) -> Result<crate::run::Summary> {
     let (manifest, _) = Store::read_manifest(dir)?;
     let n = manifest.points.len();
     if task_points(w.task, w.per_task, n).is_empty() {
@@ -520,10 +520,10 @@ pub fn work(
             n.div_ceil(w.per_task).saturating_sub(1)
         )));
     }
-    let sweep = crate::sweeprun::load_dir_sweep(dir)?;
-    let exec = crate::sweeprun::PointExecutor::new(sweep)?.with_ranks(w.ranks);
-    let run = |order: crate::sweeprun::Order| {
-        crate::sweeprun::resume_share(dir, &exec, opts, Some(order), &mut crate::sweeprun::RunAll, cancel)
+    let sweep = crate::run::load_dir_sweep(dir)?;
+    let exec = crate::run::PointExecutor::new(sweep)?.with_ranks(w.ranks);
+    let run = |order: crate::run::Order| {
+        crate::run::resume_share(dir, &exec, opts, Some(order), &mut crate::run::RunAll, cancel)
     };
     // Its own points first, waiting for any another task holds (and taking them over if that
     // task is lost); then, in a second pass, the leftovers nobody holds *now*: a helper must

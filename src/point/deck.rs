@@ -10,7 +10,7 @@ use sha2::{Digest, Sha256};
 use crate::scene::{mesh, pile, Scene};
 
 /// The built-in spreading deck.
-pub const SPREADING_TEMPLATE: &str = include_str!("../templates/spreading.liggghts.tera");
+pub const SPREADING_TEMPLATE: &str = include_str!("../../templates/spreading.liggghts.tera");
 
 #[derive(Debug, thiserror::Error)]
 pub enum DeckError {

@@ -14,8 +14,14 @@
 //! Everything that can be refused (bad design, changed engine, a directory of another sweep) is
 //! refused before anything is written.
 //!
-//! Not responsible for running one point (the [`Executor`]), for scheduling ([`crate::pool`]) or
+//! Not responsible for running one point (the [`Executor`]), for scheduling ([`crate::run::pool`]) or
 //! for the directory's formats ([`crate::store`]); no statistics here.
+
+pub mod cluster;
+pub mod pool;
+pub mod progress;
+pub mod screen;
+pub mod standin;
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
@@ -28,14 +34,14 @@ use crate::design::{halton::halton, lattice::lattice};
 use crate::error::{Error, Result};
 use crate::outcome::RunOutcome;
 use crate::point::{self, PointContext};
-use crate::pool::{self, Event, Executor, Flow, PoolOptions};
-use crate::process::CancelToken;
-use crate::progress::{Counts, Progress, ProgressMode};
-use crate::screen::{Screen, ScreenReport, Verdict};
+use crate::run::pool::{Event, Executor, Flow, PoolOptions};
+use crate::run::progress::{Counts, Progress, ProgressMode};
+use crate::run::screen::{Screen, ScreenReport, Verdict};
 use crate::store::{
     self, DesignRecord, Manifest, PointRecord, PointStatus, RunState, SpaceRecord, Store, MANIFEST_FORMAT,
 };
 use crate::sweep::Sweep;
+use crate::sys::process::CancelToken;
 
 /// Most points one design may have.
 pub const MAX_POINTS: usize = 1_000_000;
@@ -208,7 +214,7 @@ const PLAN_QUIET_FOR: std::time::Duration = std::time::Duration::from_secs(1);
 
 /// Prepare (render and hash) every point on all cores; unless `progress` is quiet, say how
 /// many are done once this takes longer than [`PLAN_QUIET_FOR`], then every
-/// [`crate::progress::LINE_EVERY`] (a 10⁶-point lattice takes minutes).
+/// [`crate::run::progress::LINE_EVERY`] (a 10⁶-point lattice takes minutes).
 fn prepare_all<E: Executor>(
     exec: &E,
     values: &[Vec<f64>],
@@ -231,7 +237,7 @@ fn prepare_all<E: Executor>(
                             "sweep: planning: {} of {total} decks rendered and hashed",
                             done.load(Ordering::Relaxed)
                         );
-                        next = start.elapsed() + crate::progress::LINE_EVERY;
+                        next = start.elapsed() + crate::run::progress::LINE_EVERY;
                     }
                 }
             });
@@ -303,7 +309,7 @@ pub fn plan_with_progress<E: Executor>(
             let members = unit
                 .iter()
                 .map(|u| {
-                    let values = crate::space::scale_point(sweep, u);
+                    let values = crate::sweep::space::scale_point(sweep, u);
                     let bits = values.iter().map(|v| v.to_bits()).collect();
                     *by_bits.entry(bits).or_insert_with(|| {
                         distinct.push(values);
@@ -618,7 +624,7 @@ pub fn resume<E: Executor>(
 }
 
 /// Which unfinished points a process runs, and in what order: given their indices in manifest
-/// order, the indices to queue. One array task's share of a sweep ([`crate::cluster`]).
+/// order, the indices to queue. One array task's share of a sweep ([`crate::run::cluster`]).
 pub type Order<'a> = &'a dyn Fn(&[usize]) -> Vec<usize>;
 
 /// [`resume`] of the unfinished points `order` picks, in its order (all, in manifest order,
@@ -676,7 +682,7 @@ pub fn resume_share<E: Executor>(
 
 /// Run the unfinished points of a manifest.
 ///
-/// The screen ([`crate::screen`]): the unfinished points of its verification sample go first in
+/// The screen ([`crate::run::screen`]): the unfinished points of its verification sample go first in
 /// the queue, whatever `order` picks (an array task waits for them before it trusts the screen);
 /// the other closed points are held back. Once the sample has run with MFR = 0 they are screened;
 /// if any closed point's run contradicts the screen, they run after the rest.
@@ -871,7 +877,7 @@ impl<'a> Reporter<'a> {
                 self.progress.warn(&format!(
                     "warning: SCREEN REFUTED: {}; it is not trusted in this sweep: the {held} closed \
                      point(s) it would skip run for real",
-                    crate::screen::refutation(&refuted_by)
+                    crate::run::screen::refutation(&refuted_by)
                 ));
                 self.verdict = verdict;
             }

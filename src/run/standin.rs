@@ -22,9 +22,9 @@ use sha2::{Digest, Sha256};
 use crate::error::Result;
 use crate::outcome::{write_json_atomic, RunOutcome, RunResult, RESULT_FORMAT, VX_LAYERS};
 use crate::point::{resolve, RESULT};
-use crate::pool::Executor;
-use crate::process::CancelToken;
+use crate::run::pool::Executor;
 use crate::sweep::Sweep;
+use crate::sys::process::CancelToken;
 
 /// The `run.engine` value that selects the stand-in.
 pub const NAME: &str = "stand-in";
@@ -230,7 +230,7 @@ mod tests {
         assert_eq!(a, p.model(&mut Noise::new("abc")));
         let rel: Vec<f64> =
             (0..2000).map(|i| p.model(&mut Noise::new(&format!("h{i}"))).0 / p.mean_mfr() - 1.0).collect();
-        let m = crate::stats::moments(&rel);
+        let m = crate::analysis::stats::moments(&rel);
         assert!(m.mean.unwrap().abs() < 0.005, "{m:?}");
         assert!((m.std.unwrap() - MFR_NOISE).abs() < 0.004, "{m:?}");
     }

@@ -12,8 +12,8 @@
 
 use serde::Serialize;
 
-use super::super::{Case, ContactError, Material, Target};
 use super::{cell, scene_case, SCENE_MATERIAL};
+use crate::contact::{Case, ContactError, Material, Target};
 
 /// δmax/R above which a row is flagged: Hertz assumes a contact radius a = √(Rδ) ≪ R; here
 /// a/R > 0.32.
@@ -121,7 +121,7 @@ fn row(e_p: f64, q: f64) -> StiffnessRow {
         * crate::scene::rayleigh_time(base.radius, base.density, e_p, SCENE_MATERIAL.poisson);
 
     let mut failures: Vec<String> = Vec::new();
-    let mut outcome = |c: &Case| match super::super::run(c) {
+    let mut outcome = |c: &Case| match crate::contact::run(c) {
         Ok(o) => Some(o),
         Err(e) => {
             let e: ContactError = e;

@@ -6,6 +6,8 @@
 //! drop is lost atoms), or a non-finite or exploding kinetic energy. None of these is ever turned
 //! into a number. Not responsible for dumps or metrics.
 
+pub mod dump;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Duration;
@@ -13,7 +15,7 @@ use std::time::Duration;
 use sha2::{Digest, Sha256};
 
 use crate::outcome::FailureClass;
-use crate::process::{self, CancelToken, ProcessOutcome};
+use crate::sys::process::{self, CancelToken, ProcessOutcome};
 
 /// Log file name in the run directory.
 pub const LOG: &str = "log.liggghts";
@@ -87,7 +89,7 @@ impl Engine {
                 h.update(bytes);
             }
         }
-        Ok(Engine { path, version, binary_hash: crate::deck::hex(&h.finalize()), ranks: 1 })
+        Ok(Engine { path, version, binary_hash: crate::point::deck::hex(&h.finalize()), ranks: 1 })
     }
 
     /// What identifies this engine in a run's hash.

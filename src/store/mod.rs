@@ -26,8 +26,8 @@
 //! ([`Store::heartbeat`]), and a claim of another host not renewed for its `lease_s` is taken
 //! over. The hosts' clocks must agree to well within the lease (NTP does).
 //!
-//! Not responsible for deciding what to run (the driver, [`crate::sweeprun`]) or running it
-//! ([`crate::pool`]).
+//! Not responsible for deciding what to run (the driver, [`crate::run`]) or running it
+//! ([`crate::run::pool`]).
 
 use std::fs::{self, File, OpenOptions};
 use std::io::Write;
@@ -160,7 +160,7 @@ pub struct PointRecord {
     /// Swept parameter values in file order, in the sweep file's units.
     pub values: Vec<f64>,
     pub hash: String,
-    /// Nothing can pass under the blade here ([`crate::screen`]): skipped as MFR = 0 once the
+    /// Nothing can pass under the blade here ([`crate::run::screen`]): skipped as MFR = 0 once the
     /// screen is verified. Absent (false) in manifests written before the screen.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub closed: bool,
@@ -593,11 +593,11 @@ impl Store {
             let Ok(entries) = fs::read_dir(&dir) else { continue };
             for e in entries.flatten() {
                 let name = e.file_name().to_string_lossy().into_owned();
-                let Some((host, pid)) = crate::atomic::temporary_owner(&name) else {
+                let Some((host, pid)) = crate::sys::atomic::temporary_owner(&name) else {
                     continue;
                 };
                 // Another host's writer may be alive; a live pid here may be writing it now.
-                if host.is_some_and(|h| h != crate::atomic::temporary_host())
+                if host.is_some_and(|h| h != crate::sys::atomic::temporary_host())
                     || process_start_ticks(pid).is_some()
                 {
                     continue;
@@ -688,7 +688,7 @@ pub fn foreign_entry(dir: &Path) -> Option<String> {
     let entries = fs::read_dir(dir).ok()?;
     entries.flatten().map(|e| e.file_name().to_string_lossy().into_owned()).find(|n| {
         !matches!(n.as_str(), LOCK | JOBLOG | "runs" | "sweep.toml" | "results.csv")
-            && crate::atomic::temporary_owner(n).is_none()
+            && crate::sys::atomic::temporary_owner(n).is_none()
     })
 }
 
@@ -864,7 +864,7 @@ pub enum PointStatus {
     Pending,
     Done(Box<RunResult>),
     Failed(Box<RunFailure>),
-    /// Closed by a verified screen and not run: MFR = 0 ([`crate::screen`]).
+    /// Closed by a verified screen and not run: MFR = 0 ([`crate::run::screen`]).
     Screened,
 }
 
@@ -878,7 +878,7 @@ impl PointStatus {
 ///
 /// Columns: index, the swept parameters, status (`done`, `failed`, `pending`, `screened`),
 /// failure (class), mfr (0 when screened), mfr_flux, mfr_particles, steady, vx_1..vx_12 (m/s,
-/// empty for an empty layer), runtime_s, hash, quality (of the v_x profile, [`crate::quality`];
+/// empty for an empty layer), runtime_s, hash, quality (of the v_x profile, [`crate::point::quality`];
 /// empty unless done), screen (`closed` for a point the screen closes, `verification` for one of
 /// its verification sample, empty for an open point).
 pub fn write_results(
@@ -931,7 +931,7 @@ pub fn write_results(
         }
         row.push(p.hash.clone());
         row.push(match s {
-            PointStatus::Done(r) => crate::quality::of_result(r).as_str().into(),
+            PointStatus::Done(r) => crate::point::quality::of_result(r).as_str().into(),
             _ => String::new(),
         });
         row.push(match (p.closed, sample.contains(&p.index)) {
@@ -947,7 +947,7 @@ pub fn write_results(
 
 /// Write `bytes` to a temporary name beside `path` and rename it into place.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), StoreError> {
-    crate::atomic::write(path, bytes).map_err(io(path))
+    crate::sys::atomic::write(path, bytes).map_err(io(path))
 }
 
 fn unix_now() -> f64 {

@@ -24,9 +24,9 @@
 //! friction (μ 0.3 × its weight, 0.25 N at D = 3 mm) on one sphere–blade contact sinks it by
 //! 0.019 D. Impacts are damped (e < 1), so this margin over-states the sinking: the screen only
 //! closes points that are clearly closed, and its verification sample checks it on the engine
-//! ([`crate::screen`]).
+//! ([`crate::run::screen`]).
 //!
-//! Not responsible for what the sweep does with a closed point (that is [`crate::screen`]).
+//! Not responsible for what the sweep does with a closed point (that is [`crate::run::screen`]).
 
 use crate::contact::model::{effective_youngs, Material, Pair};
 

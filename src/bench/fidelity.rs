@@ -17,12 +17,12 @@ use std::sync::Mutex;
 
 use plotters::prelude::*;
 
+use crate::bench::stability::opt;
 use crate::error::{Error, Result};
 use crate::outcome::{FailureClass, RunOutcome, RunResult};
 use crate::point::{self, PointContext};
-use crate::process::CancelToken;
-use crate::stability::opt;
 use crate::sweep::{SceneSettings, Sweep};
+use crate::sys::process::CancelToken;
 
 /// A way of computing the points: a preset, or the fast preset with knobs changed.
 #[derive(Debug, Clone)]
@@ -271,7 +271,7 @@ pub fn analyse(
         for v in 0..variants.len() {
             let rs: Vec<&Run> = runs.iter().filter(|r| r.point == p && r.variant == v).collect();
             let mfrs: Vec<f64> = rs.iter().filter_map(|r| r.mfr()).collect();
-            let ms = crate::stability::mean_se(&mfrs);
+            let ms = crate::bench::stability::mean_se(&mfrs);
             cells.push(Cell {
                 point: p,
                 variant: v,
@@ -506,7 +506,7 @@ pub fn write(
     ];
     let mut paths = Vec::new();
     for (p, bytes) in files {
-        crate::atomic::write(&p, &bytes)
+        crate::sys::atomic::write(&p, &bytes)
             .map_err(|e| Error::Internal(format!("cannot write {}: {e}", p.display())))?;
         paths.push(p);
     }

@@ -10,10 +10,10 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use super::super::analysis::Outcome;
-use super::super::check::{self, TOLERANCE};
-use super::super::{Case, ContactError, Target};
 use super::{cell, scene_case, CLOSED_FORM_TOLERANCE, SCENE_DENSITY, STEEL};
+use crate::contact::analysis::Outcome;
+use crate::contact::check::{self, TOLERANCE};
+use crate::contact::{Case, ContactError, Target};
 
 /// What a case is compared with.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -148,7 +148,7 @@ fn row(name: &str, case: &Case, closed: ClosedForm, n: f64, engine: &Path) -> La
         liggghts_closed_form_error: None,
         error: String::new(),
     };
-    let solver = super::super::run(&case);
+    let solver = crate::contact::run(&case);
     if let Ok(o) = &solver {
         r.solver_restitution_n = Some(o.restitution_n);
         r.solver_contact_time_s = Some(o.contact_time);

@@ -10,10 +10,10 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::super::bounce::{bounce, kinetic_energy};
-use super::super::solver::initial_state;
-use super::super::{Case, ContactError};
 use super::{cell, scene_case};
+use crate::contact::bounce::{bounce, kinetic_energy};
+use crate::contact::solver::initial_state;
+use crate::contact::{Case, ContactError};
 
 /// The cases: the scene's D 2 mm particle on a same-material wall at 1 m/s, e = 1 — head-on,
 /// oblique with spin (frictionless, so v_t and ω must not change), and with friction μ = 0.3

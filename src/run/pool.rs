@@ -8,7 +8,7 @@
 //! - Attempts that fail transiently ([`FailureClass::is_transient`]: could not start, killed by a
 //!   signal, timed out) are retried up to `retries` times; a physics failure is final.
 //! - The [`CancelToken`] (Ctrl-C, SIGTERM) stops new starts; the running children are killed by
-//!   [`crate::process`], their claims released, and their run dirs left incomplete for a resume.
+//!   [`crate::sys::process`], their claims released, and their run dirs left incomplete for a resume.
 //!   Every child is spawned from its worker thread, which lives until the pool ends, so
 //!   PR_SET_PDEATHSIG binds the child to this process even when it is SIGKILLed.
 //! - Workers only send [`Event`]s; the caller's thread consumes them (joblog, results.csv,
@@ -24,8 +24,8 @@ use std::sync::Mutex;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use crate::outcome::{FailureClass, RunOutcome};
-use crate::process::CancelToken;
 use crate::store::{AttemptRecord, ClaimAttempt, ClaimInfo, RunState, Store, StoreError};
+use crate::sys::process::CancelToken;
 
 /// How often the caller's thread wakes up without events (progress lines, results.csv).
 pub const TICK: Duration = Duration::from_millis(250);
@@ -33,7 +33,7 @@ pub const TICK: Duration = Duration::from_millis(250);
 const BUSY_POLL: Duration = Duration::from_millis(200);
 
 /// Runs one attempt of one job. The real one renders and runs a LIGGGHTS deck
-/// ([`crate::sweeprun::PointExecutor`]); [`fake::FakeExecutor`] stands in for it in tests.
+/// ([`crate::run::PointExecutor`]); [`fake::FakeExecutor`] stands in for it in tests.
 pub trait Executor: Sync {
     /// A prepared job: what `execute` needs, with its content hash.
     type Job: Send + Sync;
@@ -45,7 +45,7 @@ pub trait Executor: Sync {
     /// The content hash naming the job's run dir.
     fn hash<'a>(&self, job: &'a Self::Job) -> &'a str;
     /// Whether nothing can pass under the blade at this job's point, so that a verified screen
-    /// may skip it as MFR = 0 ([`crate::screen`]). Engines that model no scene close nothing.
+    /// may skip it as MFR = 0 ([`crate::run::screen`]). Engines that model no scene close nothing.
     fn closed(&self, _job: &Self::Job) -> bool {
         false
     }
@@ -296,7 +296,7 @@ impl<E: Executor> Worker<'_, E> {
 
 /// A deterministic stand-in for LIGGGHTS, for scheduler, retry, claim and resume tests.
 ///
-/// A job is a point; its "run" is a real child process (`sleep`) under [`crate::process::run`],
+/// A job is a point; its "run" is a real child process (`sleep`) under [`crate::sys::process::run`],
 /// so timeouts, cancellation and process groups are exercised for real. Its MFR is a made-up
 /// function of the parameters ([`fake::fake_mfr`]).
 pub mod fake {
@@ -313,7 +313,7 @@ pub mod fake {
     use crate::outcome::{
         write_json_atomic, FailureClass, RunFailure, RunOutcome, RunResult, RESULT_FORMAT, VX_LAYERS,
     };
-    use crate::process::{self, CancelToken, ProcessOutcome};
+    use crate::sys::process::{self, CancelToken, ProcessOutcome};
 
     /// What the fake does with one attempt.
     #[derive(Debug, Clone, PartialEq)]
