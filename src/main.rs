@@ -1138,7 +1138,7 @@ fn work(a: WorkArgs) -> Result<i32, Error> {
     }
     demsweep::store::set_default_lease(std::time::Duration::from_secs(a.lease));
     if let Some(h) = &a.host {
-        demsweep::store::set_host_name(h);
+        demsweep::sys::host::set_host_name(h);
     }
     let pool = PoolArgs { jobs: Some(cores / a.ranks as usize), quiet: a.quiet };
     let opts = run_options(&pool, a.retry_failed, false)?;

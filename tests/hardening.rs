@@ -314,7 +314,7 @@ fn a_killed_attempt_shows_as_interrupted_in_status_and_the_joblog() {
     let pid = dead.id();
     dead.wait().unwrap();
     let claim = serde_json::json!({
-        "host": store::hostname(), "pid": pid, "start_ticks": 1, "session": "killed", "claimed_at": 1.7e9
+        "host": demsweep::sys::host::hostname(), "pid": pid, "start_ticks": 1, "session": "killed", "claimed_at": 1.7e9
     });
     std::fs::write(run.join("claim"), claim.to_string()).unwrap();
     let st = run::status(&out).unwrap();

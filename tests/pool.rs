@@ -316,7 +316,7 @@ fn a_stale_claim_and_a_half_written_run_dir_are_cleaned_and_rerun() {
     let pid = dead.id();
     dead.wait().unwrap();
     let claim = serde_json::json!({
-        "host": store::hostname(), "pid": pid, "start_ticks": 1, "session": "x", "claimed_at": 0.0
+        "host": demsweep::sys::host::hostname(), "pid": pid, "start_ticks": 1, "session": "x", "claimed_at": 0.0
     });
     std::fs::write(run.join("claim"), claim.to_string()).unwrap();
     assert_eq!(run::status(&out).unwrap().pending, 1);

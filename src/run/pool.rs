@@ -246,7 +246,7 @@ impl<E: Executor> Worker<'_, E> {
             // executor's write may have failed), and stop on a store error.
             let stored = match &outcome {
                 // A run that failed on a full disk did not fail: its output could not be kept.
-                RunOutcome::Failed(_) if crate::store::low_on_space(&dir) => Err(StoreError::Io {
+                RunOutcome::Failed(_) if crate::sys::disk::low_on_space(&dir) => Err(StoreError::Io {
                     path: dir.clone(),
                     source: std::io::Error::from_raw_os_error(libc::ENOSPC),
                 }),

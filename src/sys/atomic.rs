@@ -31,7 +31,7 @@ pub fn write(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 fn host() -> &'static str {
     static HOST: std::sync::OnceLock<String> = std::sync::OnceLock::new();
     // A dot in a host name would be read back as a field separator.
-    HOST.get_or_init(|| crate::store::hostname().replace('.', "_"))
+    HOST.get_or_init(|| crate::sys::host::hostname().replace('.', "_"))
 }
 
 /// The writer of a temporary file of [`write`], from its name: host (`None` for the older
