@@ -21,7 +21,8 @@ use crate::bench::stability::opt;
 use crate::error::{Error, Result};
 use crate::outcome::{FailureClass, RunOutcome, RunResult};
 use crate::point::{self, PointContext};
-use crate::sweep::{SceneSettings, Sweep};
+use crate::scene::settings::SceneSettings;
+use crate::sweep::Sweep;
 use crate::sys::process::CancelToken;
 
 /// A way of computing the points: a preset, or the fast preset with knobs changed.
@@ -39,7 +40,7 @@ pub fn variants(sweep: &Sweep, presets: &[String], extra: &[String]) -> Result<V
         let preset = SceneSettings::preset(name).ok_or_else(|| {
             Error::input(format!(
                 "--presets {name}: not a fidelity preset; expected some of {}",
-                crate::sweep::FIDELITIES.join(", ")
+                crate::scene::settings::FIDELITIES.join(", ")
             ))
         })?;
         let scene = sweep.file.scene.with_knobs_of(&preset);

@@ -120,7 +120,7 @@ pub fn hex(bytes: &[u8]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sweep::{SceneSettings, SizeDistributionSpec};
+    use crate::scene::settings::{SceneSettings, SizeDistributionSpec};
     use std::collections::BTreeMap;
 
     fn scene(settings: &SceneSettings, pairs: &[(&str, f64)]) -> Scene {

@@ -211,7 +211,7 @@ fn vx_profile<'a>(scene: &Scene, frames: impl Iterator<Item = &'a Frame>) -> Vec
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sweep::SceneSettings;
+    use crate::scene::settings::SceneSettings;
     use std::collections::BTreeMap;
 
     fn scene() -> Scene {
