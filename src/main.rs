@@ -4,13 +4,13 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
-use demsweep::analysis::convergence::{Criteria, Watch};
+use demsweep::analysis::convergence::Criteria;
 use demsweep::analysis::stats::Bootstrap;
 use demsweep::error::{exit, Error};
 use demsweep::outcome::RunOutcome;
 use demsweep::point::{self, PointContext};
 use demsweep::run::progress::ProgressMode;
-use demsweep::run::{self as driver, RunOptions, Summary};
+use demsweep::run::{self as driver, RunOptions, Summary, Watch};
 use demsweep::store::DesignRecord;
 use demsweep::sweep::{Scrambling, Sweep};
 use demsweep::sys::process::CancelToken;
