@@ -248,7 +248,7 @@ pub(super) fn report(a: ReportArgs) -> Result<i32, Error> {
     a.convergence.overrides().apply(&mut settings)?;
     let analysis =
         demsweep::report::analyse(&a.dir, &Criteria::from_settings(&settings), &Bootstrap::default())?;
-    demsweep::report::rewrite_results(&a.dir)?;
+    demsweep::run::rewrite_results(&a.dir)?;
     let html = demsweep::report::write(&analysis)?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&analysis).map_err(|e| Error::Internal(e.to_string()))?);

@@ -89,7 +89,7 @@ impl Engine {
                 h.update(bytes);
             }
         }
-        Ok(Engine { path, version, binary_hash: crate::point::deck::hex(&h.finalize()), ranks: 1 })
+        Ok(Engine { path, version, binary_hash: crate::sys::hex(&h.finalize()), ranks: 1 })
     }
 
     /// What identifies this engine in a run's hash.

@@ -423,15 +423,6 @@ fn timing(dir: &Path) -> Timing {
     Timing { wall_time_s: wall, core_seconds, attempts }
 }
 
-/// Rewrite `DIR/results.csv` from the run dirs (`sweep report`: a directory written by an older
-/// version gains the newer columns, such as `quality`).
-pub fn rewrite_results(dir: &Path) -> Result<()> {
-    let (m, toml) = Store::read_manifest(dir)?;
-    let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
-    let (status, sample, _) = Screen::of(&sweep).statuses(&Store::open(dir), &m);
-    Ok(crate::store::write_results(dir, &m.parameters, &m.points, &status, &sample)?)
-}
-
 /// Write `convergence.csv`, `summary.json` and `report/` into the analysed directory; returns
 /// the path of `report.html`.
 pub fn write(a: &Analysis) -> Result<PathBuf> {

@@ -485,7 +485,7 @@ pub fn held_points(manifest: &Manifest, store: &Store) -> BTreeSet<usize> {
 /// task's pool wrote it from its own view, and the last task to end must leave every task's
 /// points in it.
 pub fn refresh_results(dir: &Path) -> Result<()> {
-    Store::open(dir).locked(|| crate::report::rewrite_results(dir))?
+    Store::open(dir).locked(|| crate::run::rewrite_results(dir))?
 }
 
 /// What one array task runs (`sweep work`).

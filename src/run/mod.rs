@@ -50,7 +50,7 @@ pub use plan::{
 };
 use reporter::Reporter;
 pub use reporter::{RunAll, SpaceHook, Watch};
-pub use status::{status, FailureGroup, FailureNote, StatusReport};
+pub use status::{rewrite_results, status, FailureGroup, FailureNote, StatusReport};
 
 /// Most points one design may have.
 pub const MAX_POINTS: usize = 1_000_000;
