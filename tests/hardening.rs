@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::Duration;
 
-use demsweep::run::pool::fake::{Behaviour, FakeExecutor};
+use demsweep::run::fake::{Behaviour, FakeExecutor};
 use demsweep::run::progress::ProgressMode;
 use demsweep::run::{self, RunAll, RunOptions};
 use demsweep::store::{self, DesignRecord};

@@ -324,7 +324,7 @@ fn quick_sweep_on_liggghts_ends_with_a_report() {
 #[test]
 fn failed_runs_are_excluded_and_counted() {
     use demsweep::outcome::FailureClass;
-    use demsweep::run::pool::fake::{fake_mfr, Behaviour, FakeExecutor};
+    use demsweep::run::fake::{fake_mfr, Behaviour, FakeExecutor};
     use demsweep::run::{self, RunOptions};
     let tmp = tempfile::tempdir().unwrap();
     let text = r#"name = "fails"

@@ -13,7 +13,7 @@ use std::process::{Command, Output, Stdio};
 use std::time::Duration;
 
 use demsweep::analysis::stats::Bootstrap;
-use demsweep::run::pool::fake::{fake_mfr, Behaviour, FakeExecutor};
+use demsweep::run::fake::{fake_mfr, Behaviour, FakeExecutor};
 use demsweep::run::pool::Flow;
 use demsweep::run::progress::ProgressMode;
 use demsweep::run::screen::Verdict;

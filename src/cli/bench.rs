@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use super::contact::contact_error;
+use super::jobs;
 use clap::{Args, Subcommand};
 use demsweep::error::{exit, Error};
 use demsweep::point::{self, PointContext};
@@ -125,11 +126,7 @@ pub(super) fn bench_fidelity(a: FidelityArgs) -> Result<i32, Error> {
     if a.seeds == 0 {
         return bad("--seeds 0: expected at least 1".into());
     }
-    let jobs = match a.jobs {
-        Some(0) => return bad("--jobs 0: expected at least 1".into()),
-        Some(n) => n,
-        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
-    };
+    let jobs = jobs(a.jobs)?;
     let variants = fidelity::variants(&sweep, &a.presets, &a.variant)?;
     if variants.is_empty() {
         return bad("--presets: expected at least one preset or --variant".into());
@@ -226,11 +223,7 @@ pub(super) fn bench_stability(a: StabilityArgs) -> Result<i32, Error> {
     if a.seeds == 0 {
         return bad("--seeds 0: expected at least 1".into());
     }
-    let jobs = match a.jobs {
-        Some(0) => return bad("--jobs 0: expected at least 1".into()),
-        Some(n) => n,
-        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
-    };
+    let jobs = jobs(a.jobs)?;
     let out = a.out.unwrap_or_else(|| PathBuf::from("runs").join(format!("{}-stability", sweep.file.name)));
     driver::check_out_dir(&out)?;
     if std::fs::read_dir(&out).map(|mut d| d.next().is_some()).unwrap_or(false) {

@@ -18,6 +18,8 @@
 //! for the directory's formats ([`crate::store`]); no statistics here.
 
 pub mod cluster;
+#[cfg(any(test, feature = "test-support"))]
+pub mod fake;
 mod executor;
 mod plan;
 pub mod pool;
@@ -42,7 +44,7 @@ use crate::store::{self, DesignRecord, Manifest, PointStatus, RunState, Store, M
 use crate::sweep::Sweep;
 use crate::sys::process::CancelToken;
 
-pub use executor::{PointExecutor, PointJob};
+pub use executor::{PointExecutor, PointJob, SweepExecutor, SweepJob};
 use plan::{check_extension, check_parameters};
 pub use plan::{
     check_out_dir, default_out, identity_diff, judge_from, load_dir_sweep, plan, plan_with_progress,
