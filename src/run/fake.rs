@@ -16,10 +16,10 @@ use std::time::Duration;
 
 use sha2::{Digest, Sha256};
 
-use crate::run::pool::Executor;
 use crate::outcome::{
     write_json_atomic, FailureClass, RunFailure, RunOutcome, RunResult, RESULT_FORMAT, VX_LAYERS,
 };
+use crate::run::pool::Executor;
 use crate::sys::process::{self, CancelToken, ProcessOutcome};
 
 /// What the fake does with one attempt.

@@ -18,9 +18,9 @@
 //! for the directory's formats ([`crate::store`]); no statistics here.
 
 pub mod cluster;
+mod executor;
 #[cfg(any(test, feature = "test-support"))]
 pub mod fake;
-mod executor;
 mod plan;
 pub mod pool;
 pub mod progress;
