@@ -79,15 +79,15 @@ fn point_failure(job: &PointJob, run_dir: &Path, reason: String) -> RunOutcome {
         wall_time: 0.0,
         measured: None,
     };
-    let _ = crate::outcome::write_json_atomic(&run_dir.join(point::FAILURE), &f);
+    let _ = crate::sys::atomic::write_json(&run_dir.join(point::FAILURE), &f);
     RunOutcome::Failed(f)
 }
 
 /// The executor a sweep file asks for, chosen once: LIGGGHTS, or the stand-in
 /// (`run.engine = "stand-in"`).
 pub enum SweepExecutor {
-    Real(PointExecutor),
-    StandIn(StandIn),
+    Real(Box<PointExecutor>),
+    StandIn(Box<StandIn>),
 }
 
 /// A job of a [`SweepExecutor`].
@@ -100,9 +100,9 @@ impl SweepExecutor {
     /// The stand-in when the sweep selects it, else LIGGGHTS (found and identified here).
     pub fn for_sweep(sweep: &Sweep) -> Result<SweepExecutor> {
         if standin::selected(sweep) {
-            Ok(SweepExecutor::StandIn(StandIn::new(sweep.clone())))
+            Ok(SweepExecutor::StandIn(Box::new(StandIn::new(sweep.clone()))))
         } else {
-            Ok(SweepExecutor::Real(PointExecutor::new(sweep.clone())?))
+            Ok(SweepExecutor::Real(Box::new(PointExecutor::new(sweep.clone())?)))
         }
     }
 }

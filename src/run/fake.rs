@@ -16,10 +16,9 @@ use std::time::Duration;
 
 use sha2::{Digest, Sha256};
 
-use crate::outcome::{
-    write_json_atomic, FailureClass, RunFailure, RunOutcome, RunResult, RESULT_FORMAT, VX_LAYERS,
-};
+use crate::outcome::{FailureClass, RunFailure, RunOutcome, RunResult, RESULT_FORMAT, VX_LAYERS};
 use crate::run::pool::Executor;
+use crate::sys::atomic::write_json;
 use crate::sys::process::{self, CancelToken, ProcessOutcome};
 
 /// What the fake does with one attempt.
@@ -40,13 +39,13 @@ pub struct FakeJob {
     pub hash: String,
 }
 
-type Plan = dyn Fn(&[f64], usize) -> Behaviour + Send + Sync;
+type Behaviours = dyn Fn(&[f64], usize) -> Behaviour + Send + Sync;
 type Closed = dyn Fn(&[f64]) -> bool + Send + Sync;
 type Mfr = dyn Fn(&[f64]) -> f64 + Send + Sync;
 
 pub struct FakeExecutor {
     /// Behaviour of attempt `n` (0-based) of the point with these values.
-    plan: Box<Plan>,
+    plan: Box<Behaviours>,
     /// Which points the fake's screen closes (none by default).
     closed: Box<Closed>,
     /// The MFR of a point ([`fake_mfr`] by default).
@@ -174,7 +173,7 @@ impl Executor for FakeExecutor {
                 measured: None,
             };
             // As the real executor: a failed write is found and reported by the pool.
-            let _ = write_json_atomic(&run_dir.join("failure.json"), &f);
+            let _ = write_json(&run_dir.join("failure.json"), &f);
             RunOutcome::Failed(f)
         };
         match (p, behaviour) {
@@ -212,7 +211,7 @@ impl Executor for FakeExecutor {
                     engine_version: "fake".into(),
                     warnings: vec![],
                 };
-                let _ = write_json_atomic(&run_dir.join("result.json"), &r);
+                let _ = write_json(&run_dir.join("result.json"), &r);
                 RunOutcome::Done(r)
             }
             (other, _) => fail(FailureClass::Signalled, format!("sleep ended {other:?}")),

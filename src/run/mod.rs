@@ -48,7 +48,7 @@ pub use executor::{PointExecutor, PointJob, SweepExecutor, SweepJob};
 use plan::{check_extension, check_parameters};
 pub use plan::{
     check_out_dir, default_out, identity_diff, judge_from, load_dir_sweep, plan, plan_with_progress,
-    resolved_toml, Plan,
+    resolved_toml, SweepPlan,
 };
 use reporter::Reporter;
 pub use reporter::{RunAll, SpaceHook, Watch};
@@ -122,7 +122,7 @@ pub fn start<E: Executor>(
             )));
         }
     }
-    let Plan { spaces, points, jobs } = plan_with_progress(exec, sweep, &design, cancel, opts.progress)?;
+    let SweepPlan { spaces, points, jobs } = plan_with_progress(exec, sweep, &design, cancel, opts.progress)?;
     let toml = resolved_toml(sweep, &design)?;
     let manifest = Manifest {
         format: MANIFEST_FORMAT,
