@@ -41,23 +41,6 @@ engine = "stand-in"
     path
 }
 
-/// results.csv by header name: one map per row.
-fn results(dir: &Path) -> Vec<BTreeMap<String, String>> {
-    let mut r = csv::Reader::from_path(dir.join("results.csv")).unwrap();
-    let h = r.headers().unwrap().clone();
-    r.records()
-        .map(|rec| h.iter().zip(rec.unwrap().iter()).map(|(k, v)| (k.into(), v.into())).collect())
-        .collect()
-}
-
-fn convergence_rows(dir: &Path) -> Vec<BTreeMap<String, String>> {
-    let mut r = csv::Reader::from_path(dir.join("convergence.csv")).unwrap();
-    let h = r.headers().unwrap().clone();
-    r.records()
-        .map(|rec| h.iter().zip(rec.unwrap().iter()).map(|(k, v)| (k.into(), v.into())).collect())
-        .collect()
-}
-
 fn summary(dir: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
 }
@@ -116,11 +99,11 @@ fn lds_on_the_stand_in_stops_by_itself_and_its_statistics_are_the_prefixes() {
     assert!(err.contains(&format!("converged at N = {n} (lds {n})")), "{err}");
     assert!(err.contains("report.html"), "{err}");
     // It stopped: far fewer runs than --max, and no space past the converged one was judged.
-    let rows = results(&out);
+    let rows = common::csv_rows(&out.join("results.csv"));
     let done: Vec<&BTreeMap<String, String>> = rows.iter().filter(|r| r["status"] == "done").collect();
     assert!(done.len() >= n && done.len() < n + 50 && n < 4000, "done {} n {n}", done.len());
     assert_eq!(joblog_lines(&out), done.len());
-    let conv = convergence_rows(&out);
+    let conv = common::csv_rows(&out.join("convergence.csv"));
     assert_eq!(conv.last().unwrap()["space"], format!("lds {n}"));
     assert_eq!(conv.iter().filter(|r| r["converged"] == "true").count(), 1);
     // The default rule needs two consecutive spaces that hold.
@@ -192,7 +175,7 @@ fn lattice_on_the_stand_in_names_its_converged_level_and_the_thesis_rule_is_weak
     let s = summary(&out);
     let level = s["verdict"]["space"].as_str().expect("converged").to_string();
     assert!(err.contains(&format!("({level})")), "{err}");
-    let conv = convergence_rows(&out);
+    let conv = common::csv_rows(&out.join("convergence.csv"));
     assert_eq!(conv.last().unwrap()["space"], level);
     assert_ne!(level, "lattice 8", "stopped before the last level");
     assert!(s["counts"]["pending"].as_u64().unwrap() > 0);
@@ -295,9 +278,7 @@ fn bad_input_is_one_line_and_exit_2_with_nothing_written() {
 /// The README's main command on real LIGGGHTS: a small sweep that ends with a report.
 #[test]
 fn quick_sweep_on_liggghts_ends_with_a_report() {
-    if common::liggghts_missing("quick_sweep_on_liggghts_ends_with_a_report") {
-        return;
-    }
+    common::require_liggghts!("quick_sweep_on_liggghts_ends_with_a_report");
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("quick");
     let quick = Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps/quick.toml");
@@ -307,12 +288,12 @@ fn quick_sweep_on_liggghts_ends_with_a_report() {
     let s = summary(&out);
     assert!(["converged", "not-converged"].contains(&s["verdict"]["status"].as_str().unwrap()), "{s}");
     assert!(err.contains(&format!("report: {}", out.join("report/report.html").display())), "{err}");
-    let rows = results(&out);
+    let rows = common::csv_rows(&out.join("results.csv"));
     let done: Vec<f64> =
         rows.iter().filter(|r| r["status"] == "done").map(|r| r["mfr"].parse().unwrap()).collect();
     assert_eq!(s["counts"]["done"].as_u64().unwrap() as usize, done.len());
     // The last space is all four points: its mean is the mean of results.csv's MFR.
-    let conv = convergence_rows(&out);
+    let conv = common::csv_rows(&out.join("convergence.csv"));
     let last = conv.last().unwrap();
     assert_eq!(last["n"], "4");
     assert_eq!(last["done"], done.len().to_string());
@@ -377,7 +358,7 @@ blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
         assert!((space.statistics.mean.unwrap() - mean).abs() < 1e-12, "{}", space.label);
     }
     demsweep::report::write(&a).unwrap();
-    let conv = convergence_rows(&out);
+    let conv = common::csv_rows(&out.join("convergence.csv"));
     assert_eq!((conv[1]["failed"].as_str(), conv[1]["done"].as_str()), ("5", "20"));
 
     // Every run failed: undefined statistics, empty cells, a report all the same.
@@ -395,7 +376,7 @@ blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
     assert_eq!(a.verdict.status, "not-converged");
     assert_eq!(a.spaces[1].statistics.mean, None);
     demsweep::report::write(&a).unwrap();
-    let conv = convergence_rows(&out);
+    let conv = common::csv_rows(&out.join("convergence.csv"));
     assert_eq!((conv[1]["mean"].as_str(), conv[1]["kurtosis"].as_str()), ("", ""));
     let json = std::fs::read_to_string(out.join("summary.json")).unwrap();
     assert!(!json.contains("NaN") && !json.contains("inf"));
