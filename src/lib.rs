@@ -31,5 +31,6 @@ pub mod stats;
 pub mod store;
 pub mod sweep;
 pub mod sweeprun;
+pub mod weights;
 
 pub use error::{Error, Result};

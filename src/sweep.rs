@@ -116,24 +116,36 @@ pub enum Scrambling {
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct ConvergenceSettings {
-    /// `"all"` (default: every statistic within tolerance, with the floor, held for `hold`
-    /// spaces) or `"any"` (the thesis's rule: any one statistic within tolerance; floor and hold
-    /// do not apply). See [`crate::convergence`].
+    /// `"scaled"` (default: every statistic moved and known within the tolerance on its own
+    /// scale, held for `hold` spaces), `"any"` (the thesis's rule: any one statistic within
+    /// tolerance relatively; floor and hold do not apply) or `"all"` (every statistic within
+    /// tolerance relatively or by the floor). See [`crate::convergence`].
     pub rule: String,
     /// Relative change of a statistic between consecutive spaces that counts as converged.
     pub tolerance: f64,
-    /// Absolute change below which a statistic counts as converged whatever its relative change.
+    /// Absolute change below which a statistic counts as converged whatever its relative change
+    /// (rule "all" only).
     pub floor: f64,
     /// Consecutive spaces the rule must hold for.
     pub hold: usize,
     /// No space with fewer points counts as converged. `sweep lds --max M` on a converged
     /// directory sets it to the old extent, so that the extension is judged on its own.
     pub min_points: usize,
+    /// `"trapezoid"` (default: a complete lattice's points weighted by the trapezoid rule) or
+    /// `"equal"` (the thesis). See [`crate::weights`].
+    pub lattice_weights: String,
 }
 
 impl Default for ConvergenceSettings {
     fn default() -> Self {
-        ConvergenceSettings { rule: "all".into(), tolerance: 0.05, floor: 0.01, hold: 2, min_points: 0 }
+        ConvergenceSettings {
+            rule: "scaled".into(),
+            tolerance: 0.05,
+            floor: 0.01,
+            hold: 2,
+            min_points: 0,
+            lattice_weights: "trapezoid".into(),
+        }
     }
 }
 
@@ -669,8 +681,17 @@ fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>, Vec<Parame
         crate::design::lds_size(n).map_err(|e| bad(key, format!("{n}: {e}")))?;
     }
     let c = &file.convergence;
-    if c.rule != "all" && c.rule != "any" {
-        return Err(bad("convergence.rule", format!("\"{}\": expected \"all\" or \"any\"", c.rule)));
+    if crate::convergence::Rule::parse(&c.rule).is_none() {
+        return Err(bad(
+            "convergence.rule",
+            format!("\"{}\": expected \"scaled\", \"any\" or \"all\"", c.rule),
+        ));
+    }
+    if crate::weights::LatticeWeights::parse(&c.lattice_weights).is_none() {
+        return Err(bad(
+            "convergence.lattice_weights",
+            format!("\"{}\": expected \"trapezoid\" or \"equal\"", c.lattice_weights),
+        ));
     }
     for (k, v) in [("convergence.tolerance", c.tolerance), ("convergence.floor", c.floor)] {
         if !v.is_finite() || v < 0.0 {

@@ -29,7 +29,7 @@ const MS: Duration = Duration::from_millis(1);
 /// Gap and blade speed swept; the fake closes the points at gap 2 (below 2.5).
 fn fake_sweep(dir: &Path, run: &str) -> Sweep {
     let text = format!(
-        "name = \"t\"\n[parameters]\ngap = {{ lo = 2.0, hi = 4.0 }}\nblade_speed = {{ lo = 1.2, hi = 1.6 }}\n[run]\n{run}\n"
+        "name = \"t\"\n[parameters]\ngap = {{ lo = 2.0, hi = 4.0 }}\nblade_speed = {{ lo = 1.2, hi = 1.6 }}\n[convergence]\nlattice_weights = \"equal\"\n[run]\n{run}\n"
     );
     let path = dir.join("t.toml");
     std::fs::write(&path, &text).unwrap();
@@ -250,6 +250,8 @@ fn on_liggghts_the_verification_run_gives_mfr_zero_and_the_other_closed_point_is
 [parameters]
 gap      = { lo = 0.5, hi = 2.75, unit = "mm" }
 diameter = { value = 2.5, unit = "mm" }
+[convergence]
+lattice_weights = "equal"   # the screen's zeros are under test here, not the weights
 [scene]
 window_diameters = 8
 window_start_diameters = 10

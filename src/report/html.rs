@@ -163,12 +163,20 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
         );
         for st in STATISTICS {
             let iv = s.intervals[st.name()];
-            let ch = s.changes.as_ref().map(|c| c[st.name()]);
+            let ch = s.changes.as_ref().map(|c| &c[st.name()]);
+            // On the scaled rule the change is shown on the statistic's own scale; the cell's
+            // tooltip holds the whole test in words.
             let change = match ch {
                 None => "".to_string(),
                 Some(c) => format!(
-                    "{}{}",
-                    c.rel.map_or("undef.".into(), |r| format!("{:.1}%", r * 100.0)),
+                    "<span title=\"{}\">{}{}</span>",
+                    esc(&c.test),
+                    match (c.abs, c.scale, c.rel) {
+                        (Some(d), Some(sc), _) if sc > 0.0 =>
+                            format!("{:.1}% of scale", d.abs() / sc * 100.0),
+                        (_, _, Some(r)) => format!("{:.1}%", r * 100.0),
+                        _ => "undef.".into(),
+                    },
                     if c.within { " ✓" } else { "" }
                 ),
             };
@@ -193,6 +201,16 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
         );
     }
     push(&mut h, "</table>\n");
+    if let Some(s) = a.spaces.iter().find(|s| s.converged).or(a.spaces.last()) {
+        if let Some(ch) = &s.changes {
+            push(&mut h, &format!("<p>The tests at {} (N = {}):</p>\n<ul>\n", esc(&s.label), s.n));
+            for st in STATISTICS {
+                push(&mut h, &format!("<li>{}: {}</li>\n", st.name(), esc(&ch[st.name()].test)));
+            }
+            push(&mut h, "</ul>\n");
+        }
+        push(&mut h, &format!("<p>{}</p>\n", esc(&super::weights_sentence(s))));
+    }
     for f in figures.iter().filter(|f| f.name == "statistics") {
         push(&mut h, &img(f));
     }

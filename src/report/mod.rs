@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use crate::convergence::{self, Change, Criteria, Judgement};
+use crate::convergence::{self, Change, Criteria, Judgement, SpaceStats};
 use crate::error::{Error, Result};
 use crate::outcome::RunResult;
 use crate::quality::{self, Quality};
@@ -82,8 +82,13 @@ pub struct SpaceRow {
     pub n: usize,
     pub done: usize,
     pub failed: usize,
-    /// Statistics of the done runs' MFR.
+    /// Statistics of the done runs' MFR (weighted as `weights` says).
     pub statistics: Moments,
+    /// `"trapezoid"` (a complete lattice weighted by the trapezoid rule) or `"equal"`.
+    pub weights: &'static str,
+    /// The equal-weight statistics beside the trapezoid ones (a complete lattice only), so the
+    /// report can say how far the two differ.
+    pub equal_weights: Option<Moments>,
     /// Bootstrap intervals of mean, std, skewness, kurtosis.
     pub intervals: BTreeMap<&'static str, Interval>,
     /// Changes from the previous space (`None` for the first).
@@ -262,16 +267,19 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
 /// space that still has pending points.
 fn judge_spaces(manifest: &Manifest, points: &[PointRow], c: &Criteria, boot: &Bootstrap) -> Vec<SpaceRow> {
     let mut rows = Vec::new();
-    let mut judged: Vec<(usize, Moments)> = Vec::new();
+    let mut judged: Vec<SpaceStats> = Vec::new();
     for space in &manifest.spaces {
         let members: Vec<&PointRow> = space.points.iter().map(|&i| &points[i]).collect();
         if members.iter().any(|p| matches!(p.state, PointState::Pending)) {
             break;
         }
-        let mfr: Vec<f64> = members.iter().filter_map(|p| p.mfr()).collect();
-        let m = stats::moments(&mfr);
-        let iv = stats::bootstrap(&mfr, boot);
-        judged.push((members.len(), m));
+        let values: Vec<&[f64]> = members.iter().map(|p| p.values.as_slice()).collect();
+        let all_mfr: Vec<Option<f64>> = members.iter().map(|p| p.mfr()).collect();
+        let (mfr, w) = convergence::space_values(&values, &all_mfr, c.lattice_weights);
+        let st = SpaceStats::of(members.len(), &mfr, w.as_deref(), boot);
+        let m = st.moments;
+        let iv = crate::weights::bootstrap(&mfr, w.as_deref(), boot);
+        judged.push(st);
         rows.push(SpaceRow {
             label: space.label.clone(),
             n: members.len(),
@@ -279,6 +287,8 @@ fn judge_spaces(manifest: &Manifest, points: &[PointRow], c: &Criteria, boot: &B
             done: mfr.len(),
             failed: members.iter().filter(|p| matches!(p.state, PointState::Failed { .. })).count(),
             statistics: m,
+            weights: if w.is_some() { "trapezoid" } else { "equal" },
+            equal_weights: w.as_ref().map(|_| stats::moments(&mfr)),
             intervals: STATISTICS.iter().zip(iv).map(|(s, i)| (s.name(), i)).collect(),
             changes: None,
             holds: false,
@@ -320,6 +330,29 @@ fn count(manifest: &Manifest, points: &[PointRow], complete: usize) -> Counts {
     c
 }
 
+/// Which weights a space's statistics used and, for a lattice, how far the thesis's equal
+/// weights would move the mean and the std.
+pub fn weights_sentence(s: &SpaceRow) -> String {
+    match &s.equal_weights {
+        None => format!("{}: every point weighted equally.", s.label),
+        Some(eq) => {
+            let rel = |a: Option<f64>, b: Option<f64>| match (a, b) {
+                (Some(a), Some(b)) if a != 0.0 => format!("{:+.1}%", (b - a) / a.abs() * 100.0),
+                _ => "undefined".into(),
+            };
+            format!(
+                "{}: lattice points weighted by the trapezoid rule (½ per coordinate on a face of the box); \
+                 equal weights (the thesis) would give mean {} ({}) and std {} ({}).",
+                s.label,
+                eq.mean.map_or("–".into(), |v| format!("{v:.4}")),
+                rel(s.statistics.mean, eq.mean),
+                eq.std.map_or("–".into(), |v| format!("{v:.4}")),
+                rel(s.statistics.std, eq.std),
+            )
+        }
+    }
+}
+
 fn pct(v: Option<f64>) -> String {
     v.map_or("undefined".into(), |v| format!("{:.1}%", v * 100.0))
 }
@@ -354,6 +387,17 @@ fn verdict(spaces: &[SpaceRow], counts: &Counts, c: &Criteria) -> Verdict {
             .join(", ")
     };
     let last = match (spaces.last(), &last_changes) {
+        (Some(s), Some(ch)) if c.rule == convergence::Rule::Scaled => {
+            let tests = s.changes.as_ref().map_or(String::new(), |t| {
+                STATISTICS
+                    .iter()
+                    .map(|st| format!("{} {}", st.name(), t[st.name()].test))
+                    .collect::<Vec<_>>()
+                    .join("; ")
+            });
+            let _ = ch;
+            format!("; last space ({}): {tests}", s.label)
+        }
         (Some(s), Some(ch)) => format!("; last changes ({}): {}", s.label, changes(ch)),
         _ => String::new(),
     };
@@ -524,7 +568,16 @@ pub fn convergence_csv(a: &Analysis) -> String {
     }
     header.extend(["moment_skewness", "median"].map(String::from));
     header.extend(STATISTICS.iter().map(|s| format!("change_{}", s.name())));
-    header.extend(["holds", "converged"].map(String::from));
+    for s in STATISTICS {
+        let n = s.name();
+        header.extend([
+            format!("delta_{n}"),
+            format!("scale_{n}"),
+            format!("noise_{n}"),
+            format!("test_{n}"),
+        ]);
+    }
+    header.extend(["holds", "converged", "weights"].map(String::from));
     w.write_record(&header).expect("in-memory csv");
     for s in &a.spaces {
         let mut row = vec![s.label.clone(), s.n.to_string(), s.done.to_string(), s.failed.to_string()];
@@ -536,7 +589,13 @@ pub fn convergence_csv(a: &Analysis) -> String {
         for st in STATISTICS {
             row.push(opt(s.changes.as_ref().and_then(|c| c[st.name()].rel)));
         }
-        row.extend([s.holds.to_string(), s.converged.to_string()]);
+        for st in STATISTICS {
+            match s.changes.as_ref().map(|c| &c[st.name()]) {
+                Some(c) => row.extend([opt(c.abs), opt(c.scale), opt(c.noise), c.test.clone()]),
+                None => row.extend([String::new(), String::new(), String::new(), String::new()]),
+            }
+        }
+        row.extend([s.holds.to_string(), s.converged.to_string(), s.weights.to_string()]);
         w.write_record(&row).expect("in-memory csv");
     }
     String::from_utf8(w.into_inner().expect("in-memory csv")).expect("utf-8")
