@@ -12,9 +12,9 @@ use std::process::Command;
 use std::time::{Duration, Instant};
 
 use demsweep::outcome::{write_json_atomic, RunOutcome, RunResult, RESULT_FORMAT};
-use demsweep::pool::{self, Executor, Flow, PoolOptions};
-use demsweep::process::{self, CancelToken, ProcessOutcome};
+use demsweep::run::pool::{self, Executor, Flow, PoolOptions};
 use demsweep::store::Store;
+use demsweep::sys::process::{self, CancelToken, ProcessOutcome};
 
 /// Runs `true` and records a trivial result.
 struct TrueExecutor;

@@ -4,16 +4,16 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
-use demsweep::convergence::{Criteria, Watch};
+use demsweep::analysis::convergence::Criteria;
+use demsweep::analysis::stats::Bootstrap;
 use demsweep::error::{exit, Error};
 use demsweep::outcome::RunOutcome;
 use demsweep::point::{self, PointContext};
-use demsweep::process::CancelToken;
-use demsweep::progress::ProgressMode;
-use demsweep::stats::Bootstrap;
+use demsweep::run::progress::ProgressMode;
+use demsweep::run::{self as driver, RunOptions, Summary, Watch};
 use demsweep::store::DesignRecord;
 use demsweep::sweep::{Scrambling, Sweep};
-use demsweep::sweeprun::{self, RunOptions, Summary};
+use demsweep::sys::process::CancelToken;
 
 /// Parameter sweeps of LIGGGHTS powder-spreading simulations.
 ///
@@ -249,24 +249,27 @@ struct LdsArgs {
 /// rule holds; `lattice`/`lds` record the overrides in DIR/sweep.toml, so `resume` keeps them.
 #[derive(Args)]
 struct ConvergenceArgs {
-    /// "all" (default: every statistic within the tolerance or the floor, for --hold
-    /// consecutive spaces) or "any" (the thesis's rule: any one statistic within the tolerance).
+    /// "scaled" (default: every statistic moved by at most the tolerance times its own scale and
+    /// known to within it, its 95% bootstrap half-width, for --hold consecutive spaces), "any"
+    /// (the thesis's rule: any one statistic within the tolerance relatively) or "all" (every
+    /// statistic within the tolerance relatively or the floor). docs/statistics.md.
     #[arg(long)]
     rule: Option<String>,
-    /// Relative change between consecutive spaces that counts as converged (e.g. 0.05).
+    /// The fraction of a statistic's scale ("scaled") or of its previous value ("any", "all")
+    /// that counts as converged (e.g. 0.05).
     #[arg(long, allow_negative_numbers = true)]
     tolerance: Option<f64>,
     /// Absolute change that counts as converged whatever the relative one (rule "all").
     #[arg(long, allow_negative_numbers = true)]
     floor: Option<f64>,
-    /// Consecutive spaces the rule must hold for (rule "all").
+    /// Consecutive spaces the rule must hold for (rules "scaled" and "all").
     #[arg(long)]
     hold: Option<usize>,
 }
 
 impl ConvergenceArgs {
-    fn overrides(&self) -> demsweep::convergence::Overrides {
-        demsweep::convergence::Overrides {
+    fn overrides(&self) -> demsweep::analysis::convergence::Overrides {
+        demsweep::analysis::convergence::Overrides {
             rule: self.rule.clone(),
             tolerance: self.tolerance,
             floor: self.floor,
@@ -669,7 +672,7 @@ fn check_timestep(sweep: &mut Sweep, force: bool) -> Result<(), Error> {
 }
 
 fn bench_fidelity(a: FidelityArgs) -> Result<i32, Error> {
-    use demsweep::fidelity;
+    use demsweep::bench::fidelity;
     let sweep = Sweep::load(&a.sweep)?;
     let bad = |m: String| Err(Error::input(m));
     if a.points == 0 {
@@ -689,15 +692,15 @@ fn bench_fidelity(a: FidelityArgs) -> Result<i32, Error> {
     }
     let lds = &sweep.file.design.lds;
     let unit = demsweep::design::halton::halton(sweep.dim(), a.points, lds.scrambling, lds.seed);
-    let points: Vec<Vec<f64>> = unit.iter().map(|p| demsweep::space::scale_point(&sweep, p)).collect();
+    let points: Vec<Vec<f64>> = unit.iter().map(|p| demsweep::sweep::space::scale_point(&sweep, p)).collect();
     let out = a.out.unwrap_or_else(|| PathBuf::from("runs").join(format!("{}-fidelity", sweep.file.name)));
-    sweeprun::check_out_dir(&out)?;
+    driver::check_out_dir(&out)?;
     let mut contexts = Vec::new();
     for v in &variants {
         contexts.push(PointContext::new(v.sweep.clone())?);
     }
     let plan = fidelity::Plan { points, seeds: a.seeds, jobs, out };
-    demsweep::process::install_interrupt_handler();
+    demsweep::sys::process::install_interrupt_handler();
     let cancel = CancelToken::new();
     let started = std::time::Instant::now();
     let show = |r: &fidelity::Run, n: usize, total: usize| {
@@ -746,7 +749,7 @@ fn bench_fidelity(a: FidelityArgs) -> Result<i32, Error> {
 }
 
 fn bench_stability(a: StabilityArgs) -> Result<i32, Error> {
-    use demsweep::stability;
+    use demsweep::bench::stability;
     let sweep = Sweep::load(&a.sweep)?;
     let bad = |m: String| Err(Error::input(m));
     if sweep.file.scene.timestep_s > 0.0 {
@@ -785,7 +788,7 @@ fn bench_stability(a: StabilityArgs) -> Result<i32, Error> {
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
     let out = a.out.unwrap_or_else(|| PathBuf::from("runs").join(format!("{}-stability", sweep.file.name)));
-    sweeprun::check_out_dir(&out)?;
+    driver::check_out_dir(&out)?;
     if std::fs::read_dir(&out).map(|mut d| d.next().is_some()).unwrap_or(false) {
         return bad(format!("{}: not empty; choose another --out", out.display()));
     }
@@ -794,7 +797,7 @@ fn bench_stability(a: StabilityArgs) -> Result<i32, Error> {
     let plan = stability::Plan { corner, fractions: a.fractions, moduli, seeds: a.seeds, jobs, out };
     stability::check(&ctx, &plan)?;
     let heading = stability::describe_corner(&ctx.sweep, &plan.corner);
-    demsweep::process::install_interrupt_handler();
+    demsweep::sys::process::install_interrupt_handler();
     std::fs::create_dir_all(&plan.out)
         .map_err(|e| Error::Internal(format!("cannot create {}: {e}", plan.out.display())))?;
     println!("harshest corner: {heading}; {} seeds per level", plan.seeds);
@@ -855,7 +858,7 @@ fn bench_stability(a: StabilityArgs) -> Result<i32, Error> {
 }
 
 fn bench_contact(a: BenchContactArgs) -> Result<i32, Error> {
-    use demsweep::contact::stability::{drift, stiffness, timestep, to_csv};
+    use demsweep::bench::contact::{drift, stiffness, timestep, to_csv};
     if a.contacts == 0 {
         return Err(Error::input("--contacts 0: expected at least 1"));
     }
@@ -866,7 +869,7 @@ fn bench_contact(a: BenchContactArgs) -> Result<i32, Error> {
         .map_err(|e| Error::Internal(format!("cannot create {}: {e}", a.out.display())))?;
     let write = |name: &str, text: String| -> Result<(), Error> {
         let path = a.out.join(name);
-        demsweep::atomic::write(&path, text.as_bytes())
+        demsweep::sys::atomic::write(&path, text.as_bytes())
             .map_err(|e| Error::Internal(format!("cannot write {}: {e}", path.display())))?;
         eprintln!("wrote {}", path.display());
         Ok(())
@@ -922,7 +925,7 @@ fn lattice(a: LatticeArgs) -> Result<i32, Error> {
     start(sweep, DesignRecord::Lattice { levels }, a.out, &a.pool)
 }
 
-/// Lattice levels: at least one, each at least 2 and at most [`sweeprun::MAX_POINTS`] points,
+/// Lattice levels: at least one, each at least 2 and at most [`driver::MAX_POINTS`] points,
 /// increasing (each level is a larger space than the one before).
 fn check_levels(dim: usize, levels: &[usize], source: &str) -> Result<(), Error> {
     let list = levels.iter().map(|l| l.to_string()).collect::<Vec<_>>().join(",");
@@ -971,38 +974,38 @@ fn lds(a: LdsArgs) -> Result<i32, Error> {
 
 fn start(mut sweep: Sweep, design: DesignRecord, out: Option<PathBuf>, p: &PoolArgs) -> Result<i32, Error> {
     let opts = run_options(p, false, false)?;
-    let out = out.unwrap_or_else(|| sweeprun::default_out(&sweep));
+    let out = out.unwrap_or_else(|| driver::default_out(&sweep));
     // Every input is checked before LIGGGHTS is looked at.
-    sweeprun::check_out_dir(&out)?;
-    sweep.file.convergence.min_points = sweeprun::judge_from(&out, &sweep, &design)?;
-    demsweep::process::install_interrupt_handler();
+    driver::check_out_dir(&out)?;
+    sweep.file.convergence.min_points = driver::judge_from(&out, &sweep, &design)?;
+    demsweep::sys::process::install_interrupt_handler();
     let mut watch = Watch::new(Criteria::from_settings(&sweep.file.convergence));
     let cancel = CancelToken::new();
-    let summary = if demsweep::standin::selected(&sweep) {
-        let exec = demsweep::standin::StandIn::new(sweep.clone());
-        sweeprun::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?
+    let summary = if demsweep::run::standin::selected(&sweep) {
+        let exec = demsweep::run::standin::StandIn::new(sweep.clone());
+        driver::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?
     } else {
-        let exec = sweeprun::PointExecutor::new(sweep.clone())?;
-        sweeprun::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?
+        let exec = driver::PointExecutor::new(sweep.clone())?;
+        driver::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?
     };
     finish(&summary, &sweep)
 }
 
 fn resume(a: ResumeArgs) -> Result<i32, Error> {
     let opts = run_options(&a.pool, a.retry_failed, a.force)?;
-    let mut sweep = sweeprun::load_dir_sweep(&a.dir)?;
+    let mut sweep = driver::load_dir_sweep(&a.dir)?;
     sweep.file.scene.force_timestep = a.force;
-    demsweep::process::install_interrupt_handler();
+    demsweep::sys::process::install_interrupt_handler();
     // The same rule as the run that made the directory (DIR/sweep.toml), so a converged sweep
     // stays stopped where it converged.
     let mut watch = Watch::new(Criteria::from_settings(&sweep.file.convergence));
     let cancel = CancelToken::new();
-    let summary = if demsweep::standin::selected(&sweep) {
-        let exec = demsweep::standin::StandIn::new(sweep.clone());
-        sweeprun::resume(&a.dir, &exec, &opts, &mut watch, &cancel)?
+    let summary = if demsweep::run::standin::selected(&sweep) {
+        let exec = demsweep::run::standin::StandIn::new(sweep.clone());
+        driver::resume(&a.dir, &exec, &opts, &mut watch, &cancel)?
     } else {
-        let exec = sweeprun::PointExecutor::new(sweep.clone())?;
-        sweeprun::resume(&a.dir, &exec, &opts, &mut watch, &cancel)?
+        let exec = driver::PointExecutor::new(sweep.clone())?;
+        driver::resume(&a.dir, &exec, &opts, &mut watch, &cancel)?
     };
     finish(&summary, &sweep)
 }
@@ -1022,7 +1025,8 @@ fn finish(s: &Summary, sweep: &Sweep) -> Result<i32, Error> {
 fn finish_runs(s: &Summary) -> i32 {
     let dir = s.dir.display();
     if let Some(line) = s.screen.sentence() {
-        let warning = if s.screen.verdict == demsweep::screen::Verdict::Refuted { "warning: " } else { "" };
+        let warning =
+            if s.screen.verdict == demsweep::run::screen::Verdict::Refuted { "warning: " } else { "" };
         eprintln!("{warning}{line}");
     }
     if s.interrupted {
@@ -1041,7 +1045,7 @@ fn finish_runs(s: &Summary) -> i32 {
 }
 
 fn submit(a: SubmitArgs) -> Result<i32, Error> {
-    use demsweep::cluster::{self, Only, Scheduler, SubmitOptions};
+    use demsweep::run::cluster::{self, Only, Scheduler, SubmitOptions};
     if a.jobs_per_task == 0 {
         return Err(Error::input("--jobs-per-task 0: expected at least 1"));
     }
@@ -1137,18 +1141,18 @@ fn work(a: WorkArgs) -> Result<i32, Error> {
     }
     demsweep::store::set_default_lease(std::time::Duration::from_secs(a.lease));
     if let Some(h) = &a.host {
-        demsweep::store::set_host_name(h);
+        demsweep::sys::host::set_host_name(h);
     }
     let pool = PoolArgs { jobs: Some(cores / a.ranks as usize), quiet: a.quiet };
     let opts = run_options(&pool, a.retry_failed, false)?;
-    demsweep::process::install_interrupt_handler();
-    let w = demsweep::cluster::WorkOptions {
+    demsweep::sys::process::install_interrupt_handler();
+    let w = demsweep::run::cluster::WorkOptions {
         task: a.task,
         per_task: a.per_task,
         steal: !a.no_steal,
         ranks: a.ranks,
     };
-    let summary = demsweep::cluster::work(&a.dir, &w, &opts, &CancelToken::new())?;
+    let summary = demsweep::run::cluster::work(&a.dir, &w, &opts, &CancelToken::new())?;
     eprintln!(
         "task {}: ran {} runs; the sweep has {} of {} points done, {} screened, {} failed",
         a.task, summary.ran, summary.done, summary.points, summary.screened, summary.failed
@@ -1158,7 +1162,7 @@ fn work(a: WorkArgs) -> Result<i32, Error> {
 }
 
 fn status(a: DirArgs) -> Result<i32, Error> {
-    let report = demsweep::sweeprun::status(&a.dir)?;
+    let report = demsweep::run::status(&a.dir)?;
     if a.json {
         let text = serde_json::to_string_pretty(&report).map_err(|e| Error::Internal(e.to_string()))?;
         println!("{text}");
@@ -1169,7 +1173,7 @@ fn status(a: DirArgs) -> Result<i32, Error> {
 }
 
 fn report(a: ReportArgs) -> Result<i32, Error> {
-    let sweep = sweeprun::load_dir_sweep(&a.dir)?;
+    let sweep = driver::load_dir_sweep(&a.dir)?;
     let mut settings = sweep.file.convergence.clone();
     a.convergence.overrides().apply(&mut settings)?;
     let analysis =
@@ -1187,16 +1191,16 @@ fn report(a: ReportArgs) -> Result<i32, Error> {
 fn stats(a: StatsArgs) -> Result<i32, Error> {
     let table = demsweep::report::read_columns(&a.file, &a.column, &a.by)?;
     let column = &table.column;
-    let m = demsweep::stats::moments(&column.values);
+    let m = demsweep::analysis::stats::moments(&column.values);
     let sensitivity = if a.by.is_empty() {
         Vec::new()
     } else {
         let (x, y): (Vec<Vec<f64>>, Vec<f64>) = table.xy.iter().cloned().unzip();
-        demsweep::sensitivity::ranked(demsweep::sensitivity::first_order(&a.by, &x, &y))
+        demsweep::analysis::sensitivity::ranked(demsweep::analysis::sensitivity::first_order(&a.by, &x, &y))
     };
-    let iv = demsweep::stats::bootstrap(&column.values, &Bootstrap::default());
+    let iv = demsweep::analysis::stats::bootstrap(&column.values, &Bootstrap::default());
     if a.json {
-        let intervals: serde_json::Map<String, serde_json::Value> = demsweep::stats::STATISTICS
+        let intervals: serde_json::Map<String, serde_json::Value> = demsweep::analysis::stats::STATISTICS
             .iter()
             .zip(iv)
             .map(|(s, i)| (s.name().to_string(), serde_json::json!(i)))
@@ -1227,7 +1231,7 @@ fn stats(a: StatsArgs) -> Result<i32, Error> {
             column.empty,
             column.non_numeric
         );
-        for (s, i) in demsweep::stats::STATISTICS.iter().zip(iv) {
+        for (s, i) in demsweep::analysis::stats::STATISTICS.iter().zip(iv) {
             println!("  {:<16} {:>12}   95% interval [{}, {}]", s.name(), f(s.of(&m)), f(i.lo), f(i.hi));
         }
         println!("  {:<16} {:>12}", "moment_skewness", f(m.moment_skewness));
@@ -1266,8 +1270,8 @@ fn points(a: PointsArgs) -> Result<i32, Error> {
             demsweep::design::discrepancy::centred_l2(&unit)
         );
     }
-    let values: Vec<Vec<f64>> = unit.iter().map(|p| demsweep::space::scale_point(&sweep, p)).collect();
-    let screen = if a.screen { Some(demsweep::screen::preview(&sweep, &values)?) } else { None };
+    let values: Vec<Vec<f64>> = unit.iter().map(|p| demsweep::sweep::space::scale_point(&sweep, p)).collect();
+    let screen = if a.screen { Some(demsweep::run::screen::preview(&sweep, &values)?) } else { None };
     if let Some(col) = &screen {
         let count = |w: &str| col.iter().filter(|c| **c == w).count();
         match count("closed") + count("verification") {
@@ -1325,7 +1329,7 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
 }
 
 fn run_one(a: RunArgs) -> Result<i32, Error> {
-    demsweep::process::install_interrupt_handler();
+    demsweep::sys::process::install_interrupt_handler();
     let mut sweep = Sweep::load(&a.sweep)?;
     check_timestep(&mut sweep, a.force)?;
     let values = point::swept_values_from_set(&sweep, &a.set)?;
@@ -1354,7 +1358,7 @@ fn run_one(a: RunArgs) -> Result<i32, Error> {
             eprintln!("the screen closes this point: nothing can pass under the blade (a sweep counts it as MFR = 0)");
         }
     }
-    let cancel = demsweep::process::CancelToken::new();
+    let cancel = demsweep::sys::process::CancelToken::new();
     match point::execute(&ctx, &prepared, &dir, &cancel) {
         RunOutcome::Done(r) => {
             if a.json {

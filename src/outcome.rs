@@ -125,9 +125,9 @@ pub enum RunOutcome {
     Cancelled,
 }
 
-/// Write `value` as pretty JSON to `path` atomically ([`crate::atomic::write`]).
+/// Write `value` as pretty JSON to `path` atomically ([`crate::sys::atomic::write`]).
 pub fn write_json_atomic<T: Serialize>(path: &Path, value: &T) -> std::io::Result<()> {
     let mut bytes = serde_json::to_vec_pretty(value)?;
     bytes.push(b'\n');
-    crate::atomic::write(path, &bytes)
+    crate::sys::atomic::write(path, &bytes)
 }

@@ -4,7 +4,7 @@
 use std::path::Path;
 use std::process::Command;
 
-use demsweep::contact::stability::timestep::{self, ClosedForm};
+use demsweep::bench::contact::timestep::{self, ClosedForm};
 use demsweep::contact::{self, bounce, check, solver, Case, ContactError, Material, Outcome, Regime, Target};
 
 /// Glass (LIGGGHTS-NOTES closed-form check).

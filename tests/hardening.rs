@@ -11,12 +11,12 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::Duration;
 
-use demsweep::pool::fake::{Behaviour, FakeExecutor};
-use demsweep::process::CancelToken;
-use demsweep::progress::ProgressMode;
+use demsweep::run::pool::fake::{Behaviour, FakeExecutor};
+use demsweep::run::progress::ProgressMode;
+use demsweep::run::{self, RunAll, RunOptions};
 use demsweep::store::{self, DesignRecord};
 use demsweep::sweep::{Scrambling, Sweep};
-use demsweep::sweeprun::{self, RunAll, RunOptions};
+use demsweep::sys::process::CancelToken;
 
 const MS: Duration = Duration::from_millis(1);
 
@@ -255,7 +255,7 @@ fn two_sweeps_started_at_once_on_one_new_directory_share_the_work() {
                 .map(|e| {
                     let (s, out) = (&s, &out);
                     scope.spawn(move || {
-                        sweeprun::start(s, lds(6, 3), out, e, &opts(1), &mut RunAll, &CancelToken::new())
+                        run::start(s, lds(6, 3), out, e, &opts(1), &mut RunAll, &CancelToken::new())
                     })
                 })
                 .collect();
@@ -280,7 +280,7 @@ fn joblog_seq_is_unique_when_two_resumes_share_a_directory() {
     let out = tmp.path().join("out");
     // A directory with its manifest and nothing run (a copy made elsewhere, a killed start).
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    sweeprun::start(&s, lds(12, 12), &out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
+    run::start(&s, lds(12, 12), &out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
     std::fs::remove_dir_all(out.join("runs")).unwrap();
     std::fs::write(out.join("joblog.tsv"), format!("{}\n", store::JOBLOG_HEADER)).unwrap();
     let execs = [
@@ -290,8 +290,7 @@ fn joblog_seq_is_unique_when_two_resumes_share_a_directory() {
     std::thread::scope(|scope| {
         for e in &execs {
             let out = &out;
-            scope
-                .spawn(move || sweeprun::resume(out, e, &opts(2), &mut RunAll, &CancelToken::new()).unwrap());
+            scope.spawn(move || run::resume(out, e, &opts(2), &mut RunAll, &CancelToken::new()).unwrap());
         }
     });
     assert!(execs.iter().all(|e| !e.attempts().is_empty()), "both resumes should have run points");
@@ -305,7 +304,7 @@ fn a_killed_attempt_shows_as_interrupted_in_status_and_the_joblog() {
     let s = fake_sweep(tmp.path());
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    sweeprun::start(&s, lds(3, 3), &out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
+    run::start(&s, lds(3, 3), &out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
     let (manifest, _) = store::Store::read_manifest(&out).unwrap();
     let hash = &manifest.points[2].hash;
     let run = out.join("runs").join(hash);
@@ -315,17 +314,17 @@ fn a_killed_attempt_shows_as_interrupted_in_status_and_the_joblog() {
     let pid = dead.id();
     dead.wait().unwrap();
     let claim = serde_json::json!({
-        "host": store::hostname(), "pid": pid, "start_ticks": 1, "session": "killed", "claimed_at": 1.7e9
+        "host": demsweep::sys::host::hostname(), "pid": pid, "start_ticks": 1, "session": "killed", "claimed_at": 1.7e9
     });
     std::fs::write(run.join("claim"), claim.to_string()).unwrap();
-    let st = sweeprun::status(&out).unwrap();
+    let st = run::status(&out).unwrap();
     assert_eq!((st.done, st.pending, st.interrupted), (2, 1, 1));
     let o = sweep_bin().arg("status").arg(&out).output().unwrap();
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("(1 interrupted"), "{text}");
 
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    sweeprun::resume(&out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
+    run::resume(&out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
     let lines: Vec<_> = store::read_joblog(&out).unwrap().into_iter().filter(|l| &l.hash == hash).collect();
     let statuses: Vec<&str> = lines.iter().map(|l| l.status.as_str()).collect();
     assert_eq!(statuses, ["done", "interrupted", "done"], "the killed attempt is in the joblog");
@@ -335,7 +334,7 @@ fn a_killed_attempt_shows_as_interrupted_in_status_and_the_joblog() {
         line.contains("\t1700000000.000\t-\tinterrupted"),
         "start = the claim's time, runtime unknown: {line}"
     );
-    assert_eq!(sweeprun::status(&out).unwrap().interrupted, 0);
+    assert_eq!(run::status(&out).unwrap().interrupted, 0);
     assert_unique_seq(&out);
 }
 
@@ -347,7 +346,7 @@ fn an_inconsistent_or_truncated_manifest_is_refused_naming_the_field() {
     let s = fake_sweep(tmp.path());
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    sweeprun::start(&s, lds(4, 2), &out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
+    run::start(&s, lds(4, 2), &out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
     let path = out.join("manifest.json");
     let good = std::fs::read_to_string(&path).unwrap();
     let edit = |f: &dyn Fn(&mut serde_json::Value)| {
@@ -419,8 +418,8 @@ fn a_full_disk_stops_the_sweep_says_where_and_resume_finishes_it() {
     // Each run leaves 40 kB of "log": about five fit.
     let mut exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
     exec.output_bytes = 40_000;
-    let err = sweeprun::start(&s, lds(12, 12), &out, &exec, &opts(1), &mut RunAll, &CancelToken::new())
-        .unwrap_err();
+    let err =
+        run::start(&s, lds(12, 12), &out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap_err();
     let msg = err.to_string();
     assert_ne!(err.code(), 0);
     assert!(msg.contains(&format!("no space left on tmpfs ({})", fs.display())), "{msg}");
@@ -434,7 +433,7 @@ fn a_full_disk_stops_the_sweep_says_where_and_resume_finishes_it() {
     assert_eq!(attempts, done + 1, "runs were started after the disk was full");
     assert!(temporaries(&out).is_empty(), "{:?}", temporaries(&out));
     // status and results.csv agree: the lost run is pending, not failed.
-    let st = sweeprun::status(&out).unwrap();
+    let st = run::status(&out).unwrap();
     assert_eq!((st.done, st.failed, st.pending), (done, 0, 12 - done));
     if let Ok(csv) = std::fs::read_to_string(out.join("results.csv")) {
         assert_eq!(csv.matches(",done,").count(), done, "{csv}");
@@ -448,11 +447,11 @@ fn a_full_disk_stops_the_sweep_says_where_and_resume_finishes_it() {
         c.wait().unwrap();
         pid
     };
-    let stale = out.join(format!(".results.csv.tmp.{}.{dead}.0", demsweep::atomic::temporary_host()));
+    let stale = out.join(format!(".results.csv.tmp.{}.{dead}.0", demsweep::sys::atomic::temporary_host()));
     mount.remount("size=4m");
     std::fs::write(&stale, "half").unwrap();
     let exec2 = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    let sum = sweeprun::resume(&out, &exec2, &opts(2), &mut RunAll, &CancelToken::new()).unwrap();
+    let sum = run::resume(&out, &exec2, &opts(2), &mut RunAll, &CancelToken::new()).unwrap();
     assert_eq!((sum.done, sum.failed, sum.reused), (12, 0, done));
     assert!(temporaries(&out).is_empty(), "{:?}", temporaries(&out));
     let per_hash = done_per_hash(&out);
@@ -491,7 +490,7 @@ fn a_full_disk_under_liggghts_is_a_store_error_not_failed_runs_and_resume_finish
     assert!(temporaries(&out).is_empty(), "{:?}", temporaries(&out));
     let lines = store::read_joblog(&out).unwrap();
     assert!(lines.iter().all(|l| l.status != "failed"), "a full disk became failed runs: {lines:?}");
-    let st = sweeprun::status(&out).unwrap();
+    let st = run::status(&out).unwrap();
     let done = lines.iter().filter(|l| l.status == "done").count();
     assert_eq!((st.done, st.failed, st.pending), (done, 0, 3 - done), "{lines:?}");
     assert!(done >= 1, "the first run should have fitted: {lines:?}");
@@ -520,12 +519,12 @@ fn an_engine_reached_through_a_symlink_is_the_same_engine() {
     std::os::unix::fs::symlink(real, &link).unwrap();
     let exec = |engine: &Path| {
         let path = write_sweep(tmp.path(), "e", &format!("engine = {:?}", engine));
-        sweeprun::PointExecutor::new(Sweep::load(&path).unwrap()).unwrap()
+        run::PointExecutor::new(Sweep::load(&path).unwrap()).unwrap()
     };
     let (a, b) = (exec(real), exec(&link));
-    use demsweep::pool::Executor;
+    use demsweep::run::pool::Executor;
     assert_ne!(a.identity()["engine_path"], b.identity()["engine_path"]);
-    assert_eq!(sweeprun::identity_diff(&a.identity(), &b.identity()), Vec::<String>::new());
+    assert_eq!(run::identity_diff(&a.identity(), &b.identity()), Vec::<String>::new());
     let (ja, jb) = (a.prepare(&[2.5, 1.4]).unwrap(), b.prepare(&[2.5, 1.4]).unwrap());
     assert_eq!(a.hash(&ja), b.hash(&jb), "the same deck on the same engine is the same run");
 }
@@ -536,7 +535,7 @@ fn an_unreadable_result_is_named_in_status_and_run_again() {
     let s = fake_sweep(tmp.path());
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    sweeprun::start(&s, lds(3, 3), &out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
+    run::start(&s, lds(3, 3), &out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
     let (manifest, _) = store::Store::read_manifest(&out).unwrap();
     let result = out.join("runs").join(&manifest.points[1].hash).join("result.json");
     std::fs::write(&result, "{\"format\": 1, \"hash\": ").unwrap();
@@ -544,7 +543,7 @@ fn an_unreadable_result_is_named_in_status_and_run_again() {
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains(&format!("warning: {}: unreadable", result.display())), "{text}");
     let exec2 = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    let sum = sweeprun::resume(&out, &exec2, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
+    let sum = run::resume(&out, &exec2, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
     assert_eq!((sum.done, sum.ran), (3, 1));
     assert_eq!(exec2.attempts().keys().collect::<Vec<_>>(), vec![&manifest.points[1].hash]);
 }

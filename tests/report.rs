@@ -358,8 +358,8 @@ fn quick_sweep_on_liggghts_ends_with_a_report() {
 #[test]
 fn failed_runs_are_excluded_and_counted() {
     use demsweep::outcome::FailureClass;
-    use demsweep::pool::fake::{fake_mfr, Behaviour, FakeExecutor};
-    use demsweep::sweeprun::{self, RunOptions};
+    use demsweep::run::pool::fake::{fake_mfr, Behaviour, FakeExecutor};
+    use demsweep::run::{self, RunOptions};
     let tmp = tempfile::tempdir().unwrap();
     let text = r#"name = "fails"
 [parameters]
@@ -378,14 +378,14 @@ blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
     let out = tmp.path().join("out");
     let opts = RunOptions {
         jobs: 2,
-        progress: demsweep::progress::ProgressMode::Quiet,
+        progress: demsweep::run::progress::ProgressMode::Quiet,
         retry_failed: false,
         force: false,
     };
     let design = demsweep::store::DesignRecord::Lattice { levels: vec![3, 5] };
-    let mut hook = sweeprun::RunAll;
-    sweeprun::start(&sweep, design, &out, &exec, &opts, &mut hook, &Default::default()).unwrap();
-    let criteria = demsweep::convergence::Criteria::from_settings(&sweep.file.convergence);
+    let mut hook = run::RunAll;
+    run::start(&sweep, design, &out, &exec, &opts, &mut hook, &Default::default()).unwrap();
+    let criteria = demsweep::analysis::convergence::Criteria::from_settings(&sweep.file.convergence);
     let a = demsweep::report::analyse(&out, &criteria, &Default::default()).unwrap();
     // Lattice 3: 3 of 9 points at gap 2; lattice 5: 5 of 25; they share the 3 points of the
     // gap-2 edge at blade speed 1.2, 1.4, 1.6, so 3 + 5 − 3 = 5 failures among 9 + 25 − 9 = 25.
@@ -423,7 +423,7 @@ blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
         scrambling: demsweep::sweep::Scrambling::None,
         seed: 0,
     };
-    sweeprun::start(&sweep, design, &out, &exec, &opts, &mut hook, &Default::default()).unwrap();
+    run::start(&sweep, design, &out, &exec, &opts, &mut hook, &Default::default()).unwrap();
     let a = demsweep::report::analyse(&out, &criteria, &Default::default()).unwrap();
     assert_eq!((a.counts.failed, a.counts.done), (4, 0));
     assert_eq!(a.verdict.status, "not-converged");

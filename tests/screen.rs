@@ -12,17 +12,17 @@ use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::Duration;
 
-use demsweep::pool::fake::{fake_mfr, Behaviour, FakeExecutor};
-use demsweep::pool::Flow;
-use demsweep::process::CancelToken;
-use demsweep::progress::ProgressMode;
-use demsweep::screen::Verdict;
-use demsweep::stats::Bootstrap;
+use demsweep::analysis::stats::Bootstrap;
+use demsweep::run::pool::fake::{fake_mfr, Behaviour, FakeExecutor};
+use demsweep::run::pool::Flow;
+use demsweep::run::progress::ProgressMode;
+use demsweep::run::screen::Verdict;
+use demsweep::run::{self, RunOptions, SpaceHook};
 use demsweep::store::{
     self, DesignRecord, Manifest, PointRecord, PointStatus, SpaceRecord, Store, MANIFEST_FORMAT,
 };
 use demsweep::sweep::Sweep;
-use demsweep::sweeprun::{self, RunOptions, SpaceHook};
+use demsweep::sys::process::CancelToken;
 
 const MS: Duration = Duration::from_millis(1);
 
@@ -91,7 +91,7 @@ fn a_verified_screen_skips_the_closed_points_and_counts_them_as_zero() {
         }
     });
     let mut seen = Seen::default();
-    let sum = sweeprun::start(&s, lattice3(), &out, &exec, &opts(2), &mut seen, &CancelToken::new()).unwrap();
+    let sum = run::start(&s, lattice3(), &out, &exec, &opts(2), &mut seen, &CancelToken::new()).unwrap();
     assert_eq!((sum.done, sum.screened, sum.failed, sum.pending, sum.exit_code()), (7, 2, 0, 0, 0));
     assert_eq!(sum.screen.verdict, Verdict::Verified);
     assert_eq!((sum.screen.closed, sum.screen.sample, sum.screen.ran, sum.screen.skipped), (3, 1, 1, 2));
@@ -126,18 +126,18 @@ fn a_verified_screen_skips_the_closed_points_and_counts_them_as_zero() {
     assert!(seen.0[0].iter().all(Option::is_some));
 
     // The report and `sweep status` count them the same way.
-    let criteria = demsweep::convergence::Criteria::from_settings(&s.file.convergence);
+    let criteria = demsweep::analysis::convergence::Criteria::from_settings(&s.file.convergence);
     let a = demsweep::report::analyse(&out, &criteria, &Bootstrap::default()).unwrap();
     assert_eq!((a.counts.done, a.counts.screened, a.counts.pending), (7, 2, 0));
     assert_eq!((a.spaces[0].n, a.spaces[0].done), (9, 9));
     let mfr: Vec<f64> = rows.iter().map(|r| r["mfr"].parse().unwrap()).collect();
     let mean = mfr.iter().sum::<f64>() / 9.0;
     assert!((a.statistics.unwrap().mean.unwrap() - mean).abs() < 1e-12);
-    let st = sweeprun::status(&out).unwrap();
+    let st = run::status(&out).unwrap();
     assert_eq!((st.done, st.screened, st.pending, st.screen.verdict), (7, 2, 0, Verdict::Verified));
 
     // A resume decides the same and runs nothing.
-    let again = sweeprun::resume(&out, &exec, &opts(2), &mut Seen::default(), &CancelToken::new()).unwrap();
+    let again = run::resume(&out, &exec, &opts(2), &mut Seen::default(), &CancelToken::new()).unwrap();
     assert_eq!((again.ran, again.done, again.screened), (0, 7, 2));
     assert_eq!(exec.attempts(), attempts);
 }
@@ -150,7 +150,7 @@ fn a_verification_run_with_mfr_above_zero_refutes_the_screen_and_every_closed_po
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(20 * MS)).with_closed(closed);
     let mut seen = Seen::default();
-    let sum = sweeprun::start(&s, lattice3(), &out, &exec, &opts(2), &mut seen, &CancelToken::new()).unwrap();
+    let sum = run::start(&s, lattice3(), &out, &exec, &opts(2), &mut seen, &CancelToken::new()).unwrap();
     assert_eq!((sum.done, sum.screened, sum.pending), (9, 0, 0));
     assert_eq!(sum.screen.verdict, Verdict::Refuted);
     assert_eq!((sum.screen.closed, sum.screen.ran, sum.screen.skipped), (3, 3, 0));
@@ -165,7 +165,7 @@ fn a_verification_run_with_mfr_above_zero_refutes_the_screen_and_every_closed_po
     }
     assert_eq!(seen.0[0].iter().filter(|m| **m == Some(0.0)).count(), 0);
     // summary.json says so.
-    let criteria = demsweep::convergence::Criteria::from_settings(&s.file.convergence);
+    let criteria = demsweep::analysis::convergence::Criteria::from_settings(&s.file.convergence);
     let a = demsweep::report::analyse(&out, &criteria, &Bootstrap::default()).unwrap();
     let json = serde_json::to_value(&a).unwrap();
     assert_eq!(json["screen"]["verdict"], "refuted");
@@ -187,7 +187,7 @@ fn an_array_task_runs_the_verification_sample_before_it_skips_its_own_closed_poi
         }
     });
     // Lay the sweep out without running it, as `sweep lds` does before its first run.
-    let plan = sweeprun::plan(&exec, &s, &lattice3(), &CancelToken::new()).unwrap();
+    let plan = run::plan(&exec, &s, &lattice3(), &CancelToken::new()).unwrap();
     let manifest = Manifest {
         format: MANIFEST_FORMAT,
         tool: "test".into(),
@@ -196,24 +196,18 @@ fn an_array_task_runs_the_verification_sample_before_it_skips_its_own_closed_poi
         design: lattice3(),
         spaces: plan.spaces,
         points: plan.points,
-        identity: demsweep::pool::Executor::identity(&exec),
+        identity: demsweep::run::pool::Executor::identity(&exec),
     };
     std::fs::create_dir_all(&out).unwrap();
-    Store::open(&out).write_manifest(&sweeprun::resolved_toml(&s, &lattice3()).unwrap(), &manifest).unwrap();
-    let sample: BTreeSet<usize> = demsweep::screen::Screen::of(&s).sample(&manifest.points);
+    Store::open(&out).write_manifest(&run::resolved_toml(&s, &lattice3()).unwrap(), &manifest).unwrap();
+    let sample: BTreeSet<usize> = demsweep::run::screen::Screen::of(&s).sample(&manifest.points);
     let sample_point = *sample.first().unwrap();
     let share: Vec<usize> =
         manifest.points.iter().filter(|p| p.closed && p.index != sample_point).map(|p| p.index).collect();
     let order = |u: &[usize]| u.iter().copied().filter(|i| share.contains(i)).collect::<Vec<_>>();
-    let sum = sweeprun::resume_share(
-        &out,
-        &exec,
-        &opts(1),
-        Some(&order),
-        &mut Seen::default(),
-        &CancelToken::new(),
-    )
-    .unwrap();
+    let sum =
+        run::resume_share(&out, &exec, &opts(1), Some(&order), &mut Seen::default(), &CancelToken::new())
+            .unwrap();
     assert_eq!(sum.screen.verdict, Verdict::Verified);
     let ran: BTreeSet<String> = exec.attempts().into_keys().collect();
     assert_eq!(ran, BTreeSet::from([manifest.points[sample_point].hash.clone()]));

@@ -5,8 +5,8 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use demsweep::scene::settings::SceneSettings;
 use demsweep::scene::MAX_RAYLEIGH_FRACTION;
-use demsweep::sweep::SceneSettings;
 
 fn sweep_bin() -> &'static str {
     env!("CARGO_BIN_EXE_sweep")

@@ -6,7 +6,7 @@ use base64::Engine as _;
 
 use super::plots::{fmt_short, Figure};
 use super::Analysis;
-use crate::stats::STATISTICS;
+use crate::analysis::stats::STATISTICS;
 
 fn esc(s: &str) -> String {
     s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")

@@ -6,8 +6,8 @@
 //! timing, sensitivity indices, spreading quality and the best points. [`write`] turns that into
 //! files. Reading fails before anything is written, so a bad directory changes nothing.
 //!
-//! Not responsible for running anything or for the statistics themselves ([`crate::stats`],
-//! [`crate::convergence`], [`crate::sensitivity`], [`crate::quality`]).
+//! Not responsible for running anything or for the statistics themselves ([`crate::analysis::stats`],
+//! [`crate::analysis::convergence`], [`crate::analysis::sensitivity`], [`crate::point::quality`]).
 
 mod html;
 mod plots;
@@ -18,13 +18,13 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use crate::convergence::{self, Change, Criteria, Judgement, SpaceStats};
+use crate::analysis::convergence::{self, Change, Criteria, Judgement, SpaceStats};
+use crate::analysis::sensitivity;
+use crate::analysis::stats::{self, Bootstrap, Interval, Moments, STATISTICS};
 use crate::error::{Error, Result};
 use crate::outcome::RunResult;
-use crate::quality::{self, Quality};
-use crate::screen::{Screen, ScreenReport};
-use crate::sensitivity;
-use crate::stats::{self, Bootstrap, Interval, Moments, STATISTICS};
+use crate::point::quality::{self, Quality};
+use crate::run::screen::{Screen, ScreenReport};
 use crate::store::{DesignRecord, Manifest, PointStatus, Store};
 use crate::sweep::Sweep;
 
@@ -50,7 +50,7 @@ pub enum PointState {
     Failed {
         class: String,
     },
-    /// Closed by a verified screen, not run: MFR = 0 ([`crate::screen`]).
+    /// Closed by a verified screen, not run: MFR = 0 ([`crate::run::screen`]).
     Screened,
     Pending,
 }
@@ -278,7 +278,7 @@ fn judge_spaces(manifest: &Manifest, points: &[PointRow], c: &Criteria, boot: &B
         let (mfr, w) = convergence::space_values(&values, &all_mfr, c.lattice_weights);
         let st = SpaceStats::of(members.len(), &mfr, w.as_deref(), boot);
         let m = st.moments;
-        let iv = crate::weights::bootstrap(&mfr, w.as_deref(), boot);
+        let iv = crate::analysis::weights::bootstrap(&mfr, w.as_deref(), boot);
         judged.push(st);
         rows.push(SpaceRow {
             label: space.label.clone(),
@@ -481,7 +481,7 @@ pub fn rewrite_results(dir: &Path) -> Result<()> {
 pub fn write(a: &Analysis) -> Result<PathBuf> {
     let io = |p: &Path, e: std::io::Error| Error::Internal(format!("cannot write {}: {e}", p.display()));
     let csv_path = a.dir.join("convergence.csv");
-    crate::atomic::write(&csv_path, convergence_csv(a).as_bytes()).map_err(|e| io(&csv_path, e))?;
+    crate::sys::atomic::write(&csv_path, convergence_csv(a).as_bytes()).map_err(|e| io(&csv_path, e))?;
     let json_path = a.dir.join("summary.json");
     crate::outcome::write_json_atomic(&json_path, a).map_err(|e| io(&json_path, e))?;
     let out = a.dir.join("report");
@@ -490,11 +490,12 @@ pub fn write(a: &Analysis) -> Result<PathBuf> {
     for f in &figures {
         for (ext, bytes) in [("svg", f.svg.as_bytes()), ("png", f.png.as_slice())] {
             let p = out.join(format!("{}.{ext}", f.name));
-            crate::atomic::write(&p, bytes).map_err(|e| io(&p, e))?;
+            crate::sys::atomic::write(&p, bytes).map_err(|e| io(&p, e))?;
         }
     }
     let html_path = out.join("report.html");
-    crate::atomic::write(&html_path, html::render(a, &figures).as_bytes()).map_err(|e| io(&html_path, e))?;
+    crate::sys::atomic::write(&html_path, html::render(a, &figures).as_bytes())
+        .map_err(|e| io(&html_path, e))?;
     Ok(html_path)
 }
 

@@ -18,15 +18,16 @@
 
 pub mod mesh;
 pub mod params;
+pub mod passage;
 pub mod pile;
 pub mod psd;
-pub mod screen;
+pub mod settings;
 
 use std::collections::BTreeMap;
 
 use serde::Serialize;
 
-use crate::sweep::SceneSettings;
+use crate::scene::settings::SceneSettings;
 use psd::SizeDistribution;
 
 /// Standard gravity, m/s².
@@ -104,7 +105,7 @@ pub struct Scene {
     pub rolling_friction: f64,
     /// LIGGGHTS rolling-friction model (used when `rolling_friction` > 0).
     pub rolling_model: &'static str,
-    /// `"gated"` or `"thesis"` (see [`crate::sweep::SceneSettings::layout`]).
+    /// `"gated"` or `"thesis"` (see [`crate::scene::settings::SceneSettings::layout`]).
     pub layout: String,
     // Particles.
     pub size_classes: Vec<psd::SizeClass>,

@@ -1,0 +1,7 @@
+//! Operating-system plumbing that knows nothing of sweeps: atomic file writes, child processes
+//! (groups, signals, cancellation), the host's identity and disk-space diagnostics.
+
+pub mod atomic;
+pub mod disk;
+pub mod host;
+pub mod process;
