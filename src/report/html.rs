@@ -210,6 +210,22 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
             push(&mut h, "</ul>\n");
         }
         push(&mut h, &format!("<p>{}</p>\n", esc(&super::weights_sentence(s))));
+        match &s.noise {
+            Some(n) => push(
+                &mut h,
+                &format!(
+                    "<p>Noise in each point ({} points with a standard error): variance of MFR {:.3e}, of which the \
+                     per-point noise (mean se²) {:.3e} ({:.1}%); std {:.4} raw, {:.4} with the noise removed.</p>\n",
+                    n.points_with_se,
+                    n.variance,
+                    n.noise_variance,
+                    n.noise_share * 100.0,
+                    n.std_raw,
+                    n.std_without_noise
+                ),
+            ),
+            None => push(&mut h, "<p>No point records its MFR's standard error, so the spread above holds the per-point noise unseen.</p>\n"),
+        }
     }
     for f in figures.iter().filter(|f| f.name == "statistics") {
         push(&mut h, &img(f));
@@ -224,21 +240,24 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
         &mut h,
         "<h2>Which parameter matters</h2>\n<p>First-order sensitivity indices of MFR over every done point \
          (adjusted correlation ratio: the share of MFR's variance explained by one parameter alone; no extra runs).</p>\n\
-         <table><tr><th class=\"l\">parameter</th><th>S₁</th><th class=\"l\"></th><th>bins</th></tr>\n",
+         <table><tr><th class=\"l\">parameter</th><th>S₁</th><th>95% interval</th><th class=\"l\"></th><th>bins</th></tr>\n",
     );
     for s in &a.sensitivity {
         let w = s.first_order.unwrap_or(0.0) * 300.0;
         push(
             &mut h,
             &format!(
-                "<tr><td class=\"l\">{}</td><td>{}</td><td class=\"l\"><span class=\"bar\" style=\"width:{w:.0}px\"></span></td><td>{}</td></tr>\n",
+                "<tr><td class=\"l\">{}</td><td>{}</td><td>[{}, {}]</td><td class=\"l\"><span class=\"bar\" style=\"width:{w:.0}px\"></span></td><td>{}</td></tr>\n",
                 esc(&s.parameter),
                 num(s.first_order),
+                num(s.lo),
+                num(s.hi),
                 s.bins
             ),
         );
     }
     push(&mut h, "</table>\n");
+    push(&mut h, &format!("<p>{}.</p>\n", esc(&a.sensitivity_note)));
     for f in figures.iter().filter(|f| f.name == "scatter") {
         push(&mut h, &img(f));
     }

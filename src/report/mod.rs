@@ -39,6 +39,8 @@ pub struct PointRow {
     pub index: usize,
     pub values: Vec<f64>,
     pub state: PointState,
+    /// The standard error of the point's MFR, where its result.json records one (`mfr_se`).
+    pub mfr_se: Option<f64>,
 }
 
 #[derive(Debug, Clone)]
@@ -95,6 +97,9 @@ pub struct SpaceRow {
     pub changes: Option<BTreeMap<&'static str, Change>>,
     pub holds: bool,
     pub converged: bool,
+    /// The variance split into the parameters' share and the per-point noise (mean of
+    /// `mfr_se`²); `None` when no point of the space has an `mfr_se`.
+    pub noise: Option<crate::analysis::noise::NoiseSplit>,
     /// Indices (into the manifest's points) of the space's points: for plots, not the JSON.
     #[serde(skip)]
     pub members: Vec<usize>,
@@ -173,6 +178,9 @@ pub struct Analysis {
     pub spaces: Vec<SpaceRow>,
     /// First-order indices of MFR over every done point, largest first.
     pub sensitivity: Vec<sensitivity::Index>,
+    /// Whether the ranking can be trusted yet, and why (or why not) in words.
+    pub sensitivity_reliable: bool,
+    pub sensitivity_note: String,
     /// Done points per spreading-quality class.
     pub quality: BTreeMap<&'static str, usize>,
     /// Highest MFR among the ideal points.
@@ -194,6 +202,7 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
         .map(|(p, s)| PointRow {
             index: p.index,
             values: p.values.clone(),
+            mfr_se: matches!(s, PointStatus::Done(_)).then(|| mfr_se(dir, &p.hash)).flatten(),
             state: match s {
                 PointStatus::Done(r) => {
                     let quality = quality::of_result(&r);
@@ -214,7 +223,9 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
     // Screened points are real zeros of MFR, and part of how it depends on the parameters.
     let (x, y): (Vec<Vec<f64>>, Vec<f64>) =
         points.iter().filter_map(|p| p.mfr().map(|m| (p.values.clone(), m))).unzip();
-    let sensitivity = sensitivity::ranked(sensitivity::first_order(&manifest.parameters, &x, &y));
+    let sboot = Bootstrap { resamples: boot.resamples.min(500), ..*boot };
+    let sensitivity = sensitivity::ranked(sensitivity::with_intervals(&manifest.parameters, &x, &y, &sboot));
+    let (sensitivity_reliable, sensitivity_note) = sensitivity::reliability(y.len(), &sensitivity);
     let mut quality: BTreeMap<&'static str, usize> = Quality::ALL.iter().map(|q| (q.as_str(), 0)).collect();
     for (_, _, q) in &done {
         *quality.entry(q.as_str()).or_default() += 1;
@@ -257,10 +268,20 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
         timing: timing(dir),
         spaces,
         sensitivity,
+        sensitivity_reliable,
+        sensitivity_note,
         quality,
         best_ideal,
         points,
     })
+}
+
+/// The `mfr_se` a run's result.json records, if it does (results written before the per-point
+/// standard error was measured have none). Read as plain JSON so that either form reads.
+fn mfr_se(dir: &Path, hash: &str) -> Option<f64> {
+    let text = std::fs::read_to_string(dir.join("runs").join(hash).join("result.json")).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    v.get("mfr_se")?.as_f64().filter(|s| s.is_finite() && *s >= 0.0)
 }
 
 /// Statistics, intervals and judgements of the complete spaces, in order, up to the first
@@ -276,6 +297,8 @@ fn judge_spaces(manifest: &Manifest, points: &[PointRow], c: &Criteria, boot: &B
         let values: Vec<&[f64]> = members.iter().map(|p| p.values.as_slice()).collect();
         let all_mfr: Vec<Option<f64>> = members.iter().map(|p| p.mfr()).collect();
         let (mfr, w) = convergence::space_values(&values, &all_mfr, c.lattice_weights);
+        let se: Vec<Option<f64>> = members.iter().filter(|p| p.mfr().is_some()).map(|p| p.mfr_se).collect();
+        let noise = crate::analysis::noise::split(&mfr, &se, w.as_deref());
         let st = SpaceStats::of(members.len(), &mfr, w.as_deref(), boot);
         let m = st.moments;
         let iv = crate::analysis::weights::bootstrap(&mfr, w.as_deref(), boot);
@@ -289,6 +312,7 @@ fn judge_spaces(manifest: &Manifest, points: &[PointRow], c: &Criteria, boot: &B
             statistics: m,
             weights: if w.is_some() { "trapezoid" } else { "equal" },
             equal_weights: w.as_ref().map(|_| stats::moments(&mfr)),
+            noise,
             intervals: STATISTICS.iter().zip(iv).map(|(s, i)| (s.name(), i)).collect(),
             changes: None,
             holds: false,
