@@ -5,6 +5,7 @@
 //! a sweep directory.
 
 pub mod convergence;
+pub mod emulator;
 pub mod noise;
 pub mod sensitivity;
 pub mod stats;
