@@ -9,6 +9,7 @@
 //! Not responsible for running anything or for the statistics themselves ([`crate::analysis::stats`],
 //! [`crate::analysis::convergence`], [`crate::analysis::sensitivity`], [`crate::point::quality`]).
 
+pub mod emulation;
 mod html;
 mod plots;
 pub use plots::to_png;
@@ -181,6 +182,9 @@ pub struct Analysis {
     /// Whether the ranking can be trusted yet, and why (or why not) in words.
     pub sensitivity_reliable: bool,
     pub sensitivity_note: String,
+    /// The emulator fitted to the last complete space: cross-validation, statistics, verdict,
+    /// zero region, best settings; `None` with too few points or no spread in MFR.
+    pub emulator: Option<emulation::EmulatorReport>,
     /// Done points per spreading-quality class.
     pub quality: BTreeMap<&'static str, usize>,
     /// Highest MFR among the ideal points.
@@ -215,6 +219,7 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
         })
         .collect();
     let spaces = judge_spaces(&manifest, &points, criteria, boot);
+    let emulator = emulation::analyse(&sweep, &points, &spaces, criteria);
     let counts = count(&manifest, &points, spaces.len());
     let verdict = verdict(&spaces, &counts, criteria);
     let statistics = spaces.iter().find(|s| s.converged).or(spaces.last()).map(|s| s.statistics);
@@ -270,6 +275,7 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
         sensitivity,
         sensitivity_reliable,
         sensitivity_note,
+        emulator,
         quality,
         best_ideal,
         points,
