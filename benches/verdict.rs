@@ -116,7 +116,14 @@ fn replicate(f: F, seed: u64, emulate: bool) -> Replicate {
 }
 
 fn crit(rule: Rule, tol: f64, hold: usize) -> Criteria {
-    Criteria { rule, tolerance: tol, floor: 0.01, hold, min_points: 0, lattice_weights: LatticeWeights::Trapezoid }
+    Criteria {
+        rule,
+        tolerance: tol,
+        floor: 0.01,
+        hold,
+        min_points: 0,
+        lattice_weights: LatticeWeights::Trapezoid,
+    }
 }
 
 fn arg(name: &str, default: usize) -> usize {
@@ -131,22 +138,30 @@ fn main() {
         let t0 = std::time::Instant::now();
         let truth_pts = halton(4, 1 << 18, Scrambling::Random, 7);
         let truth = moments(&truth_pts.iter().map(|u| f.clean(u)).collect::<Vec<_>>());
-        let reps: Vec<Replicate> = (0..seeds).into_par_iter().map(|s| replicate(f, s, s < emu_seeds)).collect();
+        let reps: Vec<Replicate> =
+            (0..seeds).into_par_iter().map(|s| replicate(f, s, s < emu_seeds)).collect();
         println!("\n### {} (truth on 2^18 points: mean {:.5}, std {:.5}, skewness {:.4}, kurtosis {:.4}; {} design seeds, emulator on {}; {:.0} s)\n",
             f.name(), truth.mean.unwrap(), truth.std.unwrap(), truth.skewness.unwrap(), truth.kurtosis.unwrap(),
             seeds, emu_seeds.min(seeds), t0.elapsed().as_secs_f64());
         println!("Median over seeds of |statistic − truth| / scale (raw sample | emulator):\n");
-        println!("| N | mean | std | skewness | kurtosis | raw within 5 % (all four) | emulator within 5 % |");
+        println!(
+            "| N | mean | std | skewness | kurtosis | raw within 5 % (all four) | emulator within 5 % |"
+        );
         println!("| ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
         for (k, n) in NS.iter().enumerate() {
             let med = |v: &mut Vec<f64>| {
                 v.sort_by(f64::total_cmp);
-                if v.is_empty() { f64::NAN } else { v[v.len() / 2] }
+                if v.is_empty() {
+                    f64::NAN
+                } else {
+                    v[v.len() / 2]
+                }
             };
             let mut cells = Vec::new();
             for j in 0..4 {
                 let mut r: Vec<f64> = reps.iter().map(|p| errors(&p.raw[k].moments, &truth)[j]).collect();
-                let mut e: Vec<f64> = reps.iter().filter_map(|p| p.emu[k].map(|m| errors(&m, &truth)[j])).collect();
+                let mut e: Vec<f64> =
+                    reps.iter().filter_map(|p| p.emu[k].map(|m| errors(&m, &truth)[j])).collect();
                 cells.push(format!("{:.1} % \\| {:.1} %", 100.0 * med(&mut r), 100.0 * med(&mut e)));
             }
             let raw_in = reps.iter().filter(|p| !off(&p.raw[k].moments, &truth, 0.05)).count();
@@ -176,7 +191,11 @@ fn main() {
                     }
                 }
                 calls.sort_unstable();
-                let rate = if calls.is_empty() { "–".to_string() } else { format!("{:.0} %", 100.0 * wrong as f64 / calls.len() as f64) };
+                let rate = if calls.is_empty() {
+                    "–".to_string()
+                } else {
+                    format!("{:.0} %", 100.0 * wrong as f64 / calls.len() as f64)
+                };
                 let med = calls.get(calls.len() / 2).map_or("–".into(), |n| n.to_string());
                 println!("| {label} | {tol} | {}/{} | {wrong} | {rate} | {med} |", calls.len(), reps.len());
             }

@@ -8,6 +8,7 @@ use std::path::Path;
 use sha2::{Digest, Sha256};
 
 use crate::scene::{mesh, pile, Scene};
+use crate::sys::hex;
 
 /// The built-in spreading deck.
 pub const SPREADING_TEMPLATE: &str = include_str!("../../templates/spreading.liggghts.tera");
@@ -111,10 +112,6 @@ impl Deck {
         std::fs::write(dir.join(Self::MESH), &self.mesh)?;
         std::fs::write(dir.join(pile::PILE_DATA), &self.pile)
     }
-}
-
-pub fn hex(bytes: &[u8]) -> String {
-    bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
 
 #[cfg(test)]

@@ -178,3 +178,12 @@ impl StatusReport {
         s
     }
 }
+
+/// Rewrite `DIR/results.csv` from the run dirs (`sweep report`: a directory written by an older
+/// version gains the newer columns, such as `quality`).
+pub fn rewrite_results(dir: &Path) -> Result<()> {
+    let (m, toml) = Store::read_manifest(dir)?;
+    let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
+    let (status, sample, _) = Screen::of(&sweep).statuses(&Store::open(dir), &m);
+    Ok(crate::store::write_results(dir, &m.parameters, &m.points, &status, &sample)?)
+}

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
+use crate::design::halton::Scrambling;
 use crate::scene::settings::SceneSettings;
 
 /// Version of the resolved sweep format written to `DIR/sweep.toml`.
@@ -89,23 +90,6 @@ impl Default for LdsSettings {
 
 /// The default `design.lds.seed` (see [`LdsSettings::seed`]).
 pub const DEFAULT_SEED: u64 = 14;
-
-/// How the Halton digits are permuted (see [`crate::design::halton`]).
-///
-/// The default is `Random`, chosen by measured discrepancy (BENCHMARKS.md "Design
-/// discrepancy"): its seed-average centred discrepancy equals scipy's scrambled Halton's, while
-/// Braaten–Weller's is 1.3× higher in 4-D at N = 400 and plain Halton's 1.55×.
-#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "kebab-case")]
-pub enum Scrambling {
-    /// Plain Halton (radical inverse, no permutation).
-    None,
-    /// Braaten & Weller (1979) fixed permutations, one per base.
-    BraatenWeller,
-    /// Seeded random permutations per base and digit position (Owen 2017).
-    #[default]
-    Random,
-}
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]

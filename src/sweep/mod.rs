@@ -9,10 +9,11 @@ mod file;
 pub mod space;
 mod validate;
 
+pub use crate::design::halton::Scrambling;
 pub use crate::scene::settings::{SceneSettings, SizeDistributionSpec, FIDELITIES, KNOBS};
 pub use file::{
-    ConvergenceSettings, DesignSettings, LdsSettings, RunSettings, Scale, Scrambling, SweepFile,
-    DEFAULT_SEED, SWEEP_FORMAT,
+    ConvergenceSettings, DesignSettings, LdsSettings, RunSettings, Scale, SweepFile, DEFAULT_SEED,
+    SWEEP_FORMAT,
 };
 use validate::{io_reason, toml_error, validate};
 

@@ -5,3 +5,7 @@ pub mod atomic;
 pub mod disk;
 pub mod host;
 pub mod process;
+
+pub fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
