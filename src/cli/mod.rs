@@ -100,17 +100,20 @@ enum Command {
 /// rule holds; `lattice`/`lds` record the overrides in DIR/sweep.toml, so `resume` keeps them.
 #[derive(Args)]
 struct ConvergenceArgs {
-    /// "all" (default: every statistic within the tolerance or the floor, for --hold
-    /// consecutive spaces) or "any" (the thesis's rule: any one statistic within the tolerance).
+    /// "scaled" (default: every statistic moved by at most the tolerance times its own scale and
+    /// known to within it, its 95% bootstrap half-width, for --hold consecutive spaces), "any"
+    /// (the thesis's rule: any one statistic within the tolerance relatively) or "all" (every
+    /// statistic within the tolerance relatively or the floor). docs/statistics.md.
     #[arg(long)]
     rule: Option<String>,
-    /// Relative change between consecutive spaces that counts as converged (e.g. 0.05).
+    /// The fraction of a statistic's scale ("scaled") or of its previous value ("any", "all")
+    /// that counts as converged (e.g. 0.05).
     #[arg(long, allow_negative_numbers = true)]
     tolerance: Option<f64>,
     /// Absolute change that counts as converged whatever the relative one (rule "all").
     #[arg(long, allow_negative_numbers = true)]
     floor: Option<f64>,
-    /// Consecutive spaces the rule must hold for (rule "all").
+    /// Consecutive spaces the rule must hold for (rules "scaled" and "all").
     #[arg(long)]
     hold: Option<usize>,
 }

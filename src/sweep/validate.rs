@@ -169,8 +169,17 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>,
         crate::design::lds_size(n).map_err(|e| bad(key, format!("{n}: {e}")))?;
     }
     let c = &file.convergence;
-    if c.rule != "all" && c.rule != "any" {
-        return Err(bad("convergence.rule", format!("\"{}\": expected \"all\" or \"any\"", c.rule)));
+    if crate::analysis::convergence::Rule::parse(&c.rule).is_none() {
+        return Err(bad(
+            "convergence.rule",
+            format!("\"{}\": expected \"scaled\", \"any\" or \"all\"", c.rule),
+        ));
+    }
+    if crate::analysis::weights::LatticeWeights::parse(&c.lattice_weights).is_none() {
+        return Err(bad(
+            "convergence.lattice_weights",
+            format!("\"{}\": expected \"trapezoid\" or \"equal\"", c.lattice_weights),
+        ));
     }
     for (k, v) in [("convergence.tolerance", c.tolerance), ("convergence.floor", c.floor)] {
         if !v.is_finite() || v < 0.0 {
