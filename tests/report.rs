@@ -421,3 +421,46 @@ blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
     assert!(!json.contains("NaN") && !json.contains("inf"));
     assert_self_contained(&out.join("report/report.html"));
 }
+
+#[test]
+fn predict_recovers_the_stand_in_between_its_points_and_refuses_bad_input() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = standin_sweep(tmp.path(), "emu", "tolerance = 0.0");
+    let out = tmp.path().join("out");
+    let o = sweep(&["lds", p(&file), "--step", "100", "--max", "300", "-q", "--out", p(&out)]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    // The emulator's cross-validation and statistics are in summary.json.
+    let s = summary(&out);
+    let cv = &s["emulator"]["cross_validation"];
+    assert!(cv["q2"].as_f64().unwrap() > 0.9, "{cv}");
+    let raw = s["statistics"]["mean"].as_f64().unwrap();
+    let emu = s["emulator"]["statistics"]["statistics"]["mean"].as_f64().unwrap();
+    assert!((emu / raw - 1.0).abs() < 0.05, "{emu} vs {raw}");
+    // At settings that are not design points the prediction is the model's noiseless MFR within
+    // 4 predictive SE (plus 0.003 for the stand-in's own per-point noise the emulator smooths).
+    for (f, d, g, v) in [(0.2, 1.5, 4.0, 1.4), (0.15, 2.5, 3.0, 1.3), (0.25, 1.2, 2.0, 1.5)] {
+        let set = format!("friction={f},diameter={d},gap={g},blade_speed={v}");
+        let o = sweep(&["predict", p(&out), "--set", &set, "--json"]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let truth =
+            demsweep::run::standin::Point { friction: f, diameter: d, gap: g, blade_speed: v }.mean_mfr();
+        let (m, se) = (j["mfr"].as_f64().unwrap(), j["se"].as_f64().unwrap());
+        assert!((m - truth).abs() <= 4.0 * se + 0.003, "{set}: {m} ± {se} vs {truth}");
+        assert!(j["outside"].as_array().unwrap().is_empty());
+    }
+    // Outside the swept range: a warning, and a larger SE than inside.
+    let o = sweep(&["predict", p(&out), "--set", "gap=7", "--json"]);
+    assert_eq!(o.status.code(), Some(0));
+    assert!(stderr(&o).contains("gap = 7 lies outside the sampled range"), "{}", stderr(&o));
+    // Bad input: exit 2, one line naming the key.
+    for (args, want) in [
+        (vec!["predict", p(&out), "--set", "gapp=3"], "--set gapp: not a swept parameter"),
+        (vec!["predict", p(&out), "--set", "gap=x"], "--set gap=x: expected a finite number"),
+        (vec!["predict", p(&tmp.path().join("none")), "--set", "gap=3"], "not a sweep directory"),
+    ] {
+        let o = sweep(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        assert!(stderr(&o).contains(want) && stderr(&o).lines().count() == 1, "{}", stderr(&o));
+    }
+}

@@ -17,10 +17,9 @@ use serde::Serialize;
 /// Most bins per parameter for continuous samples.
 pub const MAX_BINS: usize = 64;
 
-/// Below this many points per parameter the report says the ranking is not yet reliable:
-/// measured on the stand-in's 4-D space (BENCHMARKS.md "Sensitivity intervals"), the 95 %
-/// intervals of the two leading indices still overlap, or an index's interval is wider than 0.2,
-/// below about 50 points per parameter.
+/// Below this many points per parameter the report says the ranking is not yet reliable (a
+/// stated threshold: with ⌈√N⌉ bins, 50 points per parameter leaves about 7 points per bin at
+/// N = 200 in 4-D; the overlap test in [`reliability`] catches the rest).
 pub const RELIABLE_PER_PARAMETER: usize = 50;
 
 /// The first-order index of one parameter.

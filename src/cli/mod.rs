@@ -6,6 +6,7 @@ mod bench;
 mod cluster;
 mod contact;
 mod point;
+mod predict;
 mod stats;
 mod sweep;
 
@@ -89,6 +90,13 @@ enum Command {
     /// One array task of `sweep submit`: run the task's share of a sweep directory.
     #[command(hide = true)]
     Work(cluster::WorkArgs),
+    /// MFR at a setting from the sweep's emulator (a Gaussian process fitted to its done
+    /// points), with the predictive standard error.
+    ///
+    /// The same emulator as report.html's: Matérn 5/2, each point's own noise where its result
+    /// records an mfr_se. Prints the leave-one-out error beside the prediction; warns when a
+    /// value lies outside the swept range.
+    Predict(predict::PredictArgs),
     /// Benchmarks: run time against error of the fidelity presets (`fidelity`), the scene's
     /// stability edge (`stability`), and the contact reference solver's own stability
     /// (`contact`).
@@ -150,6 +158,7 @@ pub fn run(cli: Cli) -> Result<i32, Error> {
         Command::Render(a) => point::render(a),
         Command::Run(a) => point::run_one(a),
         Command::Stats(a) => stats::stats(a),
+        Command::Predict(a) => predict::predict(a),
         Command::Contact(a) => contact::contact(a),
         Command::ContactCheck(a) => contact::contact_check(a),
         Command::Submit(a) => cluster::submit(a),

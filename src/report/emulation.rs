@@ -158,3 +158,86 @@ pub fn analyse(
         best,
     })
 }
+
+/// MFR at one setting from a sweep directory's emulator.
+#[derive(Debug, Clone, Serialize)]
+pub struct Prediction {
+    pub parameters: BTreeMap<String, f64>,
+    /// The emulator's MFR (0 where its surface dips below zero) and its predictive SE.
+    pub mfr: f64,
+    pub se: f64,
+    /// Points the emulator was fitted to, and its leave-one-out RMSE.
+    pub points: usize,
+    pub loo_rmse: f64,
+    /// Parameters outside the range the sweep sampled (the prediction extrapolates there).
+    pub outside: Vec<String>,
+}
+
+/// Parse `--set name=value,...` for a prediction: every name a swept parameter, every value a
+/// finite number (outside the swept range allowed, and named in [`Prediction::outside`]);
+/// unset parameters at the middle of their range.
+pub fn parse_setting(sweep: &Sweep, sets: &[String]) -> crate::error::Result<Vec<f64>> {
+    use crate::sweep::ParamKind;
+    let mut values: Vec<Option<f64>> = vec![None; sweep.swept.len()];
+    for item in sets.iter().filter(|s| !s.trim().is_empty()) {
+        let (name, value) = item
+            .split_once('=')
+            .ok_or_else(|| crate::Error::input(format!("--set {item}: expected name=value")))?;
+        let (name, value) = (name.trim(), value.trim());
+        let i = sweep.swept.iter().position(|p| p.name == name).ok_or_else(|| {
+            crate::Error::input(format!(
+                "--set {name}: not a swept parameter of the sweep{}; swept: {}",
+                crate::error::hint(name, sweep.names()),
+                sweep.names().join(", ")
+            ))
+        })?;
+        let v =
+            value.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
+                crate::Error::input(format!("--set {name}={value}: expected a finite number"))
+            })?;
+        values[i] = Some(v);
+    }
+    Ok(sweep
+        .swept
+        .iter()
+        .zip(values)
+        .map(|(p, v)| match (v, &p.kind) {
+            (Some(v), _) => v,
+            (None, ParamKind::Swept { lo, hi, scale }) => crate::sweep::space::scale(0.5, *lo, *hi, *scale),
+            (None, ParamKind::Fixed(v)) => *v,
+        })
+        .collect())
+}
+
+/// The emulator of the sweep in `dir` (fitted to every done or screened point, thinned to
+/// MAX_POINTS) evaluated at `values` (swept parameters in file order, their units).
+pub fn predict(dir: &std::path::Path, sets: &[String]) -> crate::error::Result<Prediction> {
+    let (_, sweep, points, _) = super::read_points(dir)?;
+    let values = parse_setting(&sweep, sets)?;
+    let rows: Vec<&PointRow> = points.iter().collect();
+    let f = fit(&sweep, &rows).ok_or_else(|| {
+        crate::Error::input(format!(
+            "{}: no emulator: it needs at least {} done points with MFR that varies",
+            dir.display(),
+            crate::analysis::emulator::MIN_POINTS
+        ))
+    })?;
+    let u = crate::sweep::space::unit_point(&sweep, &values);
+    let (m, se) = f.emulator.predict(&u);
+    let cv = f.emulator.loo(&f.y, &f.se);
+    let outside = sweep
+        .swept
+        .iter()
+        .zip(&u)
+        .filter(|(_, x)| !(0.0..=1.0).contains(*x))
+        .map(|(p, _)| p.name.clone())
+        .collect();
+    Ok(Prediction {
+        parameters: sweep.swept.iter().map(|p| p.name.clone()).zip(values).collect(),
+        mfr: m.max(0.0),
+        se,
+        points: f.x.len(),
+        loo_rmse: cv.rmse,
+        outside,
+    })
+}

@@ -193,8 +193,9 @@ pub struct Analysis {
     pub points: Vec<PointRow>,
 }
 
-/// Read a sweep directory and analyse it with `criteria`.
-pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Analysis> {
+/// A sweep directory's manifest, sweep file and points (with their states and `mfr_se`), and
+/// what the screen did.
+pub fn read_points(dir: &Path) -> Result<(Manifest, Sweep, Vec<PointRow>, ScreenReport)> {
     let (manifest, toml) = Store::read_manifest(dir)?;
     let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
     let store = Store::open(dir);
@@ -218,6 +219,12 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
             },
         })
         .collect();
+    Ok((manifest, sweep, points, screen))
+}
+
+/// Read a sweep directory and analyse it with `criteria`.
+pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Analysis> {
+    let (manifest, sweep, points, screen) = read_points(dir)?;
     let spaces = judge_spaces(&manifest, &points, criteria, boot);
     let emulator = emulation::analyse(&sweep, &points, &spaces, criteria);
     let counts = count(&manifest, &points, spaces.len());
