@@ -229,7 +229,7 @@ pub struct FeedClass {
 
 /// The `n`-th prime above 10,000 after `start` (LIGGGHTS wants prime seeds above 10,000).
 fn prime_seed(start: u64, n: usize) -> u64 {
-    let is_prime = |k: u64| k > 1 && (2..).take_while(|d| d * d <= k).all(|d| k % d != 0);
+    let is_prime = |k: u64| k > 1 && (2..).take_while(|d| d * d <= k).all(|d| !k.is_multiple_of(d));
     (10_007 + start % 1_000_000..).filter(|&k| is_prime(k)).nth(n).expect("primes are infinite")
 }
 
@@ -512,7 +512,9 @@ impl Scene {
             delete_x1: blade_x0 - 10.0 * d,
             block_steps,
             insert_every: (block_steps / 5).max(1),
-            warmup_blocks: blocks(settings.warmup_diameters),
+            // Never more than the cap leaves room for: the cap wins, and the point says so.
+            warmup_blocks: blocks((settings.warmup_s * v).max(10.0 * d) / d)
+                .min(max_blocks.saturating_sub(settings.min_window_blocks as u64)),
             min_window_blocks: settings.min_window_blocks as u64,
             max_blocks,
             ideal_block_mass: s.density * s.depth * gap * v * dt * block_steps as f64,

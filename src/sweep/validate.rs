@@ -201,7 +201,7 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>,
             }
         }
         for (k, v) in [
-            ("scene.warmup_diameters", s.warmup_diameters),
+            ("scene.warmup_s", s.warmup_s),
             ("scene.mfr_rel_se", s.mfr_rel_se),
             ("scene.mfr_abs_se", s.mfr_abs_se),
         ] {
@@ -215,13 +215,13 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>,
                 format!("{}: expected at least 3", s.min_window_blocks),
             ));
         }
-        if s.warmup_diameters + s.min_window_blocks as f64 * s.block_diameters > s.window_cap_diameters {
+        if (s.min_window_blocks as f64 + 1.0) * s.block_diameters > s.window_cap_diameters {
             return Err(bad(
                 "scene.window_cap_diameters",
                 format!(
-                    "{}: expected at least warmup_diameters + min_window_blocks × block_diameters = {}",
+                    "{}: expected more than min_window_blocks × block_diameters = {}",
                     s.window_cap_diameters,
-                    s.warmup_diameters + s.min_window_blocks as f64 * s.block_diameters
+                    s.min_window_blocks as f64 * s.block_diameters
                 ),
             ));
         }
