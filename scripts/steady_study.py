@@ -23,7 +23,7 @@ def rows(d):
         p = r["parameters"]
         yield dict(status=status, D=p["diameter"], gap=p["gap"], v=p["blade_speed"], mu=p["friction"],
                    mfr=r["mfr"], se=r.get("mfr_se"), transient=s.get("transient_blocks"), window=s.get("window_blocks"),
-                   trend_z=s.get("trend_z"), drift=((w[-1] - w[0]) / r["mfr"]) if len(w) >= 2 and r["mfr"] > 0 else None,
+                   trend_z=s.get("trend_z"), drift=s.get("drift") if r["mfr"] > 0 else None,
                    heap_start=s.get("heap_start"), heap_end=s.get("heap_end"), heap_target=s.get("heap_target"),
                    stop=s.get("stop"), cpu=r.get("cpu_time"), steps=r["steps"])
 
@@ -36,8 +36,10 @@ def main():
             w = csv.DictWriter(fh, fieldnames=list(rs[0].keys()))
             w.writeheader()
             w.writerows(rs)
-    flowing = [r for r in rs if r["mfr"] > 0 and r["drift"] is not None]
-    print(f"points {len(rs)}: done {sum(r['status']=='done' for r in rs)}, flowing {len(flowing)}")
+    flowing_all = [r for r in rs if r["mfr"] > 0 and r["drift"] is not None]
+    # A point depositing a handful of particles (MFR < 0.01) has a drift of pure counting noise.
+    flowing = [r for r in flowing_all if r["mfr"] >= 0.01]
+    print(f"points {len(rs)}: done {sum(r['status']=='done' for r in rs)}, MFR > 0: {len(flowing_all)}, MFR >= 0.01: {len(flowing)}")
     if flowing:
         drifts = [r["drift"] for r in flowing]
         m = statistics.mean(drifts)

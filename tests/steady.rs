@@ -3,14 +3,11 @@
 //!
 //! Small scenes at D = 2 mm: each run is a few CPU seconds.
 
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use serde_json::Value;
-
-fn sweep_bin() -> &'static str {
-    env!("CARGO_BIN_EXE_sweep")
-}
 
 /// A conveyor sweep over gap and blade speed at D = 2 mm, μ = 0.2, with `extra` in `[scene]`.
 fn space(dir: &Path, extra: &str) -> PathBuf {
@@ -35,8 +32,7 @@ layout = "conveyor"
 }
 
 fn run_point(sweep: &Path, set: &str) -> (i32, Value, String) {
-    let out =
-        Command::new(sweep_bin()).args(["run"]).arg(sweep).args(["--set", set, "--json"]).output().unwrap();
+    let out = common::sweep_bin().args(["run"]).arg(sweep).args(["--set", set, "--json"]).output().unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
     let json = serde_json::from_slice(&out.stdout).unwrap_or(Value::Null);
     (out.status.code().unwrap_or(-1), json, stderr)
@@ -68,6 +64,7 @@ fn assert_steady(r: &Value, what: &str) {
 
 #[test]
 fn a_thesis_speed_point_becomes_steady_holds_its_heap_and_meets_its_target() {
+    common::require_liggghts!("a_thesis_speed_point_becomes_steady_holds_its_heap_and_meets_its_target");
     let dir = tempfile::tempdir().unwrap();
     let (code, r, err) = run_point(&space(dir.path(), ""), "gap=5,blade_speed=1.4");
     assert_eq!(code, 0, "{err}");
@@ -88,6 +85,7 @@ fn a_thesis_speed_point_becomes_steady_holds_its_heap_and_meets_its_target() {
 
 #[test]
 fn a_machine_speed_point_is_steady_and_deposits_a_dense_layer() {
+    common::require_liggghts!("a_machine_speed_point_is_steady_and_deposits_a_dense_layer");
     // 0.4 m/s (recoaters run 0.05–0.2): the held heap does not run out, and the layer is far
     // denser than at the thesis's speed.
     let dir = tempfile::tempdir().unwrap();
@@ -103,6 +101,7 @@ fn a_machine_speed_point_is_steady_and_deposits_a_dense_layer() {
 
 #[test]
 fn nothing_passes_where_no_sphere_fits_and_mfr_rises_with_the_gap() {
+    common::require_liggghts!("nothing_passes_where_no_sphere_fits_and_mfr_rises_with_the_gap");
     let dir = tempfile::tempdir().unwrap();
     let sweep = space(dir.path(), "");
     // gap 0.5 D: no 2 mm sphere passes under a 1 mm tip.
@@ -128,7 +127,7 @@ fn nothing_passes_where_no_sphere_fits_and_mfr_rises_with_the_gap() {
 fn a_cap_shorter_than_the_least_window_is_bad_input() {
     let dir = tempfile::tempdir().unwrap();
     let sweep = space(dir.path(), "window_cap_diameters = 20.0");
-    let out = Command::new(sweep_bin())
+    let out = common::sweep_bin()
         .args(["render"])
         .arg(&sweep)
         .args(["--out"])
