@@ -317,8 +317,10 @@ mod tests {
         assert_eq!(b, 1);
         let s = (32.0 * 0.25 / 31.0f64).sqrt();
         assert!((se - s / 32f64.sqrt()).abs() < 1e-12, "{se}");
-        // Runs of four equal values are strongly correlated: batches grow to four.
-        let y: Vec<f64> = (0..64).map(|i| ((i / 4) % 2) as f64).collect();
+        // Runs of eight equal values are strongly correlated (lag-1 ACF of the blocks ≈ 0.75):
+        // batches grow until their means' lag-1 ACF is small (at four blocks a batch, runs of
+        // two: ACF ≈ 0). Runs of four would stop at two (period-4 means have lag-1 ACF ≈ 0).
+        let y: Vec<f64> = (0..128).map(|i| ((i / 8) % 2) as f64).collect();
         let (_, b, r) = batch_means_se(&y);
         assert!(b >= 4 && r <= MAX_BATCH_ACF, "b={b} r={r}");
     }
