@@ -73,6 +73,9 @@ pub enum FailureClass {
     Unparsable,
     /// The dose was still moving when the settle's time cap ran out.
     NotSettled,
+    /// The engine's output or the result holds a number that is not physically possible (a
+    /// negative mass, a non-finite velocity, an MFR above the densest packing).
+    Implausible,
     /// The flow through the gap was not steady over the window (its halves disagree beyond
     /// counting noise): the MFR is not a property of the point.
     Unsteady,
@@ -94,6 +97,7 @@ impl FailureClass {
             FailureClass::Unstable => "unstable",
             FailureClass::Unparsable => "unparsable",
             FailureClass::NotSettled => "not-settled",
+            FailureClass::Implausible => "implausible",
             FailureClass::Unsteady => "unsteady",
         }
     }

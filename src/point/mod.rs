@@ -5,6 +5,7 @@
 
 pub mod deck;
 pub mod metrics;
+pub mod plausible;
 pub mod quality;
 
 use std::collections::BTreeMap;
@@ -195,6 +196,11 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
         Ok(f) => f,
         Err(e) => return fail(FailureClass::Unparsable, e.to_string(), String::new(), wall),
     };
+    // What the engine wrote must be possible before the metrics read it.
+    let blade_speed = p.parameters.get("blade_speed").copied().unwrap_or(f64::NAN);
+    if let Some(e) = frames.iter().find_map(|f| plausible::check_frame(f, blade_speed).err()) {
+        return fail(FailureClass::Implausible, format!("{DUMP}: {e}"), String::new(), wall);
+    }
     let m = match metrics::compute(&p.scene, &frames) {
         Ok(m) => m,
         Err(e) => return fail(FailureClass::Unparsable, e.to_string(), String::new(), wall),
@@ -228,6 +234,9 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
             result.mfr_windows.iter().map(|v| (v * 1e3).round() / 1e3).collect::<Vec<_>>()
         );
         return fail_measured(FailureClass::Unsteady, reason, String::new(), wall, Some(Box::new(result)));
+    }
+    if let Err(e) = plausible::check_result(&result) {
+        return fail(FailureClass::Implausible, e, String::new(), wall);
     }
     if let Err(e) = write_json_atomic(&run_dir.join(RESULT), &result) {
         return fail(FailureClass::Unparsable, format!("cannot write {RESULT}: {e}"), String::new(), wall);

@@ -646,6 +646,10 @@ pub fn resume_share<E: Executor>(
         .map(|p| if cancel.is_cancelled() { Err(Error::Interrupted) } else { exec.prepare(&p.values) })
         .collect::<Result<_>>()?;
     let changed = manifest.points.iter().zip(&jobs).filter(|(p, j)| exec.hash(j) != p.hash).count();
+    if changed > 0 {
+        refuse_swapped(dir, &manifest, &jobs.iter().map(|j| exec.hash(j)).collect::<Vec<_>>())?;
+    }
+    Store::open(dir).check_pairing(&manifest)?;
     let identity = exec.identity();
     let diff = identity_diff(&manifest.identity, &identity);
     if !opts.force && (!diff.is_empty() || changed > 0) {
@@ -680,6 +684,30 @@ pub fn resume_share<E: Executor>(
     execute(&store, &manifest, exec, jobs, &sweep, opts, order, hook, cancel)
 }
 
+/// Refuse a manifest whose hashes are those its points render to, but paired with the wrong
+/// points: an edit (two hashes swapped), not a changed engine or template, which `--force`
+/// must not paper over.
+fn refuse_swapped(dir: &Path, manifest: &Manifest, rendered: &[&str]) -> Result<()> {
+    let mut theirs: Vec<&str> = manifest.points.iter().map(|p| p.hash.as_str()).collect();
+    let mut ours = rendered.to_vec();
+    theirs.sort_unstable();
+    ours.sort_unstable();
+    if theirs != ours {
+        return Ok(());
+    }
+    let wrong: Vec<usize> =
+        manifest.points.iter().zip(rendered).filter(|(p, h)| p.hash != **h).map(|(p, _)| p.index).collect();
+    let pair = match wrong.as_slice() {
+        [i, j] => format!("points {i} and {j}"),
+        w => format!("{} points (first {:?})", w.len(), &w[..w.len().min(4)]),
+    };
+    Err(Error::input(format!(
+        "{}: the hashes of {pair} are swapped: each point names the run another point renders to; \
+         the manifest was edited or is damaged (swap them back, or start the sweep in a new directory)",
+        Store::manifest_path(dir).display()
+    )))
+}
+
 /// Run the unfinished points of a manifest.
 ///
 /// The screen ([`crate::run::screen`]): the unfinished points of its verification sample go first in
@@ -707,9 +735,9 @@ fn execute<E: Executor>(
     let mut queued: BTreeMap<usize, E::Job> = BTreeMap::new();
     let mut held: BTreeMap<usize, E::Job> = BTreeMap::new();
     for (p, job) in manifest.points.iter().zip(jobs) {
-        let state = store.state(&p.hash);
+        let state = store.point_state(manifest, p);
         if let RunState::Damaged { file, reason } = &state {
-            eprintln!("warning: {}: unreadable ({reason}); point {} runs again", file.display(), p.index);
+            eprintln!("warning: {}: {reason}; point {} runs again", file.display(), p.index);
         }
         let s = match state {
             RunState::Done(r) => PointStatus::Done(r),
@@ -1094,7 +1122,7 @@ pub fn status(dir: &Path) -> Result<StatusReport> {
     }
     let cut_off = |h: &str| last.get(h).is_some_and(|s| s == "cancelled" || s == "interrupted");
     for p in &manifest.points {
-        match store.state(&p.hash) {
+        match store.point_state(&manifest, p) {
             RunState::Done(_) => r.done += 1,
             RunState::Failed(f) => {
                 r.failed += 1;
@@ -1115,7 +1143,7 @@ pub fn status(dir: &Path) -> Result<StatusReport> {
             }
             RunState::Damaged { file, reason } => {
                 r.pending += 1;
-                r.damaged.push(format!("{}: unreadable ({reason})", file.display()));
+                r.damaged.push(format!("{}: {reason}", file.display()));
             }
             RunState::Incomplete | RunState::Pending
                 if matches!(statuses[p.index], PointStatus::Screened) =>

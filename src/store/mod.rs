@@ -39,6 +39,8 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use serde::{Deserialize, Serialize};
 
+mod belongs;
+
 use crate::outcome::{RunFailure, RunResult, VX_LAYERS};
 
 /// Version of `manifest.json`.
@@ -661,14 +663,22 @@ fn is_header(line: &str) -> bool {
 fn finished_state(dir: &Path) -> Option<RunState> {
     fn read<T: serde::de::DeserializeOwned>(path: &Path) -> Option<Result<T, String>> {
         match fs::read(path) {
-            Ok(bytes) => Some(serde_json::from_slice(&bytes).map_err(|e| e.to_string())),
+            Ok(bytes) => Some(serde_json::from_slice(&bytes).map_err(|e| format!("unreadable ({e})"))),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
-            Err(e) => Some(Err(e.to_string())),
+            Err(e) => Some(Err(format!("unreadable ({e})"))),
         }
     }
     let mut damaged = None;
     let result = dir.join("result.json");
-    match read::<RunResult>(&result) {
+    // A result counts only if it is this directory's run and every number in it is possible.
+    let own = |r: &RunResult| -> Result<(), String> {
+        let name = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        if r.hash != name {
+            return Err(format!("holds the result of another run ({}), not of {name}", short(&r.hash)));
+        }
+        crate::point::plausible::check_result(r)
+    };
+    match read::<RunResult>(&result).map(|r| r.and_then(|r| own(&r).map(|()| r))) {
         Some(Ok(r)) => return Some(RunState::Done(Box::new(r))),
         Some(Err(reason)) => damaged = Some(RunState::Damaged { file: result, reason }),
         None => {}
@@ -690,6 +700,11 @@ pub fn foreign_entry(dir: &Path) -> Option<String> {
         !matches!(n.as_str(), LOCK | JOBLOG | "runs" | "sweep.toml" | "results.csv")
             && crate::sys::atomic::temporary_owner(n).is_none()
     })
+}
+
+/// The first 12 characters of a hash, as status and warnings show it.
+pub fn short(hash: &str) -> &str {
+    &hash[..12.min(hash.len())]
 }
 
 fn read_claim(path: &Path) -> Option<ClaimInfo> {
