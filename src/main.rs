@@ -58,6 +58,10 @@ enum Command {
     Resume(ResumeArgs),
     /// Counts of a sweep directory: done, failed, running, screened, pending; the screen's verdict.
     Status(DirArgs),
+    /// Release the claims of a sweep directory that no live process on this machine holds:
+    /// another host's (a lost node, a clock far ahead, an old claim without a lease) or a dead
+    /// process's. Use it once their holders are known to be gone; `status` names them.
+    Unclaim(UnclaimArgs),
     /// Write convergence.csv, summary.json and report/ (plots, report.html) of a sweep directory.
     ///
     /// Also rewrites results.csv from the run directories. One row per complete space in convergence.csv (statistics of the done runs' MFR with 95%
@@ -406,6 +410,12 @@ struct WorkArgs {
 }
 
 #[derive(Args)]
+struct UnclaimArgs {
+    /// A sweep directory (holding manifest.json).
+    dir: PathBuf,
+}
+
+#[derive(Args)]
 struct DirArgs {
     dir: PathBuf,
     #[arg(long)]
@@ -640,6 +650,7 @@ fn run(cli: Cli) -> Result<i32, Error> {
         Command::Lds(a) => lds(a),
         Command::Resume(a) => resume(a),
         Command::Status(a) => status(a),
+        Command::Unclaim(a) => unclaim(a),
         Command::Report(a) => report(a),
         Command::Render(a) => render(a),
         Command::Run(a) => run_one(a),
@@ -692,12 +703,12 @@ fn bench_fidelity(a: FidelityArgs) -> Result<i32, Error> {
     let points: Vec<Vec<f64>> = unit.iter().map(|p| demsweep::sweep::space::scale_point(&sweep, p)).collect();
     let out = a.out.unwrap_or_else(|| PathBuf::from("runs").join(format!("{}-fidelity", sweep.file.name)));
     driver::check_out_dir(&out)?;
+    demsweep::sys::process::install_interrupt_handler();
     let mut contexts = Vec::new();
     for v in &variants {
         contexts.push(PointContext::new(v.sweep.clone())?);
     }
     let plan = fidelity::Plan { points, seeds: a.seeds, jobs, out };
-    demsweep::sys::process::install_interrupt_handler();
     let cancel = CancelToken::new();
     let started = std::time::Instant::now();
     let show = |r: &fidelity::Run, n: usize, total: usize| {
@@ -789,12 +800,12 @@ fn bench_stability(a: StabilityArgs) -> Result<i32, Error> {
     if std::fs::read_dir(&out).map(|mut d| d.next().is_some()).unwrap_or(false) {
         return bad(format!("{}: not empty; choose another --out", out.display()));
     }
+    demsweep::sys::process::install_interrupt_handler();
     let ctx = PointContext::new(sweep)?;
     // Every level's scene must build (the bound aside) before anything is written.
     let plan = stability::Plan { corner, fractions: a.fractions, moduli, seeds: a.seeds, jobs, out };
     stability::check(&ctx, &plan)?;
     let heading = stability::describe_corner(&ctx.sweep, &plan.corner);
-    demsweep::sys::process::install_interrupt_handler();
     std::fs::create_dir_all(&plan.out)
         .map_err(|e| Error::Internal(format!("cannot create {}: {e}", plan.out.display())))?;
     println!("harshest corner: {heading}; {} seeds per level", plan.seeds);
@@ -1094,6 +1105,10 @@ fn submit(a: SubmitArgs) -> Result<i32, Error> {
         }
     };
     let (array, report) = cluster::write(&a.dir, &rendered)?;
+    if opts.only.failed {
+        // The tasks retry each failure once between them, however far apart they start.
+        demsweep::store::retry::begin_submission_round(&a.dir)?;
+    }
     let what = format!(
         "{} points as array tasks {} ({} per task)",
         rendered.points,
@@ -1142,6 +1157,9 @@ fn work(a: WorkArgs) -> Result<i32, Error> {
     }
     let pool = PoolArgs { jobs: Some(cores / a.ranks as usize), quiet: a.quiet };
     let opts = run_options(&pool, a.retry_failed, false)?;
+    if a.retry_failed {
+        demsweep::store::retry::join_submission_round(&a.dir);
+    }
     demsweep::sys::process::install_interrupt_handler();
     let w = demsweep::run::cluster::WorkOptions {
         task: a.task,
@@ -1166,6 +1184,22 @@ fn status(a: DirArgs) -> Result<i32, Error> {
     } else {
         print!("{}", report.to_text());
     }
+    Ok(exit::SUCCESS)
+}
+
+fn unclaim(a: UnclaimArgs) -> Result<i32, Error> {
+    let (manifest, _) = demsweep::store::Store::read_manifest(&a.dir)?;
+    let store = demsweep::store::Store::open(&a.dir);
+    let hashes: Vec<String> = manifest.points.iter().map(|p| p.hash.clone()).collect();
+    let (released, kept) = store.unclaim(&hashes)?;
+    for (hash, c) in &released {
+        eprintln!("released {} ({})", demsweep::store::short(hash), demsweep::store::holders::describe(c));
+    }
+    eprintln!(
+        "released {} claims; kept {kept} held by live processes here; `sweep resume {}` runs the released points",
+        released.len(),
+        a.dir.display()
+    );
     Ok(exit::SUCCESS)
 }
 

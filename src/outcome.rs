@@ -82,9 +82,10 @@ pub enum FailureClass {
 }
 
 impl FailureClass {
-    /// Transient failures may succeed on a retry; physics failures never will.
+    /// Transient failures may succeed on a retry; physics failures never will, nor a timeout:
+    /// the same deck runs as many steps again (`--retry-failed` or a longer `timeout_s` does).
     pub fn is_transient(self) -> bool {
-        matches!(self, FailureClass::CouldNotStart | FailureClass::Signalled | FailureClass::TimedOut)
+        matches!(self, FailureClass::CouldNotStart | FailureClass::Signalled)
     }
 
     pub fn as_str(self) -> &'static str {

@@ -39,8 +39,12 @@ impl PointContext {
         // The template first: a bad one is bad input, found before the engine is run.
         let template =
             Template::load(sweep.template_path().as_deref()).map_err(|e| Error::input(e.to_string()))?;
+        // Under the process's interrupt flag (Ctrl-C, SIGTERM), like every run.
         let engine =
-            Engine::locate(sweep.file.run.engine.as_deref()).map_err(|e| Error::Engine(e.to_string()))?;
+            Engine::locate(sweep.file.run.engine.as_deref(), &CancelToken::new()).map_err(|e| match e {
+                crate::engine::EngineError::Interrupted => Error::Interrupted,
+                e => Error::Engine(e.to_string()),
+            })?;
         let timeout = Duration::from_secs_f64(sweep.file.run.timeout_s);
         Ok(PointContext { sweep, engine, template, timeout })
     }
@@ -163,6 +167,7 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
             wall_time: wall,
             measured,
         };
+        crate::engine::remove_forced_restarts(run_dir);
         let _ = write_json_atomic(&run_dir.join(FAILURE), &f);
         RunOutcome::Failed(f)
     };

@@ -25,7 +25,7 @@ pub mod standin;
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
-use std::time::{Instant, SystemTime};
+use std::time::Instant;
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -174,7 +174,8 @@ impl Summary {
     pub fn exit_code(&self) -> i32 {
         use crate::error::exit;
         if self.interrupted {
-            exit::INTERRUPTED
+            // Death by signal n is 128 + n; a cancel without a signal reads as Ctrl-C.
+            crate::sys::process::interrupt_signal().map_or(exit::INTERRUPTED, |s| 128 + s)
         } else if self.failed > 0 {
             exit::RUNS_FAILED
         } else {
@@ -726,18 +727,24 @@ fn execute<E: Executor>(
     hook: &mut dyn SpaceHook,
     cancel: &CancelToken,
 ) -> Result<Summary> {
-    let session_start = SystemTime::now();
     // Leftovers of atomic writes cut off by a kill or a full disk.
     store.remove_stale_temporaries()?;
     let screen = Screen::of(sweep);
     let sample = screen.sample(&manifest.points);
     let mut status = Vec::with_capacity(manifest.points.len());
+    let mut recovered: Vec<(String, store::ClaimInfo)> = Vec::new();
     let mut queued: BTreeMap<usize, E::Job> = BTreeMap::new();
     let mut held: BTreeMap<usize, E::Job> = BTreeMap::new();
     for (p, job) in manifest.points.iter().zip(jobs) {
         let state = store.point_state(manifest, p);
         if let RunState::Damaged { file, reason } = &state {
             eprintln!("warning: {}: {reason}; point {} runs again", file.display(), p.index);
+        }
+        if matches!(state, RunState::Done(_) | RunState::Failed(_)) {
+            // Killed between its outcome and its joblog line: the claim is still there.
+            if let Some(c) = store.remove_dead_claim_of_finished(&p.hash)? {
+                recovered.push((p.hash.clone(), c));
+            }
         }
         let s = match state {
             RunState::Done(r) => PointStatus::Done(r),
@@ -762,6 +769,9 @@ fn execute<E: Executor>(
     let awaiting: BTreeSet<usize> = queued.keys().copied().filter(|&i| manifest.points[i].closed).collect();
     let mut rep =
         Reporter::new(store, manifest, status, opts.progress, hook, screen, sample.clone(), awaiting)?;
+    if !recovered.is_empty() {
+        rep.log_recovered(store, &recovered)?;
+    }
     if rep.verdict == Verdict::Refuted {
         queued.append(&mut held);
     }
@@ -781,7 +791,7 @@ fn execute<E: Executor>(
     let popts = PoolOptions {
         slots: opts.jobs.max(1),
         retries: sweep.file.run.retries,
-        retry_failed_before: opts.retry_failed.then_some(session_start),
+        retry_failed_before: if opts.retry_failed { Some(store.retry_round()?) } else { None },
     };
     pool::run(exec, store, queue, &popts, cancel, |e| rep.event(e));
     // Refuted while the pool ran: the held-back closed points run now, for real.
@@ -821,6 +831,32 @@ struct Reporter<'a> {
 }
 
 impl<'a> Reporter<'a> {
+    /// Write the joblog line of each finished run whose process was killed before writing it
+    /// (its dead claim was still in the run directory), unless a line is there.
+    fn log_recovered(&mut self, store: &Store, recovered: &[(String, store::ClaimInfo)]) -> Result<()> {
+        let logged: BTreeSet<String> = store::read_joblog(store.dir())?
+            .into_iter()
+            .filter(|l| l.status == "done" || l.status == "failed")
+            .map(|l| l.hash)
+            .collect();
+        for (hash, claim) in recovered.iter().filter(|(h, _)| !logged.contains(h)) {
+            let (status, class, runtime_s) = match store.finished(hash) {
+                Some(RunState::Done(r)) => ("done", None, r.wall_time),
+                Some(RunState::Failed(f)) => ("failed", Some(f.class.as_str()), f.wall_time),
+                _ => continue,
+            };
+            let start = std::time::UNIX_EPOCH + std::time::Duration::from_secs_f64(claim.claimed_at.max(0.0));
+            self.joblog.append(&store::AttemptRecord {
+                hash: hash.clone(),
+                start,
+                runtime_s,
+                status,
+                class,
+            })?;
+        }
+        Ok(())
+    }
+
     #[expect(clippy::too_many_arguments, reason = "the reporter's whole starting state, one call site")]
     fn new(
         store: &'a Store,
@@ -1068,6 +1104,8 @@ pub struct StatusReport {
     pub interrupted: usize,
     /// Result files that cannot be read (their runs count as pending and run again).
     pub damaged: Vec<String>,
+    /// Who holds each running claim: point, hash, holder, age and lease (the first few).
+    pub holders: Vec<String>,
     /// Failures by class: count and the first few (by point index) with their reasons.
     pub failures: BTreeMap<String, FailureGroup>,
     /// Convergence verdict of the last report (summary.json); `None` before the first.
@@ -1109,6 +1147,7 @@ pub fn status(dir: &Path) -> Result<StatusReport> {
         pending: 0,
         interrupted: 0,
         damaged: Vec::new(),
+        holders: Vec::new(),
         failures: BTreeMap::new(),
         converged: read_verdict(dir),
         screen,
@@ -1136,7 +1175,13 @@ pub fn status(dir: &Path) -> Result<StatusReport> {
                     });
                 }
             }
-            RunState::Running(_) => r.running += 1,
+            RunState::Running(c) => {
+                r.running += 1;
+                if r.holders.len() < FIRST_FAILURES {
+                    let h = store::short(&p.hash);
+                    r.holders.push(format!("point {} ({h}): {}", p.index, store::holders::describe(&c)));
+                }
+            }
             RunState::Interrupted(_) => {
                 r.pending += 1;
                 r.interrupted += 1;
@@ -1191,6 +1236,18 @@ impl StatusReport {
                 &format!("  ({} interrupted: killed or cancelled part-way)", self.interrupted),
             );
         }
+        for h in &self.holders {
+            s.push_str(&format!("    {h}\n"));
+        }
+        if self.running > self.holders.len() {
+            s.push_str(&format!("    and {} more\n", self.running - self.holders.len()));
+        }
+        if self.running > 0 {
+            s.push_str(&format!(
+                "    a claim whose holder is gone for good (a lost node, a clock far ahead): `sweep unclaim {}` releases it\n",
+                self.dir.display()
+            ));
+        }
         for d in &self.damaged {
             s.push_str(&format!("  warning: {d}\n"));
         }
@@ -1203,6 +1260,9 @@ impl StatusReport {
                     &n.hash[..12.min(n.hash.len())],
                     n.reason
                 ));
+            }
+            if g.count > g.first.len() {
+                s.push_str(&format!("    and {} more\n", g.count - g.first.len()));
             }
         }
         if let Some(line) = self.screen.sentence() {

@@ -40,6 +40,8 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 use serde::{Deserialize, Serialize};
 
 mod belongs;
+pub mod holders;
+pub mod retry;
 
 use crate::outcome::{RunFailure, RunResult, VX_LAYERS};
 
