@@ -1,4 +1,4 @@
-//! Convergence of the MFR statistics across nested spaces (DESIGN §6, thesis §3.3).
+//! Convergence of the MFR statistics across nested spaces (thesis §3.3; README "Convergence and the report").
 //!
 //! A sweep's spaces (lattice levels, LDS prefixes) each have [`Moments`]; this module compares
 //! each space with the one before and says whether, and where, the sweep converged:
@@ -21,9 +21,6 @@
 use serde::Serialize;
 
 use crate::analysis::stats::{Moments, STATISTICS};
-use crate::run::pool::Flow;
-use crate::run::SpaceHook;
-use crate::store::{PointRecord, PointStatus, SpaceRecord};
 use crate::sweep::ConvergenceSettings;
 
 /// Which statistics must be within tolerance.
@@ -205,46 +202,6 @@ impl Overrides {
             c.hold = h;
         }
         Ok(())
-    }
-}
-
-/// The rule applied to a running sweep: the driver's [`SpaceHook`]. After each space completes
-/// it judges the spaces so far on their done runs' MFR (screened points as 0, failed runs left
-/// out) and stops the sweep ([`Flow::Drain`]: no new runs start) at the first converged space.
-pub struct Watch {
-    criteria: Criteria,
-    spaces: Vec<(usize, Moments)>,
-    labels: Vec<String>,
-    /// The space (label, point count) the sweep converged at, once it has.
-    pub converged_at: Option<(String, usize)>,
-}
-
-impl Watch {
-    pub fn new(criteria: Criteria) -> Watch {
-        Watch { criteria, spaces: Vec::new(), labels: Vec::new(), converged_at: None }
-    }
-}
-
-impl SpaceHook for Watch {
-    fn space_complete(&mut self, space: &SpaceRecord, points: &[(&PointRecord, &PointStatus)]) -> Flow {
-        let mfr: Vec<f64> = points
-            .iter()
-            .filter_map(|(_, s)| match s {
-                PointStatus::Done(r) if r.mfr.is_finite() => Some(r.mfr),
-                // A closed gap passes nothing: a real zero, not a missing value.
-                PointStatus::Screened => Some(0.0),
-                _ => None,
-            })
-            .collect();
-        self.spaces.push((points.len(), crate::analysis::stats::moments(&mfr)));
-        self.labels.push(space.label.clone());
-        match judge(&self.spaces, &self.criteria).last() {
-            Some(j) if j.converged => {
-                self.converged_at = Some((space.label.clone(), points.len()));
-                Flow::Drain
-            }
-            _ => Flow::Continue,
-        }
     }
 }
 

@@ -8,6 +8,7 @@ use std::path::Path;
 use sha2::{Digest, Sha256};
 
 use crate::scene::{mesh, pile, Scene};
+use crate::sys::hex;
 
 /// The built-in spreading deck.
 pub const SPREADING_TEMPLATE: &str = include_str!("../../templates/spreading.liggghts.tera");
@@ -113,14 +114,10 @@ impl Deck {
     }
 }
 
-pub fn hex(bytes: &[u8]) -> String {
-    bytes.iter().map(|b| format!("{b:02x}")).collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sweep::{SceneSettings, SizeDistributionSpec};
+    use crate::scene::settings::{SceneSettings, SizeDistributionSpec};
     use std::collections::BTreeMap;
 
     fn scene(settings: &SceneSettings, pairs: &[(&str, f64)]) -> Scene {

@@ -1,5 +1,5 @@
 //! The report of a sweep directory: `convergence.csv`, `summary.json` and `report/` (plots as
-//! SVG and PNG, and a self-contained `report.html`), DESIGN §4 and §6.
+//! SVG and PNG, and a self-contained `report.html`); README "Convergence and the report".
 //!
 //! [`analyse`] reads the directory (manifest, run dirs, joblog) and computes everything: the
 //! statistics of each complete space with bootstrap intervals, the convergence verdict, counts,
@@ -112,7 +112,7 @@ pub struct Verdict {
 }
 
 #[derive(Debug, Clone, Serialize)]
-pub struct Counts {
+pub struct SummaryCounts {
     pub points: usize,
     pub done: usize,
     pub failed: usize,
@@ -163,7 +163,7 @@ pub struct Analysis {
     pub screen: ScreenReport,
     /// Statistics of the converged space, or of the last complete one.
     pub statistics: Option<Moments>,
-    pub counts: Counts,
+    pub counts: SummaryCounts,
     pub timing: Timing,
     pub spaces: Vec<SpaceRow>,
     /// First-order indices of MFR over every done point, largest first.
@@ -305,8 +305,8 @@ fn judge_spaces(manifest: &Manifest, points: &[PointRow], c: &Criteria, boot: &B
     rows
 }
 
-fn count(manifest: &Manifest, points: &[PointRow], complete: usize) -> Counts {
-    let mut c = Counts {
+fn count(manifest: &Manifest, points: &[PointRow], complete: usize) -> SummaryCounts {
+    let mut c = SummaryCounts {
         points: points.len(),
         done: 0,
         failed: 0,
@@ -334,7 +334,7 @@ fn pct(v: Option<f64>) -> String {
     v.map_or("undefined".into(), |v| format!("{:.1}%", v * 100.0))
 }
 
-fn verdict(spaces: &[SpaceRow], counts: &Counts, c: &Criteria) -> Verdict {
+fn verdict(spaces: &[SpaceRow], counts: &SummaryCounts, c: &Criteria) -> Verdict {
     let last_changes = spaces
         .last()
         .and_then(|s| s.changes.as_ref())
@@ -433,15 +433,6 @@ fn timing(dir: &Path) -> Timing {
     Timing { wall_time_s: wall, core_seconds, attempts }
 }
 
-/// Rewrite `DIR/results.csv` from the run dirs (`sweep report`: a directory written by an older
-/// version gains the newer columns, such as `quality`).
-pub fn rewrite_results(dir: &Path) -> Result<()> {
-    let (m, toml) = Store::read_manifest(dir)?;
-    let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
-    let (status, sample, _) = Screen::of(&sweep).statuses(&Store::open(dir), &m);
-    Ok(crate::store::write_results(dir, &m.parameters, &m.points, &status, &sample)?)
-}
-
 /// Write `convergence.csv`, `summary.json` and `report/` into the analysed directory; returns
 /// the path of `report.html`.
 pub fn write(a: &Analysis) -> Result<PathBuf> {
@@ -449,7 +440,7 @@ pub fn write(a: &Analysis) -> Result<PathBuf> {
     let csv_path = a.dir.join("convergence.csv");
     crate::sys::atomic::write(&csv_path, convergence_csv(a).as_bytes()).map_err(|e| io(&csv_path, e))?;
     let json_path = a.dir.join("summary.json");
-    crate::outcome::write_json_atomic(&json_path, a).map_err(|e| io(&json_path, e))?;
+    crate::sys::atomic::write_json(&json_path, a).map_err(|e| io(&json_path, e))?;
     let out = a.dir.join("report");
     std::fs::create_dir_all(&out).map_err(|e| io(&out, e))?;
     let figures = plots::draw_all(a).map_err(|e| Error::Internal(format!("cannot draw the plots: {e}")))?;

@@ -214,9 +214,9 @@ pub struct Rendered {
     pub points: usize,
 }
 
-/// Counts of a directory, for the message when there is nothing to submit.
+/// SubmitCounts of a directory, for the message when there is nothing to submit.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct Counts {
+pub struct SubmitCounts {
     pub points: usize,
     pub done: usize,
     pub failed: usize,
@@ -227,7 +227,7 @@ pub struct Counts {
 
 /// Plan a submission of `dir`: the layout (read, or made from `--tasks`), the array indices to
 /// run, and both scripts. Writes nothing. `Ok(Err(counts))` when no point needs running.
-pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendered, Counts>> {
+pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendered, SubmitCounts>> {
     let (manifest, toml) = Store::read_manifest(dir)?;
     let sweep = crate::sweep::Sweep::parse(&toml, &dir.join("sweep.toml"))?;
     let dir = std::path::absolute(dir).map_err(|e| Error::input(format!("{}: {e}", dir.display())))?;
@@ -376,8 +376,8 @@ fn tera_chain(e: &tera::Error) -> String {
     s
 }
 
-fn counts(status: &[PointStatus]) -> Counts {
-    let mut c = Counts { points: status.len(), ..Counts::default() };
+fn counts(status: &[PointStatus]) -> SubmitCounts {
+    let mut c = SubmitCounts { points: status.len(), ..SubmitCounts::default() };
     for s in status {
         match s {
             PointStatus::Done(_) => c.done += 1,
@@ -485,7 +485,7 @@ pub fn held_points(manifest: &Manifest, store: &Store) -> BTreeSet<usize> {
 /// task's pool wrote it from its own view, and the last task to end must leave every task's
 /// points in it.
 pub fn refresh_results(dir: &Path) -> Result<()> {
-    Store::open(dir).locked(|| crate::report::rewrite_results(dir))?
+    Store::open(dir).locked(|| crate::run::rewrite_results(dir))?
 }
 
 /// What one array task runs (`sweep work`).

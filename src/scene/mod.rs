@@ -4,7 +4,7 @@
 //! lengths in this struct are metres, times seconds, moduli pascals (the catalogue's mm and MPa
 //! are converted once, in [`Scene::new`]).
 //!
-//! Geometry (DESIGN §5): x is the blade's travel, z is up, y is across the blade and periodic
+//! Geometry (docs/scene.md "Geometry"): x is the blade's travel, z is up, y is across the blade and periodic
 //! (the domain depth is the blade width w). A pile is inserted in front of the blade, settles on
 //! the plate z = 0, and the blade — a box whose tip is at z = gap — then pushes it over the bare
 //! plate in +x, leaving a layer behind. Walls at both x ends keep every particle in the box, so
@@ -21,12 +21,13 @@ pub mod params;
 pub mod passage;
 pub mod pile;
 pub mod psd;
+pub mod settings;
 
 use std::collections::BTreeMap;
 
 use serde::Serialize;
 
-use crate::sweep::SceneSettings;
+use crate::scene::settings::SceneSettings;
 use psd::SizeDistribution;
 
 /// Standard gravity, m/s².
@@ -104,7 +105,7 @@ pub struct Scene {
     pub rolling_friction: f64,
     /// LIGGGHTS rolling-friction model (used when `rolling_friction` > 0).
     pub rolling_model: &'static str,
-    /// `"gated"` or `"thesis"` (see [`crate::sweep::SceneSettings::layout`]).
+    /// `"gated"` or `"thesis"` (see [`crate::scene::settings::SceneSettings::layout`]).
     pub layout: String,
     // Particles.
     pub size_classes: Vec<psd::SizeClass>,

@@ -96,7 +96,7 @@ impl Scene {
 mod tests {
     use std::collections::BTreeMap;
 
-    use crate::sweep::{SceneSettings, SizeDistributionSpec};
+    use crate::scene::settings::{SceneSettings, SizeDistributionSpec};
 
     use super::*;
 

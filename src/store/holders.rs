@@ -7,7 +7,9 @@
 
 use std::fs;
 
-use super::{lease_alive, read_claim, unix_now, ClaimInfo, DirLock, RunState, Store, StoreError, LOCK};
+use super::claim::read_claim;
+use super::{lease_alive, ClaimInfo, DirLock, RunState, Store, StoreError, LOCK};
+use crate::sys::host::unix_now;
 
 /// One line about a claim's holder: host, pid, age, and its lease.
 pub fn describe(c: &ClaimInfo) -> String {

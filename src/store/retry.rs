@@ -13,7 +13,8 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use serde::{Deserialize, Serialize};
 
-use super::{process_start_ticks, DirLock, Store, StoreError, LOCK};
+use super::{io, DirLock, Store, StoreError, LOCK};
+use crate::sys::host::process_start_ticks;
 
 /// The round this process joins instead of one of its own (an array task: its submission's).
 static FIXED_ROUND: OnceLock<SystemTime> = OnceLock::new();
@@ -43,7 +44,8 @@ pub fn submission_round_path(dir: &Path) -> PathBuf {
 /// Record that a submission re-running failures begins a round now.
 pub fn begin_submission_round(dir: &Path) -> Result<(), StoreError> {
     let path = submission_round_path(dir);
-    super::write_atomic(&path, format!("{:.6}\n", unix(SystemTime::now())).as_bytes())
+    crate::sys::atomic::write(&path, format!("{:.6}\n", unix(SystemTime::now())).as_bytes())
+        .map_err(io(&path))
 }
 
 /// Join the round of the last submission of `dir` that re-ran failures, if there was one
@@ -75,7 +77,7 @@ impl Store {
         let since = if members.is_empty() { unix(SystemTime::now()) } else { old.since };
         members.push((self.host.clone(), self.me.pid, self.me.start_ticks));
         let text = serde_json::to_vec(&RoundFile { since, members }).expect("round serialises");
-        super::write_atomic(&path, &text)?;
+        crate::sys::atomic::write(&path, &text).map_err(io(&path))?;
         Ok(from_unix(since))
     }
 }

@@ -12,7 +12,8 @@
 
 use serde::Serialize;
 
-use super::{cell, scene_case, SCENE_MATERIAL};
+use super::{scene_case, SCENE_MATERIAL};
+use crate::bench::cell;
 use crate::contact::{Case, ContactError, Material, Target};
 
 /// δmax/R above which a row is flagged: Hertz assumes a contact radius a = √(Rδ) ≪ R; here
@@ -116,7 +117,7 @@ fn row(e_p: f64, q: f64) -> StiffnessRow {
     let pair = elastic.pair();
     let hertz_time = pair.hertz_time(elastic.vn);
     let hertz_overlap = pair.hertz_max_overlap(elastic.vn);
-    let settings = crate::sweep::SceneSettings::default();
+    let settings = crate::scene::settings::SceneSettings::default();
     let scene_dt = settings.rayleigh_fraction
         * crate::scene::rayleigh_time(base.radius, base.density, e_p, SCENE_MATERIAL.poisson);
 
