@@ -262,7 +262,7 @@ fn swapped_hashes_in_the_manifest_are_named_as_such_by_report_and_resume() {
 fn attempts(d: &Path) -> BTreeMap<String, usize> {
     let mut n = BTreeMap::new();
     for line in std::fs::read_to_string(d.join("joblog.tsv")).unwrap().lines().skip(1) {
-        let hash = line.split('\t').last().unwrap().to_string();
+        let hash = line.split('\t').next_back().unwrap().to_string();
         *n.entry(hash).or_insert(0) += 1;
     }
     n
