@@ -65,7 +65,7 @@ pub struct FakeExecutor {
     pub overlap: AtomicUsize,
 }
 
-/// The fake's MFR: a smooth function of the swept values, in (0, 1).
+/// The fake's MFR: a smooth function of the swept values, in [0.05, 0.65].
 pub fn fake_mfr(values: &[f64]) -> f64 {
     let s: f64 = values.iter().enumerate().map(|(i, v)| (i + 1) as f64 * v).sum();
     // Within [0.05, 0.65]: a possible MFR (below the densest packing), never zero.
