@@ -81,15 +81,19 @@ pub enum FailureClass {
     Unparsable,
     /// The dose was still moving when the settle's time cap ran out.
     NotSettled,
+    /// The engine's output or the result holds a number that is not physically possible (a
+    /// negative mass, a non-finite velocity, an MFR above the densest packing).
+    Implausible,
     /// The flow through the gap was not steady over the window (its halves disagree beyond
     /// counting noise): the MFR is not a property of the point.
     Unsteady,
 }
 
 impl FailureClass {
-    /// Transient failures may succeed on a retry; physics failures never will.
+    /// Transient failures may succeed on a retry; physics failures never will, nor a timeout:
+    /// the same deck runs as many steps again (`--retry-failed` or a longer `timeout_s` does).
     pub fn is_transient(self) -> bool {
-        matches!(self, FailureClass::CouldNotStart | FailureClass::Signalled | FailureClass::TimedOut)
+        matches!(self, FailureClass::CouldNotStart | FailureClass::Signalled)
     }
 
     pub fn as_str(self) -> &'static str {
@@ -102,6 +106,7 @@ impl FailureClass {
             FailureClass::Unstable => "unstable",
             FailureClass::Unparsable => "unparsable",
             FailureClass::NotSettled => "not-settled",
+            FailureClass::Implausible => "implausible",
             FailureClass::Unsteady => "unsteady",
         }
     }

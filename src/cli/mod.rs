@@ -59,6 +59,10 @@ enum Command {
     Resume(sweep::ResumeArgs),
     /// Counts of a sweep directory: done, failed, running, screened, pending; the screen's verdict.
     Status(sweep::DirArgs),
+    /// Release the claims of a sweep directory that no live process on this machine holds:
+    /// another host's (a lost node, a clock far ahead, an old claim without a lease) or a dead
+    /// process's. Use it once their holders are known to be gone; `status` names them.
+    Unclaim(sweep::UnclaimArgs),
     /// Write convergence.csv, summary.json and report/ (plots, report.html) of a sweep directory.
     ///
     /// Also rewrites results.csv from the run directories. One row per complete space in convergence.csv (statistics of the done runs' MFR with 95%
@@ -154,6 +158,7 @@ pub fn run(cli: Cli) -> Result<i32, Error> {
         Command::Lds(a) => sweep::lds(a),
         Command::Resume(a) => sweep::resume(a),
         Command::Status(a) => sweep::status(a),
+        Command::Unclaim(a) => sweep::unclaim(a),
         Command::Report(a) => sweep::report(a),
         Command::Render(a) => point::render(a),
         Command::Run(a) => point::run_one(a),

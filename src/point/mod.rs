@@ -5,6 +5,7 @@
 
 pub mod deck;
 pub mod metrics;
+pub mod plausible;
 pub mod quality;
 pub mod steady;
 
@@ -40,8 +41,12 @@ impl PointContext {
         // The template first: a bad one is bad input, found before the engine is run.
         let template =
             Template::load(sweep.template_path().as_deref()).map_err(|e| Error::input(e.to_string()))?;
+        // Under the process's interrupt flag (Ctrl-C, SIGTERM), like every run.
         let engine =
-            Engine::locate(sweep.file.run.engine.as_deref()).map_err(|e| Error::Engine(e.to_string()))?;
+            Engine::locate(sweep.file.run.engine.as_deref(), &CancelToken::new()).map_err(|e| match e {
+                crate::engine::EngineError::Interrupted => Error::Interrupted,
+                e => Error::Engine(e.to_string()),
+            })?;
         let timeout = Duration::from_secs_f64(sweep.file.run.timeout_s);
         Ok(PointContext { sweep, engine, template, timeout })
     }
@@ -164,6 +169,7 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
             wall_time: wall,
             measured,
         };
+        crate::engine::remove_forced_restarts(run_dir);
         let _ = write_json(&run_dir.join(FAILURE), &f);
         RunOutcome::Failed(f)
     };
@@ -198,6 +204,11 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
         Ok(f) => f,
         Err(e) => return fail(FailureClass::Unparsable, e.to_string(), String::new(), wall),
     };
+    // What the engine wrote must be possible before the metrics read it.
+    let blade_speed = p.parameters.get("blade_speed").copied().unwrap_or(f64::NAN);
+    if let Some(e) = frames.iter().find_map(|f| plausible::check_frame(f, blade_speed).err()) {
+        return fail(FailureClass::Implausible, format!("{DUMP}: {e}"), String::new(), wall);
+    }
     if p.scene.is_conveyor() {
         return finish_conveyor(ctx, p, run_dir, &run, &frames, fail_measured);
     }
@@ -237,6 +248,9 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
             result.mfr_windows.iter().map(|v| (v * 1e3).round() / 1e3).collect::<Vec<_>>()
         );
         return fail_measured(FailureClass::Unsteady, reason, String::new(), wall, Some(Box::new(result)));
+    }
+    if let Err(e) = plausible::check_result(&result) {
+        return fail(FailureClass::Implausible, e, String::new(), wall);
     }
     if let Err(e) = write_json(&run_dir.join(RESULT), &result) {
         return fail(FailureClass::Unparsable, format!("cannot write {RESULT}: {e}"), String::new(), wall);
@@ -291,6 +305,9 @@ fn finish_conveyor(
     if let Some(why) = st.unsteady {
         let reason = format!("MFR not steady: {why}");
         return fail(FailureClass::Unsteady, reason, String::new(), wall, Some(Box::new(result)));
+    }
+    if let Err(e) = plausible::check_result(&result) {
+        return fail(FailureClass::Implausible, e, String::new(), wall, None);
     }
     if let Err(e) = write_json(&run_dir.join(RESULT), &result) {
         return fail(

@@ -26,7 +26,7 @@ use crate::error::{Error, Result};
 use crate::outcome::RunResult;
 use crate::point::quality::{self, Quality};
 use crate::run::screen::{Screen, ScreenReport};
-use crate::store::{DesignRecord, Manifest, PointStatus, Store};
+use crate::store::{DesignRecord, Manifest, PointStatus, RunState, Store};
 use crate::sweep::Sweep;
 
 /// Version of `summary.json`.
@@ -199,6 +199,16 @@ pub fn read_points(dir: &Path) -> Result<(Manifest, Sweep, Vec<PointRow>, Screen
     let (manifest, toml) = Store::read_manifest(dir)?;
     let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
     let store = Store::open(dir);
+    store.check_pairing(&manifest)?;
+    for p in &manifest.points {
+        if let Some(RunState::Damaged { file, reason }) = store.point_finished(&manifest, p) {
+            eprintln!(
+                "warning: {}: {reason}; point {} is left out (`sweep resume` runs it again)",
+                file.display(),
+                p.index
+            );
+        }
+    }
     let (statuses, _, screen) = Screen::of(&sweep).statuses(&store, &manifest);
     let points: Vec<PointRow> = manifest
         .points

@@ -63,6 +63,36 @@ pub(super) struct Reporter<'a> {
 }
 
 impl<'a> Reporter<'a> {
+    /// Write the joblog line of each finished run whose process was killed before writing it
+    /// (its dead claim was still in the run directory), unless a line is there.
+    pub(super) fn log_recovered(
+        &mut self,
+        store: &Store,
+        recovered: &[(String, store::ClaimInfo)],
+    ) -> Result<()> {
+        let logged: BTreeSet<String> = store::read_joblog(store.dir())?
+            .into_iter()
+            .filter(|l| l.status == "done" || l.status == "failed")
+            .map(|l| l.hash)
+            .collect();
+        for (hash, claim) in recovered.iter().filter(|(h, _)| !logged.contains(h)) {
+            let (status, class, runtime_s) = match store.finished(hash) {
+                Some(store::RunState::Done(r)) => ("done", None, r.wall_time),
+                Some(store::RunState::Failed(f)) => ("failed", Some(f.class.as_str()), f.wall_time),
+                _ => continue,
+            };
+            let start = std::time::UNIX_EPOCH + std::time::Duration::from_secs_f64(claim.claimed_at.max(0.0));
+            self.joblog.append(&store::AttemptRecord {
+                hash: hash.clone(),
+                start,
+                runtime_s,
+                status,
+                class,
+            })?;
+        }
+        Ok(())
+    }
+
     #[expect(clippy::too_many_arguments, reason = "the reporter's whole starting state, one call site")]
     pub(super) fn new(
         store: &'a Store,

@@ -224,7 +224,7 @@ impl Screen {
         let mut status: Vec<PointStatus> = manifest
             .points
             .iter()
-            .map(|p| match store.finished(&p.hash) {
+            .map(|p| match store.point_finished(manifest, p) {
                 Some(RunState::Done(r)) => PointStatus::Done(r),
                 Some(RunState::Failed(f)) => PointStatus::Failed(f),
                 _ => PointStatus::Pending,
