@@ -2,7 +2,7 @@
 //!
 //! Writes a synthetic LIGGGHTS-style `custom` dump (columns `id type x y z vx vy vz radius mass`,
 //! numbers printed like C's `%g` as LIGGGHTS does) to a temp dir, then parses it repeatedly with
-//! [`demsweep::dump::DumpReader`] and with the baseline: `BufRead::lines()`, then
+//! [`demsweep::engine::dump::DumpReader`] and with the baseline: `BufRead::lines()`, then
 //! `split_whitespace().map(str::parse::<f64>)` collected into a `Vec` per line. Reports the best
 //! of several runs (the file is in the page cache after the first write, so this measures parsing,
 //! not the disk).
@@ -10,7 +10,7 @@
 //! `cargo bench --bench dump_parse`; set `DUMP_BENCH_ATOMS` (default 1 000 000) and
 //! `DUMP_BENCH_SNAPSHOTS` (default 2) to change the file size.
 
-use demsweep::dump::{DumpReader, Snapshot};
+use demsweep::engine::dump::{DumpReader, Snapshot};
 use std::fs::File;
 use std::io::{BufRead, BufReader, BufWriter, Write};
 use std::path::Path;

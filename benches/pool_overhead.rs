@@ -11,10 +11,11 @@ use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-use demsweep::outcome::{write_json_atomic, RunOutcome, RunResult, RESULT_FORMAT};
-use demsweep::pool::{self, Executor, Flow, PoolOptions};
-use demsweep::process::{self, CancelToken, ProcessOutcome};
+use demsweep::outcome::{RunOutcome, RunResult, RESULT_FORMAT};
+use demsweep::run::pool::{self, Executor, Flow, PoolOptions};
 use demsweep::store::Store;
+use demsweep::sys::atomic::write_json;
+use demsweep::sys::process::{self, CancelToken, ProcessOutcome};
 
 /// Runs `true` and records a trivial result.
 struct TrueExecutor;
@@ -44,6 +45,9 @@ impl Executor for TrueExecutor {
             mfr: 0.0,
             mfr_flux: 0.0,
             mfr_particles: 0,
+            mfr_se: None,
+            steady_state: None,
+            vx_se: Vec::new(),
             mfr_windows: vec![],
             steady: true,
             steady_p: 1.0,
@@ -57,7 +61,7 @@ impl Executor for TrueExecutor {
             engine_version: "true".into(),
             warnings: vec![],
         };
-        write_json_atomic(&run_dir.join("result.json"), &r).unwrap();
+        write_json(&run_dir.join("result.json"), &r).unwrap();
         RunOutcome::Done(r)
     }
 }

@@ -41,7 +41,7 @@ PARAMS = [
 # The goal cases (4-D and 6-D, the thesis's 400-point batches up to its 2,400) and thesis
 # Fig. 3.11's 8-D, N = 100.
 CASES = [(4, 400), (6, 400), (4, 800), (6, 800), (4, 2400), (6, 2400), (8, 100)]
-DEFAULT_SEED = 14  # LdsSettings::default().seed in src/sweep.rs
+DEFAULT_SEED = 14  # LdsSettings::default().seed in src/sweep/mod.rs
 
 
 def ours(binary, tmp, dim, n, scrambling, seed):

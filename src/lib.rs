@@ -1,35 +1,26 @@
 //! demsweep: parameter sweeps of LIGGGHTS powder-spreading simulations.
 //!
-//! The pipeline (DESIGN §2), one module per stage, data flowing one way:
-//! sweep file → [`sweep`] → [`space`] + [`design`] → [`scene`] → deck → engine → dump → metrics.
+//! One module per stage of the pipeline, and every import points down it (docs/architecture.md
+//! has the order and what each may import): a sweep file ([`sweep`]) and a [`design`] give
+//! points; each point is a [`scene`] rendered into a deck and run by LIGGGHTS ([`engine`]),
+//! measured into a result ([`point`]); the drivers ([`run`]) run many points into a sweep
+//! directory ([`store`]); [`analysis`] and [`report`] say what the results mean. [`contact`]
+//! checks the contact model, [`bench`] measures speed against error, and [`sys`] holds the
+//! operating-system plumbing beneath them all.
 
-pub mod atomic;
-pub mod cluster;
+pub mod analysis;
+pub mod bench;
 pub mod contact;
-pub mod convergence;
-pub mod deck;
 pub mod design;
-pub mod dump;
 pub mod engine;
 pub mod error;
-pub mod fidelity;
-pub mod metrics;
 pub mod outcome;
 pub mod point;
-pub mod pool;
-pub mod process;
-pub mod progress;
-pub mod quality;
 pub mod report;
+pub mod run;
 pub mod scene;
-pub mod screen;
-pub mod sensitivity;
-pub mod space;
-pub mod stability;
-pub mod standin;
-pub mod stats;
 pub mod store;
 pub mod sweep;
-pub mod sweeprun;
+pub mod sys;
 
 pub use error::{Error, Result};

@@ -4,7 +4,6 @@
 //! into a number: it carries its class (which decides the retry policy) and a one-line reason.
 
 use std::collections::BTreeMap;
-use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
@@ -22,12 +21,18 @@ pub struct RunResult {
     pub hash: String,
     /// Every scene parameter, swept and fixed, in the sweep file's units.
     pub parameters: BTreeMap<String, f64>,
-    /// Mass flow rate from the deposited layer (DESIGN §5, thesis Eq. 15–17), dimensionless.
+    /// Mass flow rate from the deposited layer (docs/scene.md "Metrics", thesis Eq. 15–17), dimensionless.
     pub mfr: f64,
     /// The same from the flux of particles past the blade's front face (cross-check).
     pub mfr_flux: f64,
     /// Particles counted in `mfr`: its counting noise is about 1/√n relative.
     pub mfr_particles: usize,
+    /// Standard error of `mfr` (conveyor layout: batch means over the steady window).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mfr_se: Option<f64>,
+    /// The steady-state measurement: block series, transient, batches, trend, heap, stop.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub steady_state: Option<Box<crate::point::steady::SteadyState>>,
     /// MFR over consecutive sub-windows of the measurement window.
     pub mfr_windows: Vec<f64>,
     /// False when the sub-window MFRs show the flow had not reached a steady state.
@@ -36,6 +41,9 @@ pub struct RunResult {
     pub steady_p: f64,
     /// Mean v_x (m/s) per layer k = 1..12 at z = gap + k·D/2; `None` for an empty layer.
     pub vx: Vec<Option<f64>>,
+    /// Standard error of each v_x layer over the steady window's snapshots (conveyor layout).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub vx_se: Vec<Option<f64>>,
     /// Particles in the pile.
     pub particles: usize,
     /// Timesteps of the settle (until at rest, or the fixed settle of the thesis layout).
@@ -123,11 +131,4 @@ pub enum RunOutcome {
     Failed(RunFailure),
     /// Stopped by Ctrl-C / SIGTERM; the run dir is incomplete and will be re-run on resume.
     Cancelled,
-}
-
-/// Write `value` as pretty JSON to `path` atomically ([`crate::atomic::write`]).
-pub fn write_json_atomic<T: Serialize>(path: &Path, value: &T) -> std::io::Result<()> {
-    let mut bytes = serde_json::to_vec_pretty(value)?;
-    bytes.push(b'\n');
-    crate::atomic::write(path, &bytes)
 }

@@ -3,7 +3,7 @@
 //! plate, dumped every 2000 steps of 1e-5 s), on column orders LIGGGHTS did not write, and on
 //! malformed dumps.
 
-use demsweep::dump::{read_dump, DumpError, DumpReader, Snapshot};
+use demsweep::engine::dump::{read_dump, DumpError, DumpReader, Snapshot};
 use proptest::prelude::*;
 use std::io::Read;
 use std::path::Path;
@@ -386,7 +386,7 @@ fn a_line_of_any_length_is_refused_at_the_cap_not_held_in_memory() {
     let endless = std::io::Cursor::new(head.into_bytes()).chain(std::io::repeat(b'7'));
     let mut reader = DumpReader::new(std::io::BufReader::new(endless), "mem.dump");
     let e = reader.next().expect("a result").expect_err("an endless line parsed");
-    assert!(matches!(e, DumpError::LineTooLong { limit: demsweep::dump::MAX_LINE, .. }), "{e}");
+    assert!(matches!(e, DumpError::LineTooLong { limit: demsweep::engine::dump::MAX_LINE, .. }), "{e}");
     assert_at(&e, 11, 0, Some(0));
     assert!(e.to_string().contains("line too long"), "{e}");
     // A long line that ends is still read (and fails on its content, not its length).

@@ -7,29 +7,31 @@
 //! sets what those points give), then a tiny sweep on real LIGGGHTS whose space holds two closed
 //! points: the verification run must give MFR = 0 on the engine, the other must be skipped.
 
+mod common;
+
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
-use std::process::{Command, Output, Stdio};
+use std::process::{Output, Stdio};
 use std::time::Duration;
 
-use demsweep::pool::fake::{fake_mfr, Behaviour, FakeExecutor};
-use demsweep::pool::Flow;
-use demsweep::process::CancelToken;
-use demsweep::progress::ProgressMode;
-use demsweep::screen::Verdict;
-use demsweep::stats::Bootstrap;
+use demsweep::analysis::stats::Bootstrap;
+use demsweep::run::fake::{fake_mfr, Behaviour, FakeExecutor};
+use demsweep::run::pool::Flow;
+use demsweep::run::screen::Verdict;
+use demsweep::run::{self, SpaceHook};
 use demsweep::store::{
     self, DesignRecord, Manifest, PointRecord, PointStatus, SpaceRecord, Store, MANIFEST_FORMAT,
 };
 use demsweep::sweep::Sweep;
-use demsweep::sweeprun::{self, RunOptions, SpaceHook};
+use demsweep::sys::process::CancelToken;
 
 const MS: Duration = Duration::from_millis(1);
 
-/// Gap and blade speed swept; the fake closes the points at gap 2 (below 2.5).
+/// Gap and blade speed swept; the fake closes the points at gap 2 (below 2.5). Equal lattice
+/// weights: the screen's zeros are under test here, not the weights.
 fn fake_sweep(dir: &Path, run: &str) -> Sweep {
     let text = format!(
-        "name = \"t\"\n[parameters]\ngap = {{ lo = 2.0, hi = 4.0 }}\nblade_speed = {{ lo = 1.2, hi = 1.6 }}\n[run]\n{run}\n"
+        "name = \"t\"\n[parameters]\ngap = {{ lo = 2.0, hi = 4.0 }}\nblade_speed = {{ lo = 1.2, hi = 1.6 }}\n[convergence]\nlattice_weights = \"equal\"\n[run]\n{run}\n"
     );
     let path = dir.join("t.toml");
     std::fs::write(&path, &text).unwrap();
@@ -40,22 +42,9 @@ fn closed(v: &[f64]) -> bool {
     v[0] < 2.5
 }
 
-fn opts(jobs: usize) -> RunOptions {
-    RunOptions { jobs, progress: ProgressMode::Quiet, retry_failed: false, force: false }
-}
-
 /// A 3 × 3 lattice: three points at gap 2 are closed.
 fn lattice3() -> DesignRecord {
     DesignRecord::Lattice { levels: vec![3] }
-}
-
-/// results.csv by header name: one map per row.
-fn rows(dir: &Path) -> Vec<BTreeMap<String, String>> {
-    let mut r = csv::Reader::from_path(dir.join("results.csv")).unwrap();
-    let h = r.headers().unwrap().clone();
-    r.records()
-        .map(|rec| h.iter().zip(rec.unwrap().iter()).map(|(k, v)| (k.into(), v.into())).collect())
-        .collect()
 }
 
 /// Records the MFR each completed space is judged on (`None`: not a number).
@@ -91,7 +80,8 @@ fn a_verified_screen_skips_the_closed_points_and_counts_them_as_zero() {
         }
     });
     let mut seen = Seen::default();
-    let sum = sweeprun::start(&s, lattice3(), &out, &exec, &opts(2), &mut seen, &CancelToken::new()).unwrap();
+    let sum =
+        run::start(&s, lattice3(), &out, &exec, &common::quiet(2), &mut seen, &CancelToken::new()).unwrap();
     assert_eq!((sum.done, sum.screened, sum.failed, sum.pending, sum.exit_code()), (7, 2, 0, 0, 0));
     assert_eq!(sum.screen.verdict, Verdict::Verified);
     assert_eq!((sum.screen.closed, sum.screen.sample, sum.screen.ran, sum.screen.skipped), (3, 1, 1, 2));
@@ -99,7 +89,7 @@ fn a_verified_screen_skips_the_closed_points_and_counts_them_as_zero() {
     let (manifest, _) = Store::read_manifest(&out).unwrap();
     assert_eq!(manifest.points.iter().filter(|p| p.closed).count(), 3);
     let attempts = exec.attempts();
-    let rows = rows(&out);
+    let rows = common::csv_rows(&out.join("results.csv"));
     for (p, row) in manifest.points.iter().zip(&rows) {
         let run_dir = out.join("runs").join(&p.hash);
         match row["status"].as_str() {
@@ -126,18 +116,19 @@ fn a_verified_screen_skips_the_closed_points_and_counts_them_as_zero() {
     assert!(seen.0[0].iter().all(Option::is_some));
 
     // The report and `sweep status` count them the same way.
-    let criteria = demsweep::convergence::Criteria::from_settings(&s.file.convergence);
+    let criteria = demsweep::analysis::convergence::Criteria::from_settings(&s.file.convergence);
     let a = demsweep::report::analyse(&out, &criteria, &Bootstrap::default()).unwrap();
     assert_eq!((a.counts.done, a.counts.screened, a.counts.pending), (7, 2, 0));
     assert_eq!((a.spaces[0].n, a.spaces[0].done), (9, 9));
     let mfr: Vec<f64> = rows.iter().map(|r| r["mfr"].parse().unwrap()).collect();
     let mean = mfr.iter().sum::<f64>() / 9.0;
     assert!((a.statistics.unwrap().mean.unwrap() - mean).abs() < 1e-12);
-    let st = sweeprun::status(&out).unwrap();
+    let st = run::status(&out).unwrap();
     assert_eq!((st.done, st.screened, st.pending, st.screen.verdict), (7, 2, 0, Verdict::Verified));
 
     // A resume decides the same and runs nothing.
-    let again = sweeprun::resume(&out, &exec, &opts(2), &mut Seen::default(), &CancelToken::new()).unwrap();
+    let again =
+        run::resume(&out, &exec, &common::quiet(2), &mut Seen::default(), &CancelToken::new()).unwrap();
     assert_eq!((again.ran, again.done, again.screened), (0, 7, 2));
     assert_eq!(exec.attempts(), attempts);
 }
@@ -150,7 +141,8 @@ fn a_verification_run_with_mfr_above_zero_refutes_the_screen_and_every_closed_po
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(20 * MS)).with_closed(closed);
     let mut seen = Seen::default();
-    let sum = sweeprun::start(&s, lattice3(), &out, &exec, &opts(2), &mut seen, &CancelToken::new()).unwrap();
+    let sum =
+        run::start(&s, lattice3(), &out, &exec, &common::quiet(2), &mut seen, &CancelToken::new()).unwrap();
     assert_eq!((sum.done, sum.screened, sum.pending), (9, 0, 0));
     assert_eq!(sum.screen.verdict, Verdict::Refuted);
     assert_eq!((sum.screen.closed, sum.screen.ran, sum.screen.skipped), (3, 3, 0));
@@ -159,13 +151,13 @@ fn a_verification_run_with_mfr_above_zero_refutes_the_screen_and_every_closed_po
     // Every point ran once, with its real MFR in results.csv; none is screened.
     let (manifest, _) = Store::read_manifest(&out).unwrap();
     assert!(exec.attempts().values().all(|&n| n == 1) && exec.attempts().len() == 9);
-    for (p, row) in manifest.points.iter().zip(rows(&out)) {
+    for (p, row) in manifest.points.iter().zip(common::csv_rows(&out.join("results.csv"))) {
         assert_eq!(row["status"], "done");
         assert!((row["mfr"].parse::<f64>().unwrap() - fake_mfr(&p.values)).abs() < 1e-12);
     }
     assert_eq!(seen.0[0].iter().filter(|m| **m == Some(0.0)).count(), 0);
     // summary.json says so.
-    let criteria = demsweep::convergence::Criteria::from_settings(&s.file.convergence);
+    let criteria = demsweep::analysis::convergence::Criteria::from_settings(&s.file.convergence);
     let a = demsweep::report::analyse(&out, &criteria, &Bootstrap::default()).unwrap();
     let json = serde_json::to_value(&a).unwrap();
     assert_eq!(json["screen"]["verdict"], "refuted");
@@ -187,7 +179,7 @@ fn an_array_task_runs_the_verification_sample_before_it_skips_its_own_closed_poi
         }
     });
     // Lay the sweep out without running it, as `sweep lds` does before its first run.
-    let plan = sweeprun::plan(&exec, &s, &lattice3(), &CancelToken::new()).unwrap();
+    let plan = run::plan(&exec, &s, &lattice3(), &CancelToken::new()).unwrap();
     let manifest = Manifest {
         format: MANIFEST_FORMAT,
         tool: "test".into(),
@@ -196,19 +188,19 @@ fn an_array_task_runs_the_verification_sample_before_it_skips_its_own_closed_poi
         design: lattice3(),
         spaces: plan.spaces,
         points: plan.points,
-        identity: demsweep::pool::Executor::identity(&exec),
+        identity: demsweep::run::pool::Executor::identity(&exec),
     };
     std::fs::create_dir_all(&out).unwrap();
-    Store::open(&out).write_manifest(&sweeprun::resolved_toml(&s, &lattice3()).unwrap(), &manifest).unwrap();
-    let sample: BTreeSet<usize> = demsweep::screen::Screen::of(&s).sample(&manifest.points);
+    Store::open(&out).write_manifest(&run::resolved_toml(&s, &lattice3()).unwrap(), &manifest).unwrap();
+    let sample: BTreeSet<usize> = demsweep::run::screen::Screen::of(&s).sample(&manifest.points);
     let sample_point = *sample.first().unwrap();
     let share: Vec<usize> =
         manifest.points.iter().filter(|p| p.closed && p.index != sample_point).map(|p| p.index).collect();
     let order = |u: &[usize]| u.iter().copied().filter(|i| share.contains(i)).collect::<Vec<_>>();
-    let sum = sweeprun::resume_share(
+    let sum = run::resume_share(
         &out,
         &exec,
-        &opts(1),
+        &common::quiet(1),
         Some(&order),
         &mut Seen::default(),
         &CancelToken::new(),
@@ -225,7 +217,7 @@ fn an_array_task_runs_the_verification_sample_before_it_skips_its_own_closed_poi
 // ---- real LIGGGHTS ----
 
 fn sweep_bin(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sweep")).args(args).stdin(Stdio::null()).output().unwrap()
+    common::sweep_bin().args(args).stdin(Stdio::null()).output().unwrap()
 }
 
 fn stderr(o: &Output) -> String {
@@ -239,6 +231,9 @@ fn json(o: &Output) -> serde_json::Value {
 
 #[test]
 fn on_liggghts_the_verification_run_gives_mfr_zero_and_the_other_closed_point_is_skipped() {
+    common::require_liggghts!(
+        "on_liggghts_the_verification_run_gives_mfr_zero_and_the_other_closed_point_is_skipped"
+    );
     // D = 2.5 mm on the rough substrate at 1.4 m/s: the screen closes gaps below 0.538 D
     // = 1.34 mm. Gaps 0.5, 1.25 (closed), 2.0 and 2.75 mm (0.8 D and 1.1 D: open, they flow).
     // A short window and a narrow domain keep each run to a few seconds.
@@ -250,6 +245,8 @@ fn on_liggghts_the_verification_run_gives_mfr_zero_and_the_other_closed_point_is
 [parameters]
 gap      = { lo = 0.5, hi = 2.75, unit = "mm" }
 diameter = { value = 2.5, unit = "mm" }
+[convergence]
+lattice_weights = "equal"   # the screen's zeros are under test here, not the weights
 [scene]
 window_diameters = 8
 window_start_diameters = 10
@@ -267,7 +264,7 @@ screen_sample_min = 1
     assert_eq!(run.status.code(), Some(0), "{err}");
     assert!(err.contains("screen verified: 1 of 2 closed point(s) ran and gave MFR = 0; 1 skipped"), "{err}");
 
-    let table = rows(&out);
+    let table = common::csv_rows(&out.join("results.csv"));
     let gaps: Vec<f64> = table.iter().map(|r| r["gap"].parse().unwrap()).collect();
     assert_eq!(gaps, [0.5, 1.25, 2.0, 2.75]);
     let joblog = std::fs::read_to_string(out.join("joblog.tsv")).unwrap();
@@ -328,11 +325,12 @@ screen_sample_min = 1
     let resumed = sweep_bin(&["resume", o, "-q"]);
     assert_eq!(resumed.status.code(), Some(0), "{}", stderr(&resumed));
     assert_eq!(std::fs::read_to_string(out.join("joblog.tsv")).unwrap(), joblog);
-    assert_eq!(rows(&out), table);
+    assert_eq!(common::csv_rows(&out.join("results.csv")), table);
 }
 
 #[test]
 fn the_points_preview_marks_the_closed_points_of_the_thesis_space() {
+    common::require_liggghts!("the_points_preview_marks_the_closed_points_of_the_thesis_space");
     // `sweep points --screen`: closed exactly where gap/D is below 0.670 D less the margin,
     // 0.1472 D × (v / 1.6 m/s)^0.8 (v 1.2–1.6 m/s: the bound is 0.523–0.553 D).
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps/thesis-lds.toml");
@@ -360,6 +358,7 @@ fn the_points_preview_marks_the_closed_points_of_the_thesis_space() {
 
 #[test]
 fn on_liggghts_a_failed_verification_run_refutes_the_screen_loudly() {
+    common::require_liggghts!("on_liggghts_a_failed_verification_run_refutes_the_screen_loudly");
     // Every run is cut off at 0.3 s (LIGGGHTS takes seconds), so the verification run fails:
     // the screen is refuted, said so on stderr and in summary.json, and the other closed point
     // runs too (here, failing the same way) instead of being counted as MFR = 0.
@@ -395,7 +394,7 @@ retries = 0
         (summary["screen"]["ran"].as_u64(), summary["counts"]["screened"].as_u64()),
         (Some(2), Some(0))
     );
-    let table = rows(&out);
+    let table = common::csv_rows(&out.join("results.csv"));
     assert!(table.iter().all(|r| r["status"] == "failed"), "{table:?}");
     let joblog = std::fs::read_to_string(out.join("joblog.tsv")).unwrap();
     assert!(table.iter().all(|r| joblog.contains(&r["hash"])), "every point was attempted");

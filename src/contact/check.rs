@@ -333,7 +333,7 @@ const CASE_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(120);
 /// Runs `engine -in in.contact` in `dir`, output to files there, through the same runner as the
 /// sweeps (`engine::command`, `process::run`): own process group, a timeout, the ERROR line kept.
 fn run_liggghts(engine: &Path, dir: &Path) -> Result<(), ContactError> {
-    use crate::process::{self, CancelToken, ProcessOutcome};
+    use crate::sys::process::{self, CancelToken, ProcessOutcome};
     let cmd = crate::engine::command(engine, dir, "in.contact")
         .map_err(|e| ContactError::Engine(format!("failed to prepare {}: {e}", dir.display())))?;
     let (outcome, _) = process::run(cmd, CASE_TIMEOUT, &CancelToken::new());

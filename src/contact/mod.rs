@@ -19,7 +19,6 @@ pub mod bounce;
 pub mod check;
 pub mod model;
 pub mod solver;
-pub mod stability;
 
 pub use analysis::{Outcome, Regime};
 pub use model::Material;

@@ -6,7 +6,7 @@
 //!   LDS sweep stop early and extend later.
 //! - [`discrepancy`]: the centred L2 discrepancy of a point set, to compare designs.
 //!
-//! Points are in unit coordinates; [`crate::space`] scales them onto parameter ranges.
+//! Points are in unit coordinates; [`crate::sweep::space`] scales them onto parameter ranges.
 
 pub mod discrepancy;
 pub mod halton;

@@ -15,11 +15,11 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::{Analysis, PointRow};
+use crate::analysis::stats::STATISTICS;
 use crate::outcome::VX_LAYERS;
-use crate::quality::Quality;
-use crate::stats::STATISTICS;
+use crate::point::quality::Quality;
 
-type Res<T> = std::result::Result<T, Box<dyn std::error::Error>>;
+use crate::error::Res;
 type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
 /// N, the statistic, and its interval's bounds.
 type StatPoint = (f64, Option<f64>, Option<f64>, Option<f64>);

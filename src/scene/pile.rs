@@ -102,7 +102,7 @@ pub fn pile_data(s: &Scene) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sweep::{SceneSettings, SizeDistributionSpec};
+    use crate::scene::settings::{SceneSettings, SizeDistributionSpec};
     use std::collections::BTreeMap;
 
     #[test]

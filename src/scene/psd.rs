@@ -5,7 +5,7 @@
 
 use serde::Serialize;
 
-use crate::sweep::SizeDistributionSpec;
+use crate::scene::settings::SizeDistributionSpec;
 
 /// One size class: diameter (m) and number fraction (the fractions of a distribution sum to 1).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]

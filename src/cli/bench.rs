@@ -1,0 +1,336 @@
+//! `sweep bench`: the fidelity, stability and contact benchmarks.
+
+use std::path::PathBuf;
+
+use super::contact::contact_error;
+use super::jobs;
+use clap::{Args, Subcommand};
+use demsweep::error::{exit, Error};
+use demsweep::point::{self, PointContext};
+use demsweep::run::{self as driver};
+use demsweep::sweep::Sweep;
+use demsweep::sys::process::CancelToken;
+
+#[derive(Subcommand)]
+pub(super) enum BenchCommand {
+    /// The stability edge: at the harshest corner of the sweep's space, drive the timestep up
+    /// and the stiffness down until runs fail or MFR drifts.
+    ///
+    /// The corner: the smallest particles (diameter, weibull_scale, weibull_shape at lo), the
+    /// softest (youngs_modulus lo), the largest blade speed, friction, rolling friction,
+    /// restitution, density and gap (hi); other swept parameters at their middle, fixed ones as
+    /// given. The timestep ladder runs --fractions of the Rayleigh time at the corner's modulus;
+    /// the stiffness ladder runs --moduli at the sweep's rayleigh_fraction. Each level runs
+    /// --seeds pile seeds; a ladder stops at its first level where a run fails (lost atoms,
+    /// exploding energy, a LIGGGHTS error, a pile that never settles) or where the mean MFR
+    /// differs from the first level's by more than max(10 %, 2 SE of the difference). An
+    /// unsteady flow keeps its MFR. Writes DIR/stability.csv (per level), stability-runs.csv
+    /// (per run), the map stability.svg and .png, and the run directories in DIR/runs/.
+    Stability(StabilityArgs),
+    /// Run time against error: K points of the sweep's space under each fidelity preset.
+    ///
+    /// A fixed seeded draw (the first K points of the sweep's scrambled-Halton design) is run
+    /// under each of --presets, and under each --variant (the fast preset with some of its
+    /// numerical knobs changed: rayleigh_fraction, timestep_s, stiffness_factor,
+    /// mesh_cells_across, depth_diameters, window_diameters, rest_speed, settle_min_falls,
+    /// skin_diameters, full_dump_every_s, run_to_end), with --seeds pile seeds each. The
+    /// presets set every knob whatever the sweep file sets; the rest of [scene] (layout,
+    /// substrate, supply, window start, size distribution) is the file's. Runs are interleaved so
+    /// that the machine's load falls on every variant alike; speed-ups are ratios of CPU seconds
+    /// summed over the same points in the same run. Errors are against the `reference` preset:
+    /// MFR (the difference of seed means, with its standard error) and the v_x profile (rms over
+    /// the layers of the difference over the blade speed). Writes DIR/fidelity-runs.csv (per
+    /// run), fidelity.csv (per point and variant), fidelity-summary.csv (per variant), the
+    /// frontier plot fidelity.svg and .png, and the runs in DIR/runs/<hash>; a finished run
+    /// found there is read back, not re-run (so an interrupted bench resumes).
+    Fidelity(FidelityArgs),
+    /// The contact reference solver's own stability: energy drift at e = 1 over --contacts
+    /// consecutive impacts, particle against wall moduli over six decades, and a timestep ladder
+    /// through the solver and LIGGGHTS.
+    ///
+    /// Drift: the scene's D 2 mm particle (E 21 MPa) bouncing between two walls at 1 m/s
+    /// (head-on, oblique with spin, with friction μ 0.3), at t_c/1000 (the default) to t_c/10;
+    /// the kinetic energy against the closed form. Stiffness: particle moduli 5 MPa, 21 MPa,
+    /// 1 GPa against walls 1e-3 to 1e3 times as stiff and rigid; Y*, contact time, overlap and
+    /// restitution against Hertz theory. Ladder: four impacts at t_c/10000 to 2 t_c through both,
+    /// where they differ beyond 1e-9 and where each leaves the closed form by 1 %. Writes
+    /// DIR/contact-drift.csv, contact-stiffness.csv and contact-timestep.csv and prints the
+    /// tables (BENCHMARKS.md "Reference solver stability").
+    Contact(BenchContactArgs),
+}
+
+#[derive(Args)]
+pub(super) struct FidelityArgs {
+    sweep: PathBuf,
+    /// Points of the draw.
+    #[arg(long, default_value_t = 8)]
+    points: usize,
+    /// Pile seeds per point and variant (the sweep's scene.seed and the next ones).
+    #[arg(long, default_value_t = 2)]
+    seeds: u64,
+    /// Presets to run; errors need `reference`, speed-ups over the thesis need `thesis`.
+    #[arg(long, value_delimiter = ',', default_value = "fast,reference,thesis")]
+    presets: Vec<String>,
+    /// An extra variant, NAME:key=value,key=value (knobs of the fast preset); repeatable.
+    #[arg(long)]
+    variant: Vec<String>,
+    /// Concurrent LIGGGHTS runs (default: the machine's cores).
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Output directory (default: runs/<sweep name>-fidelity); an existing one is continued.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+#[derive(Args)]
+pub(super) struct BenchContactArgs {
+    /// Consecutive impacts per energy-drift run.
+    #[arg(long, default_value_t = 10_000)]
+    contacts: usize,
+    /// The LIGGGHTS executable for the timestep ladder.
+    #[arg(long, default_value = "liggghts")]
+    engine: PathBuf,
+    /// Output directory for the CSV files (created if missing; the three files are replaced).
+    #[arg(long, default_value = "runs/contact-bench")]
+    out: PathBuf,
+}
+
+#[derive(Args)]
+pub(super) struct StabilityArgs {
+    sweep: PathBuf,
+    /// Timestep ladder, fractions of the Rayleigh time, increasing, each in (0, 1].
+    #[arg(long, value_delimiter = ',', default_value = "0.2,0.3,0.4,0.5,0.6,0.8,1.0")]
+    fractions: Vec<f64>,
+    /// Stiffness ladder, Young's modulus in MPa, decreasing, each in [5, 1000] (default: the
+    /// corner's modulus halved down to 5).
+    #[arg(long, value_delimiter = ',')]
+    moduli: Option<Vec<f64>>,
+    /// Pile seeds per level (the sweep's scene.seed and the next ones).
+    #[arg(long, default_value_t = 3)]
+    seeds: u64,
+    /// Concurrent LIGGGHTS runs (default: the machine's cores).
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Output directory (default: runs/<sweep name>-stability); must be new or empty.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+pub(super) fn bench_fidelity(a: FidelityArgs) -> Result<i32, Error> {
+    use demsweep::bench::fidelity;
+    let sweep = Sweep::load(&a.sweep)?;
+    let bad = |m: String| Err(Error::input(m));
+    if a.points == 0 {
+        return bad("--points 0: expected at least 1".into());
+    }
+    if a.seeds == 0 {
+        return bad("--seeds 0: expected at least 1".into());
+    }
+    let jobs = jobs(a.jobs)?;
+    let variants = fidelity::variants(&sweep, &a.presets, &a.variant)?;
+    if variants.is_empty() {
+        return bad("--presets: expected at least one preset or --variant".into());
+    }
+    let lds = &sweep.file.design.lds;
+    let unit = demsweep::design::halton::halton(sweep.dim(), a.points, lds.scrambling, lds.seed);
+    let points: Vec<Vec<f64>> = unit.iter().map(|p| demsweep::sweep::space::scale_point(&sweep, p)).collect();
+    let out = a.out.unwrap_or_else(|| PathBuf::from("runs").join(format!("{}-fidelity", sweep.file.name)));
+    driver::check_out_dir(&out)?;
+    let mut contexts = Vec::new();
+    for v in &variants {
+        contexts.push(PointContext::new(v.sweep.clone())?);
+    }
+    let plan = fidelity::FidelityPlan { points, seeds: a.seeds, jobs, out };
+    demsweep::sys::process::install_interrupt_handler();
+    let cancel = CancelToken::new();
+    let started = std::time::Instant::now();
+    let show = |r: &fidelity::Run, n: usize, total: usize| {
+        eprintln!(
+            "[{n}/{total} {:.0} s] point {} {} seed {}: {} MFR {} cpu {:.1} s{}",
+            started.elapsed().as_secs_f64(),
+            r.point,
+            variants[r.variant].name,
+            r.seed,
+            r.status,
+            r.mfr().map(|m| format!("{m:.4}")).unwrap_or_else(|| "-".into()),
+            r.cpu,
+            if r.reused { " (read back)" } else { "" }
+        )
+    };
+    let runs = fidelity::run(&variants, &contexts, &plan, &cancel, &show)?;
+    let find = |n: &str| variants.iter().position(|v| v.name == n);
+    let (cells, summaries) =
+        fidelity::analyse(&runs, &variants, plan.points.len(), find("reference"), find("thesis"));
+    let names = sweep.names();
+    let title = format!("{}: {} points × {} seeds", sweep.file.name, plan.points.len(), plan.seeds);
+    let files = fidelity::write(&plan, &runs, &cells, &summaries, &variants, &names, &title)?;
+    let x = |v: Option<f64>, d: usize| demsweep::bench::opt_or(v, d, "-");
+    println!(
+        "{:<14} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7}",
+        "variant", "cpu s/pt", "×thesis", "×ref", "worst|e|", "mean|e|", "noise", "vx err", "failed"
+    );
+    for m in &summaries {
+        println!(
+            "{:<14} {:>9.2} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7}",
+            variants[m.variant].name,
+            m.cpu_per_point,
+            x(m.speedup_vs_thesis, 2),
+            x(m.speedup_vs_reference, 2),
+            x(m.worst_error, 4),
+            x(m.mean_abs_error, 4),
+            x(m.mean_error_se, 4),
+            x(m.mean_vx_error, 4),
+            m.failed
+        );
+    }
+    for f in files {
+        eprintln!("wrote {}", f.display());
+    }
+    Ok(exit::SUCCESS)
+}
+
+pub(super) fn bench_stability(a: StabilityArgs) -> Result<i32, Error> {
+    use demsweep::bench::stability;
+    let sweep = Sweep::load(&a.sweep)?;
+    let bad = |m: String| Err(Error::input(m));
+    if sweep.file.scene.timestep_s > 0.0 {
+        return bad(format!(
+            "{}: scene.timestep_s = {} fixes the timestep (fidelity \"{}\"); the stability bench drives \
+             scene.rayleigh_fraction, so use a fidelity without a fixed step (\"fast\" or \"reference\")",
+            a.sweep.display(),
+            sweep.file.scene.timestep_s,
+            sweep.file.scene.fidelity
+        ));
+    }
+    if a.fractions.is_empty() || a.fractions.iter().any(|f| !(f.is_finite() && *f > 0.0 && *f <= 1.0)) {
+        return bad(format!(
+            "--fractions {:?}: expected fractions of the Rayleigh time in (0, 1]",
+            a.fractions
+        ));
+    }
+    if a.fractions.windows(2).any(|w| w[1] <= w[0]) {
+        return bad(format!("--fractions {:?}: expected increasing fractions", a.fractions));
+    }
+    let corner = stability::harshest_corner(&sweep);
+    let e0 = point::resolve(&sweep, &corner)["youngs_modulus"];
+    let moduli = a.moduli.unwrap_or_else(|| stability::default_moduli(e0));
+    if moduli.is_empty() || moduli.iter().any(|e| !(e.is_finite() && (5.0..=1000.0).contains(e))) {
+        return bad(format!("--moduli {moduli:?}: expected Young's moduli in [5, 1000] MPa"));
+    }
+    if moduli.windows(2).any(|w| w[1] >= w[0]) {
+        return bad(format!("--moduli {moduli:?}: expected decreasing moduli"));
+    }
+    if a.seeds == 0 {
+        return bad("--seeds 0: expected at least 1".into());
+    }
+    let jobs = jobs(a.jobs)?;
+    let out = a.out.unwrap_or_else(|| PathBuf::from("runs").join(format!("{}-stability", sweep.file.name)));
+    driver::check_out_dir(&out)?;
+    if std::fs::read_dir(&out).map(|mut d| d.next().is_some()).unwrap_or(false) {
+        return bad(format!("{}: not empty; choose another --out", out.display()));
+    }
+    let ctx = PointContext::new(sweep)?;
+    // Every level's scene must build (the bound aside) before anything is written.
+    let plan = stability::StabilityPlan { corner, fractions: a.fractions, moduli, seeds: a.seeds, jobs, out };
+    stability::check(&ctx, &plan)?;
+    let heading = stability::describe_corner(&ctx.sweep, &plan.corner);
+    demsweep::sys::process::install_interrupt_handler();
+    std::fs::create_dir_all(&plan.out)
+        .map_err(|e| Error::Internal(format!("cannot create {}: {e}", plan.out.display())))?;
+    println!("harshest corner: {heading}; {} seeds per level", plan.seeds);
+    println!(
+        "{:<9} {:>8} {:>8} {:>10} {:>8} {:>7} {:>8} {:>7} {:>7}  verdict",
+        "ladder", "dt/T_R", "E MPa", "dt s", "MFR", "SE", "drift", "bound", "wall s"
+    );
+    let cancel = CancelToken::new();
+    let show = |r: &stability::LevelResult| {
+        let pct = |v: Option<f64>| v.map(|v| format!("{:+.1}%", 100.0 * v)).unwrap_or_else(|| "-".into());
+        println!(
+            "{:<9} {:>8} {:>8} {:>10.3e} {:>8} {:>7} {:>8} {:>7} {:>7.1}  {}",
+            r.ladder,
+            r.level.fraction,
+            r.level.youngs_mpa,
+            r.runs.first().map_or(f64::NAN, |x| x.timestep),
+            r.mfr_mean.map(|v| format!("{v:.4}")).unwrap_or_else(|| "-".into()),
+            r.mfr_se.map(|v| format!("{v:.4}")).unwrap_or_else(|| "-".into()),
+            pct(r.drift),
+            r.bound.map(|v| format!("±{:.1}%", 100.0 * v)).unwrap_or_else(|| "-".into()),
+            r.runs.iter().map(|x| x.wall).sum::<f64>(),
+            r.verdict
+        );
+    };
+    let results = stability::run(&ctx, &plan, &cancel, &show)?;
+    let files = stability::write(&plan.out, &results, &format!("Stability map at {heading}"))?;
+    let default = ctx.sweep.file.scene.rayleigh_fraction;
+    let (safe, edge) = stability::edge(&results, "timestep");
+    match (safe, edge) {
+        (Some(s), e) => println!(
+            "timestep: safe up to {} × T_R ({:.2}× the default {default}); edge {}",
+            s.level.fraction,
+            s.level.fraction / default,
+            e.map(|e| format!(
+                "{} × T_R ({:.2}× the default): {}",
+                e.level.fraction,
+                e.level.fraction / default,
+                e.verdict
+            ))
+            .unwrap_or_else(|| "not reached".into())
+        ),
+        (None, _) => println!("timestep: even the first level failed"),
+    }
+    let (safe, edge) = stability::edge(&results, "stiffness");
+    match (safe, edge) {
+        (Some(s), e) => println!(
+            "stiffness: safe down to {} MPa at {default} × T_R; edge {}",
+            s.level.youngs_mpa,
+            e.map(|e| format!("{} MPa: {}", e.level.youngs_mpa, e.verdict))
+                .unwrap_or_else(|| "not reached".into())
+        ),
+        (None, _) => println!("stiffness: even the first level failed"),
+    }
+    for f in files {
+        eprintln!("wrote {}", f.display());
+    }
+    Ok(exit::SUCCESS)
+}
+
+pub(super) fn bench_contact(a: BenchContactArgs) -> Result<i32, Error> {
+    use demsweep::bench::contact::{drift, stiffness, timestep, to_csv};
+    if a.contacts == 0 {
+        return Err(Error::input("--contacts 0: expected at least 1"));
+    }
+    if a.out.exists() && !a.out.is_dir() {
+        return Err(Error::input(format!("--out {}: not a directory", a.out.display())));
+    }
+    std::fs::create_dir_all(&a.out)
+        .map_err(|e| Error::Internal(format!("cannot create {}: {e}", a.out.display())))?;
+    let write = |name: &str, text: String| -> Result<(), Error> {
+        let path = a.out.join(name);
+        demsweep::sys::atomic::write(&path, text.as_bytes())
+            .map_err(|e| Error::Internal(format!("cannot write {}: {e}", path.display())))?;
+        eprintln!("wrote {}", path.display());
+        Ok(())
+    };
+
+    println!("Energy drift at e = 1 over {} contacts (E_N/E_0* = closed form)", a.contacts);
+    let rows =
+        drift::run(&drift::default_cases(), &drift::DEFAULT_LADDER, a.contacts).map_err(contact_error)?;
+    print!("{}", drift::table(&rows));
+    write("contact-drift.csv", to_csv(&rows).map_err(contact_error)?)?;
+
+    println!("\nStiffness ratios (q = wall/particle modulus; errors against Hertz theory)");
+    let rows = stiffness::run(&stiffness::PARTICLE_MODULI, &stiffness::RATIOS);
+    print!("{}", stiffness::table(&rows));
+    write("contact-stiffness.csv", to_csv(&rows).map_err(contact_error)?)?;
+
+    println!("\nTimestep ladder, reference solver against {}", a.engine.display());
+    let rows = timestep::run(&timestep::default_cases(), &timestep::DEFAULT_LADDER, &a.engine)
+        .map_err(contact_error)?;
+    print!("{}", timestep::table(&rows));
+    write("contact-timestep.csv", to_csv(&rows).map_err(contact_error)?)?;
+    if rows.iter().all(|r| r.liggghts_restitution_n.is_none()) {
+        let first = rows.first().map_or("", |r| r.error.as_str());
+        return Err(Error::Engine(format!("LIGGGHTS failed on every ladder case: {first}")));
+    }
+    Ok(exit::SUCCESS)
+}

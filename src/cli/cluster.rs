@@ -1,0 +1,221 @@
+//! `sweep submit` and `sweep work`: a sweep directory run as a cluster array job.
+
+use std::path::PathBuf;
+
+use super::sweep::finish_runs;
+use super::{run_options, PoolArgs};
+use clap::Args;
+use demsweep::error::{exit, Error};
+use demsweep::sys::process::CancelToken;
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub(super) enum SchedulerArg {
+    /// Slurm: `sbatch --array=...`.
+    Slurm,
+    /// PBS Pro / OpenPBS: `#PBS -J ...`.
+    Pbs,
+    /// Torque: `#PBS -t ...`.
+    Torque,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub(super) enum OnlyArg {
+    /// Points not finished: never run, cut off, or held by a claim.
+    Missing,
+    /// Points that failed; their tasks re-run them.
+    Failed,
+}
+
+/// Render templates/slurm.tera or templates/pbs.tera into DIR/cluster/ and submit it: an array
+/// whose task i runs design points [i*P, (i+1)*P) of the sweep directory (P fixed by the first
+/// submission, so an index always means the same points), then helps with what other tasks
+/// left; and a job after the array (afterany) that runs `sweep report DIR`. DIR must be on a
+/// file system every node sees. Submitting again is the cluster's resume: only the indices
+/// whose points are unfinished are submitted (e.g. --array=3,17-19).
+#[derive(Args)]
+pub(super) struct SubmitArgs {
+    dir: PathBuf,
+    #[arg(long, value_enum)]
+    scheduler: SchedulerArg,
+    /// Array tasks sharing the points; required at the first submission, which fixes the
+    /// points per task for good.
+    #[arg(long)]
+    tasks: Option<usize>,
+    /// Concurrent LIGGGHTS runs in each task.
+    #[arg(long, default_value_t = 1)]
+    jobs_per_task: usize,
+    /// Wall time of each task: HH:MM:SS (Slurm also D-HH:MM:SS). A task stopped at its limit
+    /// leaves its runs to a re-submission.
+    #[arg(long, default_value = "01:00:00")]
+    walltime: String,
+    /// Queue (PBS) or partition (Slurm).
+    #[arg(long, visible_alias = "partition")]
+    queue: Option<String>,
+    /// Account to charge.
+    #[arg(long)]
+    account: Option<String>,
+    /// MPI ranks per LIGGGHTS run (mpirun -np R); a task asks for jobs-per-task × R cores.
+    #[arg(long, default_value_t = 1)]
+    ranks: u32,
+    /// Which points to submit: missing (the default), failed (re-run them), or both.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "missing")]
+    only: Vec<OnlyArg>,
+    /// Seconds a claim stands without its heartbeat: a lost node's runs are taken over after it.
+    #[arg(long, default_value_t = 120)]
+    lease: u64,
+    /// A template to use instead of the built-in one.
+    #[arg(long)]
+    template: Option<PathBuf>,
+    /// Tasks run only their own points, and do not help with what other tasks left.
+    #[arg(long)]
+    no_steal: bool,
+    /// Write the scripts into DIR/cluster/ but do not submit them.
+    #[arg(long)]
+    dry_run: bool,
+}
+
+#[derive(Args)]
+pub(super) struct WorkArgs {
+    dir: PathBuf,
+    /// The array index.
+    #[arg(long)]
+    task: usize,
+    /// Design points per array index (from DIR/cluster/layout.json).
+    #[arg(long)]
+    per_task: usize,
+    /// Cores to use; runs at once = jobs / ranks.
+    #[arg(long)]
+    jobs: Option<usize>,
+    #[arg(long, default_value_t = 1)]
+    ranks: u32,
+    /// Seconds a claim stands without its heartbeat.
+    #[arg(long, default_value_t = 120)]
+    lease: u64,
+    #[arg(long)]
+    retry_failed: bool,
+    /// Run only this task's points, not other tasks' leftovers.
+    #[arg(long)]
+    no_steal: bool,
+    /// Name claims after this host instead of the machine's.
+    #[arg(long)]
+    host: Option<String>,
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+pub(super) fn submit(a: SubmitArgs) -> Result<i32, Error> {
+    use demsweep::run::cluster::{self, Only, Scheduler, SubmitOptions};
+    if a.jobs_per_task == 0 {
+        return Err(Error::input("--jobs-per-task 0: expected at least 1"));
+    }
+    if a.ranks == 0 {
+        return Err(Error::input("--ranks 0: expected at least 1"));
+    }
+    if a.lease == 0 {
+        return Err(Error::input("--lease 0: expected seconds, at least 1"));
+    }
+    let scheduler = match a.scheduler {
+        SchedulerArg::Slurm => Scheduler::Slurm,
+        SchedulerArg::Pbs => Scheduler::PbsPro,
+        SchedulerArg::Torque => Scheduler::Torque,
+    };
+    let opts = SubmitOptions {
+        scheduler,
+        tasks: a.tasks,
+        jobs_per_task: a.jobs_per_task,
+        ranks: a.ranks,
+        walltime: a.walltime,
+        queue: a.queue,
+        account: a.account,
+        lease: std::time::Duration::from_secs(a.lease),
+        only: Only { missing: a.only.contains(&OnlyArg::Missing), failed: a.only.contains(&OnlyArg::Failed) },
+        template: a.template,
+        steal: !a.no_steal,
+        exe: std::env::current_exe()?,
+    };
+    let cmd = scheduler.submit_command();
+    if !a.dry_run && !cluster::on_path(cmd) {
+        return Err(Error::input(format!(
+            "--scheduler {}: `{cmd}` is not on PATH (not a {} login node?); --dry-run writes the scripts only",
+            scheduler.name(),
+            scheduler.name()
+        )));
+    }
+    let rendered = match cluster::plan(&a.dir, &opts)? {
+        Ok(r) => r,
+        Err(c) => {
+            eprintln!(
+                "nothing to submit: {} of {} points done, {} screened, {} failed{}",
+                c.done,
+                c.points,
+                c.screened,
+                c.failed,
+                if c.failed > 0 && !opts.only.failed { " (`--only failed` re-runs them)" } else { "" }
+            );
+            return Ok(exit::SUCCESS);
+        }
+    };
+    let (array, report) = cluster::write(&a.dir, &rendered)?;
+    let what = format!(
+        "{} points as array tasks {} ({} per task)",
+        rendered.points,
+        cluster::ranges(&rendered.tasks),
+        rendered.layout.per_task
+    );
+    if a.dry_run {
+        eprintln!(
+            "wrote {} and {}: {what}; submit with `{cmd} {}`",
+            array.display(),
+            report.display(),
+            array.display()
+        );
+        println!("{}", array.display());
+        return Ok(exit::SUCCESS);
+    }
+    let (job, report_job) = cluster::submit(&a.dir, &rendered, &array, &report)?;
+    eprintln!(
+        "submitted {what}: job {job}; `sweep report` runs after it as job {report_job}; logs in {}",
+        cluster::cluster_dir(&a.dir).join("logs").display()
+    );
+    println!("{job}");
+    Ok(exit::SUCCESS)
+}
+
+pub(super) fn work(a: WorkArgs) -> Result<i32, Error> {
+    if a.per_task == 0 {
+        return Err(Error::input("--per-task 0: expected at least 1"));
+    }
+    if a.ranks == 0 {
+        return Err(Error::input("--ranks 0: expected at least 1"));
+    }
+    let cores = a.jobs.unwrap_or_else(super::default_jobs);
+    if cores < a.ranks as usize {
+        return Err(Error::input(format!(
+            "--jobs {cores} --ranks {}: a run needs {} cores; give --jobs at least --ranks",
+            a.ranks, a.ranks
+        )));
+    }
+    if a.lease == 0 {
+        return Err(Error::input("--lease 0: expected seconds, at least 1"));
+    }
+    demsweep::store::set_default_lease(std::time::Duration::from_secs(a.lease));
+    if let Some(h) = &a.host {
+        demsweep::sys::host::set_host_name(h);
+    }
+    let pool = PoolArgs { jobs: Some(cores / a.ranks as usize), quiet: a.quiet };
+    let opts = run_options(&pool, a.retry_failed, false)?;
+    demsweep::sys::process::install_interrupt_handler();
+    let w = demsweep::run::cluster::WorkOptions {
+        task: a.task,
+        per_task: a.per_task,
+        steal: !a.no_steal,
+        ranks: a.ranks,
+    };
+    let summary = demsweep::run::cluster::work(&a.dir, &w, &opts, &CancelToken::new())?;
+    eprintln!(
+        "task {}: ran {} runs; the sweep has {} of {} points done, {} screened, {} failed",
+        a.task, summary.ran, summary.done, summary.points, summary.screened, summary.failed
+    );
+    // A task writes no report: the dependent report job does, once every task has ended.
+    Ok(finish_runs(&summary))
+}

@@ -1,0 +1,203 @@
+//! The command line: the commands and their shared arguments, and the dispatch from a parsed
+//! command to its handler. One file per command group; each turns its arguments into calls
+//! of the library and prints what they return.
+
+mod bench;
+mod cluster;
+mod contact;
+mod point;
+mod predict;
+mod stats;
+mod sweep;
+
+use clap::{Args, Parser, Subcommand};
+use demsweep::error::Error;
+use demsweep::run::progress::ProgressMode;
+use demsweep::run::RunOptions;
+use demsweep::sweep::Sweep;
+
+/// Parameter sweeps of LIGGGHTS powder-spreading simulations.
+///
+/// Turns a sweep file (TOML) into a design — a regular lattice or scrambled Halton points —,
+/// renders one LIGGGHTS deck per point, runs them as a job pool, and reads the mass flow rate
+/// (MFR) and the v_x profile in front of the blade from the dumps.
+///
+/// Exit codes: 0 success; 1 a sweep finished but some runs failed; 2 bad input (nothing on disk
+/// changed); 3 engine failure; 4 internal error; 130 interrupted (the directory is resumable).
+#[derive(Parser)]
+#[command(name = "sweep", version, max_term_width = 100)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run nested lattices (e.g. 5^d, 6^d, ...) until the MFR statistics converge; a point shared
+    /// by two levels runs once.
+    ///
+    /// Each level is one space; after each, the MFR statistics are compared with the previous
+    /// level's ([convergence] rule, or the flags below). Once the rule holds no new runs start.
+    /// Ends by writing the report (as `sweep report`) and printing the verdict, naming the level.
+    /// Points where nothing can pass under the blade are screened as MFR = 0 once a sample of
+    /// them ran with MFR = 0 ([run] screen; `sweep points --screen` shows which).
+    Lattice(sweep::LatticeArgs),
+    /// Run scrambled-Halton points in batches of --step up to --max, stopping once the MFR
+    /// statistics converge.
+    ///
+    /// Each prefix (step, 2·step, ...) is one space; after each, the MFR statistics are compared
+    /// with the previous prefix's ([convergence] rule, or the flags below). Once the rule holds no
+    /// new runs start. Ends by writing the report (as `sweep report`) and printing the verdict.
+    /// A larger --max on a converged directory extends it and judges again past its old extent.
+    /// Points where nothing can pass under the blade are screened as MFR = 0 once a sample of
+    /// them ran with MFR = 0 ([run] screen; `sweep points --screen` shows which).
+    Lds(sweep::LdsArgs),
+    /// Finish an interrupted sweep; every completed run is reused.
+    ///
+    /// Keeps the convergence rule and verdict of DIR/sweep.toml: a converged sweep runs nothing
+    /// more. Ends by writing the report.
+    Resume(sweep::ResumeArgs),
+    /// Counts of a sweep directory: done, failed, running, screened, pending; the screen's verdict.
+    Status(sweep::DirArgs),
+    /// Write convergence.csv, summary.json and report/ (plots, report.html) of a sweep directory.
+    ///
+    /// Also rewrites results.csv from the run directories. One row per complete space in convergence.csv (statistics of the done runs' MFR with 95%
+    /// bootstrap intervals, relative changes, whether the rule holds); the verdict, counts,
+    /// timing, sensitivity indices and spreading quality in summary.json; every figure as SVG and
+    /// PNG and a self-contained report.html in DIR/report/. The rule is DIR/sweep.toml's
+    /// [convergence] unless overridden below. Prints the verdict and the path of report.html.
+    Report(sweep::ReportArgs),
+    /// Print a design as CSV (header = swept parameter names, values in their units).
+    Points(point::PointsArgs),
+    /// Write the deck, blade mesh and initial pile of one point without running it.
+    Render(point::RenderArgs),
+    /// Run one point through LIGGGHTS and print its result.
+    Run(point::RunArgs),
+    /// The statistics of a CSV column (mean, std, skewness, kurtosis) with bootstrap intervals.
+    ///
+    /// Mean; standard deviation with divisor N; skewness as Pearson's second coefficient
+    /// 3·(mean − median)/S; kurtosis m4/S⁴ (not the excess); also the moment skewness and the
+    /// median. Empty cells and cells that are not finite numbers are skipped and counted. Skewness
+    /// and kurtosis are undefined (null) when every value is equal. Intervals: 95% percentile
+    /// bootstrap, 1,000 resamples, seed 14.
+    Stats(stats::StatsArgs),
+    /// One single-contact case on the Hertz–Mindlin reference solver, as JSON.
+    Contact(contact::ContactArgs),
+    /// Single-contact cases through LIGGGHTS, compared with the reference solver.
+    ContactCheck(contact::ContactCheckArgs),
+    /// Write and submit a Slurm or PBS array job that runs a sweep directory on a cluster.
+    Submit(cluster::SubmitArgs),
+    /// One array task of `sweep submit`: run the task's share of a sweep directory.
+    #[command(hide = true)]
+    Work(cluster::WorkArgs),
+    /// MFR at a setting from the sweep's emulator (a Gaussian process fitted to its done
+    /// points), with the predictive standard error.
+    ///
+    /// The same emulator as report.html's: Matérn 5/2, each point's own noise where its result
+    /// records an mfr_se. Prints the leave-one-out error beside the prediction; warns when a
+    /// value lies outside the swept range.
+    Predict(predict::PredictArgs),
+    /// Benchmarks: run time against error of the fidelity presets (`fidelity`), the scene's
+    /// stability edge (`stability`), and the contact reference solver's own stability
+    /// (`contact`).
+    #[command(subcommand)]
+    Bench(bench::BenchCommand),
+}
+
+/// Overrides of the sweep file's [convergence] table. A sweep stops at the first space where the
+/// rule holds; `lattice`/`lds` record the overrides in DIR/sweep.toml, so `resume` keeps them.
+#[derive(Args)]
+struct ConvergenceArgs {
+    /// "scaled" (default: every statistic moved by at most the tolerance times its own scale and
+    /// known to within it, its 95% bootstrap half-width, for --hold consecutive spaces), "any"
+    /// (the thesis's rule: any one statistic within the tolerance relatively) or "all" (every
+    /// statistic within the tolerance relatively or the floor). docs/statistics.md.
+    #[arg(long)]
+    rule: Option<String>,
+    /// The fraction of a statistic's scale ("scaled") or of its previous value ("any", "all")
+    /// that counts as converged (e.g. 0.05).
+    #[arg(long, allow_negative_numbers = true)]
+    tolerance: Option<f64>,
+    /// Absolute change that counts as converged whatever the relative one (rule "all").
+    #[arg(long, allow_negative_numbers = true)]
+    floor: Option<f64>,
+    /// Consecutive spaces the rule must hold for (rules "scaled" and "all").
+    #[arg(long)]
+    hold: Option<usize>,
+}
+
+impl ConvergenceArgs {
+    fn overrides(&self) -> demsweep::analysis::convergence::Overrides {
+        demsweep::analysis::convergence::Overrides {
+            rule: self.rule.clone(),
+            tolerance: self.tolerance,
+            floor: self.floor,
+            hold: self.hold,
+        }
+    }
+}
+
+#[derive(Args)]
+struct PoolArgs {
+    /// Concurrent LIGGGHTS runs (default: the machine's cores).
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// No progress on stderr (default: a bar on a terminal, a line every 10 s otherwise).
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+pub fn run(cli: Cli) -> Result<i32, Error> {
+    match cli.command {
+        Command::Points(a) => point::points(a),
+        Command::Lattice(a) => sweep::lattice(a),
+        Command::Lds(a) => sweep::lds(a),
+        Command::Resume(a) => sweep::resume(a),
+        Command::Status(a) => sweep::status(a),
+        Command::Report(a) => sweep::report(a),
+        Command::Render(a) => point::render(a),
+        Command::Run(a) => point::run_one(a),
+        Command::Stats(a) => stats::stats(a),
+        Command::Predict(a) => predict::predict(a),
+        Command::Contact(a) => contact::contact(a),
+        Command::ContactCheck(a) => contact::contact_check(a),
+        Command::Submit(a) => cluster::submit(a),
+        Command::Work(a) => cluster::work(a),
+        Command::Bench(bench::BenchCommand::Stability(a)) => bench::bench_stability(a),
+        Command::Bench(bench::BenchCommand::Fidelity(a)) => bench::bench_fidelity(a),
+        Command::Bench(bench::BenchCommand::Contact(a)) => bench::bench_contact(a),
+    }
+}
+
+/// Refuse a sweep whose timestep fraction is beyond the measured safe bound, before anything is
+/// written; `--force` accepts it (and any point's, for the thesis fidelity's fixed step).
+fn check_timestep(sweep: &mut Sweep, force: bool) -> Result<(), Error> {
+    if force {
+        sweep.file.scene.force_timestep = true;
+        return Ok(());
+    }
+    if sweep.file.scene.timestep_s == 0.0 {
+        demsweep::scene::check_rayleigh_fraction(sweep.file.scene.rayleigh_fraction)
+            .map_err(|e| Error::input(format!("{}: scene.rayleigh_fraction: {e}", sweep.path.display())))?;
+    }
+    Ok(())
+}
+
+fn run_options(p: &PoolArgs, retry_failed: bool, force: bool) -> Result<RunOptions, Error> {
+    let jobs = jobs(p.jobs)?;
+    Ok(RunOptions { jobs, progress: ProgressMode::detect(p.quiet), retry_failed, force })
+}
+
+/// The `--jobs` default: the machine's cores.
+fn default_jobs() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// The value of a `--jobs` flag: at least 1, the machine's cores when not given.
+fn jobs(flag: Option<usize>) -> Result<usize, Error> {
+    match flag {
+        Some(0) => Err(Error::input("--jobs 0: expected at least 1")),
+        Some(n) => Ok(n),
+        None => Ok(default_jobs()),
+    }
+}

@@ -1,0 +1,218 @@
+//! `sweep points`, `render` and `run`: a design printed, and one point rendered or run.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use super::check_timestep;
+use clap::Args;
+use demsweep::error::{exit, Error};
+use demsweep::outcome::RunOutcome;
+use demsweep::point::{self, PointContext};
+use demsweep::sweep::{Scrambling, Sweep};
+
+#[derive(Args)]
+pub(super) struct PointsArgs {
+    sweep: PathBuf,
+    /// A lattice with L values per dimension (L^d points).
+    #[arg(long, value_name = "L", conflicts_with = "lds", required_unless_present = "lds")]
+    lattice: Option<usize>,
+    /// The first N points of the Halton sequence, scrambled as design.lds.scrambling says.
+    /// Plain and Braaten–Weller Halton skip index 0 (the origin: every parameter at lo), so
+    /// their first row is index 1; random scrambling starts at index 0, which it maps to a
+    /// random point like any other (as scipy's Halton does). Every prefix is a design.
+    #[arg(long, value_name = "N")]
+    lds: Option<usize>,
+    /// Plain Halton, no digit scrambling (overrides design.lds.scrambling).
+    #[arg(long, requires = "lds")]
+    no_scramble: bool,
+    /// Also print the design's squared centred L2 discrepancy CD² (Hickernell 1998; scipy's
+    /// qmc.discrepancy(method="CD") convention) in unit coordinates to stderr.
+    #[arg(long)]
+    discrepancy: bool,
+    /// Add a `screen` column: `closed` where nothing can pass under the blade (skipped as
+    /// MFR = 0 once the screen is verified), `verification` for its verification sample (run
+    /// anyway), empty where the point runs; and a count on stderr.
+    #[arg(long)]
+    screen: bool,
+}
+
+#[derive(Args)]
+pub(super) struct RenderArgs {
+    sweep: PathBuf,
+    /// Parameter values, e.g. --set diameter=2,gap=4 (units of the sweep file).
+    #[arg(long, value_delimiter = ',')]
+    set: Vec<String>,
+    #[arg(long)]
+    out: PathBuf,
+    /// Accept a timestep beyond the measured safe bound (BENCHMARKS.md "Stability edge").
+    #[arg(long)]
+    force: bool,
+}
+
+#[derive(Args)]
+pub(super) struct RunArgs {
+    sweep: PathBuf,
+    #[arg(long, value_delimiter = ',')]
+    set: Vec<String>,
+    /// Print result.json instead of a summary.
+    #[arg(long)]
+    json: bool,
+    /// Keep the run directory here (default: a temporary directory, removed afterwards).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Accept a timestep beyond the measured safe bound (BENCHMARKS.md "Stability edge").
+    #[arg(long)]
+    force: bool,
+}
+
+pub(super) fn points(a: PointsArgs) -> Result<i32, Error> {
+    let sweep = Sweep::load(&a.sweep)?;
+    let unit = match (a.lattice, a.lds) {
+        (Some(l), _) => {
+            demsweep::design::lattice_size(sweep.dim(), l)
+                .map_err(|e| Error::input(format!("--lattice {l}: {e}")))?;
+            demsweep::design::lattice::lattice(sweep.dim(), l)
+        }
+        (None, Some(n)) => {
+            demsweep::design::lds_size(n).map_err(|e| Error::input(format!("--lds {n}: {e}")))?;
+            let lds = &sweep.file.design.lds;
+            let scrambling = if a.no_scramble { Scrambling::None } else { lds.scrambling };
+            demsweep::design::halton::halton(sweep.dim(), n, scrambling, lds.seed)
+        }
+        (None, None) => unreachable!("clap requires --lattice or --lds"),
+    };
+    if a.discrepancy {
+        eprintln!(
+            "centred L2 discrepancy (squared) of {} points in {}-D: {:.6e}",
+            unit.len(),
+            sweep.dim(),
+            demsweep::design::discrepancy::centred_l2(&unit)
+        );
+    }
+    let values: Vec<Vec<f64>> = unit.iter().map(|p| demsweep::sweep::space::scale_point(&sweep, p)).collect();
+    let screen = if a.screen { Some(demsweep::run::screen::preview(&sweep, &values)?) } else { None };
+    if let Some(col) = &screen {
+        let count = |w: &str| col.iter().filter(|c| **c == w).count();
+        match count("closed") + count("verification") {
+            0 => eprintln!("screen: none of the {} points is closed", col.len()),
+            closed => eprintln!(
+                "screen: {closed} of {} points closed; {} skipped as MFR = 0 once the {} of the verification sample give MFR = 0",
+                col.len(),
+                count("closed"),
+                count("verification")
+            ),
+        }
+    }
+    let stdout = std::io::stdout();
+    let mut out = std::io::BufWriter::new(stdout.lock());
+    let write = |out: &mut dyn Write| -> std::io::Result<()> {
+        let extra = if screen.is_some() { ",screen" } else { "" };
+        writeln!(out, "{}{extra}", sweep.names().join(","))?;
+        for (k, v) in values.iter().enumerate() {
+            let row: Vec<String> = v.iter().map(|v| format!("{v}")).collect();
+            let extra = screen.as_ref().map_or(String::new(), |c| format!(",{}", c[k]));
+            writeln!(out, "{}{extra}", row.join(","))?;
+        }
+        out.flush()
+    };
+    match write(&mut out) {
+        Ok(()) => Ok(exit::SUCCESS),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(exit::SUCCESS),
+        Err(e) => Err(e.into()),
+    }
+}
+
+pub(super) fn render(a: RenderArgs) -> Result<i32, Error> {
+    let mut sweep = Sweep::load(&a.sweep)?;
+    check_timestep(&mut sweep, a.force)?;
+    let values = point::swept_values_from_set(&sweep, &a.set)?;
+    if a.out.exists() && !a.out.is_dir() {
+        return Err(Error::input(format!("--out {}: exists and is not a directory", a.out.display())));
+    }
+    let ctx = PointContext::new(sweep)?;
+    let prepared = point::prepare(&ctx, &values)?;
+    std::fs::create_dir_all(&a.out)
+        .and_then(|_| prepared.deck.write(&a.out))
+        .map_err(|e| Error::Internal(format!("cannot write to {}: {e}", a.out.display())))?;
+    let s = &prepared.scene;
+    eprintln!(
+        "wrote {}/{{in.liggghts,blade.stl,pile.data}}: {} particles ({} substrate), dt = {:.3e} s, settle + {} steps, hash {}",
+        a.out.display(),
+        s.particles,
+        s.substrate_particles,
+        s.timestep,
+        s.spread_steps(),
+        &prepared.hash[..16]
+    );
+    Ok(exit::SUCCESS)
+}
+
+pub(super) fn run_one(a: RunArgs) -> Result<i32, Error> {
+    demsweep::sys::process::install_interrupt_handler();
+    let mut sweep = Sweep::load(&a.sweep)?;
+    check_timestep(&mut sweep, a.force)?;
+    let values = point::swept_values_from_set(&sweep, &a.set)?;
+    if let Some(out) = a.out.as_ref().filter(|o| o.exists() && !o.is_dir()) {
+        return Err(Error::input(format!("--out {}: exists and is not a directory", out.display())));
+    }
+    let ctx = PointContext::new(sweep)?;
+    let prepared = point::prepare(&ctx, &values)?;
+    let temp;
+    let dir = match &a.out {
+        Some(d) => d.clone(),
+        None => {
+            temp = tempfile::Builder::new().prefix("sweep-run-").tempdir()?;
+            temp.path().to_path_buf()
+        }
+    };
+    if !a.json {
+        eprintln!(
+            "running {} particles, settle + {} steps (dt = {:.3e} s) in {}",
+            prepared.scene.particles,
+            prepared.scene.spread_steps(),
+            prepared.scene.timestep,
+            dir.display()
+        );
+        if prepared.scene.nothing_passes() {
+            eprintln!("the screen closes this point: nothing can pass under the blade (a sweep counts it as MFR = 0)");
+        }
+    }
+    let cancel = demsweep::sys::process::CancelToken::new();
+    match point::execute(&ctx, &prepared, &dir, &cancel) {
+        RunOutcome::Done(r) => {
+            if a.json {
+                println!("{}", serde_json::to_string_pretty(&r).map_err(|e| Error::Internal(e.to_string()))?);
+            } else {
+                let vx: Vec<String> =
+                    r.vx.iter().map(|v| v.map(|v| format!("{v:.3}")).unwrap_or_else(|| "-".into())).collect();
+                println!(
+                    "MFR        {:.4}  ({} particles; flux cross-check {:.4}, {})",
+                    r.mfr,
+                    r.mfr_particles,
+                    r.mfr_flux,
+                    if r.steady { "steady" } else { "NOT steady" }
+                );
+                println!("v_x (m/s)  {}", vx.join(" "));
+                println!(
+                    "particles  {}   steps {}   simulated {:.4} s   wall {:.1} s",
+                    r.particles, r.steps, r.simulated_time, r.wall_time
+                );
+                for w in &r.warnings {
+                    println!("warning    {w}");
+                }
+            }
+            Ok(exit::SUCCESS)
+        }
+        RunOutcome::Failed(f) => {
+            if a.json {
+                println!("{}", serde_json::to_string_pretty(&f).map_err(|e| Error::Internal(e.to_string()))?);
+            }
+            eprintln!("error: run failed ({}): {}", f.class.as_str(), f.reason);
+            if a.out.is_none() && !f.log_tail.is_empty() {
+                eprintln!("last lines of the log:\n{}", f.log_tail);
+            }
+            Ok(exit::RUNS_FAILED)
+        }
+        RunOutcome::Cancelled => Err(Error::Interrupted),
+    }
+}

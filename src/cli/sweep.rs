@@ -1,0 +1,249 @@
+//! `sweep lattice`, `lds`, `resume`, `status` and `report`: a sweep directory from start to
+//! report.
+
+use std::path::PathBuf;
+
+use super::{check_timestep, run_options, ConvergenceArgs, PoolArgs};
+use clap::Args;
+use demsweep::analysis::convergence::Criteria;
+use demsweep::analysis::stats::Bootstrap;
+use demsweep::error::{exit, Error};
+use demsweep::run::{self as driver, Summary, Watch};
+use demsweep::store::DesignRecord;
+use demsweep::sweep::Sweep;
+use demsweep::sys::process::CancelToken;
+
+#[derive(Args)]
+pub(super) struct LatticeArgs {
+    sweep: PathBuf,
+    /// Lattice levels (values per dimension), e.g. 5,6,7,9,10; default from the sweep file.
+    /// A point shared by two levels runs once.
+    #[arg(long, value_delimiter = ',')]
+    levels: Option<Vec<usize>>,
+    /// Sweep directory (default: runs/<sweep name>). An existing one is continued, or extended
+    /// with more levels.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    #[command(flatten)]
+    convergence: ConvergenceArgs,
+    #[command(flatten)]
+    pool: PoolArgs,
+    /// Accept a timestep beyond the measured safe bound (scene.rayleigh_fraction above
+    /// MAX_RAYLEIGH_FRACTION; BENCHMARKS.md "Stability edge").
+    #[arg(long)]
+    force: bool,
+}
+
+#[derive(Args)]
+pub(super) struct LdsArgs {
+    sweep: PathBuf,
+    /// Points per batch (one nested space per batch); default design.lds.step.
+    #[arg(long)]
+    step: Option<usize>,
+    /// Most points to run, at least the step; default design.lds.max. A larger --max on an
+    /// existing directory extends it, reusing its points.
+    #[arg(long)]
+    max: Option<usize>,
+    /// Sweep directory (default: runs/<sweep name>).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    #[command(flatten)]
+    convergence: ConvergenceArgs,
+    #[command(flatten)]
+    pool: PoolArgs,
+    /// Accept a timestep beyond the measured safe bound (scene.rayleigh_fraction above
+    /// MAX_RAYLEIGH_FRACTION; BENCHMARKS.md "Stability edge").
+    #[arg(long)]
+    force: bool,
+}
+
+#[derive(Args)]
+pub(super) struct ReportArgs {
+    /// A sweep directory (holding manifest.json).
+    dir: PathBuf,
+    /// Also print summary.json to stdout.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    convergence: ConvergenceArgs,
+}
+
+#[derive(Args)]
+pub(super) struct ResumeArgs {
+    dir: PathBuf,
+    /// Also re-run runs that failed.
+    #[arg(long)]
+    retry_failed: bool,
+    /// Resume even if templates, mesh or engine changed since the manifest (changed points
+    /// run again under their new hashes), and accept a timestep beyond the measured safe bound.
+    #[arg(long)]
+    force: bool,
+    #[command(flatten)]
+    pool: PoolArgs,
+}
+
+#[derive(Args)]
+pub(super) struct DirArgs {
+    dir: PathBuf,
+    #[arg(long)]
+    json: bool,
+}
+
+pub(super) fn lattice(a: LatticeArgs) -> Result<i32, Error> {
+    let mut sweep = Sweep::load(&a.sweep)?;
+    check_timestep(&mut sweep, a.force)?;
+    a.convergence.overrides().apply(&mut sweep.file.convergence)?;
+    let levels = match a.levels {
+        Some(levels) => {
+            check_levels(sweep.dim(), &levels, "--levels")?;
+            levels
+        }
+        None => {
+            let levels = sweep.file.design.lattice_levels.clone();
+            check_levels(sweep.dim(), &levels, &format!("design.lattice_levels in {}", a.sweep.display()))?;
+            levels
+        }
+    };
+    start(sweep, DesignRecord::Lattice { levels }, a.out, &a.pool)
+}
+
+/// Lattice levels: at least one, each at least 2 and at most [`driver::MAX_POINTS`] points,
+/// increasing (each level is a larger space than the one before).
+pub(super) fn check_levels(dim: usize, levels: &[usize], source: &str) -> Result<(), Error> {
+    let list = levels.iter().map(|l| l.to_string()).collect::<Vec<_>>().join(",");
+    if levels.is_empty() {
+        return Err(Error::input(format!("{source}: expected at least one level, e.g. 5,6,7")));
+    }
+    for &l in levels {
+        demsweep::design::lattice_size(dim, l)
+            .map_err(|e| Error::input(format!("{source} {list}: level {l}: {e}")))?;
+    }
+    if levels.windows(2).any(|w| w[1] <= w[0]) {
+        return Err(Error::input(format!(
+            "{source} {list}: expected increasing levels (each space larger than the one before)"
+        )));
+    }
+    Ok(())
+}
+
+pub(super) fn lds(a: LdsArgs) -> Result<i32, Error> {
+    let mut sweep = Sweep::load(&a.sweep)?;
+    check_timestep(&mut sweep, a.force)?;
+    a.convergence.overrides().apply(&mut sweep.file.convergence)?;
+    let l = &sweep.file.design.lds;
+    let file = a.sweep.display();
+    let (step, step_src) = match a.step {
+        Some(s) => (s, "--step".to_string()),
+        None => (l.step, format!("design.lds.step in {file}")),
+    };
+    let (max, max_src) = match a.max {
+        Some(m) => (m, "--max".to_string()),
+        None => (l.max, format!("design.lds.max in {file}")),
+    };
+    if step == 0 {
+        return Err(Error::input(format!("{step_src} 0: expected a positive number of points per batch")));
+    }
+    demsweep::design::lds_size(max).map_err(|e| Error::input(format!("{max_src} {max}: {e}")))?;
+    if max < step {
+        return Err(Error::input(format!(
+            "{max_src} {max} is less than {step_src} {step}: expected max ≥ step (a batch of \
+             {step} points never completes); lower the step or raise max"
+        )));
+    }
+    let design = DesignRecord::Lds { step, max, scrambling: l.scrambling, seed: l.seed };
+    start(sweep, design, a.out, &a.pool)
+}
+
+pub(super) fn start(
+    mut sweep: Sweep,
+    design: DesignRecord,
+    out: Option<PathBuf>,
+    p: &PoolArgs,
+) -> Result<i32, Error> {
+    let opts = run_options(p, false, false)?;
+    let out = out.unwrap_or_else(|| driver::default_out(&sweep));
+    // Every input is checked before LIGGGHTS is looked at.
+    driver::check_out_dir(&out)?;
+    sweep.file.convergence.min_points = driver::judge_from(&out, &sweep, &design)?;
+    demsweep::sys::process::install_interrupt_handler();
+    let mut watch = Watch::new(Criteria::from_settings(&sweep.file.convergence));
+    let cancel = CancelToken::new();
+    let exec = driver::SweepExecutor::for_sweep(&sweep)?;
+    let summary = driver::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?;
+    finish(&summary, &sweep)
+}
+
+pub(super) fn resume(a: ResumeArgs) -> Result<i32, Error> {
+    let opts = run_options(&a.pool, a.retry_failed, a.force)?;
+    let mut sweep = driver::load_dir_sweep(&a.dir)?;
+    sweep.file.scene.force_timestep = a.force;
+    demsweep::sys::process::install_interrupt_handler();
+    // The same rule as the run that made the directory (DIR/sweep.toml), so a converged sweep
+    // stays stopped where it converged.
+    let mut watch = Watch::new(Criteria::from_settings(&sweep.file.convergence));
+    let cancel = CancelToken::new();
+    let exec = driver::SweepExecutor::for_sweep(&sweep)?;
+    let summary = driver::resume(&a.dir, &exec, &opts, &mut watch, &cancel)?;
+    finish(&summary, &sweep)
+}
+
+/// Write the report, say what happened and what to do next, and return the exit code.
+pub(super) fn finish(s: &Summary, sweep: &Sweep) -> Result<i32, Error> {
+    let criteria = Criteria::from_settings(&sweep.file.convergence);
+    let analysis = demsweep::report::analyse(&s.dir, &criteria, &Bootstrap::default())?;
+    let html = demsweep::report::write(&analysis)?;
+    let code = finish_runs(s);
+    eprintln!("{}: {}", analysis.verdict.status, analysis.verdict.reason);
+    eprintln!("report: {}", html.display());
+    Ok(code)
+}
+
+/// Say what to do next about the runs and return the exit code.
+pub(super) fn finish_runs(s: &Summary) -> i32 {
+    let dir = s.dir.display();
+    if let Some(line) = s.screen.sentence() {
+        let warning =
+            if s.screen.verdict == demsweep::run::screen::Verdict::Refuted { "warning: " } else { "" };
+        eprintln!("{warning}{line}");
+    }
+    if s.interrupted {
+        eprintln!(
+            "interrupted: {} of {} points finished; continue with `sweep resume {dir}`",
+            s.done + s.failed,
+            s.points
+        );
+    } else if s.failed > 0 {
+        eprintln!("{} of {} runs failed; reasons: `sweep status {dir}`; re-run them: `sweep resume {dir} --retry-failed`", s.failed, s.points);
+    }
+    if let Some(space) = &s.stopped_after {
+        eprintln!("the rule held after {space}: no new runs started");
+    }
+    s.exit_code()
+}
+
+pub(super) fn status(a: DirArgs) -> Result<i32, Error> {
+    let report = demsweep::run::status(&a.dir)?;
+    if a.json {
+        let text = serde_json::to_string_pretty(&report).map_err(|e| Error::Internal(e.to_string()))?;
+        println!("{text}");
+    } else {
+        print!("{}", report.to_text());
+    }
+    Ok(exit::SUCCESS)
+}
+
+pub(super) fn report(a: ReportArgs) -> Result<i32, Error> {
+    let sweep = driver::load_dir_sweep(&a.dir)?;
+    let mut settings = sweep.file.convergence.clone();
+    a.convergence.overrides().apply(&mut settings)?;
+    let analysis =
+        demsweep::report::analyse(&a.dir, &Criteria::from_settings(&settings), &Bootstrap::default())?;
+    demsweep::run::rewrite_results(&a.dir)?;
+    let html = demsweep::report::write(&analysis)?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&analysis).map_err(|e| Error::Internal(e.to_string()))?);
+    }
+    eprintln!("{}: {}", analysis.verdict.status, analysis.verdict.reason);
+    eprintln!("report: {}", html.display());
+    Ok(exit::SUCCESS)
+}

@@ -1,0 +1,199 @@
+//! Decks: rendering a Tera template with a scene, and the content hash that names a run.
+//!
+//! The built-in template is embedded in the binary; a sweep file may point at its own. A
+//! template that uses a variable the scene does not define is an error naming the variable.
+
+use std::path::Path;
+
+use sha2::{Digest, Sha256};
+
+use crate::scene::{mesh, pile, Scene};
+use crate::sys::hex;
+
+/// The built-in spreading deck.
+pub const SPREADING_TEMPLATE: &str = include_str!("../../templates/spreading.liggghts.tera");
+/// The built-in deck of the conveyor layout (the blade's frame, a held heap).
+pub const CONVEYOR_TEMPLATE: &str = include_str!("../../templates/conveyor.liggghts.tera");
+
+#[derive(Debug, thiserror::Error)]
+pub enum DeckError {
+    #[error("cannot read template {path}: {reason}")]
+    Read { path: String, reason: String },
+    #[error("template {name}: {reason}")]
+    Syntax { name: String, reason: String },
+    #[error("template {name}: {reason}")]
+    Render { name: String, reason: String },
+}
+
+/// A parsed template, ready to render many points.
+#[derive(Clone)]
+pub struct Template {
+    name: String,
+    source: String,
+    tera: tera::Tera,
+    /// The built-in templates only: the conveyor layout's own deck (a user's template renders
+    /// every layout itself).
+    conveyor: Option<String>,
+}
+
+impl Template {
+    /// The built-in template, or the file at `path`.
+    pub fn load(path: Option<&Path>) -> Result<Template, DeckError> {
+        match path {
+            None => {
+                let mut t = Template::from_source("spreading.liggghts.tera", SPREADING_TEMPLATE)?;
+                let name = "conveyor.liggghts.tera";
+                t.tera
+                    .add_raw_template(name, CONVEYOR_TEMPLATE)
+                    .map_err(|e| DeckError::Syntax { name: name.into(), reason: chain(&e) })?;
+                t.conveyor = Some(name.into());
+                t.source.push_str(CONVEYOR_TEMPLATE);
+                Ok(t)
+            }
+            Some(p) => {
+                let source = std::fs::read_to_string(p)
+                    .map_err(|e| DeckError::Read { path: p.display().to_string(), reason: e.to_string() })?;
+                Template::from_source(&p.display().to_string(), &source)
+            }
+        }
+    }
+
+    pub fn from_source(name: &str, source: &str) -> Result<Template, DeckError> {
+        let mut tera = tera::Tera::default();
+        tera.autoescape_on(vec![]);
+        tera.add_raw_template(name, source)
+            .map_err(|e| DeckError::Syntax { name: name.into(), reason: chain(&e) })?;
+        Ok(Template { name: name.into(), source: source.into(), tera, conveyor: None })
+    }
+
+    /// sha256 of the template source, for the manifest.
+    pub fn hash(&self) -> String {
+        hex(&Sha256::digest(self.source.as_bytes()))
+    }
+
+    /// Render the deck of one scene.
+    pub fn render(&self, scene: &Scene) -> Result<String, DeckError> {
+        let mut context = tera::Context::new();
+        context.insert("scene", scene);
+        let name = match &self.conveyor {
+            Some(c) if scene.is_conveyor() => c,
+            _ => &self.name,
+        };
+        self.tera
+            .render(name, &context)
+            .map_err(|e| DeckError::Render { name: name.clone(), reason: chain(&e) })
+    }
+}
+
+/// Tera nests the useful message ("Variable `scene.foo` not found in context ...") in its
+/// source chain; flatten it into one line.
+fn chain(e: &tera::Error) -> String {
+    let mut parts = vec![e.to_string()];
+    let mut source = std::error::Error::source(e);
+    while let Some(s) = source {
+        parts.push(s.to_string());
+        source = s.source();
+    }
+    parts.join(": ").replace('\n', " ")
+}
+
+/// The files of one run and the hash that identifies it.
+#[derive(Debug, Clone)]
+pub struct Deck {
+    pub input: String,
+    pub mesh: String,
+    pub pile: String,
+    /// sha256 over the deck, the mesh and the engine identity: equal hashes, equal runs.
+    pub hash: String,
+}
+
+impl Deck {
+    pub const INPUT: &'static str = "in.liggghts";
+    pub const MESH: &'static str = "blade.stl";
+
+    pub fn new(template: &Template, scene: &Scene, engine_identity: &str) -> Result<Deck, DeckError> {
+        let input = template.render(scene)?;
+        let mesh = mesh::blade_stl(scene);
+        let pile = pile::pile_data(scene);
+        let mut h = Sha256::new();
+        for part in [input.as_bytes(), mesh.as_bytes(), pile.as_bytes(), engine_identity.as_bytes()] {
+            // Length-prefix each part so no two different sets of parts hash alike.
+            h.update((part.len() as u64).to_le_bytes());
+            h.update(part);
+        }
+        Ok(Deck { input, mesh, pile, hash: hex(&h.finalize()) })
+    }
+
+    /// Write the deck, mesh and pile into `dir`.
+    pub fn write(&self, dir: &Path) -> std::io::Result<()> {
+        std::fs::write(dir.join(Self::INPUT), &self.input)?;
+        std::fs::write(dir.join(Self::MESH), &self.mesh)?;
+        std::fs::write(dir.join(pile::PILE_DATA), &self.pile)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::settings::{SceneSettings, SizeDistributionSpec};
+    use std::collections::BTreeMap;
+
+    fn scene(settings: &SceneSettings, pairs: &[(&str, f64)]) -> Scene {
+        let values: BTreeMap<String, f64> = pairs.iter().map(|(k, v)| (k.to_string(), *v)).collect();
+        Scene::new(&values, settings).unwrap()
+    }
+
+    #[test]
+    fn switched_off_features_leave_no_lines() {
+        let t = Template::load(None).unwrap();
+        let thesis = SceneSettings { layout: "thesis".into(), ..SceneSettings::default() };
+        let deck = t.render(&scene(&thesis, &[("rolling_friction", 0.0)])).unwrap();
+        assert!(!deck.contains("rolling"), "{deck}");
+        assert!(!deck.contains("vtk"));
+        // The thesis layout has no gate, no substrate and a fixed-time settle.
+        assert!(
+            !deck.contains("fix gate")
+                && !deck.contains("group           substrate")
+                && !deck.contains("settleloop")
+        );
+        // The default: rolling friction on every contact (pair, plate, two end walls, blade,
+        // gate), a gate, a substrate, a settle until at rest.
+        let rolled = t.render(&scene(&SceneSettings::default(), &[("rolling_friction", 0.1)])).unwrap();
+        assert!(rolled.contains("coefficientRollingFriction"));
+        assert_eq!(rolled.matches("rolling_friction epsd2").count(), 6);
+        assert!(rolled.contains("unfix gate") && rolled.contains("group           substrate type 3"));
+        assert!(rolled.contains("jump SELF settleloop"));
+    }
+
+    #[test]
+    fn a_size_distribution_puts_every_class_in_the_pile() {
+        let settings = SceneSettings {
+            size_distribution: SizeDistributionSpec::Weibull { bins: 5 },
+            ..SceneSettings::default()
+        };
+        let s = scene(&settings, &[]);
+        let pile = pile::pile_data(&s);
+        for c in &s.size_classes {
+            assert!(pile.contains(&format!(" 1 {} ", c.diameter)), "class {} missing", c.diameter);
+        }
+    }
+
+    #[test]
+    fn an_undefined_variable_is_an_error_naming_it() {
+        let t = Template::from_source("t", "run {{ scene.no_such_thing }}").unwrap();
+        let err = t.render(&scene(&SceneSettings::default(), &[])).unwrap_err().to_string();
+        assert!(err.contains("scene.no_such_thing"), "{err}");
+        assert!(!err.contains('\n'));
+    }
+
+    #[test]
+    fn the_hash_changes_with_deck_mesh_and_engine() {
+        let t = Template::load(None).unwrap();
+        let s = scene(&SceneSettings::default(), &[]);
+        let a = Deck::new(&t, &s, "liggghts 3.8").unwrap();
+        assert_eq!(a.hash, Deck::new(&t, &s, "liggghts 3.8").unwrap().hash);
+        assert_ne!(a.hash, Deck::new(&t, &s, "liggghts 3.9").unwrap().hash);
+        let s2 = scene(&SceneSettings::default(), &[("gap", 3.5)]);
+        assert_ne!(a.hash, Deck::new(&t, &s2, "liggghts 3.8").unwrap().hash);
+    }
+}

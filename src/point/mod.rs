@@ -1,0 +1,305 @@
+//! One design point end to end: values → scene → deck → LIGGGHTS → dump → metrics → result.json.
+//!
+//! [`prepare`] is pure and fast (render and hash in memory); [`execute`] does the I/O and the
+//! run in a directory it is given. The pool calls both; `sweep render` and `sweep run` too.
+
+pub mod deck;
+pub mod metrics;
+pub mod quality;
+pub mod steady;
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::Duration;
+
+use crate::engine::{Engine, LogLimits, RunStatus};
+use crate::error::{hint, Error, Result};
+use crate::outcome::{FailureClass, RunFailure, RunOutcome, RunResult, RESULT_FORMAT};
+use crate::point::deck::{Deck, Template};
+use crate::point::metrics::Frame;
+use crate::scene::{mesh, params, Scene};
+use crate::sweep::{ParamKind, Sweep};
+use crate::sys::atomic::write_json;
+use crate::sys::process::CancelToken;
+
+/// File names in a run directory.
+pub const RESULT: &str = "result.json";
+pub const FAILURE: &str = "failure.json";
+pub const DUMP: &str = "dump.spread";
+
+/// What every point of a sweep shares: the sweep, the engine, the template.
+pub struct PointContext {
+    pub sweep: Sweep,
+    pub engine: Engine,
+    pub template: Template,
+    pub timeout: Duration,
+}
+
+impl PointContext {
+    pub fn new(sweep: Sweep) -> Result<PointContext> {
+        // The template first: a bad one is bad input, found before the engine is run.
+        let template =
+            Template::load(sweep.template_path().as_deref()).map_err(|e| Error::input(e.to_string()))?;
+        let engine =
+            Engine::locate(sweep.file.run.engine.as_deref()).map_err(|e| Error::Engine(e.to_string()))?;
+        let timeout = Duration::from_secs_f64(sweep.file.run.timeout_s);
+        Ok(PointContext { sweep, engine, template, timeout })
+    }
+
+    /// What a run's outcome depends on besides its parameters: for the manifest, and for
+    /// refusing to resume a sweep whose template, mesh or engine changed.
+    pub fn identity(&self) -> serde_json::Value {
+        serde_json::json!({
+            "template_hash": self.template.hash(),
+            "mesh_version": mesh::MESH_VERSION,
+            "engine_path": self.engine.path.display().to_string(),
+            "engine_version": self.engine.version,
+            "engine_sha256": self.engine.binary_hash,
+        })
+    }
+}
+
+/// A point ready to run: its scene, deck and hash.
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    pub hash: String,
+    /// Every catalogue parameter, in catalogue units.
+    pub parameters: BTreeMap<String, f64>,
+    pub scene: Scene,
+    pub deck: Deck,
+}
+
+/// All catalogue parameters for a point: defaults, then the sweep's fixed values, then the
+/// swept values (in file order, sweep units).
+pub fn resolve(sweep: &Sweep, swept_values: &[f64]) -> BTreeMap<String, f64> {
+    let mut values: BTreeMap<String, f64> =
+        params::CATALOGUE.iter().map(|p| (p.name.to_string(), p.default)).collect();
+    for p in &sweep.fixed {
+        if let ParamKind::Fixed(v) = p.kind {
+            values.insert(p.name.clone(), v);
+        }
+    }
+    for (p, v) in sweep.swept.iter().zip(swept_values) {
+        values.insert(p.name.clone(), *v);
+    }
+    values
+}
+
+/// Parse `--set name=value,...` into swept values in file order; unset parameters take the
+/// middle of their range. Names must be swept parameters; values must lie in their range.
+pub fn swept_values_from_set(sweep: &Sweep, sets: &[String]) -> Result<Vec<f64>> {
+    let mut values: Vec<Option<f64>> = vec![None; sweep.dim()];
+    for item in sets.iter().filter(|s| !s.trim().is_empty()) {
+        let (name, value) =
+            item.split_once('=').ok_or_else(|| Error::input(format!("--set {item}: expected name=value")))?;
+        let (name, value) = (name.trim(), value.trim());
+        let Some(i) = sweep.swept.iter().position(|p| p.name == name) else {
+            if let Some(f) = sweep.fixed.iter().find(|p| p.name == name) {
+                let ParamKind::Fixed(v) = f.kind else { unreachable!() };
+                return Err(Error::input(format!(
+                    "--set {name}: {name} is fixed at {v} in {}; only swept parameters can be set",
+                    sweep.path.display()
+                )));
+            }
+            return Err(Error::input(format!(
+                "--set {name}: not a swept parameter of {}{}; swept: {}",
+                sweep.path.display(),
+                hint(name, sweep.names()),
+                sweep.names().join(", ")
+            )));
+        };
+        let v: f64 = value
+            .parse()
+            .ok()
+            .filter(|v: &f64| v.is_finite())
+            .ok_or_else(|| Error::input(format!("--set {name}={value}: expected a finite number")))?;
+        if let Some(first) = values[i] {
+            return Err(Error::input(format!(
+                "--set {name}: given twice ({first} and {value}); give each parameter once"
+            )));
+        }
+        let ParamKind::Swept { lo, hi, .. } = sweep.swept[i].kind else { unreachable!() };
+        if v < lo || v > hi {
+            return Err(Error::input(format!(
+                "--set {name}={v}: outside the sweep's range [{lo}, {hi}] {}",
+                sweep.swept[i].unit
+            )));
+        }
+        values[i] = Some(v);
+    }
+    Ok(sweep
+        .swept
+        .iter()
+        .zip(values)
+        .map(|(p, v)| {
+            v.unwrap_or(match p.kind {
+                ParamKind::Swept { lo, hi, .. } => 0.5 * (lo + hi),
+                ParamKind::Fixed(f) => f,
+            })
+        })
+        .collect())
+}
+
+/// Build the scene and deck of one point and hash it. Pure: touches no file.
+pub fn prepare(ctx: &PointContext, swept_values: &[f64]) -> Result<Prepared> {
+    let parameters = resolve(&ctx.sweep, swept_values);
+    let scene = Scene::new(&parameters, &ctx.sweep.file.scene)
+        .map_err(|e| Error::input(format!("{}: {e}", ctx.sweep.path.display())))?;
+    let deck =
+        Deck::new(&ctx.template, &scene, &ctx.engine.identity()).map_err(|e| Error::input(e.to_string()))?;
+    Ok(Prepared { hash: deck.hash.clone(), parameters, scene, deck })
+}
+
+/// Run a prepared point in `run_dir` (created if missing; stale files from an interrupted
+/// attempt are overwritten). Writes `result.json` or `failure.json` atomically and returns the
+/// outcome; a cancelled run writes neither, so it stays pending.
+pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &CancelToken) -> RunOutcome {
+    let fail_measured = |class: FailureClass, reason: String, log_tail: String, wall: f64, measured| {
+        let f = RunFailure {
+            format: RESULT_FORMAT,
+            hash: p.hash.clone(),
+            class,
+            reason,
+            log_tail,
+            wall_time: wall,
+            measured,
+        };
+        let _ = write_json(&run_dir.join(FAILURE), &f);
+        RunOutcome::Failed(f)
+    };
+    let fail = |class, reason, log_tail, wall| fail_measured(class, reason, log_tail, wall, None);
+    for stale in [RESULT, FAILURE, DUMP, crate::engine::LOG] {
+        let _ = std::fs::remove_file(run_dir.join(stale));
+    }
+    if let Err(e) = std::fs::create_dir_all(run_dir).and_then(|_| p.deck.write(run_dir)) {
+        return fail(
+            FailureClass::CouldNotStart,
+            format!("cannot write the deck in {}: {e}", run_dir.display()),
+            String::new(),
+            0.0,
+        );
+    }
+    let atoms = (!p.scene.is_conveyor()).then_some(p.scene.atoms() as u64);
+    let limits = LogLimits { ke_limit: p.scene.ke_limit, atoms };
+    let run = ctx.engine.run(run_dir, Deck::INPUT, &limits, ctx.timeout, cancel);
+    let wall = run.wall_time;
+    match run.status {
+        RunStatus::Cancelled => return RunOutcome::Cancelled,
+        RunStatus::Failed { class, reason, log_tail } => return fail(class, reason, log_tail, wall),
+        RunStatus::Ok => {}
+    }
+    let settle_steps = match crate::engine::settled_at(&run.log) {
+        Ok(steps) => steps,
+        Err((class, reason)) => return fail(class, reason, String::new(), wall),
+    };
+    let frames: Vec<Frame> = match crate::engine::dump::read_dump(run_dir.join(DUMP), &metrics::COLUMNS)
+        .and_then(|snaps| snaps.iter().map(Frame::from_snapshot).collect())
+    {
+        Ok(f) => f,
+        Err(e) => return fail(FailureClass::Unparsable, e.to_string(), String::new(), wall),
+    };
+    if p.scene.is_conveyor() {
+        return finish_conveyor(ctx, p, run_dir, &run, &frames, fail_measured);
+    }
+    let m = match metrics::compute(&p.scene, &frames) {
+        Ok(m) => m,
+        Err(e) => return fail(FailureClass::Unparsable, e.to_string(), String::new(), wall),
+    };
+    let steps = settle_steps + p.scene.spread_steps();
+    let result = RunResult {
+        format: RESULT_FORMAT,
+        hash: p.hash.clone(),
+        parameters: p.parameters.clone(),
+        mfr: m.mfr,
+        mfr_flux: m.mfr_flux,
+        mfr_particles: m.mfr_particles,
+        mfr_se: None,
+        steady_state: None,
+        vx_se: Vec::new(),
+        mfr_windows: m.mfr_windows,
+        steady: m.steady,
+        steady_p: m.steady_p,
+        vx: m.vx,
+        particles: m.particles,
+        settle_steps,
+        steps,
+        simulated_time: steps as f64 * p.scene.timestep,
+        wall_time: wall,
+        cpu_time: run.cpu_time,
+        engine_version: ctx.engine.version.clone(),
+        warnings: run.warnings,
+    };
+    if !result.steady {
+        let reason = format!(
+            "MFR not steady over the window: halves differ beyond counting noise (p = {:.2e} < {}), sub-window MFR {:?}",
+            result.steady_p,
+            metrics::STEADY_ALPHA,
+            result.mfr_windows.iter().map(|v| (v * 1e3).round() / 1e3).collect::<Vec<_>>()
+        );
+        return fail_measured(FailureClass::Unsteady, reason, String::new(), wall, Some(Box::new(result)));
+    }
+    if let Err(e) = write_json(&run_dir.join(RESULT), &result) {
+        return fail(FailureClass::Unparsable, format!("cannot write {RESULT}: {e}"), String::new(), wall);
+    }
+    RunOutcome::Done(result)
+}
+
+/// The conveyor layout's result: the block series from the log, the steady window, MFR with its
+/// SE; a run that did not become steady fails as `unsteady` with its numbers kept.
+fn finish_conveyor(
+    ctx: &PointContext,
+    p: &Prepared,
+    run_dir: &Path,
+    run: &crate::engine::EngineRun,
+    frames: &[Frame],
+    fail: impl Fn(FailureClass, String, String, f64, Option<Box<RunResult>>) -> RunOutcome,
+) -> RunOutcome {
+    let wall = run.wall_time;
+    let (blocks, stop) = match steady::parse_log(&run.log) {
+        Ok(b) => b,
+        Err(e) => return fail(FailureClass::Unparsable, e.to_string(), String::new(), wall, None),
+    };
+    let st = steady::compute(&p.scene, &blocks, &stop, frames);
+    // The steady window in quarters (the gated scene's sub-windows, for the same readers).
+    let w = &st.state.block_mfr[st.state.transient_blocks..];
+    let quarter = w.len().div_ceil(4).max(1);
+    let mfr_windows = w.chunks(quarter).map(|c| c.iter().sum::<f64>() / c.len() as f64).collect();
+    let steps = blocks.last().map(|b| b.step).unwrap_or(0);
+    let result = RunResult {
+        format: RESULT_FORMAT,
+        hash: p.hash.clone(),
+        parameters: p.parameters.clone(),
+        mfr: st.mfr,
+        mfr_flux: st.mfr_deleted,
+        mfr_particles: st.particles,
+        mfr_se: Some(st.mfr_se),
+        steady_state: Some(Box::new(st.state)),
+        vx_se: st.vx_se,
+        mfr_windows,
+        steady: st.unsteady.is_none(),
+        steady_p: 1.0,
+        vx: st.vx,
+        particles: p.scene.conveyor.heap_particles,
+        settle_steps: 0,
+        steps,
+        simulated_time: steps as f64 * p.scene.timestep,
+        wall_time: wall,
+        cpu_time: run.cpu_time,
+        engine_version: ctx.engine.version.clone(),
+        warnings: run.warnings.clone(),
+    };
+    if let Some(why) = st.unsteady {
+        let reason = format!("MFR not steady: {why}");
+        return fail(FailureClass::Unsteady, reason, String::new(), wall, Some(Box::new(result)));
+    }
+    if let Err(e) = write_json(&run_dir.join(RESULT), &result) {
+        return fail(
+            FailureClass::Unparsable,
+            format!("cannot write {RESULT}: {e}"),
+            String::new(),
+            wall,
+            None,
+        );
+    }
+    RunOutcome::Done(result)
+}

@@ -1,0 +1,596 @@
+//! Sweeps on a cluster: PBS (PBS Pro, Torque) and Slurm array jobs over one sweep directory on
+//! a shared file system (`sweep submit`), and the body of one array task (`sweep work`).
+//!
+//! The layout is stable: array index `i` always stands for the design points
+//! `[i·per_task, (i+1)·per_task)` of `manifest.json`, with `per_task` fixed by the first
+//! submission (`DIR/cluster/layout.json`) and points only ever appended to a manifest. A
+//! re-submission therefore names only the indices whose points are unfinished (or failed, with
+//! `--only failed`), as compact ranges (`--array=3,17-19`).
+//!
+//! A task runs its own points first, then helps with the unfinished points of the others that
+//! nobody holds; claims ([`crate::store`], with leases across hosts) keep two tasks off one run
+//! and let a task take over what a lost task left. After the array, a dependent job
+//! (`afterany`) runs `sweep report`.
+//!
+//! Not responsible for running points (that is [`crate::run`] and the pool) or for the
+//! directory's formats ([`crate::store`]).
+
+use std::collections::BTreeSet;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Duration;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::store::{Manifest, PointStatus, RunState, Store};
+
+/// The built-in Slurm template.
+pub const SLURM_TEMPLATE: &str = include_str!("../../templates/slurm.tera");
+/// The built-in PBS template (PBS Pro and Torque).
+pub const PBS_TEMPLATE: &str = include_str!("../../templates/pbs.tera");
+/// Version of `cluster/layout.json`.
+pub const LAYOUT_FORMAT: u32 = 1;
+
+/// A batch scheduler and its array syntax.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scheduler {
+    /// `sbatch --array=3,17-19`.
+    Slurm,
+    /// PBS Pro / OpenPBS: `#PBS -J 0-9` (ranges only, so a sparse set is mapped in the script).
+    PbsPro,
+    /// Torque: `#PBS -t 3,17-19`.
+    Torque,
+}
+
+impl Scheduler {
+    pub fn name(self) -> &'static str {
+        match self {
+            Scheduler::Slurm => "slurm",
+            Scheduler::PbsPro => "pbs",
+            Scheduler::Torque => "torque",
+        }
+    }
+
+    /// The submit command.
+    pub fn submit_command(self) -> &'static str {
+        match self {
+            Scheduler::Slurm => "sbatch",
+            Scheduler::PbsPro | Scheduler::Torque => "qsub",
+        }
+    }
+
+    fn script_ext(self) -> &'static str {
+        match self {
+            Scheduler::Slurm => "slurm",
+            Scheduler::PbsPro | Scheduler::Torque => "pbs",
+        }
+    }
+}
+
+/// Which points a submission covers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Only {
+    /// Points not finished (never run, cut off, or held by a claim).
+    pub missing: bool,
+    /// Points that failed; their tasks re-run them (`--retry-failed`).
+    pub failed: bool,
+}
+
+/// What `sweep submit` was asked for.
+#[derive(Debug, Clone)]
+pub struct SubmitOptions {
+    pub scheduler: Scheduler,
+    /// Array tasks of the first submission (sets the layout); later ones keep the layout.
+    pub tasks: Option<usize>,
+    /// Concurrent LIGGGHTS runs per task.
+    pub jobs_per_task: usize,
+    /// MPI ranks per run; a task asks for `jobs_per_task · ranks` cores.
+    pub ranks: u32,
+    /// `HH:MM:SS`, or Slurm's `D-HH:MM:SS`.
+    pub walltime: String,
+    pub queue: Option<String>,
+    pub account: Option<String>,
+    pub lease: Duration,
+    pub only: Only,
+    /// A template to use instead of the built-in one.
+    pub template: Option<PathBuf>,
+    /// Tasks help with other tasks' leftovers once their own points are done.
+    pub steal: bool,
+    /// The `sweep` executable the tasks run (on the shared file system).
+    pub exe: PathBuf,
+}
+
+/// `DIR/cluster/layout.json`: the stable map from array index to design points.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+pub struct Layout {
+    pub format: u32,
+    /// Array index `i` runs points `[i·per_task, (i+1)·per_task)`.
+    pub per_task: usize,
+}
+
+impl Layout {
+    pub fn path(dir: &Path) -> PathBuf {
+        dir.join("cluster").join("layout.json")
+    }
+
+    /// The layout of `dir`, if it was ever submitted.
+    pub fn read(dir: &Path) -> Result<Option<Layout>> {
+        let path = Self::path(dir);
+        let text = match std::fs::read_to_string(&path) {
+            Ok(t) => t,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+            Err(e) => return Err(Error::Internal(format!("{}: {e}", path.display()))),
+        };
+        let l: Layout = serde_json::from_str(&text).map_err(|e| {
+            Error::input(format!(
+                "{}: unreadable ({e}); it fixes which points each array index runs",
+                path.display()
+            ))
+        })?;
+        if l.format != LAYOUT_FORMAT || l.per_task == 0 {
+            return Err(Error::input(format!(
+                "{}: format {}, per_task {}: expected format {LAYOUT_FORMAT}, per_task ≥ 1",
+                path.display(),
+                l.format,
+                l.per_task
+            )));
+        }
+        Ok(Some(l))
+    }
+
+    /// Array indices whose points include one of `points`.
+    pub fn tasks_of(&self, points: impl IntoIterator<Item = usize>) -> Vec<usize> {
+        points.into_iter().map(|p| p / self.per_task).collect::<BTreeSet<_>>().into_iter().collect()
+    }
+}
+
+/// The design points of array index `task`: `[task·per_task, (task+1)·per_task)` cut to `n`.
+pub fn task_points(task: usize, per_task: usize, n: usize) -> std::ops::Range<usize> {
+    let start = task.saturating_mul(per_task).min(n);
+    start..start.saturating_add(per_task).min(n)
+}
+
+/// The order in which task `task` runs the unfinished points `unfinished` (manifest order):
+/// its own first, then — with `steal` — the others that nobody holds (`held`, read when its
+/// own are done), beginning after its own block and wrapping, so that tasks helping each other
+/// spread out instead of all starting on the same block.
+pub fn share_order(
+    task: usize,
+    per_task: usize,
+    steal: bool,
+    held: &BTreeSet<usize>,
+    unfinished: &[usize],
+) -> Vec<usize> {
+    let own = task_points(task, per_task, usize::MAX);
+    let mut order: Vec<usize> = unfinished.iter().copied().filter(|i| own.contains(i)).collect();
+    if steal {
+        let (before, after): (Vec<usize>, Vec<usize>) = unfinished
+            .iter()
+            .copied()
+            .filter(|i| !own.contains(i) && !held.contains(i))
+            .partition(|&i| i < own.start);
+        order.extend(after);
+        order.extend(before);
+    }
+    order
+}
+
+/// Indices as compact ranges: `[3, 17, 18, 19]` → `"3,17-19"`.
+pub fn ranges(indices: &[usize]) -> String {
+    let mut out = String::new();
+    let mut i = 0;
+    while i < indices.len() {
+        let start = indices[i];
+        let mut end = start;
+        while i + 1 < indices.len() && indices[i + 1] == end + 1 {
+            i += 1;
+            end = indices[i];
+        }
+        if !out.is_empty() {
+            out.push(',');
+        }
+        match end - start {
+            0 => write!(out, "{start}"),
+            _ => write!(out, "{start}-{end}"),
+        }
+        .expect("writing to a String");
+        i += 1;
+    }
+    out
+}
+
+/// A rendered submission: the array script, the report script, and what to submit.
+#[derive(Debug, Clone)]
+pub struct Rendered {
+    pub scheduler: Scheduler,
+    pub layout: Layout,
+    /// Array indices (tasks of the layout) this submission runs.
+    pub tasks: Vec<usize>,
+    pub array_script: String,
+    pub report_script: String,
+    /// Points the tasks cover: unfinished, and failed when re-running failures.
+    pub points: usize,
+}
+
+/// SubmitCounts of a directory, for the message when there is nothing to submit.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct SubmitCounts {
+    pub points: usize,
+    pub done: usize,
+    pub failed: usize,
+    /// Skipped by a verified screen.
+    pub screened: usize,
+    pub missing: usize,
+}
+
+/// Plan a submission of `dir`: the layout (read, or made from `--tasks`), the array indices to
+/// run, and both scripts. Writes nothing. `Ok(Err(counts))` when no point needs running.
+pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendered, SubmitCounts>> {
+    let (manifest, toml) = Store::read_manifest(dir)?;
+    let sweep = crate::sweep::Sweep::parse(&toml, &dir.join("sweep.toml"))?;
+    let dir = std::path::absolute(dir).map_err(|e| Error::input(format!("{}: {e}", dir.display())))?;
+    check_word("DIR", &dir.display().to_string())?;
+    check_word("the sweep executable", &o.exe.display().to_string())?;
+    check_walltime(&o.walltime)?;
+    for (flag, v) in [("--queue", &o.queue), ("--account", &o.account)] {
+        if let Some(v) = v {
+            check_word(flag, v)?;
+        }
+    }
+    let n = manifest.points.len();
+    let layout = match (Layout::read(&dir)?, o.tasks) {
+        (Some(l), _) => l,
+        (None, Some(0)) => return Err(Error::input("--tasks 0: expected at least 1")),
+        (None, Some(t)) => Layout { format: LAYOUT_FORMAT, per_task: n.div_ceil(t.min(n).max(1)) },
+        (None, None) => {
+            return Err(Error::input(format!(
+            "--tasks: required for the first submission of {} ({n} points): how many array tasks share them",
+            dir.display()
+        )))
+        }
+    };
+    // Points a verified screen skipped need no task; while it is pending, the closed points do
+    // (their tasks run them if the sample refutes it).
+    let (status, _, _) = crate::run::screen::Screen::of(&sweep).statuses(&Store::open(&dir), &manifest);
+    let counts = counts(&status);
+    let wanted: Vec<usize> = status
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| match s {
+            PointStatus::Done(_) | PointStatus::Screened => false,
+            PointStatus::Failed(_) => o.only.failed,
+            PointStatus::Pending => o.only.missing,
+        })
+        .map(|(i, _)| i)
+        .collect();
+    if wanted.is_empty() {
+        return Ok(Err(counts));
+    }
+    let tasks = layout.tasks_of(wanted.iter().copied());
+    let template = match &o.template {
+        Some(p) => std::fs::read_to_string(p)
+            .map_err(|e| Error::input(format!("--template {}: {e}", p.display())))?,
+        None => match o.scheduler {
+            Scheduler::Slurm => SLURM_TEMPLATE.to_string(),
+            _ => PBS_TEMPLATE.to_string(),
+        },
+    };
+    let mut ctx = tera::Context::new();
+    ctx.insert("tool", &format!("demsweep {}", env!("CARGO_PKG_VERSION")));
+    ctx.insert("name", &job_name(&manifest.name));
+    ctx.insert("dir", &dir.display().to_string());
+    ctx.insert("sweep", &o.exe.display().to_string());
+    ctx.insert("per_task", &layout.per_task);
+    ctx.insert("cpus", &(o.jobs_per_task * o.ranks as usize));
+    ctx.insert("ranks", &o.ranks);
+    ctx.insert("walltime", &o.walltime);
+    ctx.insert("queue", &o.queue.clone().unwrap_or_default());
+    ctx.insert("account", &o.account.clone().unwrap_or_default());
+    ctx.insert("lease", &o.lease.as_secs());
+    ctx.insert("retry_failed", &o.only.failed);
+    ctx.insert("no_steal", &!o.steal);
+    ctx.insert("torque", &(o.scheduler == Scheduler::Torque));
+    let (array, index_map) = array_spec(o.scheduler, &tasks);
+    ctx.insert("array", &array);
+    ctx.insert("index_map", &index_map);
+    let render = |report: bool| -> Result<String> {
+        let mut c = ctx.clone();
+        c.insert("report", &report);
+        let mut tera = tera::Tera::default();
+        tera.autoescape_on(vec![]);
+        let name = format!("{}.tera", o.scheduler.script_ext());
+        tera.add_raw_template(&name, &template)
+            .and_then(|_| tera.render(&name, &c))
+            .map_err(|e| Error::input(format!("{name}: {}", tera_chain(&e))))
+    };
+    let points = wanted.len();
+    Ok(Ok(Rendered {
+        scheduler: o.scheduler,
+        layout,
+        tasks,
+        array_script: render(false)?,
+        report_script: render(true)?,
+        points,
+    }))
+}
+
+/// How the scheduler names the array's indices, and (PBS Pro with a set that is not one
+/// range) the task each index stands for, for the script to map.
+fn array_spec(s: Scheduler, tasks: &[usize]) -> (String, String) {
+    let contiguous = tasks.windows(2).all(|w| w[1] == w[0] + 1);
+    match s {
+        Scheduler::Slurm | Scheduler::Torque => (ranges(tasks), String::new()),
+        // PBS Pro's -J takes one range of at least two indices.
+        Scheduler::PbsPro if contiguous && tasks.len() >= 2 => (ranges(tasks), String::new()),
+        Scheduler::PbsPro => {
+            let map = tasks.iter().map(|t| t.to_string()).collect::<Vec<_>>().join(" ");
+            let array = if tasks.len() >= 2 { format!("0-{}", tasks.len() - 1) } else { String::new() };
+            (array, map)
+        }
+    }
+}
+
+/// A job name from the sweep name: schedulers take letters, digits, `-`, `_`, `.`.
+fn job_name(name: &str) -> String {
+    let clean: String =
+        name.chars().map(|c| if c.is_ascii_alphanumeric() || "-_.".contains(c) { c } else { '_' }).collect();
+    // PBS allows 15 characters in older versions; keep it short everywhere.
+    format!("sweep-{}", clean.chars().take(9).collect::<String>())
+}
+
+/// Scheduler directives and the task's command line are written without quoting: refuse
+/// what would need it.
+fn check_word(what: &str, v: &str) -> Result<()> {
+    let ok = !v.is_empty() && v.chars().all(|c| c.is_ascii_alphanumeric() || "/._-+@,=:~".contains(c));
+    if ok {
+        Ok(())
+    } else {
+        Err(Error::input(format!(
+            "{what} {v:?}: expected letters, digits and / . _ - + @ , = : ~ only (it goes into #SBATCH/#PBS lines unquoted)"
+        )))
+    }
+}
+
+/// `MM`, `HH:MM:SS`, `D-HH:MM:SS` and similar: digits, colons, one dash after the days.
+fn check_walltime(w: &str) -> Result<()> {
+    let (days, rest) = w.split_once('-').unwrap_or(("0", w));
+    let parts: Vec<&str> = rest.split(':').collect();
+    let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+    if digits(days) && parts.len() <= 3 && parts.iter().all(|p| digits(p)) {
+        Ok(())
+    } else {
+        Err(Error::input(format!("--walltime {w:?}: expected HH:MM:SS (or D-HH:MM:SS, or minutes)")))
+    }
+}
+
+fn tera_chain(e: &tera::Error) -> String {
+    let mut s = e.to_string();
+    let mut src = std::error::Error::source(e);
+    while let Some(inner) = src {
+        s.push_str(": ");
+        s.push_str(&inner.to_string());
+        src = inner.source();
+    }
+    s
+}
+
+fn counts(status: &[PointStatus]) -> SubmitCounts {
+    let mut c = SubmitCounts { points: status.len(), ..SubmitCounts::default() };
+    for s in status {
+        match s {
+            PointStatus::Done(_) => c.done += 1,
+            PointStatus::Failed(_) => c.failed += 1,
+            PointStatus::Screened => c.screened += 1,
+            PointStatus::Pending => c.missing += 1,
+        }
+    }
+    c
+}
+
+/// Where a submission's files go: `DIR/cluster/`.
+pub fn cluster_dir(dir: &Path) -> PathBuf {
+    dir.join("cluster")
+}
+
+/// Write the scripts (and the layout, at the first submission) into `DIR/cluster/`; returns
+/// the array script's path and the report script's.
+pub fn write(dir: &Path, r: &Rendered) -> Result<(PathBuf, PathBuf)> {
+    let cdir = cluster_dir(dir);
+    let io = |p: &Path, e: std::io::Error| Error::Internal(format!("{}: {e}", p.display()));
+    std::fs::create_dir_all(cdir.join("logs")).map_err(|e| io(&cdir, e))?;
+    let lpath = Layout::path(dir);
+    if !lpath.exists() {
+        let text = serde_json::to_string_pretty(&r.layout).expect("layout serialises");
+        crate::sys::atomic::write(&lpath, text.as_bytes()).map_err(|e| io(&lpath, e))?;
+    }
+    let ext = r.scheduler.script_ext();
+    let array = cdir.join(format!("array.{ext}"));
+    let report = cdir.join(format!("report.{ext}"));
+    for (p, text) in [(&array, &r.array_script), (&report, &r.report_script)] {
+        crate::sys::atomic::write(p, text.as_bytes()).map_err(|e| io(p, e))?;
+    }
+    Ok((array, report))
+}
+
+/// Submit the array script, then the report script depending on it (`afterany`); returns both
+/// job ids, as the scheduler printed them. Each submission is appended to
+/// `DIR/cluster/submissions.tsv`.
+pub fn submit(dir: &Path, r: &Rendered, array: &Path, report: &Path) -> Result<(String, String)> {
+    let cmd = r.scheduler.submit_command();
+    let job = run_submit(cmd, array, &[])?;
+    let depend = match r.scheduler {
+        Scheduler::Slurm => vec!["--dependency".to_string(), format!("afterany:{job}")],
+        Scheduler::PbsPro => vec!["-W".into(), format!("depend=afterany:{job}")],
+        // Torque waits on a whole array with its own dependency type.
+        Scheduler::Torque => vec!["-W".into(), format!("depend=afteranyarray:{job}")],
+    };
+    let report_job = run_submit(cmd, report, &depend)?;
+    let line = format!(
+        "{:.0}\t{}\t{job}\t{report_job}\t{}\n",
+        std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64()),
+        r.scheduler.name(),
+        ranges(&r.tasks)
+    );
+    let log = cluster_dir(dir).join("submissions.tsv");
+    let appended = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&log)
+        .and_then(|mut f| std::io::Write::write_all(&mut f, line.as_bytes()));
+    if let Err(e) = appended {
+        eprintln!("warning: {}: {e}", log.display());
+    }
+    Ok((job, report_job))
+}
+
+/// Run `sbatch --parsable` or `qsub` on a script; the job id it printed.
+fn run_submit(cmd: &str, script: &Path, extra: &[String]) -> Result<String> {
+    let mut c = Command::new(cmd);
+    if cmd == "sbatch" {
+        c.arg("--parsable");
+    }
+    c.args(extra).arg(script);
+    let out = c.output().map_err(|e| Error::Internal(format!("cannot run {cmd}: {e}")))?;
+    let stdout = String::from_utf8_lossy(&out.stdout).trim().to_string();
+    if !out.status.success() || stdout.is_empty() {
+        return Err(Error::Internal(format!(
+            "{cmd} {} failed ({}): {}",
+            script.display(),
+            out.status,
+            String::from_utf8_lossy(&out.stderr).trim()
+        )));
+    }
+    // `sbatch --parsable` prints `id` or `id;cluster`.
+    Ok(stdout.lines().last().unwrap_or("").split(';').next().unwrap_or("").to_string())
+}
+
+/// Whether `cmd` is on PATH.
+pub fn on_path(cmd: &str) -> bool {
+    std::env::var_os("PATH").is_some_and(|p| std::env::split_paths(&p).any(|d| d.join(cmd).is_file()))
+}
+
+/// Points of `dir` held by a live claim now (other tasks are running them).
+pub fn held_points(manifest: &Manifest, store: &Store) -> BTreeSet<usize> {
+    manifest
+        .points
+        .iter()
+        .filter(|p| matches!(store.state(&p.hash), RunState::Running(_)))
+        .map(|p| p.index)
+        .collect()
+}
+
+/// Rewrite `DIR/results.csv` from what the run dirs hold now, under the directory's lock: each
+/// task's pool wrote it from its own view, and the last task to end must leave every task's
+/// points in it.
+pub fn refresh_results(dir: &Path) -> Result<()> {
+    Store::open(dir).locked(|| crate::run::rewrite_results(dir))?
+}
+
+/// What one array task runs (`sweep work`).
+#[derive(Debug, Clone)]
+pub struct WorkOptions {
+    /// The array index.
+    pub task: usize,
+    /// Points per index, from the layout.
+    pub per_task: usize,
+    /// Help with other tasks' unfinished points once its own are done.
+    pub steal: bool,
+    /// MPI ranks per LIGGGHTS run; the pool runs `jobs / ranks` runs at once.
+    pub ranks: u32,
+}
+
+/// The body of one array task: resume `dir` on this task's share (see [`share_order`]), then
+/// rewrite results.csv from the whole directory.
+pub fn work(
+    dir: &Path,
+    w: &WorkOptions,
+    opts: &crate::run::RunOptions,
+    cancel: &crate::sys::process::CancelToken,
+) -> Result<crate::run::Summary> {
+    let (manifest, _) = Store::read_manifest(dir)?;
+    let n = manifest.points.len();
+    if task_points(w.task, w.per_task, n).is_empty() {
+        return Err(Error::input(format!(
+            "--task {}: no such task; {} points at {} per task make tasks 0-{}",
+            w.task,
+            n,
+            w.per_task,
+            n.div_ceil(w.per_task).saturating_sub(1)
+        )));
+    }
+    let sweep = crate::run::load_dir_sweep(dir)?;
+    let exec = crate::run::PointExecutor::new(sweep)?.with_ranks(w.ranks);
+    let run = |order: crate::run::Order| {
+        crate::run::resume_share(dir, &exec, opts, Some(order), &mut crate::run::RunAll, cancel)
+    };
+    // Its own points first, waiting for any another task holds (and taking them over if that
+    // task is lost); then, in a second pass, the leftovers nobody holds *now*: a helper must
+    // not wait on runs that live tasks are doing.
+    let none = BTreeSet::new();
+    let mut summary = run(&|u: &[usize]| share_order(w.task, w.per_task, false, &none, u))?;
+    if w.steal && !summary.interrupted {
+        let held = held_points(&manifest, &Store::open(dir));
+        let own = task_points(w.task, w.per_task, n);
+        let others = |u: &[usize]| {
+            share_order(w.task, w.per_task, true, &held, u).into_iter().filter(|i| !own.contains(i)).collect()
+        };
+        let first_ran = summary.ran;
+        summary = run(&others)?;
+        summary.ran += first_ran;
+    }
+    refresh_results(dir)?;
+    Ok(summary)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_are_compact() {
+        assert_eq!(ranges(&[]), "");
+        assert_eq!(ranges(&[3]), "3");
+        assert_eq!(ranges(&[3, 17, 18, 19]), "3,17-19");
+        assert_eq!(ranges(&[0, 1, 2, 3]), "0-3");
+        assert_eq!(ranges(&[1, 3, 5, 6]), "1,3,5-6");
+    }
+
+    #[test]
+    fn task_points_cover_every_point_once() {
+        let (n, per) = (10usize, 3usize);
+        let all: Vec<usize> = (0..n.div_ceil(per)).flat_map(|t| task_points(t, per, n)).collect();
+        assert_eq!(all, (0..n).collect::<Vec<_>>());
+        assert!(task_points(7, per, n).is_empty());
+    }
+
+    #[test]
+    fn a_task_runs_its_own_points_first_then_helps_after_its_block() {
+        let unfinished: Vec<usize> = (0..9).collect();
+        let held = BTreeSet::from([7]);
+        assert_eq!(share_order(1, 3, true, &held, &unfinished), vec![3, 4, 5, 6, 8, 0, 1, 2]);
+        assert_eq!(share_order(1, 3, false, &held, &unfinished), vec![3, 4, 5]);
+        // Its own points run even when held: it waits for them (and takes them over if the
+        // holder is lost).
+        assert_eq!(share_order(2, 3, false, &held, &unfinished), vec![6, 7, 8]);
+    }
+
+    #[test]
+    fn pbs_pro_maps_a_sparse_set_in_the_script() {
+        assert_eq!(array_spec(Scheduler::PbsPro, &[2, 3, 4]), ("2-4".into(), String::new()));
+        assert_eq!(array_spec(Scheduler::PbsPro, &[3, 17, 18]), ("0-2".into(), "3 17 18".into()));
+        assert_eq!(array_spec(Scheduler::PbsPro, &[5]), (String::new(), "5".into()));
+        assert_eq!(array_spec(Scheduler::Torque, &[3, 17, 18]), ("3,17-18".into(), String::new()));
+    }
+
+    #[test]
+    fn walltimes() {
+        for ok in ["30", "01:00:00", "2-00:00:00", "90:00"] {
+            assert!(check_walltime(ok).is_ok(), "{ok}");
+        }
+        for bad in ["", "1h", "01:00:00:00", "-1", "1:a"] {
+            assert!(check_walltime(bad).is_err(), "{bad}");
+        }
+    }
+}

@@ -1,0 +1,150 @@
+//! The real executor: one point run through LIGGGHTS in its content-addressed run directory.
+
+use std::path::Path;
+
+use crate::error::Result;
+use crate::outcome::RunOutcome;
+use crate::point::{self, PointContext};
+use crate::run::pool::Executor;
+use crate::run::standin::{self, StandIn, StandInJob};
+use crate::sweep::Sweep;
+use crate::sys::process::CancelToken;
+
+/// The real executor: one LIGGGHTS run per point through [`crate::point`].
+///
+/// A job keeps only the point's values and hash; the deck is rendered again when the run starts
+/// (rendering is cheap and deterministic), so a 10,000-point sweep does not hold 10,000 decks.
+pub struct PointExecutor {
+    ctx: PointContext,
+}
+
+/// A point to run for real.
+pub struct PointJob {
+    values: Vec<f64>,
+    hash: String,
+    /// Nothing can pass under the blade here ([`crate::scene::Scene::nothing_passes`]).
+    closed: bool,
+}
+
+impl PointExecutor {
+    /// Find LIGGGHTS and load the template of `sweep`.
+    pub fn new(sweep: Sweep) -> Result<PointExecutor> {
+        Ok(PointExecutor { ctx: PointContext::new(sweep)? })
+    }
+
+    /// Run each LIGGGHTS job on `ranks` MPI ranks (`mpirun -np ranks`).
+    pub fn with_ranks(mut self, ranks: u32) -> PointExecutor {
+        self.ctx.engine.ranks = ranks.max(1);
+        self
+    }
+}
+
+impl Executor for PointExecutor {
+    type Job = PointJob;
+
+    fn identity(&self) -> serde_json::Value {
+        self.ctx.identity()
+    }
+
+    fn prepare(&self, swept: &[f64]) -> Result<PointJob> {
+        let p = point::prepare(&self.ctx, swept)?;
+        Ok(PointJob { values: swept.to_vec(), hash: p.hash, closed: p.scene.nothing_passes() })
+    }
+
+    fn hash<'a>(&self, job: &'a PointJob) -> &'a str {
+        &job.hash
+    }
+
+    fn closed(&self, job: &PointJob) -> bool {
+        job.closed
+    }
+
+    fn execute(&self, job: &PointJob, run_dir: &Path, cancel: &CancelToken) -> RunOutcome {
+        match point::prepare(&self.ctx, &job.values) {
+            Ok(p) if p.hash == job.hash => point::execute(&self.ctx, &p, run_dir, cancel),
+            // Prepared once already, so neither can happen short of a bug; fail the run loudly.
+            Ok(p) => point_failure(job, run_dir, format!("deck hash changed on re-render: {}", p.hash)),
+            Err(e) => point_failure(job, run_dir, format!("cannot render the deck: {e}")),
+        }
+    }
+}
+
+fn point_failure(job: &PointJob, run_dir: &Path, reason: String) -> RunOutcome {
+    let f = crate::outcome::RunFailure {
+        format: crate::outcome::RESULT_FORMAT,
+        hash: job.hash.clone(),
+        class: crate::outcome::FailureClass::CouldNotStart,
+        reason,
+        log_tail: String::new(),
+        wall_time: 0.0,
+        measured: None,
+    };
+    let _ = crate::sys::atomic::write_json(&run_dir.join(point::FAILURE), &f);
+    RunOutcome::Failed(f)
+}
+
+/// The executor a sweep file asks for, chosen once: LIGGGHTS, or the stand-in
+/// (`run.engine = "stand-in"`).
+pub enum SweepExecutor {
+    Real(Box<PointExecutor>),
+    StandIn(Box<StandIn>),
+}
+
+/// A job of a [`SweepExecutor`].
+pub enum SweepJob {
+    Real(PointJob),
+    StandIn(StandInJob),
+}
+
+impl SweepExecutor {
+    /// The stand-in when the sweep selects it, else LIGGGHTS (found and identified here).
+    pub fn for_sweep(sweep: &Sweep) -> Result<SweepExecutor> {
+        if standin::selected(sweep) {
+            Ok(SweepExecutor::StandIn(Box::new(StandIn::new(sweep.clone()))))
+        } else {
+            Ok(SweepExecutor::Real(Box::new(PointExecutor::new(sweep.clone())?)))
+        }
+    }
+}
+
+impl Executor for SweepExecutor {
+    type Job = SweepJob;
+
+    fn identity(&self) -> serde_json::Value {
+        match self {
+            SweepExecutor::Real(e) => e.identity(),
+            SweepExecutor::StandIn(e) => e.identity(),
+        }
+    }
+
+    fn prepare(&self, swept: &[f64]) -> Result<SweepJob> {
+        match self {
+            SweepExecutor::Real(e) => e.prepare(swept).map(SweepJob::Real),
+            SweepExecutor::StandIn(e) => e.prepare(swept).map(SweepJob::StandIn),
+        }
+    }
+
+    fn hash<'a>(&self, job: &'a SweepJob) -> &'a str {
+        match (self, job) {
+            (SweepExecutor::Real(e), SweepJob::Real(j)) => e.hash(j),
+            (SweepExecutor::StandIn(e), SweepJob::StandIn(j)) => e.hash(j),
+            _ => unreachable!("a job is prepared by the executor that runs it"),
+        }
+    }
+
+    fn closed(&self, job: &SweepJob) -> bool {
+        match (self, job) {
+            (SweepExecutor::Real(e), SweepJob::Real(j)) => e.closed(j),
+            (SweepExecutor::StandIn(e), SweepJob::StandIn(j)) => e.closed(j),
+            _ => unreachable!("a job is prepared by the executor that runs it"),
+        }
+    }
+
+    fn execute(&self, job: &SweepJob, run_dir: &Path, cancel: &CancelToken) -> RunOutcome {
+        match (self, job) {
+            (SweepExecutor::Real(e), SweepJob::Real(j)) => e.execute(j, run_dir, cancel),
+            (SweepExecutor::StandIn(e), SweepJob::StandIn(j)) => e.execute(j, run_dir, cancel),
+            _ => unreachable!("a job is prepared by the executor that runs it"),
+        }
+    }
+}

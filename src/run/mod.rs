@@ -1,0 +1,304 @@
+//! The sweep drivers: `sweep lattice`, `sweep lds`, `sweep resume` and `sweep status`, and what
+//! they are built from: the executor ([`SweepExecutor`]: LIGGGHTS or the stand-in), the plan
+//! (manifest and directory checks), the job [`pool`], the reporter of its events, the status of a
+//! directory, the [`screen`] policy, [`progress`], and cluster arrays ([`cluster`]). Knows what
+//! to run and in which order; how a point is computed is [`crate::point`]'s, and what the
+//! results say is [`crate::analysis`]'s.
+//!
+//! A driver turns a sweep and a design into the directory's manifest (every distinct point with
+//! its content hash, every nested space as a list of points), checks an existing directory
+//! before touching it, queues the points that are not finished, and consumes the pool's events
+//! with one reporter: joblog lines, results.csv (rewritten as points finish), progress, and the
+//! per-space hook where convergence checking plugs in ([`SpaceHook`]).
+//!
+//! Spaces are not run as batches with a barrier between them: all points go into one queue in
+//! design order (an LDS prefix, a lattice level, comes first), so no slot idles at the end of a
+//! batch; the hook fires as soon as a space's last point finishes, and if it stops the sweep only
+//! the runs already started past that space finish.
+//!
+//! Everything that can be refused (bad design, changed engine, a directory of another sweep) is
+//! refused before anything is written.
+//!
+//! Not responsible for running one point (the [`Executor`]), for scheduling ([`crate::run::pool`]) or
+//! for the directory's formats ([`crate::store`]); no statistics here.
+
+pub mod cluster;
+mod executor;
+#[cfg(any(test, feature = "test-support"))]
+pub mod fake;
+mod plan;
+pub mod pool;
+pub mod progress;
+mod reporter;
+pub mod screen;
+pub mod standin;
+mod status;
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+use std::time::SystemTime;
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+use crate::run::pool::{Executor, Flow, PoolOptions};
+use crate::run::progress::ProgressMode;
+use crate::run::screen::{Screen, ScreenReport, Verdict};
+use crate::store::{self, DesignRecord, Manifest, PointStatus, RunState, Store, MANIFEST_FORMAT};
+use crate::sweep::Sweep;
+use crate::sys::process::CancelToken;
+
+pub use executor::{PointExecutor, PointJob, SweepExecutor, SweepJob};
+use plan::{check_extension, check_parameters};
+pub use plan::{
+    check_out_dir, default_out, identity_diff, judge_from, load_dir_sweep, plan, plan_with_progress,
+    resolved_toml, SweepPlan,
+};
+use reporter::Reporter;
+pub use reporter::{RunAll, SpaceHook, Watch};
+pub use status::{rewrite_results, status, FailureGroup, FailureNote, StatusReport};
+
+/// Most points one design may have.
+pub const MAX_POINTS: usize = 1_000_000;
+/// Options shared by the running commands.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    pub jobs: usize,
+    pub progress: ProgressMode,
+    /// Re-run runs that failed (`sweep resume --retry-failed`).
+    pub retry_failed: bool,
+    /// Resume although the identity (template, mesh, engine) changed (`--force`).
+    pub force: bool,
+}
+
+/// How a sweep ended.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    pub dir: PathBuf,
+    pub points: usize,
+    pub done: usize,
+    pub failed: usize,
+    /// Closed points skipped by a verified screen (MFR = 0).
+    pub screened: usize,
+    pub pending: usize,
+    /// Runs executed by this process (not counting retries).
+    pub ran: usize,
+    /// Points already finished when it started.
+    pub reused: usize,
+    pub interrupted: bool,
+    /// The space after which the hook stopped the sweep.
+    pub stopped_after: Option<String>,
+    /// What the screen did.
+    pub screen: ScreenReport,
+}
+
+impl Summary {
+    /// 130 interrupted, 1 when runs failed, else 0 (the exit codes of `sweep --help`).
+    pub fn exit_code(&self) -> i32 {
+        use crate::error::exit;
+        if self.interrupted {
+            exit::INTERRUPTED
+        } else if self.failed > 0 {
+            exit::RUNS_FAILED
+        } else {
+            exit::SUCCESS
+        }
+    }
+}
+
+/// `sweep lattice` / `sweep lds`: create (or extend) the sweep directory `out` and run it.
+pub fn start<E: Executor>(
+    sweep: &Sweep,
+    design: DesignRecord,
+    out: &Path,
+    exec: &E,
+    opts: &RunOptions,
+    hook: &mut dyn SpaceHook,
+    cancel: &CancelToken,
+) -> Result<Summary> {
+    check_out_dir(out)?;
+    if !Store::manifest_path(out).exists() {
+        if let Some(stranger) = store::foreign_entry(out) {
+            return Err(Error::input(format!(
+                "{}: exists and is not a sweep directory (no manifest.json, and it holds {stranger:?}); \
+                 choose another --out",
+                out.display()
+            )));
+        }
+    }
+    let SweepPlan { spaces, points, jobs } = plan_with_progress(exec, sweep, &design, cancel, opts.progress)?;
+    let toml = resolved_toml(sweep, &design)?;
+    let manifest = Manifest {
+        format: MANIFEST_FORMAT,
+        tool: format!("demsweep {}", env!("CARGO_PKG_VERSION")),
+        name: sweep.file.name.clone(),
+        parameters: sweep.names().iter().map(|s| s.to_string()).collect(),
+        design,
+        spaces,
+        points,
+        identity: exec.identity(),
+    };
+    // Created, or checked and extended, under the directory's lock: a second `sweep` on the
+    // same new directory waits, then finds the manifest and shares the work.
+    let store = Store::open(out);
+    store.write_manifest_checked(&toml, &manifest, |old| match old {
+        Some((old, old_toml)) => check_extension(out, &old, &old_toml, &manifest, &toml),
+        None => Ok(()),
+    })?;
+    execute(&store, &manifest, exec, jobs, sweep, opts, None, hook, cancel)
+}
+
+/// `sweep resume DIR`: re-prepare the manifest's points, refuse if the identity or the decks
+/// changed (unless `--force`), and run what is not finished.
+pub fn resume<E: Executor>(
+    dir: &Path,
+    exec: &E,
+    opts: &RunOptions,
+    hook: &mut dyn SpaceHook,
+    cancel: &CancelToken,
+) -> Result<Summary> {
+    resume_share(dir, exec, opts, None, hook, cancel)
+}
+
+/// Which unfinished points a process runs, and in what order: given their indices in manifest
+/// order, the indices to queue. One array task's share of a sweep ([`crate::run::cluster`]).
+pub type Order<'a> = &'a dyn Fn(&[usize]) -> Vec<usize>;
+
+/// [`resume`] of the unfinished points `order` picks, in its order (all, in manifest order,
+/// without one).
+pub fn resume_share<E: Executor>(
+    dir: &Path,
+    exec: &E,
+    opts: &RunOptions,
+    order: Option<Order>,
+    hook: &mut dyn SpaceHook,
+    cancel: &CancelToken,
+) -> Result<Summary> {
+    let (mut manifest, toml) = Store::read_manifest(dir)?;
+    let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
+    check_parameters(dir, &manifest, &sweep)?;
+    let jobs: Vec<E::Job> = manifest
+        .points
+        .par_iter()
+        .map(|p| if cancel.is_cancelled() { Err(Error::Interrupted) } else { exec.prepare(&p.values) })
+        .collect::<Result<_>>()?;
+    let changed = manifest.points.iter().zip(&jobs).filter(|(p, j)| exec.hash(j) != p.hash).count();
+    let identity = exec.identity();
+    let diff = identity_diff(&manifest.identity, &identity);
+    if !opts.force && (!diff.is_empty() || changed > 0) {
+        let what = if diff.is_empty() {
+            format!("{changed} of {} decks render differently", manifest.points.len())
+        } else {
+            diff.join("; ")
+        };
+        return Err(Error::input(format!(
+            "{}: the engine or templates changed since the sweep started ({what}); \
+             `--force` re-runs the changed points with the new ones",
+            dir.display()
+        )));
+    }
+    let store = Store::open(dir);
+    // The screen is decided again from each point (a pure function of the point and the
+    // settings); a directory written before the screen gains it here.
+    let reclosed = manifest
+        .points
+        .iter()
+        .zip(&jobs)
+        .filter(|(p, j)| p.closed != (sweep.file.run.screen && exec.closed(j)))
+        .count();
+    if changed > 0 || !diff.is_empty() || reclosed > 0 {
+        manifest.identity = identity;
+        for (p, j) in manifest.points.iter_mut().zip(&jobs) {
+            p.hash = exec.hash(j).to_string();
+            p.closed = sweep.file.run.screen && exec.closed(j);
+        }
+        store.write_manifest(&toml, &manifest)?;
+    }
+    execute(&store, &manifest, exec, jobs, &sweep, opts, order, hook, cancel)
+}
+
+/// Run the unfinished points of a manifest.
+///
+/// The screen ([`crate::run::screen`]): the unfinished points of its verification sample go first in
+/// the queue, whatever `order` picks (an array task waits for them before it trusts the screen);
+/// the other closed points are held back. Once the sample has run with MFR = 0 they are screened;
+/// if any closed point's run contradicts the screen, they run after the rest.
+#[expect(clippy::too_many_arguments, reason = "one call site each in start and resume_share")]
+fn execute<E: Executor>(
+    store: &Store,
+    manifest: &Manifest,
+    exec: &E,
+    jobs: Vec<E::Job>,
+    sweep: &Sweep,
+    opts: &RunOptions,
+    order: Option<Order>,
+    hook: &mut dyn SpaceHook,
+    cancel: &CancelToken,
+) -> Result<Summary> {
+    let session_start = SystemTime::now();
+    // Leftovers of atomic writes cut off by a kill or a full disk.
+    store.remove_stale_temporaries()?;
+    let screen = Screen::of(sweep);
+    let sample = screen.sample(&manifest.points);
+    let mut status = Vec::with_capacity(manifest.points.len());
+    let mut queued: BTreeMap<usize, E::Job> = BTreeMap::new();
+    let mut held: BTreeMap<usize, E::Job> = BTreeMap::new();
+    for (p, job) in manifest.points.iter().zip(jobs) {
+        let state = store.state(&p.hash);
+        if let RunState::Damaged { file, reason } = &state {
+            eprintln!("warning: {}: unreadable ({reason}); point {} runs again", file.display(), p.index);
+        }
+        let s = match state {
+            RunState::Done(r) => PointStatus::Done(r),
+            RunState::Failed(f) => {
+                if opts.retry_failed {
+                    queued.insert(p.index, job);
+                }
+                PointStatus::Failed(f)
+            }
+            _ => {
+                if p.closed && !sample.contains(&p.index) {
+                    held.insert(p.index, job);
+                } else {
+                    queued.insert(p.index, job);
+                }
+                PointStatus::Pending
+            }
+        };
+        status.push(s);
+    }
+    // Closed points about to run (again): their present status is no evidence.
+    let awaiting: BTreeSet<usize> = queued.keys().copied().filter(|&i| manifest.points[i].closed).collect();
+    let mut rep =
+        Reporter::new(store, manifest, status, opts.progress, hook, screen, sample.clone(), awaiting)?;
+    if rep.verdict == Verdict::Refuted {
+        queued.append(&mut held);
+    }
+    let pick = |all: &mut BTreeMap<usize, E::Job>, sample_first: bool| -> Vec<E::Job> {
+        let (first, rest): (Vec<usize>, Vec<usize>) =
+            all.keys().copied().partition(|i| sample_first && sample.contains(i));
+        let rest = match order {
+            Some(order) => order(&rest),
+            None => rest,
+        };
+        first.into_iter().chain(rest).filter_map(|i| all.remove(&i)).collect()
+    };
+    let mut queue = pick(&mut queued, true);
+    if rep.fire_spaces() == Flow::Drain {
+        queue.clear();
+    }
+    let popts = PoolOptions {
+        slots: opts.jobs.max(1),
+        retries: sweep.file.run.retries,
+        retry_failed_before: opts.retry_failed.then_some(session_start),
+    };
+    pool::run(exec, store, queue, &popts, cancel, |e| rep.event(e));
+    // Refuted while the pool ran: the held-back closed points run now, for real.
+    let go_on = !cancel.is_cancelled() && rep.stopped_after.is_none() && rep.errors.is_empty();
+    if go_on && rep.verdict == Verdict::Refuted && !held.is_empty() {
+        let queue = pick(&mut held, false);
+        pool::run(exec, store, queue, &popts, cancel, |e| rep.event(e));
+    }
+    rep.finish(cancel.is_cancelled())
+}

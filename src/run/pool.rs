@@ -1,0 +1,295 @@
+//! The job pool: runs the runs of a sweep on `--jobs` slots, as GNU parallel does.
+//!
+//! - N long-lived worker threads; each takes the next job from one queue as soon as it is free,
+//!   so a long run never holds up the slots behind it (thesis §3.3, Fig. 3.9).
+//! - Each job is claimed in the [`Store`] first. A run another process holds is put aside and
+//!   looked at again once the queue is empty; a run found finished under the claim is reported,
+//!   not re-run.
+//! - Attempts that fail transiently ([`FailureClass::is_transient`]: could not start, killed by a
+//!   signal, timed out) are retried up to `retries` times; a physics failure is final.
+//! - The [`CancelToken`] (Ctrl-C, SIGTERM) stops new starts; the running children are killed by
+//!   [`crate::sys::process`], their claims released, and their run dirs left incomplete for a resume.
+//!   Every child is spawned from its worker thread, which lives until the pool ends, so
+//!   PR_SET_PDEATHSIG binds the child to this process even when it is SIGKILLed.
+//! - Workers only send [`Event`]s; the caller's thread consumes them (joblog, results.csv,
+//!   progress), so there is one writer of each file.
+//!
+//! Not responsible for what a job is (the [`Executor`]) or for what to run (the driver).
+
+use std::collections::VecDeque;
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc;
+use std::sync::Mutex;
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+use crate::outcome::{FailureClass, RunOutcome};
+use crate::store::{AttemptRecord, ClaimAttempt, ClaimInfo, RunState, Store, StoreError};
+use crate::sys::process::CancelToken;
+
+/// How often the caller's thread wakes up without events (progress lines, results.csv).
+pub const TICK: Duration = Duration::from_millis(250);
+/// How often a run held by another process is looked at again.
+const BUSY_POLL: Duration = Duration::from_millis(200);
+
+/// Runs one attempt of one job. The real one renders and runs a LIGGGHTS deck
+/// ([`crate::run::PointExecutor`]); `run::fake::FakeExecutor` stands in for it in tests.
+pub trait Executor: Sync {
+    /// A prepared job: what `execute` needs, with its content hash.
+    type Job: Send + Sync;
+    /// What besides the deck determines a run's outcome (template, mesh generator, engine),
+    /// recorded in the manifest; a resume refuses when it changed.
+    fn identity(&self) -> serde_json::Value;
+    /// Prepare the job of one design point (swept values in file order, sweep units). Pure.
+    fn prepare(&self, swept: &[f64]) -> crate::Result<Self::Job>;
+    /// The content hash naming the job's run dir.
+    fn hash<'a>(&self, job: &'a Self::Job) -> &'a str;
+    /// Whether nothing can pass under the blade at this job's point, so that a verified screen
+    /// may skip it as MFR = 0 ([`crate::run::screen`]). Engines that model no scene close nothing.
+    fn closed(&self, _job: &Self::Job) -> bool {
+        false
+    }
+    /// Run one attempt in `run_dir` (existing, empty but for the claim), writing `result.json`
+    /// or `failure.json` there before returning `Done` or `Failed`; `Cancelled` when `cancel`
+    /// fired.
+    fn execute(&self, job: &Self::Job, run_dir: &Path, cancel: &CancelToken) -> RunOutcome;
+}
+
+#[derive(Debug, Clone)]
+pub struct PoolOptions {
+    /// Concurrent jobs.
+    pub slots: usize,
+    /// Retries of a transiently failed attempt.
+    pub retries: u32,
+    /// Re-run failed runs whose `failure.json` is older than this (`--retry-failed`); a failure
+    /// written since (by another process of this resume) stands.
+    pub retry_failed_before: Option<SystemTime>,
+}
+
+/// What the pool reports, in the order it happens for each job.
+#[derive(Debug, Clone)]
+pub enum Event {
+    /// A slot started running the job.
+    Started { hash: String },
+    /// One attempt ended (one joblog line). `retrying` when another attempt follows.
+    Attempt { record: AttemptRecord, retrying: bool },
+    /// The job is over: run here (`ran`), or found finished by another process.
+    Finished { hash: String, outcome: RunOutcome, ran: bool },
+    /// Another live process holds the run; it is waited for.
+    Busy { hash: String, owner: ClaimInfo },
+    /// The pool could not use the sweep directory for this job (I/O); it is left pending.
+    StoreError { hash: String, error: String },
+    /// Nothing happened for [`TICK`].
+    Tick,
+}
+
+/// What the consumer tells the pool after an event.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Flow {
+    Continue,
+    /// Start no more jobs; let the running ones finish (convergence reached).
+    Drain,
+}
+
+/// Run `jobs` on the pool. `consume` sees every event on the calling thread.
+pub fn run<E: Executor>(
+    exec: &E,
+    store: &Store,
+    jobs: Vec<E::Job>,
+    opts: &PoolOptions,
+    cancel: &CancelToken,
+    mut consume: impl FnMut(&Event) -> Flow,
+) {
+    // Keeps this process's claims alive for other hosts while the pool runs.
+    let _heartbeat = store.heartbeat();
+    let queue = Mutex::new(jobs.into_iter().collect::<VecDeque<_>>());
+    let busy: Mutex<VecDeque<(E::Job, Instant)>> = Mutex::new(VecDeque::new());
+    let drain = AtomicBool::new(false);
+    let (tx, rx) = mpsc::channel::<Event>();
+    std::thread::scope(|scope| {
+        for _ in 0..opts.slots.max(1) {
+            let tx = tx.clone();
+            let w = Worker { exec, store, opts, cancel, queue: &queue, busy: &busy, drain: &drain, tx };
+            scope.spawn(move || w.run());
+        }
+        drop(tx);
+        loop {
+            let event = match rx.recv_timeout(TICK) {
+                Ok(e) => e,
+                Err(mpsc::RecvTimeoutError::Timeout) => Event::Tick,
+                Err(mpsc::RecvTimeoutError::Disconnected) => break,
+            };
+            if consume(&event) == Flow::Drain {
+                drain.store(true, Ordering::SeqCst);
+            }
+        }
+    });
+}
+
+struct Worker<'a, E: Executor> {
+    exec: &'a E,
+    store: &'a Store,
+    opts: &'a PoolOptions,
+    cancel: &'a CancelToken,
+    queue: &'a Mutex<VecDeque<E::Job>>,
+    busy: &'a Mutex<VecDeque<(E::Job, Instant)>>,
+    drain: &'a AtomicBool,
+    tx: mpsc::Sender<Event>,
+}
+
+impl<E: Executor> Worker<'_, E> {
+    fn run(&self) {
+        loop {
+            if self.cancel.is_cancelled() || self.drain.load(Ordering::SeqCst) {
+                return;
+            }
+            let next = self.queue.lock().unwrap().pop_front();
+            let job = match next {
+                Some(j) => j,
+                None => {
+                    // Only runs held by other processes are left: look at the oldest again.
+                    let mut busy = self.busy.lock().unwrap();
+                    match busy.pop_front() {
+                        None => return,
+                        Some((job, since)) => {
+                            drop(busy);
+                            let wait = BUSY_POLL.saturating_sub(since.elapsed());
+                            std::thread::sleep(wait);
+                            job
+                        }
+                    }
+                }
+            };
+            let hash = self.exec.hash(&job).to_string();
+            if let Err(e) = self.one(job, &hash) {
+                // Only an I/O failure of the store lands here (a full disk): the job stays
+                // unfinished, and no other starts, since its outcome could not be kept either.
+                self.drain.store(true, Ordering::SeqCst);
+                self.send(Event::StoreError { hash, error: e.to_string() });
+            }
+        }
+    }
+
+    fn send(&self, e: Event) {
+        // The receiver lives as long as the scope: a send cannot fail while workers run.
+        let _ = self.tx.send(e);
+    }
+
+    fn one(&self, job: E::Job, hash: &str) -> Result<(), StoreError> {
+        let hash = hash.to_string();
+        let (claim, stale) = match self.store.claim(&hash)? {
+            ClaimAttempt::Busy(owner) => {
+                self.send(Event::Busy { hash: hash.clone(), owner });
+                self.busy.lock().unwrap().push_back((job, Instant::now()));
+                return Ok(());
+            }
+            ClaimAttempt::Claimed(c, stale) => (c, stale),
+        };
+        let outcome = self.claimed(job, &hash, stale);
+        // Give the claim back whatever happened; a store error is the one to report.
+        let released = self.store.release(claim);
+        let outcome = outcome?;
+        released?;
+        if let Some((outcome, ran)) = outcome {
+            self.send(Event::Finished { hash, outcome, ran });
+        }
+        Ok(())
+    }
+
+    /// The job under its claim: the outcome and whether it ran here, `None` if cancelled first.
+    fn claimed(
+        &self,
+        job: E::Job,
+        hash: &str,
+        stale: Option<ClaimInfo>,
+    ) -> Result<Option<(RunOutcome, bool)>, StoreError> {
+        let hash = hash.to_string();
+        // Finished while we were not looking (another process), or earlier and not to retry.
+        let found = match self.store.finished(&hash) {
+            Some(RunState::Done(r)) => Some(RunOutcome::Done(*r)),
+            Some(RunState::Failed(f)) => {
+                let retry = match (self.opts.retry_failed_before, self.store.failure_time(&hash)) {
+                    (Some(before), Some(t)) => t < before,
+                    _ => false,
+                };
+                (!retry).then_some(RunOutcome::Failed(*f))
+            }
+            _ => None,
+        };
+        if let Some(outcome) = found {
+            return Ok(Some((outcome, false)));
+        }
+        if let Some(old) = stale {
+            // The trace of an attempt that was killed: its claim outlived its process.
+            let start = UNIX_EPOCH + Duration::from_secs_f64(old.claimed_at.max(0.0));
+            let record = AttemptRecord {
+                hash: hash.clone(),
+                start,
+                runtime_s: f64::NAN,
+                status: "interrupted",
+                class: None,
+            };
+            self.send(Event::Attempt { record, retrying: false });
+        }
+        if self.cancel.is_cancelled() {
+            return Ok(None);
+        }
+        self.send(Event::Started { hash: hash.clone() });
+        let dir = self.store.run_dir(&hash);
+        let mut attempt = 0;
+        let outcome = loop {
+            self.store.clean_run_dir(&hash)?;
+            let start = SystemTime::now();
+            let t = Instant::now();
+            let outcome = self.exec.execute(&job, &dir, self.cancel);
+            // The outcome must be on disk before it counts: write it again if it is not (the
+            // executor's write may have failed), and stop on a store error.
+            let stored = match &outcome {
+                // A run that failed on a full disk did not fail: its output could not be kept.
+                RunOutcome::Failed(_) if crate::sys::disk::low_on_space(&dir) => Err(StoreError::Io {
+                    path: dir.clone(),
+                    source: std::io::Error::from_raw_os_error(libc::ENOSPC),
+                }),
+                _ => self.store.record(&hash, &outcome),
+            };
+            if let Err(e) = stored {
+                // Free what the attempt left (it is re-run on resume) so that the joblog and
+                // results.csv can still be written.
+                let _ = self.store.clean_run_dir(&hash);
+                let record = AttemptRecord {
+                    hash: hash.clone(),
+                    start,
+                    runtime_s: t.elapsed().as_secs_f64(),
+                    status: "store-error",
+                    class: None,
+                };
+                self.send(Event::Attempt { record, retrying: false });
+                self.send(Event::Finished { hash: hash.clone(), outcome: RunOutcome::Cancelled, ran: true });
+                return Err(e);
+            }
+            let (status, class) = match &outcome {
+                RunOutcome::Done(_) => ("done", None),
+                RunOutcome::Failed(f) => ("failed", Some(f.class)),
+                RunOutcome::Cancelled => ("cancelled", None),
+            };
+            let retrying = class.is_some_and(FailureClass::is_transient)
+                && attempt < self.opts.retries
+                && !self.cancel.is_cancelled();
+            self.send(Event::Attempt {
+                record: AttemptRecord {
+                    hash: hash.clone(),
+                    start,
+                    runtime_s: t.elapsed().as_secs_f64(),
+                    status,
+                    class: class.map(FailureClass::as_str),
+                },
+                retrying,
+            });
+            if !retrying {
+                break outcome;
+            }
+            attempt += 1;
+        };
+        Ok(Some((outcome, true)))
+    }
+}

@@ -1,0 +1,301 @@
+//! The `[scene]` settings of a sweep file: layout, substrate, supply, the fidelity presets and
+//! their numerical knobs, and the size-distribution spec. Scene physics that the sweep file
+//! carries, so it lives with the scene; the sweep file only holds it.
+
+use std::path::PathBuf;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::hint;
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct SceneSettings {
+    /// A path to a Tera template overriding the built-in `spreading.liggghts.tera`
+    /// (relative to the sweep file).
+    pub template: Option<PathBuf>,
+    /// Fidelity preset (see [`FIDELITIES`] and [`SceneSettings::preset`]): it sets every
+    /// numerical knob ([`KNOBS`]) the file does not set itself.
+    pub fidelity: String,
+    // The numerical knobs: how finely a point is computed, not what it is.
+    /// Timestep as a fraction of the Rayleigh time.
+    pub rayleigh_fraction: f64,
+    /// A fixed timestep, s, in place of `rayleigh_fraction` (0: use the fraction).
+    pub timestep_s: f64,
+    /// Young's modulus in the deck over the point's `youngs_modulus` (a softer contact allows a
+    /// longer step; never below LIGGGHTS's floor of 5 MPa).
+    pub stiffness_factor: f64,
+    /// Blade mesh resolution: cells across the domain depth (the other faces use the same cell).
+    pub mesh_cells_across: usize,
+    /// Domain depth across the blade (periodic y), in particle diameters.
+    pub depth_diameters: f64,
+    /// Length of the MFR measurement window (blade travel), in diameters.
+    pub window_diameters: f64,
+    /// Gated layout: the pile is at rest when its rms speed is below this fraction of √(g·D).
+    pub rest_speed: f64,
+    /// Gated layout: the least settle before the rest criterion is first checked, in free-fall
+    /// times of the dose block (a lattice block is still for an instant before it collapses).
+    pub settle_min_falls: f64,
+    /// Neighbour-list skin, in smallest diameters.
+    pub skin_diameters: f64,
+    /// Interval of a dump of every per-particle column over the whole run, s (0: none; only the
+    /// window's snapshots of the columns the metrics read are written).
+    pub full_dump_every_s: f64,
+    /// Keep the blade going after the window to the end of the domain (the thesis's full
+    /// traverse) instead of stopping once the window is measured.
+    pub run_to_end: bool,
+    /// Conveyor layout: substrate travel per block of the deposit series, in diameters.
+    pub block_diameters: f64,
+    /// Conveyor layout: simulated time before the precision target is first checked, s (at
+    /// least 10 D of travel). The heap's start-up transient is a time, not a travel: measured
+    /// 0.10–0.14 s by MSER truncation at 0.1, 0.4 and 1.4 m/s. The deck's stop rule averages the
+    /// blocks after it; the steady window itself is chosen afterwards by MSER truncation.
+    pub warmup_s: f64,
+    /// Conveyor layout: the most travel, warm-up included, in diameters: where it ends the run
+    /// before the precision target is met, the point says so (`stop = "cap"`).
+    pub window_cap_diameters: f64,
+    /// Conveyor layout: the window runs until the standard error of MFR is at most this
+    /// fraction of MFR ...
+    pub mfr_rel_se: f64,
+    /// ... or at most this absolute value (MFR near zero), whichever is reached first.
+    pub mfr_abs_se: f64,
+    /// Conveyor layout: the least number of blocks after the warm-up before the target can stop
+    /// the run.
+    pub min_window_blocks: usize,
+    // What the point is.
+    /// The scene's layout: `"gated"` (default: the dose settles at rest in a closed region on a
+    /// rough substrate and is released when the blade starts) or `"thesis"` (the thesis's pile
+    /// on a smooth plate, settled for a fixed time).
+    pub layout: String,
+    /// Gated layout: `"rough"` (default: a layer of fixed spheres, as the previous powder layer
+    /// a blade spreads onto) or `"smooth"` (a flat plate).
+    pub substrate: String,
+    /// Gated layout: longest settle, s; a pile still moving then fails the run (`not-settled`).
+    pub settle_max_s: f64,
+    /// Gated layout: blade travel past the opened gate before the window starts, in diameters.
+    pub window_start_diameters: f64,
+    /// Conveyor layout: height of the heap held in front of the blade above the gap, in
+    /// diameters (the heap is gap + this × D tall at 30° repose, topped up to its particle count
+    /// every fifth of a block).
+    pub heap_diameters: f64,
+    /// Size of the heap in front of the blade, relative to the planned one (gated: gap + 10 D
+    /// tall at 30° repose; thesis: the heap left at the end, gap + 6 D tall).
+    pub supply_factor: f64,
+    /// Size distribution of the particles.
+    pub size_distribution: SizeDistributionSpec,
+    /// Half-height of each v_x layer, in diameters (0.25 = ±D/4); `thesis_band` overrides it
+    /// with the thesis's fixed ±1 mm.
+    pub vx_band_diameters: f64,
+    pub thesis_band: bool,
+    /// Seed of the initial pile: diameters and lattice jitter.
+    pub seed: u64,
+    /// Accept a timestep beyond [`crate::scene::MAX_RAYLEIGH_FRACTION`] (`--force`; never read
+    /// from a sweep file).
+    #[serde(skip)]
+    pub force_timestep: bool,
+}
+
+/// The scene layouts (docs/scene.md): the gated dose, the thesis's free pile, and the blade's
+/// frame with a held heap.
+pub const LAYOUTS: [&str; 3] = ["gated", "thesis", "conveyor"];
+
+/// The fidelity presets, fastest first.
+pub const FIDELITIES: [&str; 3] = ["fast", "reference", "thesis"];
+
+/// The numerical knobs a preset sets (field names of [`SceneSettings`]); everything else in
+/// `[scene]` says what the point is and is the same in every preset.
+pub const KNOBS: [&str; 17] = [
+    "rayleigh_fraction",
+    "timestep_s",
+    "stiffness_factor",
+    "mesh_cells_across",
+    "depth_diameters",
+    "window_diameters",
+    "rest_speed",
+    "settle_min_falls",
+    "skin_diameters",
+    "full_dump_every_s",
+    "run_to_end",
+    "block_diameters",
+    "warmup_s",
+    "window_cap_diameters",
+    "mfr_rel_se",
+    "mfr_abs_se",
+    "min_window_blocks",
+];
+
+impl SceneSettings {
+    /// The settings of a fidelity preset (docs/scene.md "Fidelity"; BENCHMARKS.md "Fidelity").
+    ///
+    /// - `fast` (default): the measured fastest settings whose MFR stays within the stated error
+    ///   of `reference`.
+    /// - `reference`: what errors are measured against: a fine step, a domain twice as deep,
+    ///   a window twice as long, a stricter rest criterion, a fine blade mesh.
+    /// - `thesis`: the thesis's way (the baseline every speed-up is quoted against): its fixed
+    ///   1e-5 s step, every column dumped every 2,000 steps (0.02 s, Appendix A), the blade
+    ///   driven to the end of the domain; every run settles its own pile.
+    pub fn preset(fidelity: &str) -> Option<SceneSettings> {
+        let fast = SceneSettings::default();
+        match fidelity {
+            "fast" => Some(fast),
+            "reference" => Some(SceneSettings {
+                fidelity: fidelity.into(),
+                rayleigh_fraction: 0.1,
+                stiffness_factor: 1.0,
+                mesh_cells_across: 12,
+                depth_diameters: 12.0,
+                window_diameters: 80.0,
+                rest_speed: 0.005,
+                settle_min_falls: 2.0,
+                skin_diameters: 0.25,
+                ..fast
+            }),
+            "thesis" => Some(SceneSettings {
+                fidelity: fidelity.into(),
+                timestep_s: crate::scene::THESIS_TIMESTEP,
+                stiffness_factor: 1.0,
+                mesh_cells_across: 6,
+                settle_min_falls: 2.0,
+                skin_diameters: 0.25,
+                full_dump_every_s: 0.02,
+                run_to_end: true,
+                ..fast
+            }),
+            _ => None,
+        }
+    }
+
+    /// These settings with every knob the file did not write (`written`: keys of `[scene]`)
+    /// taken from the preset named by `fidelity`.
+    pub fn resolve_preset(&self, written: &[String]) -> std::result::Result<SceneSettings, String> {
+        let preset = SceneSettings::preset(&self.fidelity)
+            .ok_or_else(|| format!("\"{}\": expected one of {}", self.fidelity, quoted(&FIDELITIES)))?;
+        let mut table = toml::Table::try_from(&preset).map_err(|e| e.to_string())?;
+        let mine = toml::Table::try_from(self).map_err(|e| e.to_string())?;
+        for key in written {
+            if let Some(v) = mine.get(key) {
+                table.insert(key.clone(), v.clone());
+            }
+        }
+        let mut resolved: SceneSettings = table.try_into().map_err(|e: toml::de::Error| e.to_string())?;
+        resolved.force_timestep = self.force_timestep;
+        Ok(resolved)
+    }
+}
+
+impl SceneSettings {
+    /// These settings with every knob ([`KNOBS`]) and the fidelity's name taken from `preset`:
+    /// the same point computed another way.
+    pub fn with_knobs_of(&self, preset: &SceneSettings) -> SceneSettings {
+        let mut s = preset.clone();
+        s.template = self.template.clone();
+        s.layout = self.layout.clone();
+        s.substrate = self.substrate.clone();
+        s.settle_max_s = self.settle_max_s;
+        s.window_start_diameters = self.window_start_diameters;
+        s.supply_factor = self.supply_factor;
+        s.heap_diameters = self.heap_diameters;
+        s.size_distribution = self.size_distribution.clone();
+        s.vx_band_diameters = self.vx_band_diameters;
+        s.thesis_band = self.thesis_band;
+        s.seed = self.seed;
+        s.force_timestep = self.force_timestep;
+        s
+    }
+
+    /// These settings with `key = value` (TOML syntax) set, for a knob only.
+    pub fn with_knob(&self, key: &str, value: &str) -> std::result::Result<SceneSettings, String> {
+        if !KNOBS.contains(&key) {
+            return Err(format!(
+                "`{key}` is not a numerical knob{}; knobs: {}",
+                hint(key, KNOBS),
+                KNOBS.join(", ")
+            ));
+        }
+        let parsed: toml::Table = toml::from_str(&format!("{key} = {value}"))
+            .map_err(|_| format!("{key} = {value}: not a TOML value"))?;
+        let mut table = toml::Table::try_from(self).map_err(|e| e.to_string())?;
+        table.extend(parsed);
+        let mut s: SceneSettings = table
+            .try_into()
+            .map_err(|e: toml::de::Error| format!("{key} = {value}: {}", e.message().trim()))?;
+        s.force_timestep = self.force_timestep;
+        Ok(s)
+    }
+}
+
+pub(crate) fn quoted(names: &[&str]) -> String {
+    names.iter().map(|n| format!("\"{n}\"")).collect::<Vec<_>>().join(", ")
+}
+
+impl Default for SceneSettings {
+    fn default() -> Self {
+        SceneSettings {
+            template: None,
+            fidelity: "fast".into(),
+            // The fast preset (BENCHMARKS.md "Fidelity"): the largest step with a 1.5× margin
+            // below the measured safe bound 0.5, a blade mesh of one cell across the depth
+            // (the moving mesh's neighbour rebuilds dominate a step) and a skin of half a
+            // diameter (fewer rebuilds): 2.4× less CPU than the previous 0.2 / 6 cells / 0.25
+            // at worst |ΔMFR| 0.017 and mean 0.009 against the reference over 8 points × 2 seeds.
+            // The stiffness reduction is not in it: 0.25 was 1.5× cheaper again but moved MFR
+            // by up to 0.042.
+            rayleigh_fraction: 0.33,
+            timestep_s: 0.0,
+            stiffness_factor: 1.0,
+            mesh_cells_across: 1,
+            depth_diameters: 6.0,
+            // 40 D: measured 2.8× less seed-to-seed spread than 20 D for 1.6× the CPU
+            // (BENCHMARKS.md "MFR noise").
+            window_diameters: 40.0,
+            rest_speed: 0.01,
+            settle_min_falls: 2.0,
+            skin_diameters: 0.5,
+            full_dump_every_s: 0.0,
+            run_to_end: false,
+            block_diameters: 5.0,
+            warmup_s: 0.15,
+            window_cap_diameters: 600.0,
+            mfr_rel_se: 0.05,
+            mfr_abs_se: 0.005,
+            min_window_blocks: 8,
+            layout: "gated".into(),
+            substrate: "rough".into(),
+            settle_max_s: 1.0,
+            window_start_diameters: 30.0,
+            supply_factor: 1.0,
+            heap_diameters: 10.0,
+            size_distribution: SizeDistributionSpec::default(),
+            vx_band_diameters: 0.25,
+            thesis_band: false,
+            seed: 12345,
+            force_timestep: false,
+        }
+    }
+}
+
+/// The particle size distribution, as written in the sweep file.
+#[derive(Debug, Clone, Default, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, tag = "kind", rename_all = "kebab-case")]
+pub enum SizeDistributionSpec {
+    /// Every particle has the `diameter` parameter.
+    #[default]
+    Mono,
+    /// Discrete classes: `classes = [[d, fraction], ...]`; `d` in mm, or in multiples of the
+    /// `diameter` parameter when `relative = true` (thesis Tables 3.2–3.3).
+    Classes {
+        classes: Vec<[f64; 2]>,
+        #[serde(default)]
+        relative: bool,
+    },
+    /// Two-parameter Weibull in diameter, from the `weibull_shape` and `weibull_scale`
+    /// parameters, discretised into `bins` classes of equal probability width.
+    Weibull {
+        #[serde(default = "default_bins")]
+        bins: usize,
+    },
+}
+
+fn default_bins() -> usize {
+    5
+}

@@ -1,0 +1,146 @@
+//! `joblog.tsv`: one line per attempt, appended and numbered under the directory lock.
+
+use std::fs::{self, File, OpenOptions};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::{SystemTime, UNIX_EPOCH};
+
+use super::{io, DirLock, Store, StoreError, LOCK};
+
+impl Store {
+    /// Create the joblog with its header if it is missing. Call under the lock, so that no
+    /// process appends before the header.
+    pub(super) fn joblog_header(&self) -> Result<(), StoreError> {
+        let path = self.dir.join(JOBLOG);
+        let mut file = OpenOptions::new().create(true).append(true).open(&path).map_err(io(&path))?;
+        if file.metadata().map_err(io(&path))?.len() == 0 {
+            file.write_all(format!("{JOBLOG_HEADER}\n").as_bytes()).map_err(io(&path))?;
+        }
+        Ok(())
+    }
+
+    /// Open the joblog for appending attempts, creating it with its header if missing.
+    pub fn joblog(&self) -> Result<Joblog, StoreError> {
+        let lock = self.dir.join(LOCK);
+        let _lock = DirLock::take(&lock)?;
+        self.joblog_header()?;
+        let path = self.dir.join(JOBLOG);
+        let file = OpenOptions::new().read(true).append(true).open(&path).map_err(io(&path))?;
+        Ok(Joblog { file, path, lock, host: self.host.clone() })
+    }
+}
+
+/// The joblog's file name.
+pub(super) const JOBLOG: &str = "joblog.tsv";
+
+/// Header of `joblog.tsv` (GNU parallel's `--joblog`, plus the run hash and the failure class).
+pub const JOBLOG_HEADER: &str = "seq\thost\tpid\tstart\truntime_s\tstatus\tclass\thash";
+
+fn is_header(line: &str) -> bool {
+    line.starts_with("seq\t")
+}
+
+/// One attempt, as a joblog line.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AttemptRecord {
+    pub hash: String,
+    pub start: SystemTime,
+    pub runtime_s: f64,
+    /// `done`, `failed` or `cancelled`.
+    pub status: &'static str,
+    /// The failure class, if it failed.
+    pub class: Option<&'static str>,
+}
+
+/// `joblog.tsv`, opened for appending. Each line is appended under the directory's lock with
+/// the next sequence number after the file's last line, so that two processes sharing the
+/// directory never write the same `seq`.
+#[derive(Debug)]
+pub struct Joblog {
+    file: File,
+    path: PathBuf,
+    lock: PathBuf,
+    host: String,
+}
+
+impl Joblog {
+    /// Append one attempt; returns its sequence number.
+    pub fn append(&mut self, a: &AttemptRecord) -> Result<u64, StoreError> {
+        let _lock = DirLock::take(&self.lock)?;
+        let (last, ends_with_newline) = last_seq(&self.file).map_err(io(&self.path))?;
+        let seq = last + 1;
+        let start = a.start.duration_since(UNIX_EPOCH).map(|d| d.as_secs_f64()).unwrap_or(0.0);
+        // A line cut short (a full disk) is closed first, so that ours starts a line.
+        let runtime = if a.runtime_s.is_finite() { format!("{:.3}", a.runtime_s) } else { "-".into() };
+        let line = format!(
+            "{}{}\t{}\t{}\t{:.3}\t{}\t{}\t{}\t{}\n",
+            if ends_with_newline { "" } else { "\n" },
+            seq,
+            self.host,
+            std::process::id(),
+            start,
+            runtime,
+            a.status,
+            a.class.unwrap_or("-"),
+            a.hash
+        );
+        self.file.write_all(line.as_bytes()).map_err(io(&self.path))?;
+        Ok(seq)
+    }
+}
+
+/// The sequence number of the last whole line of a joblog (0 when it has none), and whether
+/// the file ends with a newline. Reads only the file's tail.
+fn last_seq(file: &File) -> std::io::Result<(u64, bool)> {
+    use std::os::unix::fs::FileExt;
+    let len = file.metadata()?.len();
+    let mut from = len.saturating_sub(8192);
+    loop {
+        let mut buf = vec![0u8; (len - from) as usize];
+        file.read_exact_at(&mut buf, from)?;
+        let ends = buf.last().is_none_or(|&b| b == b'\n');
+        let text = String::from_utf8_lossy(&buf);
+        // The first line of a tail may be cut; only whole lines count.
+        let whole = if from == 0 { &text[..] } else { text.split_once('\n').map_or("", |(_, r)| r) };
+        let seq = whole
+            .lines()
+            .rev()
+            .filter(|l| !is_header(l) && l.split('\t').count() == 8)
+            .find_map(|l| l.split('\t').next()?.parse::<u64>().ok());
+        match seq {
+            Some(s) => return Ok((s, ends)),
+            None if from == 0 => return Ok((0, ends)),
+            None => from = 0,
+        }
+    }
+}
+
+/// A parsed joblog line (for status and tests).
+#[derive(Debug, Clone, PartialEq)]
+pub struct JoblogLine {
+    pub seq: u64,
+    pub pid: u32,
+    pub status: String,
+    pub class: String,
+    pub hash: String,
+}
+
+/// Read `DIR/joblog.tsv`.
+pub fn read_joblog(dir: &Path) -> Result<Vec<JoblogLine>, StoreError> {
+    let path = dir.join(JOBLOG);
+    let text = fs::read_to_string(&path).map_err(io(&path))?;
+    Ok(text
+        .lines()
+        .filter(|l| !is_header(l))
+        .filter_map(|l| {
+            let f: Vec<&str> = l.split('\t').collect();
+            (f.len() == 8).then(|| JoblogLine {
+                seq: f[0].parse().unwrap_or(0),
+                pid: f[2].parse().unwrap_or(0),
+                status: f[5].to_string(),
+                class: f[6].to_string(),
+                hash: f[7].to_string(),
+            })
+        })
+        .collect())
+}

@@ -1,0 +1,181 @@
+//! `manifest.json`: the design, every distinct point with its content hash, every nested space,
+//! and the identity (templates, mesh, engine, tool) a resume compares against.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use super::{io, DirLock, Store, StoreError, LOCK};
+
+impl Store {
+    pub fn manifest_path(dir: &Path) -> PathBuf {
+        dir.join("manifest.json")
+    }
+
+    /// Write `sweep.toml` and `manifest.json` (atomically each) and create `runs/` and the joblog.
+    pub fn write_manifest(&self, sweep_toml: &str, manifest: &Manifest) -> Result<(), StoreError> {
+        self.write_manifest_checked(sweep_toml, manifest, |_| Ok(()))
+    }
+
+    /// [`Store::write_manifest`], creating the directory if needed, under the directory's lock,
+    /// after `check` has accepted the manifest already there (`None` for a new directory).
+    ///
+    /// `manifest.json` is written last: a directory without it holds at most `runs/`, the
+    /// joblog and `sweep.toml` of a creation that was killed, which the next creation redoes.
+    pub fn write_manifest_checked<E: From<StoreError>>(
+        &self,
+        sweep_toml: &str,
+        manifest: &Manifest,
+        check: impl FnOnce(Option<(Manifest, String)>) -> Result<(), E>,
+    ) -> Result<(), E> {
+        fs::create_dir_all(&self.dir).map_err(io(&self.dir))?;
+        let _lock = DirLock::take(&self.dir.join(LOCK))?;
+        let path = Self::manifest_path(&self.dir);
+        let old = if path.exists() { Some(Self::read_manifest(&self.dir)?) } else { None };
+        check(old)?;
+        let runs = self.dir.join("runs");
+        fs::create_dir_all(&runs).map_err(io(&runs))?;
+        self.joblog_header()?;
+        let toml_path = self.dir.join("sweep.toml");
+        crate::sys::atomic::write(&toml_path, sweep_toml.as_bytes()).map_err(io(&toml_path))?;
+        crate::sys::atomic::write_json(&path, manifest).map_err(io(&path))?;
+        Ok(())
+    }
+
+    /// Read `manifest.json` and `sweep.toml` of `dir`.
+    pub fn read_manifest(dir: &Path) -> Result<(Manifest, String), StoreError> {
+        let path = Self::manifest_path(dir);
+        let text = fs::read_to_string(&path).map_err(|e| StoreError::NotASweep {
+            path: dir.to_path_buf(),
+            reason: format!(
+                "not a sweep directory (cannot read manifest.json: {})",
+                match e.kind() {
+                    std::io::ErrorKind::NotFound => "no such file".to_string(),
+                    _ => e.to_string(),
+                }
+            ),
+        })?;
+        let not_a_sweep = |reason: String| StoreError::NotASweep { path: path.clone(), reason };
+        let value: serde_json::Value = serde_json::from_str(&text)
+            .map_err(|e| not_a_sweep(format!("truncated or not JSON ({e}); the manifest is damaged")))?;
+        let format = value.get("format").and_then(|f| f.as_u64());
+        if format != Some(MANIFEST_FORMAT as u64) {
+            return Err(not_a_sweep(format!(
+                "manifest format {}: expected {MANIFEST_FORMAT}",
+                format.map_or("missing".into(), |f| f.to_string())
+            )));
+        }
+        let manifest: Manifest =
+            serde_json::from_str(&text).map_err(|e| not_a_sweep(format!("unreadable manifest: {e}")))?;
+        manifest
+            .validate()
+            .map_err(|e| not_a_sweep(format!("{e}; the manifest was edited or is damaged")))?;
+        let toml_path = dir.join("sweep.toml");
+        let sweep = fs::read_to_string(&toml_path).map_err(|e| StoreError::NotASweep {
+            path: toml_path.clone(),
+            reason: format!("cannot read the resolved sweep file: {e}"),
+        })?;
+        Ok((manifest, sweep))
+    }
+}
+
+/// Version of `manifest.json`.
+pub const MANIFEST_FORMAT: u32 = 1;
+
+/// How the points were chosen; enough to extend the design later.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(tag = "kind", rename_all = "kebab-case")]
+pub enum DesignRecord {
+    Lattice { levels: Vec<usize> },
+    Lds { step: usize, max: usize, scrambling: crate::sweep::Scrambling, seed: u64 },
+}
+
+/// One nested space: a lattice level or an LDS prefix.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct SpaceRecord {
+    /// `"lattice 5"`, `"lds 400"`.
+    pub label: String,
+    /// Indices into [`Manifest::points`].
+    pub points: Vec<usize>,
+}
+
+/// One distinct design point.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct PointRecord {
+    pub index: usize,
+    /// Swept parameter values in file order, in the sweep file's units.
+    pub values: Vec<f64>,
+    pub hash: String,
+    /// Nothing can pass under the blade here ([`crate::run::screen`]): skipped as MFR = 0 once the
+    /// screen is verified. Absent (false) in manifests written before the screen.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub closed: bool,
+}
+
+/// `manifest.json`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct Manifest {
+    pub format: u32,
+    /// `demsweep <version>` that wrote it.
+    pub tool: String,
+    pub name: String,
+    /// Swept parameter names: the columns of [`PointRecord::values`].
+    pub parameters: Vec<String>,
+    pub design: DesignRecord,
+    pub spaces: Vec<SpaceRecord>,
+    pub points: Vec<PointRecord>,
+    /// Template, mesh generator and engine identity; a resume refuses when it changed.
+    pub identity: serde_json::Value,
+}
+
+impl Manifest {
+    /// Check what the types cannot: every index in range, one hash per point, as many values
+    /// as parameters. The error names the field.
+    pub fn validate(&self) -> Result<(), String> {
+        let n = self.points.len();
+        if self.parameters.is_empty() {
+            return Err("parameters: expected at least one swept parameter".into());
+        }
+        let mut hashes: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
+        for (i, p) in self.points.iter().enumerate() {
+            if p.index != i {
+                return Err(format!("points[{i}].index = {}: expected {i}", p.index));
+            }
+            if p.values.len() != self.parameters.len() {
+                return Err(format!(
+                    "points[{i}].values: {} values for {} parameters",
+                    p.values.len(),
+                    self.parameters.len()
+                ));
+            }
+            // The hash names a directory under runs/: 64 hex digits, nothing else.
+            if p.hash.len() != 64 || !p.hash.bytes().all(|b| b.is_ascii_hexdigit()) {
+                return Err(format!("points[{i}].hash = {:?}: expected 64 hex digits", p.hash));
+            }
+            if let Some(j) = hashes.insert(&p.hash, i) {
+                return Err(format!("points[{i}].hash: the same as points[{j}].hash"));
+            }
+        }
+        if self.spaces.is_empty() {
+            return Err("spaces: expected at least one space".into());
+        }
+        for (k, s) in self.spaces.iter().enumerate() {
+            if s.points.is_empty() {
+                return Err(format!("spaces[{k}].points: empty"));
+            }
+            if let Some((j, &v)) = s.points.iter().enumerate().find(|(_, &v)| v >= n) {
+                return Err(format!("spaces[{k}].points[{j}] = {v}: no such point (the manifest has {n})"));
+            }
+        }
+        match &self.design {
+            DesignRecord::Lds { step, max, .. } if *step == 0 || max < step => {
+                Err(format!("design: lds step {step}, max {max}: expected 1 ≤ step ≤ max"))
+            }
+            DesignRecord::Lattice { levels } if levels.iter().any(|&l| l < 2) => {
+                Err(format!("design: lattice levels {levels:?}: expected each at least 2"))
+            }
+            _ => Ok(()),
+        }
+    }
+}

@@ -1,0 +1,381 @@
+//! The sweep directory: manifest, content-addressed run dirs, claims, joblog and
+//! results.csv.
+//!
+//! ```text
+//! DIR/sweep.toml        the sweep file as resolved
+//! DIR/manifest.json     design, points (index → values → hash), identity, tool version
+//! DIR/runs/<hash>/      one per distinct deck; result.json or failure.json when finished
+//! DIR/runs/<hash>/claim who is running it now: host, pid, process start time, session
+//! DIR/joblog.tsv        one line per attempt, appended
+//! DIR/results.csv       one row per design point, rewritten atomically
+//! ```
+//!
+//! A run is done when its `result.json` exists (written by rename, so whole or absent) and failed
+//! when its `failure.json` does; a directory holding neither is incomplete, whatever logs it
+//! holds. Claims are created with `O_EXCL` under a short `flock` of `DIR/.lock`, so two
+//! processes never hold the same claim; a claim whose owner is gone (same host, and no live
+//! process with that pid *and* that start time) is taken over, and until then marks the run
+//! as interrupted. The manifest is created (or extended) and each joblog line numbered under
+//! the same lock, so two processes started at once on a new directory share it, and `seq` is
+//! unique. `manifest.json` is validated when read. A write error (a full disk) is a
+//! [`StoreError`] naming the device and the file; temporaries of writes cut off are removed by
+//! [`Store::remove_stale_temporaries`].
+//!
+//! Across hosts (a cluster on a shared file system) processes cannot be seen, so a claim is a
+//! lease: its holder renews `renewed_at` every [`Store::lease`]/4 while it lives
+//! ([`Store::heartbeat`]), and a claim of another host not renewed for its `lease_s` is taken
+//! over. The hosts' clocks must agree to well within the lease (NTP does).
+//!
+//! Not responsible for deciding what to run (the driver, [`crate::run`]) or running it
+//! ([`crate::run::pool`]).
+
+mod claim;
+mod joblog;
+mod manifest;
+mod results;
+
+pub use claim::{
+    foreign_entry, lease_alive, set_default_lease, Claim, ClaimAttempt, ClaimInfo, Heartbeat, RunState,
+    DEFAULT_LEASE,
+};
+pub use joblog::{read_joblog, AttemptRecord, Joblog, JoblogLine, JOBLOG_HEADER};
+pub use manifest::{DesignRecord, Manifest, PointRecord, SpaceRecord, MANIFEST_FORMAT};
+pub use results::{write_results, PointStatus};
+
+use std::fs::{self, File, OpenOptions};
+use std::os::unix::io::AsRawFd;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use crate::sys::disk::{describe_io, is_no_space};
+use crate::sys::host::{process_start_ticks, unix_now};
+use claim::{finished_state, LEASE_MS};
+
+/// The lock file of a sweep directory: claims, joblog lines and the manifest are written under
+/// its `flock`.
+const LOCK: &str = ".lock";
+#[derive(Debug, thiserror::Error)]
+pub enum StoreError {
+    #[error("{}", describe_io(path, source))]
+    Io { path: PathBuf, source: std::io::Error },
+    /// The directory is not a sweep directory this version can read.
+    #[error("{}: {reason}", path.display())]
+    NotASweep { path: PathBuf, reason: String },
+}
+
+impl From<StoreError> for crate::Error {
+    fn from(e: StoreError) -> Self {
+        match e {
+            StoreError::Io { .. } => crate::Error::Internal(e.to_string()),
+            StoreError::NotASweep { .. } => crate::Error::Input(e.to_string()),
+        }
+    }
+}
+
+impl StoreError {
+    /// Whether the file system is full (or the quota spent): free space, then resume.
+    pub fn is_no_space(&self) -> bool {
+        matches!(self, StoreError::Io { source, .. } if is_no_space(source))
+    }
+}
+
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> StoreError + '_ {
+    move |source| StoreError::Io { path: path.to_path_buf(), source }
+}
+
+/// An open sweep directory.
+#[derive(Debug)]
+pub struct Store {
+    dir: PathBuf,
+    host: String,
+    me: ClaimInfo,
+    /// Claim files held now, renewed by the heartbeat.
+    held: Arc<Mutex<Vec<PathBuf>>>,
+}
+
+impl Store {
+    /// Open `dir` (which must exist) for running: this process's identity is fixed here.
+    pub fn open(dir: &Path) -> Store {
+        let pid = std::process::id();
+        let host = crate::sys::host::claim_host();
+        static SESSIONS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let n = SESSIONS.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+        let now = unix_now();
+        Store {
+            dir: dir.to_path_buf(),
+            host: host.clone(),
+            me: ClaimInfo {
+                host,
+                pid,
+                start_ticks: process_start_ticks(pid).unwrap_or(0),
+                session: format!("{pid}-{n}-{}", (now * 1e6) as u64),
+                claimed_at: now,
+                lease_s: Some(LEASE_MS.load(std::sync::atomic::Ordering::SeqCst) as f64 / 1e3),
+                renewed_at: None,
+            },
+            held: Arc::default(),
+        }
+    }
+
+    /// Claims of this store last `lease` without renewal (default [`DEFAULT_LEASE`]).
+    pub fn with_lease(mut self, lease: Duration) -> Store {
+        self.me.lease_s = Some(lease.as_secs_f64());
+        self
+    }
+
+    /// Claims of this store name `host` instead of this machine's name: for nodes that share a
+    /// name, and for tests that play two hosts on one machine.
+    pub fn with_host(mut self, host: &str) -> Store {
+        self.host = host.to_string();
+        self.me.host = host.to_string();
+        self
+    }
+
+    /// The lease of this store's claims.
+    pub fn lease(&self) -> Duration {
+        Duration::from_secs_f64(self.me.lease_s.unwrap_or(DEFAULT_LEASE.as_secs_f64()))
+    }
+
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    pub fn run_dir(&self, hash: &str) -> PathBuf {
+        self.dir.join("runs").join(hash)
+    }
+
+    /// Write the outcome of the run `hash` (`result.json` or `failure.json`) unless it is
+    /// already there: the executor writes it, and this makes sure it landed.
+    pub fn record(&self, hash: &str, outcome: &crate::outcome::RunOutcome) -> Result<(), StoreError> {
+        use crate::outcome::RunOutcome;
+        let dir = self.run_dir(hash);
+        let (name, written) = match (outcome, finished_state(&dir)) {
+            (RunOutcome::Done(r), Some(RunState::Done(d))) if *d == *r => return Ok(()),
+            (RunOutcome::Failed(f), Some(RunState::Failed(d))) if *d == *f => return Ok(()),
+            (RunOutcome::Done(r), _) => {
+                ("result.json", crate::sys::atomic::write_json(&dir.join("result.json"), r))
+            }
+            (RunOutcome::Failed(f), _) => {
+                ("failure.json", crate::sys::atomic::write_json(&dir.join("failure.json"), f))
+            }
+            (RunOutcome::Cancelled, _) => return Ok(()),
+        };
+        written.map_err(io(&dir.join(name)))
+    }
+
+    /// Empty the run dir of a held claim (a stale attempt's files), keeping the claim.
+    pub fn clean_run_dir(&self, hash: &str) -> Result<(), StoreError> {
+        let dir = self.run_dir(hash);
+        for entry in fs::read_dir(&dir).map_err(io(&dir))? {
+            let entry = entry.map_err(io(&dir))?;
+            if entry.file_name() == "claim" {
+                continue;
+            }
+            let p = entry.path();
+            let r = if entry.file_type().map_err(io(&p))?.is_dir() {
+                fs::remove_dir_all(&p)
+            } else {
+                fs::remove_file(&p)
+            };
+            r.map_err(io(&p))?;
+        }
+        Ok(())
+    }
+
+    /// Remove the temporary files of atomic writes whose writer is gone (killed mid-write, or
+    /// a write that failed), in the directory and every run dir; returns how many.
+    pub fn remove_stale_temporaries(&self) -> Result<usize, StoreError> {
+        let mut removed = 0;
+        let mut dirs = vec![self.dir.clone()];
+        let runs = self.dir.join("runs");
+        match fs::read_dir(&runs) {
+            Ok(entries) => dirs.extend(entries.flatten().map(|e| e.path())),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => return Err(io(&runs)(e)),
+        }
+        for dir in dirs {
+            let Ok(entries) = fs::read_dir(&dir) else { continue };
+            for e in entries.flatten() {
+                let name = e.file_name().to_string_lossy().into_owned();
+                let Some((host, pid)) = crate::sys::atomic::temporary_owner(&name) else {
+                    continue;
+                };
+                // Another host's writer may be alive; a live pid here may be writing it now.
+                if host.is_some_and(|h| h != crate::sys::atomic::temporary_host())
+                    || process_start_ticks(pid).is_some()
+                {
+                    continue;
+                }
+                match fs::remove_file(e.path()) {
+                    Ok(()) => removed += 1,
+                    Err(err) if err.kind() == std::io::ErrorKind::NotFound => {}
+                    Err(err) => return Err(io(&e.path())(err)),
+                }
+            }
+        }
+        Ok(removed)
+    }
+
+    /// Run `f` under the directory's lock (a consistent read-then-write of a shared file).
+    pub fn locked<T>(&self, f: impl FnOnce() -> T) -> Result<T, StoreError> {
+        let _lock = DirLock::take(&self.dir.join(".lock"))?;
+        Ok(f())
+    }
+}
+
+/// `flock(2)` on a lock file, held while the guard lives. Released by the kernel if we die.
+struct DirLock(File);
+
+impl DirLock {
+    fn take(path: &Path) -> Result<DirLock, StoreError> {
+        let f = OpenOptions::new().create(true).truncate(false).write(true).open(path).map_err(io(path))?;
+        // SAFETY: flock on a file descriptor we own.
+        if unsafe { libc::flock(f.as_raw_fd(), libc::LOCK_EX) } != 0 {
+            return Err(io(path)(std::io::Error::last_os_error()));
+        }
+        Ok(DirLock(f))
+    }
+}
+
+impl Drop for DirLock {
+    fn drop(&mut self) {
+        // SAFETY: unlocking the descriptor we locked.
+        unsafe { libc::flock(self.0.as_raw_fd(), libc::LOCK_UN) };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::SystemTime;
+
+    fn dead_pid() -> u32 {
+        let mut c = std::process::Command::new("true").spawn().unwrap();
+        let pid = c.id();
+        c.wait().unwrap();
+        pid
+    }
+
+    fn claim_file(store: &Store, hash: &str, info: &ClaimInfo) {
+        let d = store.run_dir(hash);
+        fs::create_dir_all(&d).unwrap();
+        fs::write(d.join("claim"), serde_json::to_string(info).unwrap()).unwrap();
+    }
+
+    #[test]
+    fn a_claim_is_exclusive_between_two_sessions() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = Store::open(dir.path());
+        let b = Store::open(dir.path());
+        let ClaimAttempt::Claimed(claim, None) = a.claim("h1").unwrap() else {
+            panic!("first claim must succeed")
+        };
+        match b.claim("h1").unwrap() {
+            ClaimAttempt::Busy(owner) => assert_eq!(owner.pid, std::process::id()),
+            other => panic!("second claim must be busy, got {other:?}"),
+        }
+        assert!(matches!(b.state("h1"), RunState::Running(_)));
+        a.release(claim).unwrap();
+        assert!(matches!(b.claim("h1").unwrap(), ClaimAttempt::Claimed(_, None)));
+    }
+
+    #[test]
+    fn a_claim_of_a_dead_process_is_taken_over() {
+        let dir = tempfile::tempdir().unwrap();
+        let s = Store::open(dir.path());
+        let dead = ClaimInfo { pid: dead_pid(), session: "gone".into(), ..s.me.clone() };
+        claim_file(&s, "h", &dead);
+        assert_eq!(s.state("h"), RunState::Interrupted(dead.clone()));
+        match s.claim("h").unwrap() {
+            ClaimAttempt::Claimed(_, Some(old)) => assert_eq!(old, dead),
+            other => panic!("expected a takeover, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn a_reused_pid_does_not_keep_a_claim_alive() {
+        // Our own pid is alive, but with another start time it is a different process.
+        let dir = tempfile::tempdir().unwrap();
+        let s = Store::open(dir.path());
+        let reused =
+            ClaimInfo { start_ticks: s.me.start_ticks + 1, session: "earlier".into(), ..s.me.clone() };
+        claim_file(&s, "h", &reused);
+        assert!(matches!(s.claim("h").unwrap(), ClaimAttempt::Claimed(_, Some(_))));
+    }
+
+    #[test]
+    fn a_claim_from_another_host_stands() {
+        let dir = tempfile::tempdir().unwrap();
+        let s = Store::open(dir.path());
+        let remote =
+            ClaimInfo { host: "elsewhere".into(), pid: dead_pid(), session: "remote".into(), ..s.me.clone() };
+        claim_file(&s, "h", &remote);
+        assert!(matches!(s.claim("h").unwrap(), ClaimAttempt::Busy(_)));
+    }
+
+    #[test]
+    fn a_truncated_claim_is_stale() {
+        let dir = tempfile::tempdir().unwrap();
+        let s = Store::open(dir.path());
+        fs::create_dir_all(s.run_dir("h")).unwrap();
+        fs::write(s.run_dir("h").join("claim"), "{\"host\": \"x").unwrap();
+        assert!(matches!(s.claim("h").unwrap(), ClaimAttempt::Claimed(_, None)));
+    }
+
+    #[test]
+    fn start_ticks_of_self_and_of_a_zombie() {
+        assert!(process_start_ticks(std::process::id()).is_some());
+        let c = std::process::Command::new("true").spawn().unwrap();
+        let pid = c.id();
+        std::thread::sleep(std::time::Duration::from_millis(200));
+        // Exited but not reaped: a zombie counts as gone.
+        assert_eq!(process_start_ticks(pid), None);
+        drop(c);
+    }
+
+    #[test]
+    fn cleaning_keeps_only_the_claim() {
+        let dir = tempfile::tempdir().unwrap();
+        let s = Store::open(dir.path());
+        let ClaimAttempt::Claimed(claim, _) = s.claim("h").unwrap() else { panic!() };
+        let d = s.run_dir("h");
+        fs::write(d.join("log.liggghts"), "half a log").unwrap();
+        fs::create_dir(d.join("post")).unwrap();
+        fs::write(d.join("post/dump.1"), "x").unwrap();
+        s.clean_run_dir("h").unwrap();
+        let left: Vec<_> = fs::read_dir(&d).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(left, vec![std::ffi::OsString::from("claim")]);
+        s.release(claim).unwrap();
+        assert!(!d.join("claim").exists());
+    }
+
+    #[test]
+    fn joblog_lines_round_trip_and_continue_numbering() {
+        let dir = tempfile::tempdir().unwrap();
+        fs::write(dir.path().join("joblog.tsv"), format!("{JOBLOG_HEADER}\n")).unwrap();
+        let s = Store::open(dir.path());
+        let rec = |h: &str, status, class| AttemptRecord {
+            hash: h.into(),
+            start: SystemTime::now(),
+            runtime_s: 1.5,
+            status,
+            class,
+        };
+        s.joblog().unwrap().append(&rec("a", "done", None)).unwrap();
+        let mut log = s.joblog().unwrap();
+        log.append(&rec("b", "failed", Some("timed-out"))).unwrap();
+        let lines = read_joblog(dir.path()).unwrap();
+        assert_eq!(lines.len(), 2);
+        // A directory without a joblog (copied manifest) gets one, header first.
+        let other = tempfile::tempdir().unwrap();
+        Store::open(other.path()).joblog().unwrap().append(&rec("c", "done", None)).unwrap();
+        let text = fs::read_to_string(other.path().join("joblog.tsv")).unwrap();
+        assert!(text.starts_with(&format!("{JOBLOG_HEADER}\n1\t")), "{text}");
+        assert_eq!((lines[0].seq, lines[0].hash.as_str()), (1, "a"));
+        assert_eq!(
+            (lines[1].seq, lines[1].status.as_str(), lines[1].class.as_str()),
+            (2, "failed", "timed-out")
+        );
+    }
+}

@@ -1,0 +1,108 @@
+//! `results.csv`: one row per design point, rewritten whole (atomically) as points finish.
+
+use std::path::Path;
+
+use super::{io, PointRecord, StoreError};
+use crate::outcome::{RunFailure, RunResult, VX_LAYERS};
+
+/// The state of one design point in results.csv.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PointStatus {
+    Pending,
+    Done(Box<RunResult>),
+    Failed(Box<RunFailure>),
+    /// Closed by a verified screen and not run: MFR = 0 ([`crate::run::screen`]).
+    Screened,
+}
+
+impl PointStatus {
+    pub fn is_finished(&self) -> bool {
+        !matches!(self, PointStatus::Pending)
+    }
+}
+
+/// Write `DIR/results.csv`: one row per design point, in index order, atomically.
+///
+/// Columns: index, the swept parameters, status (`done`, `failed`, `pending`, `screened`),
+/// failure (class), mfr (0 when screened), mfr_flux, mfr_particles, steady, vx_1..vx_12 (m/s,
+/// empty for an empty layer), runtime_s, hash, quality (of the v_x profile, [`crate::point::quality`];
+/// empty unless done), screen (`closed` for a point the screen closes, `verification` for one of
+/// its verification sample, empty for an open point), mfr_se (the standard error of MFR, from
+/// batch means over the steady window), stop (`target` or `cap`: what ended the window).
+pub fn write_results(
+    dir: &Path,
+    parameters: &[String],
+    points: &[PointRecord],
+    status: &[PointStatus],
+    sample: &std::collections::BTreeSet<usize>,
+) -> Result<(), StoreError> {
+    let path = dir.join("results.csv");
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let mut header: Vec<String> = vec!["index".into()];
+    header.extend(parameters.iter().cloned());
+    header.extend(["status", "failure", "mfr", "mfr_flux", "mfr_particles", "steady"].map(String::from));
+    header.extend((1..=VX_LAYERS).map(|k| format!("vx_{k}")));
+    header.extend(["runtime_s", "hash", "quality", "screen", "mfr_se", "stop"].map(String::from));
+    w.write_record(&header).expect("in-memory csv");
+    for (p, s) in points.iter().zip(status) {
+        let mut row: Vec<String> = vec![p.index.to_string()];
+        row.extend(p.values.iter().map(|v| v.to_string()));
+        match s {
+            PointStatus::Pending => {
+                row.push("pending".into());
+                row.extend(std::iter::repeat_n(String::new(), 5 + VX_LAYERS + 1));
+            }
+            PointStatus::Done(r) => {
+                row.extend([
+                    "done".into(),
+                    String::new(),
+                    r.mfr.to_string(),
+                    r.mfr_flux.to_string(),
+                    r.mfr_particles.to_string(),
+                    r.steady.to_string(),
+                ]);
+                row.extend(
+                    (0..VX_LAYERS)
+                        .map(|k| r.vx.get(k).copied().flatten().map_or(String::new(), |v| v.to_string())),
+                );
+                row.push(format!("{:.3}", r.wall_time));
+            }
+            PointStatus::Failed(f) => {
+                row.extend(["failed".into(), f.class.as_str().into()]);
+                row.extend(std::iter::repeat_n(String::new(), 4 + VX_LAYERS));
+                row.push(format!("{:.3}", f.wall_time));
+            }
+            PointStatus::Screened => {
+                row.extend(["screened".into(), String::new(), "0".into()]);
+                row.extend(std::iter::repeat_n(String::new(), 3 + VX_LAYERS + 1));
+            }
+        }
+        row.push(p.hash.clone());
+        row.push(match s {
+            PointStatus::Done(r) => crate::point::quality::of_result(r).as_str().into(),
+            _ => String::new(),
+        });
+        row.push(match (p.closed, sample.contains(&p.index)) {
+            (true, true) => "verification".into(),
+            (true, false) => "closed".into(),
+            (false, _) => String::new(),
+        });
+        // The steady-state measurement's SE and what ended its window (empty for a layout
+        // without them).
+        let (se, stop) = match s {
+            PointStatus::Done(r) => (
+                r.mfr_se.map_or(String::new(), |v| v.to_string()),
+                r.steady_state.as_ref().map_or(String::new(), |st| st.stop.clone()),
+            ),
+            PointStatus::Failed(f) => (
+                f.measured.as_ref().and_then(|r| r.mfr_se).map_or(String::new(), |v| v.to_string()),
+                String::new(),
+            ),
+            _ => (String::new(), String::new()),
+        };
+        row.extend([se, stop]);
+        w.write_record(&row).expect("in-memory csv");
+    }
+    let bytes = w.into_inner().expect("in-memory csv");
+    crate::sys::atomic::write(&path, &bytes).map_err(io(&path))
+}

@@ -1,0 +1,162 @@
+//! The sweep file's schema: the tables and keys a user writes, with their defaults.
+
+use std::path::PathBuf;
+
+use serde::{Deserialize, Serialize};
+
+use crate::design::halton::Scrambling;
+use crate::scene::settings::SceneSettings;
+
+/// Version of the resolved sweep format written to `DIR/sweep.toml`.
+pub const SWEEP_FORMAT: u32 = 1;
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SweepFile {
+    /// Name of the sweep; the default output directory is `runs/<name>`.
+    pub name: String,
+    #[serde(default)]
+    pub description: String,
+    /// Every parameter of the scene that the sweep sets: a range (swept) or a value (fixed).
+    /// Parameters not named take the scene's defaults.
+    pub parameters: toml::Table,
+    #[serde(default)]
+    pub design: DesignSettings,
+    #[serde(default)]
+    pub convergence: ConvergenceSettings,
+    #[serde(default)]
+    pub scene: SceneSettings,
+    #[serde(default)]
+    pub run: RunSettings,
+}
+
+/// One entry of `[parameters]` as written: either `{ lo, hi, [unit], [scale] }` or `{ value,
+/// [unit] }` or a bare number.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub(super) struct ParamEntry {
+    pub(super) lo: Option<f64>,
+    pub(super) hi: Option<f64>,
+    pub(super) value: Option<f64>,
+    pub(super) unit: Option<String>,
+    #[serde(default)]
+    pub(super) scale: Scale,
+}
+
+#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum Scale {
+    #[default]
+    Linear,
+    /// Uniform in log(x); only for positive ranges.
+    Log,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct DesignSettings {
+    /// Lattice levels: n values per dimension, run in order (`sweep lattice`).
+    pub lattice_levels: Vec<usize>,
+    pub lds: LdsSettings,
+}
+
+impl Default for DesignSettings {
+    fn default() -> Self {
+        DesignSettings { lattice_levels: vec![5, 6, 7, 9, 10], lds: LdsSettings::default() }
+    }
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct LdsSettings {
+    /// Points per batch; each prefix of the sequence at a multiple of `step` is one space.
+    pub step: usize,
+    /// Most points to run.
+    pub max: usize,
+    pub scrambling: Scrambling,
+    /// Seed for `scrambling = "random"`. The default, 14, was chosen by measurement
+    /// (`scripts/bench_discrepancy.py`, BENCHMARKS.md "Design discrepancy"): of seeds 0–39 it
+    /// has the smallest worst-case ratio of its centred discrepancy to the average of
+    /// scipy's scrambled Halton in 4-D and 6-D (N = 400, 800, 2400) and 8-D (N = 100), and is
+    /// below that average in every case.
+    pub seed: u64,
+}
+
+impl Default for LdsSettings {
+    fn default() -> Self {
+        LdsSettings { step: 400, max: 2400, scrambling: Scrambling::default(), seed: DEFAULT_SEED }
+    }
+}
+
+/// The default `design.lds.seed` (see [`LdsSettings::seed`]).
+pub const DEFAULT_SEED: u64 = 14;
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct ConvergenceSettings {
+    /// `"scaled"` (default: every statistic moved and known within the tolerance on its own
+    /// scale, held for `hold` spaces), `"any"` (the thesis's rule: any one statistic within
+    /// tolerance relatively; floor and hold do not apply) or `"all"` (every statistic within
+    /// tolerance relatively or by the floor). See [`crate::analysis::convergence`].
+    pub rule: String,
+    /// Relative change of a statistic between consecutive spaces that counts as converged.
+    pub tolerance: f64,
+    /// Absolute change below which a statistic counts as converged whatever its relative change
+    /// (rule "all" only).
+    pub floor: f64,
+    /// Consecutive spaces the rule must hold for.
+    pub hold: usize,
+    /// No space with fewer points counts as converged. `sweep lds --max M` on a converged
+    /// directory sets it to the old extent, so that the extension is judged on its own.
+    pub min_points: usize,
+    /// `"trapezoid"` (default: a complete lattice's points weighted by the trapezoid rule) or
+    /// `"equal"` (the thesis). See [`crate::analysis::weights`].
+    pub lattice_weights: String,
+}
+
+impl Default for ConvergenceSettings {
+    fn default() -> Self {
+        ConvergenceSettings {
+            rule: "scaled".into(),
+            tolerance: 0.05,
+            floor: 0.01,
+            hold: 2,
+            min_points: 0,
+            lattice_weights: "trapezoid".into(),
+        }
+    }
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct RunSettings {
+    /// LIGGGHTS executable (default: `liggghts` on PATH).
+    pub engine: Option<PathBuf>,
+    /// Wall-clock limit of one run, seconds.
+    pub timeout_s: f64,
+    /// Retries of transient failures (could not start, killed by a signal, timed out).
+    pub retries: u32,
+    /// Skip the points where nothing can pass under the blade ([`crate::scene::passage`]),
+    /// counting them as MFR = 0, once a seeded sample of them has run and given MFR = 0
+    /// ([`crate::run::screen`]).
+    pub screen: bool,
+    /// Fraction of the closed points run anyway to verify the screen (seeded by
+    /// `design.lds.seed`).
+    pub screen_sample: f64,
+    /// ... and at least this many (every closed point when fewer).
+    pub screen_sample_min: usize,
+}
+
+impl Default for RunSettings {
+    fn default() -> Self {
+        RunSettings {
+            engine: None,
+            timeout_s: 600.0,
+            retries: 1,
+            screen: true,
+            // A tenth: on a 2,400-point sweep of the thesis space about 12 of ~120 closed points.
+            screen_sample: 0.1,
+            screen_sample_min: 3,
+        }
+    }
+}

@@ -1,0 +1,174 @@
+//! Sweep files: the TOML a user writes, parsed and validated into a [`Sweep`].
+//!
+//! Responsible for syntax, unknown keys (with "did you mean"), and values that make no sense
+//! (lo ≥ hi, non-finite, zero levels, N = 0). Every error is one line naming the file and the
+//! key. Not responsible for the physics meaning of parameters: that is the scene's catalogue
+//! ([`crate::scene::params`]), which this module consults for names and units.
+
+mod file;
+pub mod space;
+mod validate;
+
+pub use crate::design::halton::Scrambling;
+pub use crate::scene::settings::{SceneSettings, SizeDistributionSpec, FIDELITIES, KNOBS};
+pub use file::{
+    ConvergenceSettings, DesignSettings, LdsSettings, RunSettings, Scale, SweepFile, DEFAULT_SEED,
+    SWEEP_FORMAT,
+};
+use validate::{io_reason, toml_error, validate};
+
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+
+/// One parameter after validation.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Parameter {
+    pub name: String,
+    pub unit: &'static str,
+    pub kind: ParamKind,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub enum ParamKind {
+    Swept { lo: f64, hi: f64, scale: Scale },
+    Fixed(f64),
+}
+
+/// A validated sweep: the file as written plus its parameters resolved against the catalogue.
+#[derive(Debug, Clone)]
+pub struct Sweep {
+    pub path: PathBuf,
+    pub file: SweepFile,
+    /// Swept parameters in file order: the design's dimensions.
+    pub swept: Vec<Parameter>,
+    /// Fixed parameters as written.
+    pub fixed: Vec<Parameter>,
+}
+
+impl Sweep {
+    pub fn load(path: &Path) -> Result<Sweep> {
+        if path.is_dir() {
+            return Err(Error::input(format!(
+                "cannot read sweep file {}: it is a directory",
+                path.display()
+            )));
+        }
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            Error::input(format!("cannot read sweep file {}: {}", path.display(), io_reason(&e)))
+        })?;
+        Sweep::parse(&text, path)
+    }
+
+    /// Parse and validate; `path` is only used in messages and to resolve relative paths.
+    pub fn parse(text: &str, path: &Path) -> Result<Sweep> {
+        let mut file: SweepFile = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
+        // The preset fills the knobs the file leaves out (the file parsed, so this parses too).
+        let raw: toml::Table = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
+        let written: Vec<String> = raw
+            .get("scene")
+            .and_then(|v| v.as_table())
+            .map(|t| t.keys().cloned().collect())
+            .unwrap_or_default();
+        file.scene = file
+            .scene
+            .resolve_preset(&written)
+            .map_err(|e| Error::input(format!("{}: scene.fidelity: {e}", path.display())))?;
+        let (swept, fixed) = validate(&file, path)?;
+        Ok(Sweep { path: path.to_path_buf(), file, swept, fixed })
+    }
+
+    /// This sweep with other scene settings, validated as if they had been written in the file.
+    pub fn with_scene(&self, scene: SceneSettings) -> Result<Sweep> {
+        let mut file = self.file.clone();
+        file.scene = scene;
+        let (swept, fixed) = validate(&file, &self.path)?;
+        Ok(Sweep { path: self.path.clone(), file, swept, fixed })
+    }
+
+    pub fn names(&self) -> Vec<&str> {
+        self.swept.iter().map(|p| p.name.as_str()).collect()
+    }
+
+    /// The design's dimension.
+    pub fn dim(&self) -> usize {
+        self.swept.len()
+    }
+
+    /// Resolve the template override path against the sweep file's directory.
+    pub fn template_path(&self) -> Option<PathBuf> {
+        self.file.scene.template.as_ref().map(|t| {
+            if t.is_absolute() {
+                t.clone()
+            } else {
+                self.path.parent().unwrap_or(Path::new(".")).join(t)
+            }
+        })
+    }
+}
+
+#[cfg(test)]
+mod preset_tests {
+    use super::*;
+
+    fn scene_of(scene: &str) -> Result<SceneSettings> {
+        let text = format!("name = \"t\"\n[parameters]\ngap = {{ lo = 1.0, hi = 2.0 }}\n[scene]\n{scene}\n");
+        Sweep::parse(&text, Path::new("t.toml")).map(|s| s.file.scene)
+    }
+
+    #[test]
+    fn a_preset_sets_the_knobs_the_file_leaves_out_and_the_file_wins_where_it_speaks() {
+        let r = scene_of("fidelity = \"reference\"").unwrap();
+        assert_eq!(r, SceneSettings::preset("reference").unwrap());
+        // The reference is finer in every knob it changes.
+        let fast = SceneSettings::default();
+        assert!(r.rayleigh_fraction < fast.rayleigh_fraction);
+        assert!(r.depth_diameters > fast.depth_diameters && r.window_diameters > fast.window_diameters);
+        assert!(r.rest_speed < fast.rest_speed && r.stiffness_factor >= fast.stiffness_factor);
+        let mine = scene_of("fidelity = \"reference\"\ndepth_diameters = 5\nseed = 7").unwrap();
+        assert_eq!((mine.depth_diameters, mine.seed, mine.window_diameters), (5.0, 7, r.window_diameters));
+        let thesis = scene_of("fidelity = \"thesis\"").unwrap();
+        assert_eq!(thesis.timestep_s, crate::scene::THESIS_TIMESTEP);
+        assert!(thesis.run_to_end && thesis.full_dump_every_s > 0.0);
+        assert_eq!(scene_of("").unwrap(), SceneSettings::default());
+    }
+
+    #[test]
+    fn the_resolved_settings_read_back_to_themselves() {
+        // DIR/sweep.toml holds every key: a resume must see the same knobs.
+        let text = "name = \"t\"\n[parameters]\ngap = { lo = 1.0, hi = 2.0 }\n[scene]\nfidelity = \"thesis\"\nwindow_diameters = 30\n";
+        let first = Sweep::parse(text, Path::new("t.toml")).unwrap();
+        let body = toml::to_string(&first.file).unwrap();
+        let again = Sweep::parse(&body, Path::new("sweep.toml")).unwrap();
+        assert_eq!(again.file.scene, first.file.scene);
+        assert_eq!(again.file.scene.window_diameters, 30.0);
+    }
+
+    #[test]
+    fn a_bad_fidelity_or_knob_is_one_line_naming_the_key() {
+        for (scene, key) in [
+            ("fidelity = \"fastest\"", "scene.fidelity"),
+            ("stiffness_factor = 2", "scene.stiffness_factor"),
+            ("mesh_cells_across = 0", "scene.mesh_cells_across"),
+            ("timestep_s = -1", "scene.timestep_s"),
+        ] {
+            let e = scene_of(scene).unwrap_err().to_string();
+            assert!(e.contains(key) && !e.contains('\n'), "{scene}: {e}");
+        }
+    }
+
+    #[test]
+    fn knobs_of_a_preset_replace_only_the_knobs() {
+        let mine =
+            SceneSettings { supply_factor: 1.5, seed: 3, depth_diameters: 4.0, ..SceneSettings::default() };
+        let r = mine.with_knobs_of(&SceneSettings::preset("reference").unwrap());
+        assert_eq!((r.supply_factor, r.seed, r.fidelity.as_str()), (1.5, 3, "reference"));
+        assert_eq!(r.depth_diameters, 12.0);
+        let k = mine.with_knob("rayleigh_fraction", "0.3").unwrap();
+        assert_eq!((k.rayleigh_fraction, k.supply_factor), (0.3, 1.5));
+        assert!(mine.with_knob("supply_factor", "2").unwrap_err().contains("not a numerical knob"));
+        assert!(mine.with_knob("run_to_end", "maybe").is_err());
+    }
+}

@@ -1,0 +1,319 @@
+//! Reading a sweep file: TOML syntax errors and unknown keys told with the key and a "did you
+//! mean", and the values checked against the scene's catalogue of parameters.
+
+use std::path::Path;
+
+use super::file::*;
+use super::{ParamKind, Parameter};
+use crate::error::{hint, Error, Result};
+use crate::scene::params::{self, ParamInfo};
+use crate::scene::settings::{quoted, SizeDistributionSpec, FIDELITIES, LAYOUTS};
+
+pub(super) fn io_reason(e: &std::io::Error) -> String {
+    match e.kind() {
+        std::io::ErrorKind::NotFound => "no such file".into(),
+        std::io::ErrorKind::PermissionDenied => "permission denied".into(),
+        _ => e.to_string(),
+    }
+}
+
+/// Turn a (multi-line) toml error into one line:
+/// `file:line: key.path: message (did you mean ..?)`.
+pub(super) fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> Error {
+    let start = e.span().map(|s| s.start.min(text.len()));
+    let line = start.map(|s| text[..s].matches('\n').count() + 1);
+    let msg = e
+        .message()
+        .trim()
+        .replace('\n', " ")
+        .replace("expected usize", "expected a whole number ≥ 0")
+        .replace("expected u64", "expected a whole number ≥ 0")
+        .replace("expected u32", "expected a whole number ≥ 0");
+    let mut extra = String::new();
+    // serde's message: "unknown field `frction`, expected one of `a`, `b`".
+    if let Some(rest) = msg.strip_prefix("unknown field `") {
+        if let Some((word, tail)) = rest.split_once('`') {
+            let candidates: Vec<&str> = tail.split('`').skip(1).step_by(2).collect();
+            extra = hint(word, candidates);
+        }
+    }
+    let at = line.map(|l| format!(":{l}")).unwrap_or_default();
+    let key = start.and_then(|s| key_at(text, s)).map(|k| format!(" {k}:")).unwrap_or_default();
+    Error::input(format!("{}{at}:{key} {msg}{extra}", path.display()))
+}
+
+/// The dotted key whose `key = value` line holds byte `offset` of `text`, prefixed with the
+/// enclosing `[table]` header, e.g. `design.lds.max`; `None` on a header or a blank line.
+fn key_at(text: &str, offset: usize) -> Option<String> {
+    let line_start = text[..offset].rfind('\n').map_or(0, |i| i + 1);
+    let line = text[line_start..].lines().next().unwrap_or("").trim();
+    let (key, _) = line.split_once('=')?;
+    let key = key.trim().replace([' ', '"', '\''], "");
+    if key.is_empty() || key.starts_with('[') || key.starts_with('#') {
+        return None;
+    }
+    let header = text[..line_start].lines().rev().find_map(|l| {
+        let l = l.trim();
+        l.starts_with('[')
+            .then(|| l.trim_start_matches('[').split(']').next().unwrap_or("").replace([' ', '"', '\''], ""))
+    });
+    Some(match header {
+        Some(h) if !h.is_empty() => format!("{h}.{key}"),
+        _ => key,
+    })
+}
+
+pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>, Vec<Parameter>)> {
+    let p = path.display();
+    let bad = |key: &str, what: String| Error::input(format!("{p}: {key}: {what}"));
+    if file.name.trim().is_empty() || file.name.contains(['/', '\\']) || file.name.starts_with('.') {
+        return Err(bad("name", "expected a non-empty name without slashes".into()));
+    }
+    let mut swept = Vec::new();
+    let mut fixed = Vec::new();
+    for (name, value) in &file.parameters {
+        let key = format!("parameters.{name}");
+        let info: &ParamInfo = params::lookup(name).ok_or_else(|| {
+            bad(
+                &key,
+                format!(
+                    "unknown parameter{}; known: {}",
+                    hint(name, params::CATALOGUE.iter().map(|i| i.name)),
+                    params::CATALOGUE.iter().map(|i| i.name).collect::<Vec<_>>().join(", ")
+                ),
+            )
+        })?;
+        let entry: ParamEntry = match value {
+            toml::Value::Float(_) | toml::Value::Integer(_) => ParamEntry {
+                lo: None,
+                hi: None,
+                value: Some(as_f64(value).unwrap()),
+                unit: None,
+                scale: Scale::Linear,
+            },
+            toml::Value::Table(_) => value.clone().try_into().map_err(|e: toml::de::Error| {
+                let msg = e.message().trim().replace('\n', " ");
+                let mut extra = String::new();
+                if let Some(rest) = msg.strip_prefix("unknown field `") {
+                    if let Some((word, _)) = rest.split_once('`') {
+                        extra = hint(word, ["lo", "hi", "value", "unit", "scale"]);
+                    }
+                }
+                bad(&key, format!("{msg}{extra}"))
+            })?,
+            _ => {
+                return Err(bad(
+                    &key,
+                    "expected a number or a table { lo = .., hi = .. } / { value = .. }".into(),
+                ))
+            }
+        };
+        if let Some(unit) = &entry.unit {
+            if unit != info.unit {
+                return Err(bad(
+                    &format!("{key}.unit"),
+                    format!("is \"{unit}\" but {name} is given in \"{}\"", info.unit),
+                ));
+            }
+        }
+        let check = |k: &str, v: f64| -> Result<f64> {
+            if !v.is_finite() {
+                return Err(bad(&format!("{key}.{k}"), format!("{v} is not a finite number")));
+            }
+            if !info.accepts(v) {
+                return Err(bad(&format!("{key}.{k}"), format!("{v} is outside {}", info.domain())));
+            }
+            Ok(v)
+        };
+        let kind = match (entry.lo, entry.hi, entry.value) {
+            (Some(lo), Some(hi), None) => {
+                let (lo, hi) = (check("lo", lo)?, check("hi", hi)?);
+                if lo >= hi {
+                    return Err(bad(&key, format!("lo = {lo} must be below hi = {hi}")));
+                }
+                if entry.scale == Scale::Log && lo <= 0.0 {
+                    return Err(bad(&format!("{key}.scale"), "log scale needs lo > 0".into()));
+                }
+                ParamKind::Swept { lo, hi, scale: entry.scale }
+            }
+            (None, None, Some(v)) => ParamKind::Fixed(check("value", v)?),
+            _ => {
+                return Err(bad(&key, "expected either both `lo` and `hi` (swept) or `value` (fixed)".into()))
+            }
+        };
+        let param = Parameter { name: name.clone(), unit: info.unit, kind };
+        match param.kind {
+            ParamKind::Swept { .. } => swept.push(param),
+            ParamKind::Fixed(_) => fixed.push(param),
+        }
+    }
+    if swept.is_empty() {
+        return Err(bad("parameters", "expected at least one swept parameter { lo, hi }".into()));
+    }
+    let d = &file.design;
+    if d.lattice_levels.is_empty() {
+        return Err(bad(
+            "design.lattice_levels",
+            "expected at least one level, e.g. [5, 6, 7, 9, 10]".into(),
+        ));
+    }
+    // Only the level count here: whether n^d points are too many matters only when a lattice
+    // is built (`design::lattice_size`), and an LDS sweep never builds one.
+    if let Some(i) = d.lattice_levels.iter().position(|&n| n < 2) {
+        return Err(bad(
+            &format!("design.lattice_levels[{i}]"),
+            format!("{}: expected at least 2 values per dimension", d.lattice_levels[i]),
+        ));
+    }
+    for (key, n) in [("design.lds.step", d.lds.step), ("design.lds.max", d.lds.max)] {
+        crate::design::lds_size(n).map_err(|e| bad(key, format!("{n}: {e}")))?;
+    }
+    let c = &file.convergence;
+    if crate::analysis::convergence::Rule::parse(&c.rule).is_none() {
+        return Err(bad(
+            "convergence.rule",
+            format!("\"{}\": expected \"scaled\", \"any\" or \"all\"", c.rule),
+        ));
+    }
+    if crate::analysis::weights::LatticeWeights::parse(&c.lattice_weights).is_none() {
+        return Err(bad(
+            "convergence.lattice_weights",
+            format!("\"{}\": expected \"trapezoid\" or \"equal\"", c.lattice_weights),
+        ));
+    }
+    for (k, v) in [("convergence.tolerance", c.tolerance), ("convergence.floor", c.floor)] {
+        if !v.is_finite() || v < 0.0 {
+            return Err(bad(k, format!("{v}: expected a finite number ≥ 0")));
+        }
+    }
+    if c.hold == 0 {
+        return Err(bad("convergence.hold", "expected at least 1".into()));
+    }
+    let s = &file.scene;
+    if !FIDELITIES.contains(&s.fidelity.as_str()) {
+        return Err(bad(
+            "scene.fidelity",
+            format!("\"{}\": expected one of {}", s.fidelity, quoted(&FIDELITIES)),
+        ));
+    }
+    if !LAYOUTS.contains(&s.layout.as_str()) {
+        return Err(bad("scene.layout", format!("\"{}\": expected one of {}", s.layout, quoted(&LAYOUTS))));
+    }
+    if s.layout == "conveyor" {
+        for (k, v) in [
+            ("scene.block_diameters", s.block_diameters),
+            ("scene.window_cap_diameters", s.window_cap_diameters),
+            ("scene.heap_diameters", s.heap_diameters),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(bad(k, format!("{v}: expected a positive number")));
+            }
+        }
+        for (k, v) in [
+            ("scene.warmup_s", s.warmup_s),
+            ("scene.mfr_rel_se", s.mfr_rel_se),
+            ("scene.mfr_abs_se", s.mfr_abs_se),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(bad(k, format!("{v}: expected a number ≥ 0")));
+            }
+        }
+        if s.min_window_blocks < 3 {
+            return Err(bad(
+                "scene.min_window_blocks",
+                format!("{}: expected at least 3", s.min_window_blocks),
+            ));
+        }
+        if (s.min_window_blocks as f64 + 1.0) * s.block_diameters > s.window_cap_diameters {
+            return Err(bad(
+                "scene.window_cap_diameters",
+                format!(
+                    "{}: expected more than min_window_blocks × block_diameters = {}",
+                    s.window_cap_diameters,
+                    s.min_window_blocks as f64 * s.block_diameters
+                ),
+            ));
+        }
+    }
+    if s.substrate != "rough" && s.substrate != "smooth" {
+        return Err(bad("scene.substrate", format!("\"{}\": expected \"rough\" or \"smooth\"", s.substrate)));
+    }
+    for (k, v) in [
+        ("scene.rest_speed", s.rest_speed),
+        ("scene.settle_max_s", s.settle_max_s),
+        ("scene.window_start_diameters", s.window_start_diameters),
+        ("scene.supply_factor", s.supply_factor),
+        ("scene.rayleigh_fraction", s.rayleigh_fraction),
+        ("scene.depth_diameters", s.depth_diameters),
+        ("scene.window_diameters", s.window_diameters),
+        ("scene.vx_band_diameters", s.vx_band_diameters),
+        ("scene.stiffness_factor", s.stiffness_factor),
+        ("scene.settle_min_falls", s.settle_min_falls),
+        ("scene.skin_diameters", s.skin_diameters),
+    ] {
+        if !v.is_finite() || v <= 0.0 {
+            return Err(bad(k, format!("{v}: expected a finite number > 0")));
+        }
+    }
+    for (k, v) in [("scene.timestep_s", s.timestep_s), ("scene.full_dump_every_s", s.full_dump_every_s)] {
+        if !v.is_finite() || v < 0.0 {
+            return Err(bad(k, format!("{v}: expected a finite number ≥ 0 (0: off)")));
+        }
+    }
+    if s.stiffness_factor > 1.0 {
+        return Err(bad(
+            "scene.stiffness_factor",
+            format!("{}: expected at most 1 (a reduction)", s.stiffness_factor),
+        ));
+    }
+    if s.mesh_cells_across == 0 {
+        return Err(bad("scene.mesh_cells_across", "expected at least 1".into()));
+    }
+    if s.rayleigh_fraction > 1.0 {
+        return Err(bad("scene.rayleigh_fraction", format!("{}: expected at most 1", s.rayleigh_fraction)));
+    }
+    match &s.size_distribution {
+        SizeDistributionSpec::Mono => {}
+        SizeDistributionSpec::Classes { classes, .. } => {
+            if classes.is_empty() {
+                return Err(bad("scene.size_distribution.classes", "expected at least one class".into()));
+            }
+            for (i, [dia, frac]) in classes.iter().enumerate() {
+                if !(dia.is_finite() && *dia > 0.0 && frac.is_finite() && *frac > 0.0) {
+                    return Err(bad(
+                        &format!("scene.size_distribution.classes[{i}]"),
+                        format!("[{dia}, {frac}]: expected a positive diameter and fraction"),
+                    ));
+                }
+            }
+        }
+        SizeDistributionSpec::Weibull { bins } => {
+            if *bins == 0 {
+                return Err(bad("scene.size_distribution.bins", "expected at least 1".into()));
+            }
+        }
+    }
+    if !(file.run.timeout_s.is_finite() && file.run.timeout_s > 0.0) {
+        return Err(bad("run.timeout_s", format!("{}: expected seconds > 0", file.run.timeout_s)));
+    }
+    let r = &file.run;
+    if !(r.screen_sample.is_finite() && (0.0..=1.0).contains(&r.screen_sample)) {
+        return Err(bad("run.screen_sample", format!("{}: expected a fraction in [0, 1]", r.screen_sample)));
+    }
+    if r.screen_sample_min == 0 {
+        return Err(bad(
+            "run.screen_sample_min",
+            "0: expected at least 1 (a screen is trusted only once verified; `screen = false` runs every point)"
+                .into(),
+        ));
+    }
+    Ok((swept, fixed))
+}
+
+fn as_f64(v: &toml::Value) -> Option<f64> {
+    match v {
+        toml::Value::Float(f) => Some(*f),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    }
+}
