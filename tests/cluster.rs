@@ -351,6 +351,73 @@ fn scripts_match_their_snapshots() {
     }
 }
 
+/// `--plan` writes a directory with every point pending and runs nothing; `submit` takes it; a
+/// second `--tasks` with another value lays the points out again when no task holds a run, and
+/// keeps the layout (saying so) while one does.
+#[test]
+fn a_planned_directory_is_submitted_and_another_tasks_says_what_it_does() {
+    let root = tempfile::tempdir().unwrap();
+    std::fs::write(root.path().join("s.toml"), SWEEP).unwrap();
+    let o = run(sweep_bin()
+        .args(["lds", "s.toml", "--step", "3", "--max", "3", "--out", "planned", "--plan"])
+        .current_dir(root.path()));
+    let err = text(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("planned 3 points") && err.contains("nothing run") && err.contains("sweep submit"),
+        "{err}"
+    );
+    let dir = root.path().join("planned");
+    let rows = results(&dir);
+    assert_eq!(rows.len(), POINTS);
+    assert!(rows.iter().all(|r| r.1 == "pending" && r.3.is_empty()), "{rows:?}");
+    // Nothing ran: no run directory, no joblog attempt, no LIGGGHTS log anywhere.
+    let runs: Vec<_> = std::fs::read_dir(dir.join("runs")).map(|d| d.flatten().collect()).unwrap_or_default();
+    assert!(runs.is_empty(), "{runs:?}");
+    assert!(!root.path().join("log.liggghts").exists());
+    let attempts = std::fs::read_to_string(dir.join("joblog.tsv")).unwrap_or_default();
+    assert!(attempts.lines().count() <= 1, "{attempts}");
+
+    let submit = |tasks: &str| {
+        let o = run(sweep_bin().args([
+            "submit",
+            dir.to_str().unwrap(),
+            "--scheduler",
+            "slurm",
+            "--tasks",
+            tasks,
+            "--dry-run",
+        ]));
+        assert!(o.status.success(), "--tasks {tasks}: {}", text(&o.stderr));
+        text(&o.stderr)
+    };
+    let per_task = || -> u64 {
+        let l: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("cluster/layout.json")).unwrap()).unwrap();
+        l["per_task"].as_u64().unwrap()
+    };
+    let msg = submit("3");
+    assert!(msg.contains("array tasks 0-2 (1 per task)") && msg.contains("afterany"), "{msg}");
+    assert_eq!(per_task(), 1);
+    let msg = submit("1");
+    assert!(
+        msg.contains("--tasks 1: no task holds a run") && msg.contains("3 per task instead of 1"),
+        "{msg}"
+    );
+    assert_eq!(per_task(), 3);
+    // A live task holds a run: the layout stays.
+    let (manifest, _) = Store::read_manifest(&dir).unwrap();
+    let held = Store::open(&dir).claim(&manifest.points[0].hash).unwrap();
+    assert!(matches!(held, ClaimAttempt::Claimed(..)));
+    let msg = submit("3");
+    assert!(
+        msg.contains("--tasks 3: keeping the layout of 3 points per task") && msg.contains("hold 1 runs"),
+        "{msg}"
+    );
+    assert_eq!(per_task(), 3);
+    drop(held);
+}
+
 #[test]
 fn bad_submit_input_is_refused_and_writes_nothing() {
     let root = tempfile::tempdir().unwrap();

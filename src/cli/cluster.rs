@@ -34,11 +34,15 @@ pub(super) enum OnlyArg {
 /// whose points are unfinished are submitted (e.g. --array=3,17-19).
 #[derive(Args)]
 pub(super) struct SubmitArgs {
+    /// The sweep directory (from `sweep lds|lattice ... --plan`, or a started sweep), on a file
+    /// system every node sees.
     dir: PathBuf,
+    /// The batch system.
     #[arg(long, value_enum)]
     scheduler: SchedulerArg,
     /// Array tasks sharing the points; required at the first submission, which fixes the
-    /// points per task for good.
+    /// points per task (cluster/layout.json). Given again with another value, it lays the
+    /// points out anew if no task holds a run, and otherwise keeps the layout; it says which.
     #[arg(long)]
     tasks: Option<usize>,
     /// Concurrent LIGGGHTS runs in each task.
@@ -155,6 +159,9 @@ pub(super) fn submit(a: SubmitArgs) -> Result<i32, Error> {
             return Ok(exit::SUCCESS);
         }
     };
+    if let Some(note) = &rendered.layout_note {
+        eprintln!("{note}");
+    }
     let (array, report) = cluster::write(&a.dir, &rendered)?;
     let what = format!(
         "{} points as array tasks {} ({} per task)",
@@ -163,11 +170,19 @@ pub(super) fn submit(a: SubmitArgs) -> Result<i32, Error> {
         rendered.layout.per_task
     );
     if a.dry_run {
+        let after = match scheduler {
+            Scheduler::Slurm => "--dependency=afterany:JOB",
+            Scheduler::PbsPro => "-W depend=afterany:JOB",
+            Scheduler::Torque => "-W depend=afteranyarray:JOB",
+        };
         eprintln!(
-            "wrote {} and {}: {what}; submit with `{cmd} {}`",
+            "wrote {} and {}: {what}; `sweep submit` without --dry-run submits both, or by hand: \
+             `{cmd} {}`, then `{cmd} {after} {}` with the array's JOB id (the report runs once \
+             every task has ended)",
             array.display(),
             report.display(),
-            array.display()
+            array.display(),
+            report.display()
         );
         println!("{}", array.display());
         return Ok(exit::SUCCESS);

@@ -212,6 +212,9 @@ pub struct Rendered {
     pub report_script: String,
     /// Points the tasks cover: unfinished, and failed when re-running failures.
     pub points: usize,
+    /// What a `--tasks` that differs from the directory's layout did (kept it, or laid the
+    /// points out again), to be said.
+    pub layout_note: Option<String>,
 }
 
 /// Counts of a directory, for the message when there is nothing to submit.
@@ -240,10 +243,34 @@ pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendere
         }
     }
     let n = manifest.points.len();
+    let fresh = |t: usize| Layout { format: LAYOUT_FORMAT, per_task: n.div_ceil(t.min(n).max(1)) };
+    let mut layout_note = None;
     let layout = match (Layout::read(&dir)?, o.tasks) {
+        (_, Some(0)) => return Err(Error::input("--tasks 0: expected at least 1")),
+        (Some(old), Some(t)) if fresh(t).per_task != old.per_task => {
+            // Another --tasks: lay the points out again only when no task of the old layout
+            // still runs, since a running task's index means the old block of points.
+            let held = held_points(&manifest, &Store::open(&dir)).len();
+            if held > 0 {
+                layout_note = Some(format!(
+                    "--tasks {t}: keeping the layout of {} points per task (cluster/layout.json): \
+                     tasks of an earlier submission still hold {held} runs; submit with --tasks \
+                     again once they have ended to lay the points out anew",
+                    old.per_task
+                ));
+                old
+            } else {
+                let new = fresh(t);
+                layout_note = Some(format!(
+                    "--tasks {t}: no task holds a run, so the {n} points are laid out again: {} per \
+                     task instead of {} (cluster/layout.json rewritten)",
+                    new.per_task, old.per_task
+                ));
+                new
+            }
+        }
         (Some(l), _) => l,
-        (None, Some(0)) => return Err(Error::input("--tasks 0: expected at least 1")),
-        (None, Some(t)) => Layout { format: LAYOUT_FORMAT, per_task: n.div_ceil(t.min(n).max(1)) },
+        (None, Some(t)) => fresh(t),
         (None, None) => {
             return Err(Error::input(format!(
             "--tasks: required for the first submission of {} ({n} points): how many array tasks share them",
@@ -313,6 +340,7 @@ pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendere
         array_script: render(false)?,
         report_script: render(true)?,
         points,
+        layout_note,
     }))
 }
 
@@ -401,7 +429,8 @@ pub fn write(dir: &Path, r: &Rendered) -> Result<(PathBuf, PathBuf)> {
     let io = |p: &Path, e: std::io::Error| Error::Internal(format!("{}: {e}", p.display()));
     std::fs::create_dir_all(cdir.join("logs")).map_err(|e| io(&cdir, e))?;
     let lpath = Layout::path(dir);
-    if !lpath.exists() {
+    let existing = Layout::read(dir)?;
+    if existing.is_none_or(|l| l.per_task != r.layout.per_task) {
         let text = serde_json::to_string_pretty(&r.layout).expect("layout serialises");
         crate::sys::atomic::write(&lpath, text.as_bytes()).map_err(|e| io(&lpath, e))?;
     }

@@ -20,6 +20,7 @@ pub mod mesh;
 pub mod params;
 pub mod passage;
 pub mod pile;
+pub mod plausible;
 pub mod psd;
 pub mod settings;
 
@@ -91,6 +92,9 @@ pub fn check_rayleigh_fraction(fraction: f64) -> Result<(), String> {
 pub enum SceneError {
     #[error("parameter `{name}` = {value}: {why}")]
     Invalid { name: String, value: f64, why: String },
+    /// Far outside what the scene is built for ([`plausible`]); the message names the slip.
+    #[error("{0}")]
+    Implausible(String),
 }
 
 /// Every number the deck and the metrics need for one point.
@@ -226,7 +230,7 @@ impl Scene {
         } else {
             settings.rayleigh_fraction * rayleigh_time
         };
-        if !settings.force_timestep {
+        if !settings.force_bounds {
             if let Err(why) = check_rayleigh_fraction(timestep / rayleigh_time) {
                 return Err(SceneError::Invalid { name: "timestep".into(), value: timestep, why });
             }
@@ -360,7 +364,7 @@ impl Scene {
         let rest_speed = settings.rest_speed * (GRAVITY * d).sqrt();
         let rest_ke = if gated { 0.5 * mass * rest_speed * rest_speed } else { 0.0 };
 
-        Ok(Scene {
+        let scene = Scene {
             density,
             youngs_modulus: youngs,
             poisson,
@@ -416,7 +420,11 @@ impl Scene {
             vx_band,
             vx_length: 6.0 * profile_diameter,
             ke_limit,
-        })
+        };
+        if !settings.force_bounds {
+            plausible::check(&scene, values, settings).map_err(SceneError::Implausible)?;
+        }
+        Ok(scene)
     }
 
     /// Timestep at which the blade starts moving: the spread's steps count from it (the deck

@@ -67,10 +67,10 @@ pub struct SceneSettings {
     pub thesis_band: bool,
     /// Seed of the initial pile: diameters and lattice jitter.
     pub seed: u64,
-    /// Accept a timestep beyond [`crate::scene::MAX_RAYLEIGH_FRACTION`] (`--force`; never read
-    /// from a sweep file).
+    /// Accept a timestep beyond [`crate::scene::MAX_RAYLEIGH_FRACTION`] and a point outside the
+    /// bounds of [`crate::scene::plausible`] (`--force`; never read from a sweep file).
     #[serde(skip)]
-    pub force_timestep: bool,
+    pub force_bounds: bool,
 }
 
 /// The fidelity presets, fastest first.
@@ -146,7 +146,7 @@ impl SceneSettings {
             }
         }
         let mut resolved: SceneSettings = table.try_into().map_err(|e: toml::de::Error| e.to_string())?;
-        resolved.force_timestep = self.force_timestep;
+        resolved.force_bounds = self.force_bounds;
         Ok(resolved)
     }
 }
@@ -166,7 +166,7 @@ impl SceneSettings {
         s.vx_band_diameters = self.vx_band_diameters;
         s.thesis_band = self.thesis_band;
         s.seed = self.seed;
-        s.force_timestep = self.force_timestep;
+        s.force_bounds = self.force_bounds;
         s
     }
 
@@ -186,7 +186,7 @@ impl SceneSettings {
         let mut s: SceneSettings = table
             .try_into()
             .map_err(|e: toml::de::Error| format!("{key} = {value}: {}", e.message().trim()))?;
-        s.force_timestep = self.force_timestep;
+        s.force_bounds = self.force_bounds;
         Ok(s)
     }
 }
@@ -229,7 +229,7 @@ impl Default for SceneSettings {
             vx_band_diameters: 0.25,
             thesis_band: false,
             seed: 12345,
-            force_timestep: false,
+            force_bounds: false,
         }
     }
 }
