@@ -76,6 +76,14 @@ pub(super) struct SubmitArgs {
     /// Write the scripts into DIR/cluster/ but do not submit them.
     #[arg(long)]
     dry_run: bool,
+    /// An LDS sweep: submit every point as one array, instead of one batch (design.lds.step
+    /// points) at a time with a job after each that stops the chain once the rule holds.
+    #[arg(long)]
+    all_at_once: bool,
+    /// The job after a batch: the batch ended points below N; submit the next batch only if
+    /// every one of them finished and the rule has not held.
+    #[arg(long, hide = true, value_name = "N")]
+    after_batch: Option<usize>,
 }
 
 #[derive(Args)]
@@ -100,6 +108,9 @@ pub(super) struct WorkArgs {
     /// Run only this task's points, not other tasks' leftovers.
     #[arg(long)]
     no_steal: bool,
+    /// Run only points below this index (one batch of an LDS sweep).
+    #[arg(long)]
+    upto: Option<usize>,
     /// Name claims after this host instead of the machine's.
     #[arg(long)]
     host: Option<String>,
@@ -136,7 +147,20 @@ pub(super) fn submit(a: SubmitArgs) -> Result<i32, Error> {
         template: a.template,
         steal: !a.no_steal,
         exe: std::env::current_exe()?,
+        chain: None,
     };
+    let (manifest, _) = demsweep::store::Store::read_manifest(&a.dir)?;
+    let step = match manifest.design {
+        demsweep::store::DesignRecord::Lds { step, .. } if !a.all_at_once => Some(step),
+        _ => None,
+    };
+    let mut opts = opts;
+    if let Some(step) = step {
+        if let Some(code) = chain_stops(&a.dir, a.after_batch)? {
+            return Ok(code);
+        }
+        opts.chain = Some(cluster::Chain { step, next: next_command(&a.dir, &opts)? });
+    }
     let cmd = scheduler.submit_command();
     if !a.dry_run && !cluster::on_path(cmd) {
         return Err(Error::input(format!(
@@ -163,8 +187,9 @@ pub(super) fn submit(a: SubmitArgs) -> Result<i32, Error> {
         eprintln!("{note}");
     }
     let (array, report) = cluster::write(&a.dir, &rendered)?;
+    let batch = rendered.batch.as_ref().map_or(String::new(), |(label, _)| format!(" of the batch {label}"));
     let what = format!(
-        "{} points as array tasks {} ({} per task)",
+        "{} points{batch} as array tasks {} ({} per task)",
         rendered.points,
         cluster::ranges(&rendered.tasks),
         rendered.layout.per_task
@@ -188,12 +213,91 @@ pub(super) fn submit(a: SubmitArgs) -> Result<i32, Error> {
         return Ok(exit::SUCCESS);
     }
     let (job, report_job) = cluster::submit(&a.dir, &rendered, &array, &report)?;
+    let after = if rendered.batch.is_some() {
+        "`sweep report`, then the next batch unless the rule has held,"
+    } else {
+        "`sweep report`"
+    };
     eprintln!(
-        "submitted {what}: job {job}; `sweep report` runs after it as job {report_job}; logs in {}",
+        "submitted {what}: job {job}; {after} runs after it as job {report_job}; logs in {}",
         cluster::cluster_dir(&a.dir).join("logs").display()
     );
     println!("{job}");
     Ok(exit::SUCCESS)
+}
+
+/// Whether an LDS chain ends here: the MFR statistics converged (say so, submit nothing), or,
+/// for the job after a batch, the batch left points unfinished (cut off: a re-submission by
+/// hand decides). `Some(exit code)` when it ends.
+fn chain_stops(dir: &std::path::Path, after_batch: Option<usize>) -> Result<Option<i32>, Error> {
+    use demsweep::analysis::convergence::Criteria;
+    let sweep = demsweep::run::load_dir_sweep(dir)?;
+    let criteria = Criteria::from_settings(&sweep.file.convergence);
+    let analysis =
+        demsweep::report::analyse(dir, &criteria, &demsweep::analysis::stats::Bootstrap::default())?;
+    if analysis.verdict.converged {
+        eprintln!("nothing to submit: {}: {}", analysis.verdict.status, analysis.verdict.reason);
+        return Ok(Some(exit::SUCCESS));
+    }
+    if let Some(upto) = after_batch {
+        let (manifest, _) = demsweep::store::Store::read_manifest(dir)?;
+        let store = demsweep::store::Store::open(dir);
+        let (status, _, _) = demsweep::run::screen::Screen::of(&sweep).statuses(&store, &manifest);
+        let left =
+            status.iter().take(upto).filter(|s| matches!(s, demsweep::store::PointStatus::Pending)).count();
+        if left > 0 {
+            eprintln!(
+                "the batch ended with {left} of its {upto} points unfinished (tasks cut off?): no next batch; \
+                 `sweep submit {}` re-submits them and carries the chain on",
+                dir.display()
+            );
+            return Ok(Some(exit::SUCCESS));
+        }
+    }
+    Ok(None)
+}
+
+/// The command the job after a batch runs: this submission again, as the judge of the batch.
+fn next_command(dir: &std::path::Path, o: &demsweep::run::cluster::SubmitOptions) -> Result<String, Error> {
+    let dir = std::path::absolute(dir).map_err(|e| Error::input(format!("{}: {e}", dir.display())))?;
+    let quote = |s: &str| format!("'{}'", s.replace('\'', "'\\''"));
+    let mut cmd = vec![
+        quote(&o.exe.display().to_string()),
+        "submit".into(),
+        quote(&dir.display().to_string()),
+        "--scheduler".into(),
+        o.scheduler.name().into(),
+        "--jobs-per-task".into(),
+        o.jobs_per_task.to_string(),
+        "--walltime".into(),
+        quote(&o.walltime),
+        "--ranks".into(),
+        o.ranks.to_string(),
+        "--lease".into(),
+        o.lease.as_secs().to_string(),
+    ];
+    for (flag, v) in [("--queue", &o.queue), ("--account", &o.account)] {
+        if let Some(v) = v {
+            cmd.extend([flag.to_string(), quote(v)]);
+        }
+    }
+    if let Some(t) = &o.template {
+        let t =
+            std::path::absolute(t).map_err(|e| Error::input(format!("--template {}: {e}", t.display())))?;
+        cmd.extend(["--template".into(), quote(&t.display().to_string())]);
+    }
+    let only: Vec<&str> = [(o.only.missing, "missing"), (o.only.failed, "failed")]
+        .iter()
+        .filter(|(on, _)| *on)
+        .map(|(_, n)| *n)
+        .collect();
+    cmd.extend(["--only".into(), only.join(",")]);
+    if !o.steal {
+        cmd.push("--no-steal".into());
+    }
+    // The end of the batch's points follows, once the batch is known (`cluster::plan`).
+    cmd.push("--after-batch".into());
+    Ok(cmd.join(" "))
 }
 
 pub(super) fn work(a: WorkArgs) -> Result<i32, Error> {
@@ -224,6 +328,7 @@ pub(super) fn work(a: WorkArgs) -> Result<i32, Error> {
         task: a.task,
         per_task: a.per_task,
         steal: !a.no_steal,
+        upto: a.upto,
         ranks: a.ranks,
     };
     let summary = demsweep::run::cluster::work(&a.dir, &w, &opts, &CancelToken::new())?;
