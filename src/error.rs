@@ -86,6 +86,9 @@ pub fn hint<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str>) -> St
     did_you_mean(word, candidates).map(|c| format!(" (did you mean `{c}`?)")).unwrap_or_default()
 }
 
+/// The result of drawing a figure: plotters and resvg fail with errors of their own types.
+pub type Res<T> = std::result::Result<T, Box<dyn std::error::Error>>;
+
 #[cfg(test)]
 mod tests {
     #[test]

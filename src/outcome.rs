@@ -4,7 +4,6 @@
 //! into a number: it carries its class (which decides the retry policy) and a one-line reason.
 
 use std::collections::BTreeMap;
-use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
@@ -123,11 +122,4 @@ pub enum RunOutcome {
     Failed(RunFailure),
     /// Stopped by Ctrl-C / SIGTERM; the run dir is incomplete and will be re-run on resume.
     Cancelled,
-}
-
-/// Write `value` as pretty JSON to `path` atomically ([`crate::sys::atomic::write`]).
-pub fn write_json_atomic<T: Serialize>(path: &Path, value: &T) -> std::io::Result<()> {
-    let mut bytes = serde_json::to_vec_pretty(value)?;
-    bytes.push(b'\n');
-    crate::sys::atomic::write(path, &bytes)
 }

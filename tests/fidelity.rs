@@ -5,9 +5,10 @@
 //! runs back instead of running them again. Speed is measured by the bench, not asserted here
 //! (BENCHMARKS.md "Fidelity").
 
+mod common;
+
 use std::collections::HashMap;
 use std::path::Path;
-use std::process::Command;
 
 fn sweep_file(dir: &Path) -> std::path::PathBuf {
     let path = dir.join("space.toml");
@@ -41,11 +42,16 @@ fn result(dir: &Path, hash: &str) -> serde_json::Value {
 
 #[test]
 fn one_point_under_each_preset_is_measured_against_the_reference_and_read_back_on_a_rerun() {
+    if common::liggghts_missing(
+        "one_point_under_each_preset_is_measured_against_the_reference_and_read_back_on_a_rerun",
+    ) {
+        return;
+    }
     let tmp = tempfile::tempdir().unwrap();
     let file = sweep_file(tmp.path());
     let out = tmp.path().join("bench");
     let bench = || {
-        Command::new(env!("CARGO_BIN_EXE_sweep"))
+        common::sweep_bin()
             .args([
                 "bench",
                 "fidelity",
@@ -131,6 +137,9 @@ fn one_point_under_each_preset_is_measured_against_the_reference_and_read_back_o
 
 #[test]
 fn bad_bench_input_is_one_line_and_writes_nothing() {
+    if common::liggghts_missing("bad_bench_input_is_one_line_and_writes_nothing") {
+        return;
+    }
     let tmp = tempfile::tempdir().unwrap();
     let file = sweep_file(tmp.path());
     let out = tmp.path().join("bench");
@@ -142,7 +151,7 @@ fn bad_bench_input_is_one_line_and_writes_nothing() {
         vec!["--variant", "x:supply_factor=2"],
         vec!["--variant", "x:rayleigh_fraction=0.9"],
     ] {
-        let r = Command::new(env!("CARGO_BIN_EXE_sweep"))
+        let r = common::sweep_bin()
             .args(["bench", "fidelity", file.to_str().unwrap(), "--out", out.to_str().unwrap()])
             .args(&extra)
             .output()

@@ -6,12 +6,14 @@
 //! Sweeps that only exercise the directory run on the deterministic fake executor; those whose
 //! path involves LIGGGHTS run it for real on small scenes.
 
+mod common;
+
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::Duration;
 
-use demsweep::run::pool::fake::{Behaviour, FakeExecutor};
+use demsweep::run::fake::{Behaviour, FakeExecutor};
 use demsweep::run::progress::ProgressMode;
 use demsweep::run::{self, RunAll, RunOptions};
 use demsweep::store::{self, DesignRecord};
@@ -19,10 +21,6 @@ use demsweep::sweep::{Scrambling, Sweep};
 use demsweep::sys::process::CancelToken;
 
 const MS: Duration = Duration::from_millis(1);
-
-fn sweep_bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_sweep"))
-}
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
@@ -70,7 +68,7 @@ fn snapshot(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
 /// panic, and nothing in `cwd` changed.
 fn refused(cwd: &Path, args: &[&str], needles: &[&str]) {
     let before = snapshot(cwd);
-    let o = sweep_bin().args(args).current_dir(cwd).stdin(Stdio::null()).output().unwrap();
+    let o = common::sweep_bin().args(args).current_dir(cwd).stdin(Stdio::null()).output().unwrap();
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(2), "{args:?}\nstderr: {err}");
     assert_eq!(err.lines().count(), 1, "{args:?}\nstderr: {err}");
@@ -159,7 +157,7 @@ fn refused_commands_write_nothing_in_the_callers_directory_not_even_a_liggghts_l
 
     // A command that identifies the engine and succeeds writes only where it was told to.
     let before = snapshot(&cwd);
-    let o = sweep_bin()
+    let o = common::sweep_bin()
         .args(["render", "s.toml", "--set", "gap=3", "--out", deck])
         .current_dir(&cwd)
         .output()
@@ -319,7 +317,7 @@ fn a_killed_attempt_shows_as_interrupted_in_status_and_the_joblog() {
     std::fs::write(run.join("claim"), claim.to_string()).unwrap();
     let st = run::status(&out).unwrap();
     assert_eq!((st.done, st.pending, st.interrupted), (2, 1, 1));
-    let o = sweep_bin().arg("status").arg(&out).output().unwrap();
+    let o = common::sweep_bin().arg("status").arg(&out).output().unwrap();
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("(1 interrupted"), "{text}");
 
@@ -386,7 +384,7 @@ fn an_inconsistent_or_truncated_manifest_is_refused_naming_the_field() {
             commands.push(vec!["status"]);
         }
         for args in commands {
-            let o = sweep_bin().args(&args).arg(&out).output().unwrap();
+            let o = common::sweep_bin().args(&args).arg(&out).output().unwrap();
             let err = stderr(&o);
             assert_eq!(o.status.code(), Some(2), "{args:?} {needle}: {err}");
             assert_eq!(err.lines().count(), 1, "{err}");
@@ -474,7 +472,7 @@ fn a_full_disk_under_liggghts_is_a_store_error_not_failed_runs_and_resume_finish
         }
     };
     let out = fs.join("out");
-    let o = sweep_bin()
+    let o = common::sweep_bin()
         .args(["lds", sweep.to_str().unwrap(), "--max", "3", "--step", "3", "--jobs", "1", "-q", "--out"])
         .arg(&out)
         .stdin(Stdio::null())
@@ -496,8 +494,12 @@ fn a_full_disk_under_liggghts_is_a_store_error_not_failed_runs_and_resume_finish
     assert!(done >= 1, "the first run should have fitted: {lines:?}");
 
     mount.remount("size=16m");
-    let o =
-        sweep_bin().args(["resume", "--jobs", "2", "-q"]).arg(&out).stdin(Stdio::null()).output().unwrap();
+    let o = common::sweep_bin()
+        .args(["resume", "--jobs", "2", "-q"])
+        .arg(&out)
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let per_hash = done_per_hash(&out);
     assert!(per_hash.len() == 3 && per_hash.values().all(|&n| n == 1), "{per_hash:?}");
@@ -539,7 +541,7 @@ fn an_unreadable_result_is_named_in_status_and_run_again() {
     let (manifest, _) = store::Store::read_manifest(&out).unwrap();
     let result = out.join("runs").join(&manifest.points[1].hash).join("result.json");
     std::fs::write(&result, "{\"format\": 1, \"hash\": ").unwrap();
-    let o = sweep_bin().arg("status").arg(&out).output().unwrap();
+    let o = common::sweep_bin().arg("status").arg(&out).output().unwrap();
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains(&format!("warning: {}: unreadable", result.display())), "{text}");
     let exec2 = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
@@ -554,7 +556,7 @@ fn planning_a_large_lattice_shows_progress_and_an_interrupt_writes_nothing() {
     let sweep = write_sweep(tmp.path(), "big", "");
     let out = tmp.path().join("out");
     // 2-D level 150: 22,500 decks to render and hash, several seconds of planning.
-    let mut child = sweep_bin()
+    let mut child = common::sweep_bin()
         .args(["lattice", sweep.to_str().unwrap(), "--levels", "150", "--out"])
         .arg(&out)
         .stdin(Stdio::null())

@@ -7,7 +7,7 @@ use std::sync::atomic::Ordering;
 use std::time::Duration;
 
 use demsweep::outcome::FailureClass;
-use demsweep::run::pool::fake::{fake_mfr, Behaviour, FakeExecutor};
+use demsweep::run::fake::{fake_mfr, Behaviour, FakeExecutor};
 use demsweep::run::pool::Flow;
 use demsweep::run::progress::ProgressMode;
 use demsweep::run::{self, RunAll, RunOptions, SpaceHook};

@@ -3,12 +3,14 @@
 //! real LIGGGHTS on `sweeps/quick.toml` for one sweep that ends with a report. Statistics are
 //! checked against values recomputed here from results.csv, never against our own output.
 
+mod common;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Output, Stdio};
 
 fn sweep(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sweep")).args(args).stdin(Stdio::null()).output().unwrap()
+    common::sweep_bin().args(args).stdin(Stdio::null()).output().unwrap()
 }
 
 fn stderr(o: &Output) -> String {
@@ -293,6 +295,9 @@ fn bad_input_is_one_line_and_exit_2_with_nothing_written() {
 /// The README's main command on real LIGGGHTS: a small sweep that ends with a report.
 #[test]
 fn quick_sweep_on_liggghts_ends_with_a_report() {
+    if common::liggghts_missing("quick_sweep_on_liggghts_ends_with_a_report") {
+        return;
+    }
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("quick");
     let quick = Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps/quick.toml");
@@ -324,7 +329,7 @@ fn quick_sweep_on_liggghts_ends_with_a_report() {
 #[test]
 fn failed_runs_are_excluded_and_counted() {
     use demsweep::outcome::FailureClass;
-    use demsweep::run::pool::fake::{fake_mfr, Behaviour, FakeExecutor};
+    use demsweep::run::fake::{fake_mfr, Behaviour, FakeExecutor};
     use demsweep::run::{self, RunOptions};
     let tmp = tempfile::tempdir().unwrap();
     let text = r#"name = "fails"

@@ -7,13 +7,15 @@
 //! sets what those points give), then a tiny sweep on real LIGGGHTS whose space holds two closed
 //! points: the verification run must give MFR = 0 on the engine, the other must be skipped.
 
+mod common;
+
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
-use std::process::{Command, Output, Stdio};
+use std::process::{Output, Stdio};
 use std::time::Duration;
 
 use demsweep::analysis::stats::Bootstrap;
-use demsweep::run::pool::fake::{fake_mfr, Behaviour, FakeExecutor};
+use demsweep::run::fake::{fake_mfr, Behaviour, FakeExecutor};
 use demsweep::run::pool::Flow;
 use demsweep::run::progress::ProgressMode;
 use demsweep::run::screen::Verdict;
@@ -219,7 +221,7 @@ fn an_array_task_runs_the_verification_sample_before_it_skips_its_own_closed_poi
 // ---- real LIGGGHTS ----
 
 fn sweep_bin(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sweep")).args(args).stdin(Stdio::null()).output().unwrap()
+    common::sweep_bin().args(args).stdin(Stdio::null()).output().unwrap()
 }
 
 fn stderr(o: &Output) -> String {
@@ -233,6 +235,11 @@ fn json(o: &Output) -> serde_json::Value {
 
 #[test]
 fn on_liggghts_the_verification_run_gives_mfr_zero_and_the_other_closed_point_is_skipped() {
+    if common::liggghts_missing(
+        "on_liggghts_the_verification_run_gives_mfr_zero_and_the_other_closed_point_is_skipped",
+    ) {
+        return;
+    }
     // D = 2.5 mm on the rough substrate at 1.4 m/s: the screen closes gaps below 0.538 D
     // = 1.34 mm. Gaps 0.5, 1.25 (closed), 2.0 and 2.75 mm (0.8 D and 1.1 D: open, they flow).
     // A short window and a narrow domain keep each run to a few seconds.
@@ -327,6 +334,9 @@ screen_sample_min = 1
 
 #[test]
 fn the_points_preview_marks_the_closed_points_of_the_thesis_space() {
+    if common::liggghts_missing("the_points_preview_marks_the_closed_points_of_the_thesis_space") {
+        return;
+    }
     // `sweep points --screen`: closed exactly where gap/D is below 0.670 D less the margin,
     // 0.1472 D × (v / 1.6 m/s)^0.8 (v 1.2–1.6 m/s: the bound is 0.523–0.553 D).
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps/thesis-lds.toml");
@@ -354,6 +364,9 @@ fn the_points_preview_marks_the_closed_points_of_the_thesis_space() {
 
 #[test]
 fn on_liggghts_a_failed_verification_run_refutes_the_screen_loudly() {
+    if common::liggghts_missing("on_liggghts_a_failed_verification_run_refutes_the_screen_loudly") {
+        return;
+    }
     // Every run is cut off at 0.3 s (LIGGGHTS takes seconds), so the verification run fails:
     // the screen is refuted, said so on stderr and in summary.json, and the other closed point
     // runs too (here, failing the same way) instead of being counted as MFR = 0.

@@ -181,13 +181,8 @@ pub(super) fn start(
     }
     let mut watch = Watch::new(Criteria::from_settings(&sweep.file.convergence));
     let cancel = CancelToken::new();
-    let summary = if demsweep::run::standin::selected(&sweep) {
-        let exec = demsweep::run::standin::StandIn::new(sweep.clone());
-        driver::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?
-    } else {
-        let exec = driver::PointExecutor::new(sweep.clone())?;
-        driver::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?
-    };
+    let exec = driver::SweepExecutor::for_sweep(&sweep)?;
+    let summary = driver::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?;
     finish(&summary, &sweep)
 }
 
@@ -199,13 +194,8 @@ fn plan(
     opts: &driver::RunOptions,
 ) -> Result<i32, Error> {
     let cancel = CancelToken::new();
-    let (points, unfinished) = if demsweep::run::standin::selected(sweep) {
-        let exec = demsweep::run::standin::StandIn::new(sweep.clone());
-        driver::plan_dir(sweep, design, out, &exec, opts.progress, &cancel)?
-    } else {
-        let exec = driver::PointExecutor::new(sweep.clone())?;
-        driver::plan_dir(sweep, design, out, &exec, opts.progress, &cancel)?
-    };
+    let exec = driver::SweepExecutor::for_sweep(sweep)?;
+    let (points, unfinished) = driver::plan_dir(sweep, design, out, &exec, opts.progress, &cancel)?;
     let dir = out.display();
     eprintln!("planned {points} points in {dir}, {unfinished} to run; nothing run");
     eprintln!(
@@ -223,13 +213,8 @@ pub(super) fn resume(a: ResumeArgs) -> Result<i32, Error> {
     // stays stopped where it converged.
     let mut watch = Watch::new(Criteria::from_settings(&sweep.file.convergence));
     let cancel = CancelToken::new();
-    let summary = if demsweep::run::standin::selected(&sweep) {
-        let exec = demsweep::run::standin::StandIn::new(sweep.clone());
-        driver::resume(&a.dir, &exec, &opts, &mut watch, &cancel)?
-    } else {
-        let exec = driver::PointExecutor::new(sweep.clone())?;
-        driver::resume(&a.dir, &exec, &opts, &mut watch, &cancel)?
-    };
+    let exec = driver::SweepExecutor::for_sweep(&sweep)?;
+    let summary = driver::resume(&a.dir, &exec, &opts, &mut watch, &cancel)?;
     finish(&summary, &sweep)
 }
 

@@ -19,6 +19,8 @@
 
 pub mod cluster;
 mod executor;
+#[cfg(any(test, feature = "test-support"))]
+pub mod fake;
 mod plan;
 pub mod pool;
 pub mod progress;
@@ -42,11 +44,11 @@ use crate::store::{self, DesignRecord, Manifest, PointStatus, RunState, Store, M
 use crate::sweep::Sweep;
 use crate::sys::process::CancelToken;
 
-pub use executor::{PointExecutor, PointJob};
+pub use executor::{PointExecutor, PointJob, SweepExecutor, SweepJob};
 use plan::{check_extension, check_parameters};
 pub use plan::{
     check_out_dir, default_out, identity_diff, judge_from, load_dir_sweep, plan, plan_with_progress,
-    resolved_toml, Plan,
+    resolved_toml, SweepPlan,
 };
 use reporter::Reporter;
 pub use reporter::{RunAll, SpaceHook, Watch};
@@ -150,7 +152,7 @@ fn create<E: Executor>(
             )));
         }
     }
-    let Plan { spaces, points, jobs } = plan_with_progress(exec, sweep, &design, cancel, progress)?;
+    let SweepPlan { spaces, points, jobs } = plan_with_progress(exec, sweep, &design, cancel, progress)?;
     let toml = resolved_toml(sweep, &design)?;
     let manifest = Manifest {
         format: MANIFEST_FORMAT,

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use super::{write_atomic, PointRecord, StoreError};
+use super::{io, PointRecord, StoreError};
 use crate::outcome::{RunFailure, RunResult, VX_LAYERS};
 
 /// The state of one design point in results.csv.
@@ -89,5 +89,5 @@ pub fn write_results(
         w.write_record(&row).expect("in-memory csv");
     }
     let bytes = w.into_inner().expect("in-memory csv");
-    write_atomic(&path, &bytes)
+    crate::sys::atomic::write(&path, &bytes).map_err(io(&path))
 }

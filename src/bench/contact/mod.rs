@@ -55,8 +55,3 @@ pub fn to_csv<T: serde::Serialize>(rows: &[T]) -> Result<String, ContactError> {
     let bytes = w.into_inner().map_err(|e| std::io::Error::other(e.to_string()))?;
     String::from_utf8(bytes).map_err(|e| ContactError::Io(std::io::Error::other(e)))
 }
-
-/// `v` in scientific notation for a table cell, or "-".
-fn cell(v: Option<f64>) -> String {
-    v.map_or("-".to_string(), |v| format!("{v:.2e}"))
-}
