@@ -9,7 +9,7 @@
 //! installs and starts it.
 
 mod common;
-use common::results;
+use common::{results, sweep_bin};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
