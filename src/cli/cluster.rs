@@ -29,8 +29,11 @@ pub(super) enum OnlyArg {
 /// Render templates/slurm.tera or templates/pbs.tera into DIR/cluster/ and submit it: an array
 /// whose task i runs design points [i*P, (i+1)*P) of the sweep directory (P fixed by the first
 /// submission, so an index always means the same points), then helps with what other tasks
-/// left; and a job after the array (afterany) that runs `sweep report DIR`. DIR must be on a
-/// file system every node sees. Submitting again is the cluster's resume: only the indices
+/// left; and a job after the array (afterany) that runs `sweep report DIR`. An LDS sweep goes
+/// batch by batch (design.lds.step points per array): the job after each batch writes the
+/// report and submits the next batch only if the convergence rule has not held, so the chain
+/// stops where a local `sweep lds` would (--all-at-once: one array of every point). DIR must be
+/// on a file system every node sees. Submitting again is the cluster's resume: only the indices
 /// whose points are unfinished are submitted (e.g. --array=3,17-19).
 #[derive(Args)]
 pub(super) struct SubmitArgs {
