@@ -1,7 +1,7 @@
 //! The top-level error type and the exit codes it maps to.
 //!
 //! Library modules return their own `thiserror` enums; this type is what the CLI sees, and its
-//! [`Error::code`] is the process exit code (DESIGN §4).
+//! [`Error::code`] is the process exit code (`sweep --help` lists them).
 
 /// Exit codes, documented in `sweep --help` and the README.
 pub mod exit {

@@ -1,4 +1,4 @@
-//! `sweep bench fidelity`: run time against error (issue 10, DESIGN §8).
+//! `sweep bench fidelity`: run time against error (BENCHMARKS.md "Fidelity").
 //!
 //! A fixed seeded LDS draw of K points of a sweep's space is run under each fidelity preset
 //! (and any extra variant of the fast knobs) with S pile seeds, jobs interleaved so that the

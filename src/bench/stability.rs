@@ -1,4 +1,4 @@
-//! `sweep bench stability`: the stability edge of the scene's numerics (issue 10, DESIGN §8).
+//! `sweep bench stability`: the stability edge of the scene's numerics (BENCHMARKS.md "Stability edge").
 //!
 //! At the harshest corner of a sweep's space ([`harshest_corner`]) the real point is run with
 //! the timestep driven up in fractions of the Rayleigh time, and with the stiffness (Young's

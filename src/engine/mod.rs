@@ -1,5 +1,5 @@
 //! The real engine: find LIGGGHTS, identify it, run one deck in its own directory, and read its
-//! log for what went wrong.
+//! log for what went wrong; its dump files are read by [`dump`]. Knows nothing of sweeps.
 //!
 //! A run fails — with a class and a one-line reason, the log's tail kept — on a LIGGGHTS
 //! `ERROR`, a non-zero exit, a drop in the atom count (nothing in our scenes removes atoms, so a

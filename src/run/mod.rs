@@ -1,4 +1,9 @@
-//! The sweep drivers: `sweep lattice`, `sweep lds`, `sweep resume` and `sweep status`.
+//! The sweep drivers: `sweep lattice`, `sweep lds`, `sweep resume` and `sweep status`, and what
+//! they are built from: the executor ([`SweepExecutor`]: LIGGGHTS or the stand-in), the plan
+//! (manifest and directory checks), the job [`pool`], the reporter of its events, the status of a
+//! directory, the [`screen`] policy, [`progress`], and cluster arrays ([`cluster`]). Knows what
+//! to run and in which order; how a point is computed is [`crate::point`]'s, and what the
+//! results say is [`crate::analysis`]'s.
 //!
 //! A driver turns a sweep and a design into the directory's manifest (every distinct point with
 //! its content hash, every nested space as a list of points), checks an existing directory
@@ -89,7 +94,7 @@ pub struct Summary {
 }
 
 impl Summary {
-    /// 130 interrupted, 1 when runs failed, else 0 (DESIGN §4).
+    /// 130 interrupted, 1 when runs failed, else 0 (the exit codes of `sweep --help`).
     pub fn exit_code(&self) -> i32 {
         use crate::error::exit;
         if self.interrupted {

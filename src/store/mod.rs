@@ -1,4 +1,4 @@
-//! The sweep directory (DESIGN §4): manifest, content-addressed run dirs, claims, joblog and
+//! The sweep directory: manifest, content-addressed run dirs, claims, joblog and
 //! results.csv.
 //!
 //! ```text

@@ -1,4 +1,4 @@
-//! The reference solver's own stability (issue 10, `sweep bench contact`).
+//! The reference solver's own stability (`sweep bench contact`; BENCHMARKS.md "Reference solver stability").
 //!
 //! Three studies, each a list of rows with a CSV and a table rendering:
 //! - [`drift`]: kinetic-energy drift at e = 1 over many consecutive contacts, against the closed
