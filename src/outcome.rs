@@ -27,6 +27,12 @@ pub struct RunResult {
     pub mfr_flux: f64,
     /// Particles counted in `mfr`: its counting noise is about 1/√n relative.
     pub mfr_particles: usize,
+    /// Standard error of `mfr` (conveyor layout: batch means over the steady window).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mfr_se: Option<f64>,
+    /// The steady-state measurement: block series, transient, batches, trend, heap, stop.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub steady_state: Option<Box<crate::point::steady::SteadyState>>,
     /// MFR over consecutive sub-windows of the measurement window.
     pub mfr_windows: Vec<f64>,
     /// False when the sub-window MFRs show the flow had not reached a steady state.
@@ -35,6 +41,9 @@ pub struct RunResult {
     pub steady_p: f64,
     /// Mean v_x (m/s) per layer k = 1..12 at z = gap + k·D/2; `None` for an empty layer.
     pub vx: Vec<Option<f64>>,
+    /// Standard error of each v_x layer over the steady window's snapshots (conveyor layout).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub vx_se: Vec<Option<f64>>,
     /// Particles in the pile.
     pub particles: usize,
     /// Timesteps of the settle (until at rest, or the fixed settle of the thesis layout).

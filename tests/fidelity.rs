@@ -11,9 +11,8 @@ use std::collections::HashMap;
 use std::path::Path;
 
 fn sweep_file(dir: &Path) -> std::path::PathBuf {
-    let path = dir.join("space.toml");
-    std::fs::write(
-        &path,
+    common::write_file(
+        &dir.join("space.toml"),
         r#"name = "space"
 [parameters]
 gap         = { lo = 2.0, hi = 3.0, unit = "mm" }
@@ -21,8 +20,6 @@ blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
 diameter    = 2.0
 "#,
     )
-    .unwrap();
-    path
 }
 
 fn rows(path: &Path) -> Vec<HashMap<String, String>> {
@@ -42,11 +39,9 @@ fn result(dir: &Path, hash: &str) -> serde_json::Value {
 
 #[test]
 fn one_point_under_each_preset_is_measured_against_the_reference_and_read_back_on_a_rerun() {
-    if common::liggghts_missing(
-        "one_point_under_each_preset_is_measured_against_the_reference_and_read_back_on_a_rerun",
-    ) {
-        return;
-    }
+    common::require_liggghts!(
+        "one_point_under_each_preset_is_measured_against_the_reference_and_read_back_on_a_rerun"
+    );
     let tmp = tempfile::tempdir().unwrap();
     let file = sweep_file(tmp.path());
     let out = tmp.path().join("bench");
@@ -137,9 +132,7 @@ fn one_point_under_each_preset_is_measured_against_the_reference_and_read_back_o
 
 #[test]
 fn bad_bench_input_is_one_line_and_writes_nothing() {
-    if common::liggghts_missing("bad_bench_input_is_one_line_and_writes_nothing") {
-        return;
-    }
+    common::require_liggghts!("bad_bench_input_is_one_line_and_writes_nothing");
     let tmp = tempfile::tempdir().unwrap();
     let file = sweep_file(tmp.path());
     let out = tmp.path().join("bench");

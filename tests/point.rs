@@ -11,9 +11,8 @@ use serde_json::Value;
 
 /// A sweep file over the thesis's D and gap ranges at μ = 0.3, v = 1.6 m/s, written to `dir`.
 fn thesis_space(dir: &Path) -> PathBuf {
-    let path = dir.join("space.toml");
-    std::fs::write(
-        &path,
+    common::write_file(
+        &dir.join("space.toml"),
         r#"name = "space"
 [parameters]
 diameter = { lo = 1.0, hi = 3.0, unit = "mm" }
@@ -22,8 +21,6 @@ friction = 0.3
 blade_speed = 1.6
 "#,
     )
-    .unwrap();
-    path
 }
 
 /// `sweep run --json` of one point; returns (exit code, parsed JSON, stderr).
@@ -55,9 +52,7 @@ fn assert_open_case(r: &Value, what: &str) {
 
 #[test]
 fn gap_of_two_diameters_flows_and_fills_the_profile() {
-    if common::liggghts_missing("gap_of_two_diameters_flows_and_fills_the_profile") {
-        return;
-    }
+    common::require_liggghts!("gap_of_two_diameters_flows_and_fills_the_profile");
     let dir = tempfile::tempdir().unwrap();
     let (code, r, err) = run_point(&thesis_space(dir.path()), "diameter=2,gap=4");
     assert_eq!(code, 0, "{err}");
@@ -74,9 +69,7 @@ fn gap_of_two_diameters_flows_and_fills_the_profile() {
 
 #[test]
 fn thesis_corners_run_without_errors_or_lost_atoms() {
-    if common::liggghts_missing("thesis_corners_run_without_errors_or_lost_atoms") {
-        return;
-    }
+    common::require_liggghts!("thesis_corners_run_without_errors_or_lost_atoms");
     // D 1 and 3 mm × gap 1 and 5 mm at μ = 0.3, v = 1.6 m/s. A failed run (LIGGGHTS ERROR,
     // lost atoms, unstable energy) exits 1 with its class; all four must complete.
     let dir = tempfile::tempdir().unwrap();
@@ -99,9 +92,7 @@ fn thesis_corners_run_without_errors_or_lost_atoms() {
 
 #[test]
 fn render_writes_the_three_files_of_a_point() {
-    if common::liggghts_missing("render_writes_the_three_files_of_a_point") {
-        return;
-    }
+    common::require_liggghts!("render_writes_the_three_files_of_a_point");
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("deck");
     let status = common::sweep_bin()
@@ -123,9 +114,7 @@ fn render_writes_the_three_files_of_a_point() {
 
 #[test]
 fn a_point_outside_its_domain_a_unit_slip_or_an_unknown_name_is_bad_input() {
-    if common::liggghts_missing("a_point_outside_its_domain_a_unit_slip_or_an_unknown_name_is_bad_input") {
-        return;
-    }
+    common::require_liggghts!("a_point_outside_its_domain_a_unit_slip_or_an_unknown_name_is_bad_input");
     let dir = tempfile::tempdir().unwrap();
     let sweep = thesis_space(dir.path());
     // Any parameter may be set, outside the sweep's range too; a value outside its domain, a
@@ -155,9 +144,7 @@ fn sweep_with_template(dir: &Path, template: &str, extra: &str) -> PathBuf {
 
 #[test]
 fn a_template_variable_the_scene_lacks_is_an_error_naming_it() {
-    if common::liggghts_missing("a_template_variable_the_scene_lacks_is_an_error_naming_it") {
-        return;
-    }
+    common::require_liggghts!("a_template_variable_the_scene_lacks_is_an_error_naming_it");
     let dir = tempfile::tempdir().unwrap();
     let sweep = sweep_with_template(dir.path(), "units si\nrun {{ scene.blade_angle }}\n", "");
     let (code, _, err) = run_point(&sweep, "gap=1.5");
@@ -167,9 +154,7 @@ fn a_template_variable_the_scene_lacks_is_an_error_naming_it() {
 
 #[test]
 fn a_deck_that_makes_liggghts_fail_is_reported_with_its_reason() {
-    if common::liggghts_missing("a_deck_that_makes_liggghts_fail_is_reported_with_its_reason") {
-        return;
-    }
+    common::require_liggghts!("a_deck_that_makes_liggghts_fail_is_reported_with_its_reason");
     let dir = tempfile::tempdir().unwrap();
     let deck = "units si\natom_style granular\nregion d block 0 1 0 1 0 1 units box\ncreate_box 1 d\n\
                 fix blade all mesh/surface file missing.stl type 1\nrun 10\n";
@@ -188,9 +173,7 @@ fn a_deck_that_makes_liggghts_fail_is_reported_with_its_reason() {
 /// rendered for real and cut after its first `run` (1 step): setup errors surface there.
 #[test]
 fn every_thesis_geometry_passes_liggghts_setup() {
-    if common::liggghts_missing("every_thesis_geometry_passes_liggghts_setup") {
-        return;
-    }
+    common::require_liggghts!("every_thesis_geometry_passes_liggghts_setup");
     let dir = tempfile::tempdir().unwrap();
     let mono = thesis_space(dir.path());
     let psd = dir.path().join("psd.toml");
@@ -237,9 +220,7 @@ fn every_thesis_geometry_passes_liggghts_setup() {
 /// stops a run whose energy explodes).
 #[test]
 fn an_unstable_timestep_fails_the_run_instead_of_giving_a_number() {
-    if common::liggghts_missing("an_unstable_timestep_fails_the_run_instead_of_giving_a_number") {
-        return;
-    }
+    common::require_liggghts!("an_unstable_timestep_fails_the_run_instead_of_giving_a_number");
     let dir = tempfile::tempdir().unwrap();
     let builtin = include_str!("../templates/spreading.liggghts.tera");
     let unstable =
@@ -258,9 +239,7 @@ fn an_unstable_timestep_fails_the_run_instead_of_giving_a_number() {
 /// never a number: here the rest criterion asks for an rms speed no pile reaches (1e-9 √(gD)).
 #[test]
 fn a_pile_still_moving_at_the_settle_cap_fails_as_not_settled() {
-    if common::liggghts_missing("a_pile_still_moving_at_the_settle_cap_fails_as_not_settled") {
-        return;
-    }
+    common::require_liggghts!("a_pile_still_moving_at_the_settle_cap_fails_as_not_settled");
     let dir = tempfile::tempdir().unwrap();
     let sweep = dir.path().join("s.toml");
     std::fs::write(
@@ -280,9 +259,7 @@ fn a_pile_still_moving_at_the_settle_cap_fails_as_not_settled() {
 /// reachable: its deck has no gate and no substrate, and it runs.
 #[test]
 fn the_thesis_layout_runs_on_a_smooth_plate() {
-    if common::liggghts_missing("the_thesis_layout_runs_on_a_smooth_plate") {
-        return;
-    }
+    common::require_liggghts!("the_thesis_layout_runs_on_a_smooth_plate");
     let dir = tempfile::tempdir().unwrap();
     let sweep = dir.path().join("s.toml");
     std::fs::write(

@@ -14,21 +14,14 @@ use std::time::{Duration, Instant};
 /// The quick demo scene, with gap and blade speed swept.
 fn write_sweep(dir: &Path, name: &str, extra_run: &str, template: Option<&Path>) -> PathBuf {
     let template = template.map_or(String::new(), |t| format!("template = {:?}\n", t));
-    let text = format!(
-        r#"name = "{name}"
-[parameters]
-gap         = {{ lo = 2.0, hi = 3.0, unit = "mm" }}
-blade_speed = {{ lo = 1.2, hi = 1.6, unit = "m/s" }}
-diameter    = {{ value = 1.5, unit = "mm" }}
-[scene]
+    let tables = format!(
+        r#"[scene]
 {template}
 [run]
 {extra_run}
 "#
     );
-    let path = dir.join(format!("{name}.toml"));
-    std::fs::write(&path, text).unwrap();
-    path
+    common::write_file(&dir.join(format!("{name}.toml")), &common::quick_scene(name, &tables))
 }
 
 fn run(cmd: &mut Command) -> Output {
@@ -142,9 +135,7 @@ fn interrupt(sweep: &Path, out: &Path, signal: i32) -> (std::process::ExitStatus
 
 #[test]
 fn killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results() {
-    if common::liggghts_missing("killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results") {
-        return;
-    }
+    common::require_liggghts!("killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results");
     let tmp = tempfile::tempdir().unwrap();
     let sweep = write_sweep(tmp.path(), "kr", "", None);
     let lds = |out: &Path| {
@@ -211,9 +202,7 @@ fn killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results() {
 
 #[test]
 fn a_run_past_its_timeout_is_killed_retried_and_reported() {
-    if common::liggghts_missing("a_run_past_its_timeout_is_killed_retried_and_reported") {
-        return;
-    }
+    common::require_liggghts!("a_run_past_its_timeout_is_killed_retried_and_reported");
     let tmp = tempfile::tempdir().unwrap();
     let sweep = write_sweep(tmp.path(), "slow", "timeout_s = 0.5\nretries = 1", None);
     let out = tmp.path().join("out");
@@ -233,9 +222,7 @@ fn a_run_past_its_timeout_is_killed_retried_and_reported() {
 
 #[test]
 fn a_deck_that_makes_liggghts_fail_is_reported_and_the_sweep_goes_on() {
-    if common::liggghts_missing("a_deck_that_makes_liggghts_fail_is_reported_and_the_sweep_goes_on") {
-        return;
-    }
+    common::require_liggghts!("a_deck_that_makes_liggghts_fail_is_reported_and_the_sweep_goes_on");
     let tmp = tempfile::tempdir().unwrap();
     // The built-in deck with an unknown command for gaps above 2.5 mm.
     let builtin = std::fs::read_to_string(
@@ -288,9 +275,7 @@ fn a_deck_that_makes_liggghts_fail_is_reported_and_the_sweep_goes_on() {
 
 #[test]
 fn two_sweep_processes_started_at_once_on_one_new_directory_share_the_work() {
-    if common::liggghts_missing("two_sweep_processes_started_at_once_on_one_new_directory_share_the_work") {
-        return;
-    }
+    common::require_liggghts!("two_sweep_processes_started_at_once_on_one_new_directory_share_the_work");
     let tmp = tempfile::tempdir().unwrap();
     let sweep = write_sweep(tmp.path(), "pair", "", None);
     let out = tmp.path().join("out");

@@ -39,9 +39,7 @@ youngs_modulus = {{ value = 21.0, unit = "MPa" }}
 
 #[test]
 fn a_timestep_beyond_the_measured_bound_is_refused_unless_forced() {
-    if common::liggghts_missing("a_timestep_beyond_the_measured_bound_is_refused_unless_forced") {
-        return;
-    }
+    common::require_liggghts!("a_timestep_beyond_the_measured_bound_is_refused_unless_forced");
     let tmp = tempfile::tempdir().unwrap();
     let beyond = MAX_RAYLEIGH_FRACTION + 0.1;
     let file = thesis_space(tmp.path(), &format!("rayleigh_fraction = {beyond}"));
@@ -71,9 +69,7 @@ fn a_timestep_beyond_the_measured_bound_is_refused_unless_forced() {
 
 #[test]
 fn bad_bench_input_is_one_line_and_writes_nothing() {
-    if common::liggghts_missing("bad_bench_input_is_one_line_and_writes_nothing") {
-        return;
-    }
+    common::require_liggghts!("bad_bench_input_is_one_line_and_writes_nothing");
     let tmp = tempfile::tempdir().unwrap();
     let file = thesis_space(tmp.path(), "");
     let f = file.to_str().unwrap();
@@ -102,11 +98,9 @@ fn bad_bench_input_is_one_line_and_writes_nothing() {
 /// to 0.4 (1.5× = 0.6, where every seed lost atoms when measured).
 #[test]
 fn the_default_timestep_has_a_margin_of_1_5_below_the_edge_at_the_harshest_corner() {
-    if common::liggghts_missing(
-        "the_default_timestep_has_a_margin_of_1_5_below_the_edge_at_the_harshest_corner",
-    ) {
-        return;
-    }
+    common::require_liggghts!(
+        "the_default_timestep_has_a_margin_of_1_5_below_the_edge_at_the_harshest_corner"
+    );
     let default = SceneSettings::default().rayleigh_fraction;
     let margin = 1.5 * default;
     assert!(

@@ -6,6 +6,7 @@ mod bench;
 mod cluster;
 mod contact;
 mod point;
+mod predict;
 mod stats;
 mod sweep;
 
@@ -89,6 +90,13 @@ enum Command {
     /// One array task of `sweep submit`: run the task's share of a sweep directory.
     #[command(hide = true)]
     Work(cluster::WorkArgs),
+    /// MFR at a setting from the sweep's emulator (a Gaussian process fitted to its done
+    /// points), with the predictive standard error.
+    ///
+    /// The same emulator as report.html's: Matérn 5/2, each point's own noise where its result
+    /// records an mfr_se. Prints the leave-one-out error beside the prediction; warns when a
+    /// value lies outside the swept range.
+    Predict(predict::PredictArgs),
     /// Benchmarks: run time against error of the fidelity presets (`fidelity`), the scene's
     /// stability edge (`stability`), and the contact reference solver's own stability
     /// (`contact`).
@@ -100,17 +108,20 @@ enum Command {
 /// rule holds; `lattice`/`lds` record the overrides in DIR/sweep.toml, so `resume` keeps them.
 #[derive(Args)]
 struct ConvergenceArgs {
-    /// "all" (default: every statistic within the tolerance or the floor, for --hold
-    /// consecutive spaces) or "any" (the thesis's rule: any one statistic within the tolerance).
+    /// "scaled" (default: every statistic moved by at most the tolerance times its own scale and
+    /// known to within it, its 95% bootstrap half-width, for --hold consecutive spaces), "any"
+    /// (the thesis's rule: any one statistic within the tolerance relatively) or "all" (every
+    /// statistic within the tolerance relatively or the floor). docs/statistics.md.
     #[arg(long)]
     rule: Option<String>,
-    /// Relative change between consecutive spaces that counts as converged (e.g. 0.05).
+    /// The fraction of a statistic's scale ("scaled") or of its previous value ("any", "all")
+    /// that counts as converged (e.g. 0.05).
     #[arg(long, allow_negative_numbers = true)]
     tolerance: Option<f64>,
     /// Absolute change that counts as converged whatever the relative one (rule "all").
     #[arg(long, allow_negative_numbers = true)]
     floor: Option<f64>,
-    /// Consecutive spaces the rule must hold for (rule "all").
+    /// Consecutive spaces the rule must hold for (rules "scaled" and "all").
     #[arg(long)]
     hold: Option<usize>,
 }
@@ -147,6 +158,7 @@ pub fn run(cli: Cli) -> Result<i32, Error> {
         Command::Render(a) => point::render(a),
         Command::Run(a) => point::run_one(a),
         Command::Stats(a) => stats::stats(a),
+        Command::Predict(a) => predict::predict(a),
         Command::Contact(a) => contact::contact(a),
         Command::ContactCheck(a) => contact::contact_check(a),
         Command::Submit(a) => cluster::submit(a),

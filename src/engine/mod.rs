@@ -276,8 +276,9 @@ fn find_on_path(name: &str) -> Option<PathBuf> {
 pub struct LogLimits {
     /// Kinetic energy above which the run is unstable, J.
     pub ke_limit: f64,
-    /// Atoms expected once inserted; fewer at the end is lost atoms.
-    pub atoms: u64,
+    /// Atoms expected once inserted; fewer at the end is lost atoms. None: the count varies by
+    /// design (a fed scene inserts and deletes); LIGGGHTS's own lost-atom error guards it.
+    pub atoms: Option<u64>,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -418,7 +419,7 @@ fn analyse_log(log: &str, limits: &LogLimits) -> LogAnalysis {
                     FailureClass::Unstable,
                     format!("kinetic energy {ke:.3e} J at step {step} exceeds {:.3e} J", limits.ke_limit),
                 ));
-            } else if atoms < max_atoms {
+            } else if limits.atoms.is_some() && atoms < max_atoms {
                 a.failure = Some((
                     FailureClass::LostAtoms,
                     format!("atom count fell from {max_atoms} to {atoms} by step {step} (lost atoms)"),
@@ -430,14 +431,11 @@ fn analyse_log(log: &str, limits: &LogLimits) -> LogAnalysis {
     if a.failure.is_none() {
         match a.thermo.last() {
             None => a.failure = Some((FailureClass::Unparsable, "no thermo output in the log".into())),
-            Some(last) if last.atoms != limits.atoms => {
+            Some(last) if limits.atoms.is_some_and(|n| last.atoms != n) => {
+                let expected = limits.atoms.unwrap_or(0);
                 a.failure = Some((
-                    if last.atoms < limits.atoms {
-                        FailureClass::LostAtoms
-                    } else {
-                        FailureClass::Unparsable
-                    },
-                    format!("{} atoms at the end, expected {}", last.atoms, limits.atoms),
+                    if last.atoms < expected { FailureClass::LostAtoms } else { FailureClass::Unparsable },
+                    format!("{} atoms at the end, expected {expected}", last.atoms),
                 ))
             }
             _ => {}
@@ -450,7 +448,7 @@ fn analyse_log(log: &str, limits: &LogLimits) -> LogAnalysis {
 mod tests {
     use super::*;
 
-    const LIMITS: LogLimits = LogLimits { ke_limit: 1.0, atoms: 700 };
+    const LIMITS: LogLimits = LogLimits { ke_limit: 1.0, atoms: Some(700) };
 
     #[test]
     fn a_multi_line_warning_is_kept_whole() {
