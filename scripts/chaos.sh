@@ -72,11 +72,12 @@ while [ "$kills" -lt "$KILLS" ]; do
     [ "$rc" = 0 ] && break
   fi
 done
-between=$(awk -F'\t' 'NR > 1 && $6 == "done"' "$out/joblog.tsv" 2>/dev/null | wc -l)
+# joblog.tsv: Status is column 12 and Hash column 11 (GNU parallel's nine columns, then Index).
+between=$(awk -F'\t' 'NR > 1 && $12 == "done"' "$out/joblog.tsv" 2>/dev/null | wc -l)
 echo "chaos: $between of $POINTS runs finished between kills; final resume"
 "$SWEEP" resume "$out" --jobs "$JOBS" -q
 
-twice=$(awk -F'\t' 'NR > 1 && $6 == "done" { n[$8]++ } END { t = 0; for (h in n) if (n[h] > 1) t++; print t }' "$out/joblog.tsv")
+twice=$(awk -F'\t' 'NR > 1 && $12 == "done" { n[$11]++ } END { t = 0; for (h in n) if (n[h] > 1) t++; print t }' "$out/joblog.tsv")
 attempts=$(awk -F'\t' 'NR > 1' "$out/joblog.tsv" | wc -l)
 nodup=$(awk -F'\t' 'NR > 1 { print $1 }' "$out/joblog.tsv" | sort | uniq -d | wc -l)
 strip() { # results.csv without the runtime_s column

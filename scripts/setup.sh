@@ -3,7 +3,8 @@
 # nothing and takes seconds.
 #   - LIGGGHTS 3.8 from Debian when `liggghts` is not on PATH (needs root or sudo);
 #   - GNU parallel and GNU time, only for the benchmarks (BENCHMARKS.md);
-#   - target/release/sweep.
+#   - target/release/sweep, linked as `sweep` into a directory on PATH: next to `cargo`
+#     (~/.cargo/bin with rustup), else /usr/local/bin, so that `sweep ...` works as written.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -25,4 +26,16 @@ fi
 command -v liggghts >/dev/null || { echo "setup: liggghts is still not on PATH" >&2; exit 1; }
 
 cargo build --release --quiet
-echo "setup: ready: $(command -v liggghts), target/release/sweep" >&2
+
+# A link, not a copy: a later `cargo build --release` in this checkout updates the command.
+on_path() { case ":$PATH:" in *":$1:"*) return 0 ;; *) return 1 ;; esac; }
+bin_dir=$(dirname "$(command -v cargo)")
+case "$bin_dir" in "$HOME"/*) ;; *) bin_dir=/usr/local/bin ;; esac  # never into /usr/bin
+if ! on_path "$bin_dir" || [ ! -w "$bin_dir" ]; then bin_dir=/usr/local/bin; fi
+as_root_if_needed() { if [ -w "$bin_dir" ]; then "$@"; else as_root "$@"; fi; }
+as_root_if_needed ln -sfn "$PWD/target/release/sweep" "$bin_dir/sweep"
+found=$(command -v sweep || true)
+if [ "$found" != "$bin_dir/sweep" ]; then
+  echo "setup: warning: \`sweep\` on PATH is ${found:-missing}, not $bin_dir/sweep" >&2
+fi
+echo "setup: ready: $(command -v liggghts), $bin_dir/sweep -> $PWD/target/release/sweep" >&2

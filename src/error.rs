@@ -67,13 +67,21 @@ impl From<std::io::Error> for Error {
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
 /// The closest candidate to `word` for a "did you mean" hint, if any is close enough.
+/// Close means a Jaro–Winkler similarity above 0.8, or for short words one edit or swap of two
+/// neighbours (`gpa` for `gap`, where Jaro–Winkler sees too little).
 pub fn did_you_mean<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    let candidates: Vec<&str> = candidates.into_iter().collect();
     candidates
-        .into_iter()
-        .map(|c| (strsim::jaro_winkler(word, c), c))
+        .iter()
+        .map(|c| (strsim::jaro_winkler(word, c), *c))
         .filter(|(score, _)| *score > 0.8)
         .max_by(|a, b| a.0.total_cmp(&b.0))
         .map(|(_, c)| c)
+        .or_else(|| {
+            (word.chars().count() >= 3)
+                .then(|| candidates.iter().find(|c| strsim::osa_distance(word, c) == 1).copied())
+                .flatten()
+        })
 }
 
 /// `" (did you mean `x`?)"` or an empty string.
@@ -83,3 +91,13 @@ pub fn hint<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str>) -> St
 
 /// The result of drawing a figure: plotters and resvg fail with errors of their own types.
 pub type Res<T> = std::result::Result<T, Box<dyn std::error::Error>>;
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn swapped_letters_of_a_short_name_get_a_suggestion() {
+        assert_eq!(super::did_you_mean("gpa", ["gap", "diameter"]), Some("gap"));
+        assert_eq!(super::did_you_mean("frction", ["gap", "friction"]), Some("friction"));
+        assert_eq!(super::did_you_mean("xyz", ["gap", "diameter"]), None);
+    }
+}

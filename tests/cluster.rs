@@ -9,7 +9,7 @@
 //! installs and starts it.
 
 mod common;
-use common::results;
+use common::{results, sweep_bin};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
@@ -70,11 +70,9 @@ fn fresh_copy(name: &str) -> (tempfile::TempDir, PathBuf) {
 
 /// Joblog statuses by hash, in order, with the host of each line.
 fn attempts(dir: &Path) -> BTreeMap<String, Vec<(String, String)>> {
-    let text = std::fs::read_to_string(dir.join("joblog.tsv")).unwrap();
     let mut m: BTreeMap<String, Vec<(String, String)>> = BTreeMap::new();
-    for line in text.lines().filter(|l| !l.starts_with("seq\t")) {
-        let f: Vec<&str> = line.split('\t').collect();
-        m.entry(f[7].to_string()).or_default().push((f[1].to_string(), f[5].to_string()));
+    for l in demsweep::store::read_joblog(dir).unwrap() {
+        m.entry(l.hash).or_default().push((l.host, l.status));
     }
     m
 }
@@ -179,7 +177,7 @@ fn slurm_array_with_a_cancelled_task_completes_on_resubmission() {
 
     // Re-submit: only index 1.
     let (job2, msg) = submit(&conf, &dir, &[]);
-    assert!(msg.contains("1 points as array tasks 1 "), "{msg}");
+    assert!(msg.contains("1 points of the batch lds 3 as array tasks 1 "), "{msg}");
     let script = std::fs::read_to_string(dir.join("cluster/array.slurm")).unwrap();
     assert!(script.contains("#SBATCH --array=1\n"), "{script}");
     wait_until("the re-submitted array to end", Duration::from_secs(600), || squeue(&conf, &job2).is_empty());
@@ -213,6 +211,62 @@ fn slurm_array_with_a_cancelled_task_completes_on_resubmission() {
     ]));
     assert!(o.status.success() && text(&o.stdout).is_empty(), "{}", text(&o.stderr));
     assert!(text(&o.stderr).contains("nothing to submit"), "{}", text(&o.stderr));
+}
+
+/// An LDS sweep planned with `--plan` and submitted batch by batch on the local Slurm: each
+/// batch of `step` points is one array, the job after it judges the statistics, and the chain
+/// stops at the verdict, well before `max`. A stand-in sweep whose rule holds at the second
+/// space: 8 of its 20 points run.
+#[test]
+fn an_lds_chain_on_slurm_stops_at_the_verdict() {
+    let Some(conf) = local_slurm() else { return };
+    let root = tempfile::Builder::new().prefix("cluster-chain-").tempdir().unwrap();
+    let sweep = "name = \"chain\"\n[parameters]\ngap = { lo = 2.0, hi = 4.0 }\nblade_speed = { lo = 1.2, hi = 1.6 }\n\
+                 [design.lds]\nstep = 4\nmax = 20\n[convergence]\ntolerance = 2.0\nfloor = 2.0\nhold = 1\n\
+                 [run]\nengine = \"stand-in\"\n";
+    std::fs::write(root.path().join("s.toml"), sweep).unwrap();
+    let o = run(sweep_bin().args(["lds", "s.toml", "--out", "planned", "--plan"]).current_dir(root.path()));
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let dir = root.path().join("planned");
+    let (_job, msg) = submit(&conf, &dir, &["--tasks", "2"]);
+    assert!(msg.contains("4 points of the batch lds 4 as array tasks 0-1 (2 per task)"), "{msg}");
+    assert!(msg.contains("then the next batch unless the rule has held"), "{msg}");
+
+    // The chain: batch lds 4, its judge submits lds 8, whose judge finds the rule held.
+    let judges = || -> Vec<String> {
+        std::fs::read_dir(dir.join("cluster/logs"))
+            .unwrap()
+            .flatten()
+            .filter(|e| e.file_name().to_string_lossy().starts_with("report-"))
+            .map(|e| std::fs::read_to_string(e.path()).unwrap_or_default())
+            .collect()
+    };
+    wait_until("the chain to stop at the verdict", Duration::from_secs(600), || {
+        judges().iter().any(|l| l.contains("nothing to submit: converged"))
+    });
+    let subs = std::fs::read_to_string(dir.join("cluster/submissions.tsv")).unwrap();
+    assert_eq!(subs.lines().count(), 2, "two batches submitted: {subs}");
+    let rows = results(&dir);
+    assert_eq!(rows.len(), 20);
+    let done: Vec<usize> = rows.iter().enumerate().filter(|(_, r)| r.1 == "done").map(|(i, _)| i).collect();
+    assert_eq!(done, (0..8).collect::<Vec<_>>(), "{rows:?}");
+    assert!(rows[8..].iter().all(|r| r.1 == "pending"), "{rows:?}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["verdict"]["status"], "converged", "{summary}");
+    assert_eq!(summary["verdict"]["n"], 8, "{summary}");
+    // Submitting again by hand agrees: nothing to run.
+    let o = run(sweep_bin().env("SLURM_CONF", &conf).args([
+        "submit",
+        dir.to_str().unwrap(),
+        "--scheduler",
+        "slurm",
+    ]));
+    assert!(
+        o.status.success() && text(&o.stderr).contains("nothing to submit: converged"),
+        "{}",
+        text(&o.stderr)
+    );
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -345,6 +399,73 @@ fn scripts_match_their_snapshots() {
             snapshot(&format!("{scheduler}-{kind}.txt"), &got);
         }
     }
+}
+
+/// `--plan` writes a directory with every point pending and runs nothing; `submit` takes it; a
+/// second `--tasks` with another value lays the points out again when no task holds a run, and
+/// keeps the layout (saying so) while one does.
+#[test]
+fn a_planned_directory_is_submitted_and_another_tasks_says_what_it_does() {
+    let root = tempfile::tempdir().unwrap();
+    std::fs::write(root.path().join("s.toml"), SWEEP).unwrap();
+    let o = run(sweep_bin()
+        .args(["lds", "s.toml", "--step", "3", "--max", "3", "--out", "planned", "--plan"])
+        .current_dir(root.path()));
+    let err = text(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("planned 3 points") && err.contains("nothing run") && err.contains("sweep submit"),
+        "{err}"
+    );
+    let dir = root.path().join("planned");
+    let rows = results(&dir);
+    assert_eq!(rows.len(), POINTS);
+    assert!(rows.iter().all(|r| r.1 == "pending" && r.3.is_empty()), "{rows:?}");
+    // Nothing ran: no run directory, no joblog attempt, no LIGGGHTS log anywhere.
+    let runs: Vec<_> = std::fs::read_dir(dir.join("runs")).map(|d| d.flatten().collect()).unwrap_or_default();
+    assert!(runs.is_empty(), "{runs:?}");
+    assert!(!root.path().join("log.liggghts").exists());
+    let attempts = std::fs::read_to_string(dir.join("joblog.tsv")).unwrap_or_default();
+    assert!(attempts.lines().count() <= 1, "{attempts}");
+
+    let submit = |tasks: &str| {
+        let o = run(sweep_bin().args([
+            "submit",
+            dir.to_str().unwrap(),
+            "--scheduler",
+            "slurm",
+            "--tasks",
+            tasks,
+            "--dry-run",
+        ]));
+        assert!(o.status.success(), "--tasks {tasks}: {}", text(&o.stderr));
+        text(&o.stderr)
+    };
+    let per_task = || -> u64 {
+        let l: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("cluster/layout.json")).unwrap()).unwrap();
+        l["per_task"].as_u64().unwrap()
+    };
+    let msg = submit("3");
+    assert!(msg.contains("array tasks 0-2 (1 per task)") && msg.contains("afterany"), "{msg}");
+    assert_eq!(per_task(), 1);
+    let msg = submit("1");
+    assert!(
+        msg.contains("--tasks 1: no task holds a run") && msg.contains("3 per task instead of 1"),
+        "{msg}"
+    );
+    assert_eq!(per_task(), 3);
+    // A live task holds a run: the layout stays.
+    let (manifest, _) = Store::read_manifest(&dir).unwrap();
+    let held = Store::open(&dir).claim(&manifest.points[0].hash).unwrap();
+    assert!(matches!(held, ClaimAttempt::Claimed(..)));
+    let msg = submit("3");
+    assert!(
+        msg.contains("--tasks 3: keeping the layout of 3 points per task") && msg.contains("hold 1 runs"),
+        "{msg}"
+    );
+    assert_eq!(per_task(), 3);
+    drop(held);
 }
 
 #[test]

@@ -113,11 +113,17 @@ fn render_writes_the_three_files_of_a_point() {
 }
 
 #[test]
-fn a_point_outside_the_space_or_an_unknown_name_is_bad_input() {
-    common::require_liggghts!("a_point_outside_the_space_or_an_unknown_name_is_bad_input");
+fn a_point_outside_its_domain_a_unit_slip_or_an_unknown_name_is_bad_input() {
+    common::require_liggghts!("a_point_outside_its_domain_a_unit_slip_or_an_unknown_name_is_bad_input");
     let dir = tempfile::tempdir().unwrap();
     let sweep = thesis_space(dir.path());
-    for (set, needle) in [("gap=9", "gap=9"), ("gapp=3", "did you mean `gap`"), ("friction=0.2", "fixed")] {
+    // Any parameter may be set, outside the sweep's range too; a value outside its domain, a
+    // unit slip or an unknown name is refused.
+    for (set, needle) in [
+        ("gap=0.009", "did you mean 9?"),
+        ("gapp=3", "did you mean `gap`"),
+        ("friction=-0.2", "outside the domain of friction"),
+    ] {
         let (code, _, err) = run_point(&sweep, set);
         assert_eq!(code, 2, "--set {set}: {err}");
         assert!(err.contains(needle), "--set {set}: {err}");

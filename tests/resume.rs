@@ -46,11 +46,9 @@ fn stderr(o: &Output) -> String {
 
 /// Joblog lines by hash: the statuses of its attempts in order.
 fn attempts(dir: &Path) -> BTreeMap<String, Vec<String>> {
-    let text = std::fs::read_to_string(dir.join("joblog.tsv")).unwrap();
     let mut m: BTreeMap<String, Vec<String>> = BTreeMap::new();
-    for line in text.lines().filter(|l| !l.starts_with("seq\t")) {
-        let f: Vec<&str> = line.split('\t').collect();
-        m.entry(f[7].to_string()).or_default().push(f[5].to_string());
+    for l in demsweep::store::read_joblog(dir).unwrap() {
+        m.entry(l.hash).or_default().push(l.status);
     }
     m
 }

@@ -279,7 +279,7 @@ screen_sample_min = 1
         serde_json::from_str(&std::fs::read_to_string(vdir.join("result.json")).unwrap()).unwrap();
     assert!(result["engine_version"].as_str().unwrap().contains("LIGGGHTS"), "{result}");
     assert!(vdir.join("log.liggghts").exists() && vdir.join("in.liggghts").exists());
-    assert!(joblog.lines().any(|l| l.ends_with(&v["hash"]) && l.contains("\tdone\t")), "{joblog}");
+    assert!(joblog.lines().any(|l| l.contains(&format!("\t{}\tdone\t", v["hash"]))), "{joblog}");
     // The other closed point: screened, MFR 0, no v_x, no run directory, no joblog line.
     let screened: Vec<&BTreeMap<String, String>> =
         table.iter().filter(|r| r["status"] == "screened").collect();

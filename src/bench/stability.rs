@@ -148,7 +148,7 @@ pub fn default_moduli(start: f64) -> Vec<f64> {
 fn level_sweep(sweep: &Sweep, corner: &[f64], level: Level) -> (Sweep, Vec<f64>) {
     let mut sweep = sweep.clone();
     sweep.file.scene.rayleigh_fraction = level.fraction;
-    sweep.file.scene.force_timestep = true;
+    sweep.file.scene.force_bounds = true;
     let mut values = corner.to_vec();
     match sweep.swept.iter().position(|p| p.name == "youngs_modulus") {
         Some(i) => values[i] = level.youngs_mpa,

@@ -29,16 +29,23 @@ pub(super) enum OnlyArg {
 /// Render templates/slurm.tera or templates/pbs.tera into DIR/cluster/ and submit it: an array
 /// whose task i runs design points [i*P, (i+1)*P) of the sweep directory (P fixed by the first
 /// submission, so an index always means the same points), then helps with what other tasks
-/// left; and a job after the array (afterany) that runs `sweep report DIR`. DIR must be on a
-/// file system every node sees. Submitting again is the cluster's resume: only the indices
+/// left; and a job after the array (afterany) that runs `sweep report DIR`. An LDS sweep goes
+/// batch by batch (design.lds.step points per array): the job after each batch writes the
+/// report and submits the next batch only if the convergence rule has not held, so the chain
+/// stops where a local `sweep lds` would (--all-at-once: one array of every point). DIR must be
+/// on a file system every node sees. Submitting again is the cluster's resume: only the indices
 /// whose points are unfinished are submitted (e.g. --array=3,17-19).
 #[derive(Args)]
 pub(super) struct SubmitArgs {
+    /// The sweep directory (from `sweep lds|lattice ... --plan`, or a started sweep), on a file
+    /// system every node sees.
     dir: PathBuf,
+    /// The batch system.
     #[arg(long, value_enum)]
     scheduler: SchedulerArg,
     /// Array tasks sharing the points; required at the first submission, which fixes the
-    /// points per task for good.
+    /// points per task (cluster/layout.json). Given again with another value, it lays the
+    /// points out anew if no task holds a run, and otherwise keeps the layout; it says which.
     #[arg(long)]
     tasks: Option<usize>,
     /// Concurrent LIGGGHTS runs in each task.
@@ -72,6 +79,14 @@ pub(super) struct SubmitArgs {
     /// Write the scripts into DIR/cluster/ but do not submit them.
     #[arg(long)]
     dry_run: bool,
+    /// An LDS sweep: submit every point as one array, instead of one batch (design.lds.step
+    /// points) at a time with a job after each that stops the chain once the rule holds.
+    #[arg(long)]
+    all_at_once: bool,
+    /// The job after a batch: the batch ended points below N; submit the next batch only if
+    /// every one of them finished and the rule has not held.
+    #[arg(long, hide = true, value_name = "N")]
+    after_batch: Option<usize>,
 }
 
 #[derive(Args)]
@@ -96,6 +111,9 @@ pub(super) struct WorkArgs {
     /// Run only this task's points, not other tasks' leftovers.
     #[arg(long)]
     no_steal: bool,
+    /// Run only points below this index (one batch of an LDS sweep).
+    #[arg(long)]
+    upto: Option<usize>,
     /// Name claims after this host instead of the machine's.
     #[arg(long)]
     host: Option<String>,
@@ -132,7 +150,20 @@ pub(super) fn submit(a: SubmitArgs) -> Result<i32, Error> {
         template: a.template,
         steal: !a.no_steal,
         exe: std::env::current_exe()?,
+        chain: None,
     };
+    let (manifest, _) = demsweep::store::Store::read_manifest(&a.dir)?;
+    let step = match manifest.design {
+        demsweep::store::DesignRecord::Lds { step, .. } if !a.all_at_once => Some(step),
+        _ => None,
+    };
+    let mut opts = opts;
+    if let Some(step) = step {
+        if let Some(code) = chain_stops(&a.dir, a.after_batch)? {
+            return Ok(code);
+        }
+        opts.chain = Some(cluster::Chain { step, next: next_command(&a.dir, &opts)? });
+    }
     let cmd = scheduler.submit_command();
     if !a.dry_run && !cluster::on_path(cmd) {
         return Err(Error::input(format!(
@@ -155,34 +186,125 @@ pub(super) fn submit(a: SubmitArgs) -> Result<i32, Error> {
             return Ok(exit::SUCCESS);
         }
     };
+    if let Some(note) = &rendered.layout_note {
+        eprintln!("{note}");
+    }
     let (array, report) = cluster::write(&a.dir, &rendered)?;
     if opts.only.failed {
         // The tasks retry each failure once between them, however far apart they start.
         demsweep::store::retry::begin_submission_round(&a.dir)?;
     }
+    let batch = rendered.batch.as_ref().map_or(String::new(), |(label, _)| format!(" of the batch {label}"));
     let what = format!(
-        "{} points as array tasks {} ({} per task)",
+        "{} points{batch} as array tasks {} ({} per task)",
         rendered.points,
         cluster::ranges(&rendered.tasks),
         rendered.layout.per_task
     );
     if a.dry_run {
+        let after = match scheduler {
+            Scheduler::Slurm => "--dependency=afterany:JOB",
+            Scheduler::PbsPro => "-W depend=afterany:JOB",
+            Scheduler::Torque => "-W depend=afteranyarray:JOB",
+        };
         eprintln!(
-            "wrote {} and {}: {what}; submit with `{cmd} {}`",
+            "wrote {} and {}: {what}; `sweep submit` without --dry-run submits both, or by hand: \
+             `{cmd} {}`, then `{cmd} {after} {}` with the array's JOB id (the report runs once \
+             every task has ended)",
             array.display(),
             report.display(),
-            array.display()
+            array.display(),
+            report.display()
         );
         println!("{}", array.display());
         return Ok(exit::SUCCESS);
     }
     let (job, report_job) = cluster::submit(&a.dir, &rendered, &array, &report)?;
+    let after = if rendered.batch.is_some() {
+        "`sweep report`, then the next batch unless the rule has held,"
+    } else {
+        "`sweep report`"
+    };
     eprintln!(
-        "submitted {what}: job {job}; `sweep report` runs after it as job {report_job}; logs in {}",
+        "submitted {what}: job {job}; {after} runs after it as job {report_job}; logs in {}",
         cluster::cluster_dir(&a.dir).join("logs").display()
     );
     println!("{job}");
     Ok(exit::SUCCESS)
+}
+
+/// Whether an LDS chain ends here: the MFR statistics converged (say so, submit nothing), or,
+/// for the job after a batch, the batch left points unfinished (cut off: a re-submission by
+/// hand decides). `Some(exit code)` when it ends.
+fn chain_stops(dir: &std::path::Path, after_batch: Option<usize>) -> Result<Option<i32>, Error> {
+    use demsweep::analysis::convergence::Criteria;
+    let sweep = demsweep::run::load_dir_sweep(dir)?;
+    let criteria = Criteria::from_settings(&sweep.file.convergence);
+    let analysis =
+        demsweep::report::analyse(dir, &criteria, &demsweep::analysis::stats::Bootstrap::default())?;
+    if analysis.verdict.converged {
+        eprintln!("nothing to submit: {}: {}", analysis.verdict.status, analysis.verdict.reason);
+        return Ok(Some(exit::SUCCESS));
+    }
+    if let Some(upto) = after_batch {
+        let (manifest, _) = demsweep::store::Store::read_manifest(dir)?;
+        let store = demsweep::store::Store::open(dir);
+        let (status, _, _) = demsweep::run::screen::Screen::of(&sweep).statuses(&store, &manifest);
+        let left =
+            status.iter().take(upto).filter(|s| matches!(s, demsweep::store::PointStatus::Pending)).count();
+        if left > 0 {
+            eprintln!(
+                "the batch ended with {left} of its {upto} points unfinished (tasks cut off?): no next batch; \
+                 `sweep submit {}` re-submits them and carries the chain on",
+                dir.display()
+            );
+            return Ok(Some(exit::SUCCESS));
+        }
+    }
+    Ok(None)
+}
+
+/// The command the job after a batch runs: this submission again, as the judge of the batch.
+fn next_command(dir: &std::path::Path, o: &demsweep::run::cluster::SubmitOptions) -> Result<String, Error> {
+    let dir = std::path::absolute(dir).map_err(|e| Error::input(format!("{}: {e}", dir.display())))?;
+    let quote = |s: &str| format!("'{}'", s.replace('\'', "'\\''"));
+    let mut cmd = vec![
+        quote(&o.exe.display().to_string()),
+        "submit".into(),
+        quote(&dir.display().to_string()),
+        "--scheduler".into(),
+        o.scheduler.name().into(),
+        "--jobs-per-task".into(),
+        o.jobs_per_task.to_string(),
+        "--walltime".into(),
+        quote(&o.walltime),
+        "--ranks".into(),
+        o.ranks.to_string(),
+        "--lease".into(),
+        o.lease.as_secs().to_string(),
+    ];
+    for (flag, v) in [("--queue", &o.queue), ("--account", &o.account)] {
+        if let Some(v) = v {
+            cmd.extend([flag.to_string(), quote(v)]);
+        }
+    }
+    if let Some(t) = &o.template {
+        let t =
+            std::path::absolute(t).map_err(|e| Error::input(format!("--template {}: {e}", t.display())))?;
+        cmd.extend(["--template".into(), quote(&t.display().to_string())]);
+    }
+    let only: Vec<&str> = [(o.only.missing, "missing"), (o.only.failed, "failed")]
+        .iter()
+        .filter(|(on, _)| *on)
+        .map(|(_, n)| *n)
+        .collect();
+    cmd.extend(["--only".into(), only.join(",")]);
+    if !o.steal {
+        cmd.push("--no-steal".into());
+    }
+    // The end of the batch's points follows, once the batch is known (`cluster::plan`).
+    cmd.push("--after-batch".into());
+    Ok(cmd.join(" "))
 }
 
 pub(super) fn work(a: WorkArgs) -> Result<i32, Error> {
@@ -216,6 +338,7 @@ pub(super) fn work(a: WorkArgs) -> Result<i32, Error> {
         task: a.task,
         per_task: a.per_task,
         steal: !a.no_steal,
+        upto: a.upto,
         ranks: a.ranks,
     };
     let summary = demsweep::run::cluster::work(&a.dir, &w, &opts, &CancelToken::new())?;

@@ -178,7 +178,7 @@ pub fn run(cli: Cli) -> Result<i32, Error> {
 /// written; `--force` accepts it (and any point's, for the thesis fidelity's fixed step).
 fn check_timestep(sweep: &mut Sweep, force: bool) -> Result<(), Error> {
     if force {
-        sweep.file.scene.force_timestep = true;
+        sweep.file.scene.force_bounds = true;
         return Ok(());
     }
     if sweep.file.scene.timestep_s == 0.0 {

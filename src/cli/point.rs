@@ -12,9 +12,11 @@ use demsweep::sweep::{Scrambling, Sweep};
 
 #[derive(Args)]
 pub(super) struct PointsArgs {
+    /// The sweep file (TOML) whose design to print.
     sweep: PathBuf,
-    /// A lattice with L values per dimension (L^d points).
-    #[arg(long, value_name = "L", conflicts_with = "lds", required_unless_present = "lds")]
+    /// A lattice with L values per dimension (L^d points). Without --lattice or --lds: the
+    /// sweep file's design as `sweep lds` runs it (design.lds.max points).
+    #[arg(long, value_name = "L", conflicts_with = "lds")]
     lattice: Option<usize>,
     /// The first N points of the Halton sequence, scrambled as design.lds.scrambling says.
     /// Plain and Braaten–Weller Halton skip index 0 (the origin: every parameter at lo), so
@@ -23,7 +25,7 @@ pub(super) struct PointsArgs {
     #[arg(long, value_name = "N")]
     lds: Option<usize>,
     /// Plain Halton, no digit scrambling (overrides design.lds.scrambling).
-    #[arg(long, requires = "lds")]
+    #[arg(long, conflicts_with = "lattice")]
     no_scramble: bool,
     /// Also print the design's squared centred L2 discrepancy CD² (Hickernell 1998; scipy's
     /// qmc.discrepancy(method="CD") convention) in unit coordinates to stderr.
@@ -38,21 +40,32 @@ pub(super) struct PointsArgs {
 
 #[derive(Args)]
 pub(super) struct RenderArgs {
+    /// The sweep file (TOML) whose scene and parameters the point takes.
     sweep: PathBuf,
-    /// Parameter values, e.g. --set diameter=2,gap=4 (units of the sweep file).
-    #[arg(long, value_delimiter = ',')]
+    /// Any parameter's value, e.g. --set gap=3,diameter=1.2 (mm, m/s, MPa as in the sweep
+    /// file's catalogue); swept parameters not set take the middle of their range.
+    #[arg(long, value_delimiter = ',', value_name = "NAME=VALUE")]
     set: Vec<String>,
+    /// Directory to write in.liggghts, blade.stl and pile.data into.
     #[arg(long)]
     out: PathBuf,
-    /// Accept a timestep beyond the measured safe bound (BENCHMARKS.md "Stability edge").
-    #[arg(long)]
+    #[arg(long, help = FORCE_HELP)]
     force: bool,
 }
 
+/// `--force` of every command that builds points.
+pub(crate) const FORCE_HELP: &str =
+    "Run points outside the bounds the scene is built for: a timestep above 0.5 \
+     Rayleigh times (the measured safe bound, BENCHMARKS.md \"Stability edge\") or below 0.01, \
+     more than 200,000 particles, a mean diameter below 10 µm or above 20 mm, a gap below 0.1 D.";
+
 #[derive(Args)]
 pub(super) struct RunArgs {
+    /// The sweep file (TOML) whose scene and parameters the point takes.
     sweep: PathBuf,
-    #[arg(long, value_delimiter = ',')]
+    /// Any parameter's value, e.g. --set gap=3,diameter=1.2 (mm, m/s, MPa as in the sweep
+    /// file's catalogue); swept parameters not set take the middle of their range.
+    #[arg(long, value_delimiter = ',', value_name = "NAME=VALUE")]
     set: Vec<String>,
     /// Print result.json instead of a summary.
     #[arg(long)]
@@ -60,8 +73,7 @@ pub(super) struct RunArgs {
     /// Keep the run directory here (default: a temporary directory, removed afterwards).
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Accept a timestep beyond the measured safe bound (BENCHMARKS.md "Stability edge").
-    #[arg(long)]
+    #[arg(long, help = FORCE_HELP)]
     force: bool,
 }
 
@@ -73,13 +85,13 @@ pub(super) fn points(a: PointsArgs) -> Result<i32, Error> {
                 .map_err(|e| Error::input(format!("--lattice {l}: {e}")))?;
             demsweep::design::lattice::lattice(sweep.dim(), l)
         }
-        (None, Some(n)) => {
-            demsweep::design::lds_size(n).map_err(|e| Error::input(format!("--lds {n}: {e}")))?;
+        (None, n) => {
             let lds = &sweep.file.design.lds;
+            let n = n.unwrap_or(lds.max);
+            demsweep::design::lds_size(n).map_err(|e| Error::input(format!("--lds {n}: {e}")))?;
             let scrambling = if a.no_scramble { Scrambling::None } else { lds.scrambling };
             demsweep::design::halton::halton(sweep.dim(), n, scrambling, lds.seed)
         }
-        (None, None) => unreachable!("clap requires --lattice or --lds"),
     };
     if a.discrepancy {
         eprintln!(
@@ -109,7 +121,8 @@ pub(super) fn points(a: PointsArgs) -> Result<i32, Error> {
         let extra = if screen.is_some() { ",screen" } else { "" };
         writeln!(out, "{}{extra}", sweep.names().join(","))?;
         for (k, v) in values.iter().enumerate() {
-            let row: Vec<String> = v.iter().map(|v| format!("{v}")).collect();
+            // 12 significant digits: every digit a design has, without float noise.
+            let row: Vec<String> = v.iter().map(|v| demsweep::scene::plausible::round_to(*v, 12)).collect();
             let extra = screen.as_ref().map_or(String::new(), |c| format!(",{}", c[k]));
             writeln!(out, "{}{extra}", row.join(","))?;
         }
@@ -123,14 +136,15 @@ pub(super) fn points(a: PointsArgs) -> Result<i32, Error> {
 }
 
 pub(super) fn render(a: RenderArgs) -> Result<i32, Error> {
-    let mut sweep = Sweep::load(&a.sweep)?;
+    let sweep = Sweep::load(&a.sweep)?;
+    let (mut sweep, values, notes) = point::with_set(&sweep, &a.set)?;
     check_timestep(&mut sweep, a.force)?;
-    let values = point::swept_values_from_set(&sweep, &a.set)?;
     if a.out.exists() && !a.out.is_dir() {
         return Err(Error::input(format!("--out {}: exists and is not a directory", a.out.display())));
     }
     let ctx = PointContext::new(sweep)?;
-    let prepared = point::prepare(&ctx, &values)?;
+    let prepared = prepare_set(&ctx, &values, &a.set)?;
+    notes.iter().for_each(|n| eprintln!("note: {n}"));
     std::fs::create_dir_all(&a.out)
         .and_then(|_| prepared.deck.write(&a.out))
         .map_err(|e| Error::Internal(format!("cannot write to {}: {e}", a.out.display())))?;
@@ -147,16 +161,29 @@ pub(super) fn render(a: RenderArgs) -> Result<i32, Error> {
     Ok(exit::SUCCESS)
 }
 
+/// [`point::prepare`], with a refusal that names the `--set` it came with.
+fn prepare_set(ctx: &PointContext, values: &[f64], set: &[String]) -> Result<point::Prepared, Error> {
+    point::prepare(ctx, values).map_err(|e| match e {
+        Error::Input(msg) if !set.is_empty() => {
+            let path = format!("{}: ", ctx.sweep.path.display());
+            let rest = msg.strip_prefix(&path).unwrap_or(&msg);
+            Error::input(format!("{} with --set {}: {rest}", ctx.sweep.path.display(), set.join(",")))
+        }
+        e => e,
+    })
+}
+
 pub(super) fn run_one(a: RunArgs) -> Result<i32, Error> {
     demsweep::sys::process::install_interrupt_handler();
-    let mut sweep = Sweep::load(&a.sweep)?;
+    let sweep = Sweep::load(&a.sweep)?;
+    let (mut sweep, values, notes) = point::with_set(&sweep, &a.set)?;
     check_timestep(&mut sweep, a.force)?;
-    let values = point::swept_values_from_set(&sweep, &a.set)?;
     if let Some(out) = a.out.as_ref().filter(|o| o.exists() && !o.is_dir()) {
         return Err(Error::input(format!("--out {}: exists and is not a directory", out.display())));
     }
     let ctx = PointContext::new(sweep)?;
-    let prepared = point::prepare(&ctx, &values)?;
+    let prepared = prepare_set(&ctx, &values, &a.set)?;
+    notes.iter().for_each(|n| eprintln!("note: {n}"));
     let temp;
     let dir = match &a.out {
         Some(d) => d.clone(),

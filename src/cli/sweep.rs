@@ -15,6 +15,7 @@ use demsweep::sys::process::CancelToken;
 
 #[derive(Args)]
 pub(super) struct LatticeArgs {
+    /// The sweep file (TOML): parameters, design, convergence rule, scene.
     sweep: PathBuf,
     /// Lattice levels (values per dimension), e.g. 5,6,7,9,10; default from the sweep file.
     /// A point shared by two levels runs once.
@@ -28,14 +29,17 @@ pub(super) struct LatticeArgs {
     convergence: ConvergenceArgs,
     #[command(flatten)]
     pool: PoolArgs,
-    /// Accept a timestep beyond the measured safe bound (scene.rayleigh_fraction above
-    /// MAX_RAYLEIGH_FRACTION; BENCHMARKS.md "Stability edge").
+    /// Write the sweep directory (manifest.json, sweep.toml, results.csv with every point
+    /// pending) and run nothing: for `sweep submit` on a cluster, or `sweep resume` later.
     #[arg(long)]
+    plan: bool,
+    #[arg(long, help = super::point::FORCE_HELP)]
     force: bool,
 }
 
 #[derive(Args)]
 pub(super) struct LdsArgs {
+    /// The sweep file (TOML): parameters, design, convergence rule, scene.
     sweep: PathBuf,
     /// Points per batch (one nested space per batch); default design.lds.step.
     #[arg(long)]
@@ -51,9 +55,11 @@ pub(super) struct LdsArgs {
     convergence: ConvergenceArgs,
     #[command(flatten)]
     pool: PoolArgs,
-    /// Accept a timestep beyond the measured safe bound (scene.rayleigh_fraction above
-    /// MAX_RAYLEIGH_FRACTION; BENCHMARKS.md "Stability edge").
+    /// Write the sweep directory (manifest.json, sweep.toml, results.csv with every point
+    /// pending) and run nothing: for `sweep submit` on a cluster, or `sweep resume` later.
     #[arg(long)]
+    plan: bool,
+    #[arg(long, help = super::point::FORCE_HELP)]
     force: bool,
 }
 
@@ -70,6 +76,7 @@ pub(super) struct ReportArgs {
 
 #[derive(Args)]
 pub(super) struct ResumeArgs {
+    /// The sweep directory (holding manifest.json).
     dir: PathBuf,
     /// Also re-run runs that failed.
     #[arg(long)]
@@ -90,7 +97,9 @@ pub(super) struct UnclaimArgs {
 
 #[derive(Args)]
 pub(super) struct DirArgs {
+    /// The sweep directory (holding manifest.json).
     dir: PathBuf,
+    /// Print the counts as JSON.
     #[arg(long)]
     json: bool,
 }
@@ -110,7 +119,7 @@ pub(super) fn lattice(a: LatticeArgs) -> Result<i32, Error> {
             levels
         }
     };
-    start(sweep, DesignRecord::Lattice { levels }, a.out, &a.pool)
+    start(sweep, DesignRecord::Lattice { levels }, a.out, &a.pool, a.plan)
 }
 
 /// Lattice levels: at least one, each at least 2 and at most [`driver::MAX_POINTS`] points,
@@ -157,7 +166,7 @@ pub(super) fn lds(a: LdsArgs) -> Result<i32, Error> {
         )));
     }
     let design = DesignRecord::Lds { step, max, scrambling: l.scrambling, seed: l.seed };
-    start(sweep, design, a.out, &a.pool)
+    start(sweep, design, a.out, &a.pool, a.plan)
 }
 
 pub(super) fn start(
@@ -165,6 +174,7 @@ pub(super) fn start(
     design: DesignRecord,
     out: Option<PathBuf>,
     p: &PoolArgs,
+    plan_only: bool,
 ) -> Result<i32, Error> {
     let opts = run_options(p, false, false)?;
     let out = out.unwrap_or_else(|| driver::default_out(&sweep));
@@ -172,6 +182,9 @@ pub(super) fn start(
     driver::check_out_dir(&out)?;
     sweep.file.convergence.min_points = driver::judge_from(&out, &sweep, &design)?;
     demsweep::sys::process::install_interrupt_handler();
+    if plan_only {
+        return plan(&sweep, design, &out, &opts);
+    }
     let mut watch = Watch::new(Criteria::from_settings(&sweep.file.convergence));
     let cancel = CancelToken::new();
     let exec = driver::SweepExecutor::for_sweep(&sweep)?;
@@ -179,10 +192,28 @@ pub(super) fn start(
     finish(&summary, &sweep)
 }
 
+/// `--plan`: the directory written, nothing run; say what to do with it.
+fn plan(
+    sweep: &Sweep,
+    design: DesignRecord,
+    out: &std::path::Path,
+    opts: &driver::RunOptions,
+) -> Result<i32, Error> {
+    let cancel = CancelToken::new();
+    let exec = driver::SweepExecutor::for_sweep(sweep)?;
+    let (points, unfinished) = driver::plan_dir(sweep, design, out, &exec, opts.progress, &cancel)?;
+    let dir = out.display();
+    eprintln!("planned {points} points in {dir}, {unfinished} to run; nothing run");
+    eprintln!(
+        "run them here: `sweep resume {dir}`; on a cluster: `sweep submit {dir} --scheduler slurm --tasks N`"
+    );
+    Ok(exit::SUCCESS)
+}
+
 pub(super) fn resume(a: ResumeArgs) -> Result<i32, Error> {
     let opts = run_options(&a.pool, a.retry_failed, a.force)?;
     let mut sweep = driver::load_dir_sweep(&a.dir)?;
-    sweep.file.scene.force_timestep = a.force;
+    sweep.file.scene.force_bounds = a.force;
     demsweep::sys::process::install_interrupt_handler();
     // The same rule as the run that made the directory (DIR/sweep.toml), so a converged sweep
     // stays stopped where it converged.

@@ -405,17 +405,58 @@ fn tail(log: &str, n: usize) -> String {
     lines[lines.len().saturating_sub(n)..].join("\n")
 }
 
+/// Every LIGGGHTS warning of a log, each whole on one line. A multi-line warning is `WARNING: `
+/// alone on its line, then tab-indented lines, a blank line and the indented source location
+/// (`(./src/contact_models.h:364)`): its lines are joined with single spaces.
+fn warnings(log: &str) -> Vec<String> {
+    let lines: Vec<&str> = log.lines().collect();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < lines.len() {
+        let t = lines[i].trim();
+        i += 1;
+        if !t.starts_with("WARNING") {
+            continue;
+        }
+        let mut parts = vec![t.to_string()];
+        if t == "WARNING:" || t == "WARNING" {
+            let indented = |l: &str| l.starts_with([' ', '\t']) && !l.trim().is_empty();
+            while i < lines.len() {
+                let l = lines[i];
+                if indented(l) {
+                    parts.push(l.trim().to_string());
+                    i += 1;
+                } else if l.trim().is_empty()
+                    && lines.get(i + 1).is_some_and(|n| indented(n) && n.trim().starts_with('('))
+                {
+                    // The blank line before the source location.
+                    i += 1;
+                } else {
+                    break;
+                }
+                if parts.last().is_some_and(|p| p.starts_with('(') && p.ends_with(')')) {
+                    break;
+                }
+            }
+        }
+        out.push(parts.join(" "));
+    }
+    out
+}
+
 /// Read the thermo blocks (`thermo_style custom step atoms ke`) and warnings of a log.
 fn analyse_log(log: &str, limits: &LogLimits) -> LogAnalysis {
     let mut a = LogAnalysis::default();
     let mut in_block = false;
     let mut max_atoms = 0u64;
+    for w in warnings(log) {
+        if !a.warnings.contains(&w) {
+            a.warnings.push(w);
+        }
+    }
     for line in log.lines() {
         let t = line.trim();
         if t.starts_with("WARNING") {
-            if !a.warnings.iter().any(|w| w == t) {
-                a.warnings.push(t.to_string());
-            }
             continue;
         }
         if t.starts_with("Step") && t.contains("Atoms") {
@@ -475,6 +516,20 @@ mod tests {
     use super::*;
 
     const LIMITS: LogLimits = LogLimits { ke_limit: 1.0, atoms: Some(700) };
+
+    #[test]
+    fn a_multi_line_warning_is_kept_whole() {
+        // As LIGGGHTS 3.8 prints it for `pair_style gran ... rolling_friction epsd2`.
+        let log = "pair_style gran model hertz tangential history rolling_friction epsd2\nWARNING: \n\tThe contact model you specified is not located in any whitelist.\n\tBecause of this the model will be run in an unoptimized version (increasing runtime by up to 20%).\n\t\t(i)  Run the script\n\n (./src/contact_models.h:364)\nWARNING: Less insertions than requested (../fix_insert.cpp:792)\n    Step    Atoms         KinEng \n       0      700              0 \n";
+        let w = warnings(log);
+        assert_eq!(w.len(), 2, "{w:?}");
+        assert_eq!(
+            w[0],
+            "WARNING: The contact model you specified is not located in any whitelist. Because of this the model will be run in an unoptimized version (increasing runtime by up to 20%). (i)  Run the script (./src/contact_models.h:364)"
+        );
+        // A one-line warning does not swallow the thermo header or rows after it.
+        assert_eq!(w[1], "WARNING: Less insertions than requested (../fix_insert.cpp:792)");
+    }
 
     fn log(rows: &str) -> String {
         format!("LIGGGHTS (Version LIGGGHTS-PUBLIC 3.8.0)\n    Step    Atoms         KinEng \nINFO: inserted\n{rows}Loop time of 2.8 on 1 procs\n")

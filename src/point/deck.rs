@@ -105,6 +105,9 @@ pub struct Deck {
     pub pile: String,
     /// sha256 over the deck, the mesh and the engine identity: equal hashes, equal runs.
     pub hash: String,
+    /// Comment lines written above the deck: the point's values and its hash. Not hashed (it
+    /// names the hash, and the values are the scene's, already in the deck).
+    pub header: String,
 }
 
 impl Deck {
@@ -121,12 +124,12 @@ impl Deck {
             h.update((part.len() as u64).to_le_bytes());
             h.update(part);
         }
-        Ok(Deck { input, mesh, pile, hash: hex(&h.finalize()) })
+        Ok(Deck { input, mesh, pile, hash: hex(&h.finalize()), header: String::new() })
     }
 
     /// Write the deck, mesh and pile into `dir`.
     pub fn write(&self, dir: &Path) -> std::io::Result<()> {
-        std::fs::write(dir.join(Self::INPUT), &self.input)?;
+        std::fs::write(dir.join(Self::INPUT), format!("{}{}", self.header, self.input))?;
         std::fs::write(dir.join(Self::MESH), &self.mesh)?;
         std::fs::write(dir.join(pile::PILE_DATA), &self.pile)
     }

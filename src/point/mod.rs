@@ -19,7 +19,7 @@ use crate::outcome::{FailureClass, RunFailure, RunOutcome, RunResult, RESULT_FOR
 use crate::point::deck::{Deck, Template};
 use crate::point::metrics::Frame;
 use crate::scene::{mesh, params, Scene};
-use crate::sweep::{ParamKind, Sweep};
+use crate::sweep::{ParamKind, Parameter, Sweep};
 use crate::sys::atomic::write_json;
 use crate::sys::process::CancelToken;
 
@@ -90,59 +90,63 @@ pub fn resolve(sweep: &Sweep, swept_values: &[f64]) -> BTreeMap<String, f64> {
     values
 }
 
-/// Parse `--set name=value,...` into swept values in file order; unset parameters take the
-/// middle of their range. Names must be swept parameters; values must lie in their range.
-pub fn swept_values_from_set(sweep: &Sweep, sets: &[String]) -> Result<Vec<f64>> {
-    let mut values: Vec<Option<f64>> = vec![None; sweep.dim()];
+/// One point of `sweep run` / `render`: `--set name=value,...` may set any catalogue parameter
+/// (each once, in its catalogue unit, inside its physical domain). A set parameter becomes fixed
+/// at its value; the swept parameters not set take the middle of their range. Returns the sweep
+/// so changed, its swept values, and a note for each value outside the sweep's own range.
+pub fn with_set(sweep: &Sweep, sets: &[String]) -> Result<(Sweep, Vec<f64>, Vec<String>)> {
+    let mut out = sweep.clone();
+    let mut seen: Vec<(String, String)> = Vec::new();
+    let mut notes = Vec::new();
     for item in sets.iter().filter(|s| !s.trim().is_empty()) {
         let (name, value) =
             item.split_once('=').ok_or_else(|| Error::input(format!("--set {item}: expected name=value")))?;
         let (name, value) = (name.trim(), value.trim());
-        let Some(i) = sweep.swept.iter().position(|p| p.name == name) else {
-            if let Some(f) = sweep.fixed.iter().find(|p| p.name == name) {
-                let ParamKind::Fixed(v) = f.kind else { unreachable!() };
-                return Err(Error::input(format!(
-                    "--set {name}: {name} is fixed at {v} in {}; only swept parameters can be set",
-                    sweep.path.display()
-                )));
-            }
+        let Some(info) = params::lookup(name) else {
+            let known: Vec<&str> = params::CATALOGUE.iter().map(|p| p.name).collect();
             return Err(Error::input(format!(
-                "--set {name}: not a swept parameter of {}{}; swept: {}",
-                sweep.path.display(),
-                hint(name, sweep.names()),
-                sweep.names().join(", ")
+                "--set {name}: unknown parameter{}; known: {}",
+                hint(name, known.iter().copied()),
+                known.join(", ")
             )));
         };
+        if let Some((_, first)) = seen.iter().find(|(n, _)| n == name) {
+            return Err(Error::input(format!(
+                "--set {name}: given twice ({first} and {value}); give each parameter once"
+            )));
+        }
         let v: f64 = value
             .parse()
             .ok()
             .filter(|v: &f64| v.is_finite())
             .ok_or_else(|| Error::input(format!("--set {name}={value}: expected a finite number")))?;
-        if let Some(first) = values[i] {
-            return Err(Error::input(format!(
-                "--set {name}: given twice ({first} and {value}); give each parameter once"
-            )));
+        if !info.accepts(v) {
+            return Err(Error::input(format!("--set {name}={value}: outside {}", info.domain())));
         }
-        let ParamKind::Swept { lo, hi, .. } = sweep.swept[i].kind else { unreachable!() };
-        if v < lo || v > hi {
-            return Err(Error::input(format!(
-                "--set {name}={v}: outside the sweep's range [{lo}, {hi}] {}",
-                sweep.swept[i].unit
-            )));
+        seen.push((name.to_string(), value.to_string()));
+        if let Some(p) = out.swept.iter().find(|p| p.name == name) {
+            if let ParamKind::Swept { lo, hi, .. } = p.kind {
+                if v < lo || v > hi {
+                    notes.push(format!(
+                        "--set {name}={value}: outside the sweep's range [{lo}, {hi}] {}",
+                        info.unit
+                    ));
+                }
+            }
         }
-        values[i] = Some(v);
+        out.swept.retain(|p| p.name != name);
+        out.fixed.retain(|p| p.name != name);
+        out.fixed.push(Parameter { name: name.to_string(), unit: info.unit, kind: ParamKind::Fixed(v) });
     }
-    Ok(sweep
+    let values = out
         .swept
         .iter()
-        .zip(values)
-        .map(|(p, v)| {
-            v.unwrap_or(match p.kind {
-                ParamKind::Swept { lo, hi, .. } => 0.5 * (lo + hi),
-                ParamKind::Fixed(f) => f,
-            })
+        .map(|p| match p.kind {
+            ParamKind::Swept { lo, hi, .. } => 0.5 * (lo + hi),
+            ParamKind::Fixed(f) => f,
         })
-        .collect())
+        .collect();
+    Ok((out, values, notes))
 }
 
 /// Build the scene and deck of one point and hash it. Pure: touches no file.
@@ -150,9 +154,26 @@ pub fn prepare(ctx: &PointContext, swept_values: &[f64]) -> Result<Prepared> {
     let parameters = resolve(&ctx.sweep, swept_values);
     let scene = Scene::new(&parameters, &ctx.sweep.file.scene)
         .map_err(|e| Error::input(format!("{}: {e}", ctx.sweep.path.display())))?;
-    let deck =
+    let mut deck =
         Deck::new(&ctx.template, &scene, &ctx.engine.identity()).map_err(|e| Error::input(e.to_string()))?;
+    deck.header = header(&parameters, &deck.hash);
     Ok(Prepared { hash: deck.hash.clone(), parameters, scene, deck })
+}
+
+/// The deck's first lines: every parameter of the point with its unit, and the run's hash.
+fn header(parameters: &BTreeMap<String, f64>, hash: &str) -> String {
+    let values: Vec<String> = params::CATALOGUE
+        .iter()
+        .filter_map(|p| {
+            let v = crate::scene::plausible::show(*parameters.get(p.name)?);
+            Some(if p.unit == "-" {
+                format!("{} = {v}", p.name)
+            } else {
+                format!("{} = {v} {}", p.name, p.unit)
+            })
+        })
+        .collect();
+    format!("# point: {}\n# run {hash}\n", values.join(", "))
 }
 
 /// Run a prepared point in `run_dir` (created if missing; stale files from an interrupted

@@ -482,7 +482,9 @@ fn timing(dir: &Path) -> Timing {
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap_or("").split('\t').collect();
     let col = |name: &str| header.iter().position(|h| *h == name);
-    let (Some(si), Some(ri)) = (col("start"), col("runtime_s")) else {
+    // The columns of GNU parallel's joblog, or of an earlier version's.
+    let (Some(si), Some(ri)) = (col("Starttime").or(col("start")), col("JobRuntime").or(col("runtime_s")))
+    else {
         return Timing { wall_time_s: 0.0, core_seconds: 0.0, attempts: 0 };
     };
     let mut spans: Vec<(f64, f64)> = lines

@@ -100,6 +100,20 @@ pub struct SubmitOptions {
     pub steal: bool,
     /// The `sweep` executable the tasks run (on the shared file system).
     pub exe: PathBuf,
+    /// An LDS sweep submitted batch by batch; `None`: every point as one array.
+    pub chain: Option<Chain>,
+}
+
+/// An LDS sweep on a cluster, batch by batch: the array runs the first batch (nested space)
+/// with unfinished points, and the job after it writes the report and runs `next`, which
+/// judges convergence and submits the following batch only if the rule has not held.
+#[derive(Debug, Clone)]
+pub struct Chain {
+    /// Points per batch (`design.lds.step`): the layout gives each batch `--tasks` tasks.
+    pub step: usize,
+    /// The shell command the job after the array runs once the report is written; it ends
+    /// with `--after-batch`, to which the end of the batch's points is appended.
+    pub next: String,
 }
 
 /// `DIR/cluster/layout.json`: the stable map from array index to design points.
@@ -212,6 +226,11 @@ pub struct Rendered {
     pub report_script: String,
     /// Points the tasks cover: unfinished, and failed when re-running failures.
     pub points: usize,
+    /// What a `--tasks` that differs from the directory's layout did (kept it, or laid the
+    /// points out again), to be said.
+    pub layout_note: Option<String>,
+    /// In a chain: the space this array runs and the end of its points.
+    pub batch: Option<(String, usize)>,
 }
 
 /// SubmitCounts of a directory, for the message when there is nothing to submit.
@@ -240,10 +259,36 @@ pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendere
         }
     }
     let n = manifest.points.len();
+    // In a chain each batch, not the whole design, is shared by the tasks.
+    let span = o.chain.as_ref().map_or(n, |c| c.step.min(n)).max(1);
+    let fresh = |t: usize| Layout { format: LAYOUT_FORMAT, per_task: span.div_ceil(t.min(span).max(1)) };
+    let mut layout_note = None;
     let layout = match (Layout::read(&dir)?, o.tasks) {
+        (_, Some(0)) => return Err(Error::input("--tasks 0: expected at least 1")),
+        (Some(old), Some(t)) if fresh(t).per_task != old.per_task => {
+            // Another --tasks: lay the points out again only when no task of the old layout
+            // still runs, since a running task's index means the old block of points.
+            let held = held_points(&manifest, &Store::open(&dir)).len();
+            if held > 0 {
+                layout_note = Some(format!(
+                    "--tasks {t}: keeping the layout of {} points per task (cluster/layout.json): \
+                     tasks of an earlier submission still hold {held} runs; submit with --tasks \
+                     again once they have ended to lay the points out anew",
+                    old.per_task
+                ));
+                old
+            } else {
+                let new = fresh(t);
+                layout_note = Some(format!(
+                    "--tasks {t}: no task holds a run, so the {n} points are laid out again: {} per \
+                     task instead of {} (cluster/layout.json rewritten)",
+                    new.per_task, old.per_task
+                ));
+                new
+            }
+        }
         (Some(l), _) => l,
-        (None, Some(0)) => return Err(Error::input("--tasks 0: expected at least 1")),
-        (None, Some(t)) => Layout { format: LAYOUT_FORMAT, per_task: n.div_ceil(t.min(n).max(1)) },
+        (None, Some(t)) => fresh(t),
         (None, None) => {
             return Err(Error::input(format!(
             "--tasks: required for the first submission of {} ({n} points): how many array tasks share them",
@@ -255,7 +300,7 @@ pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendere
     // (their tasks run them if the sample refutes it).
     let (status, _, _) = crate::run::screen::Screen::of(&sweep).statuses(&Store::open(&dir), &manifest);
     let counts = counts(&status);
-    let wanted: Vec<usize> = status
+    let mut wanted: Vec<usize> = status
         .iter()
         .enumerate()
         .filter(|(_, s)| match s {
@@ -267,6 +312,15 @@ pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendere
         .collect();
     if wanted.is_empty() {
         return Ok(Err(counts));
+    }
+    // A chain runs the first space (an LDS prefix) that has points to run: points below `upto`.
+    let mut batch = None;
+    if o.chain.is_some() {
+        if let Some(space) = manifest.spaces.iter().find(|s| s.points.iter().any(|p| wanted.contains(p))) {
+            let upto = space.points.iter().max().map_or(0, |m| m + 1);
+            wanted.retain(|&p| p < upto);
+            batch = Some((space.label.clone(), upto));
+        }
     }
     let tasks = layout.tasks_of(wanted.iter().copied());
     let template = match &o.template {
@@ -292,6 +346,13 @@ pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendere
     ctx.insert("retry_failed", &o.only.failed);
     ctx.insert("no_steal", &!o.steal);
     ctx.insert("torque", &(o.scheduler == Scheduler::Torque));
+    ctx.insert("upto", &batch.as_ref().map_or(0, |b| b.1));
+    // The job after the batch judges it: `next` ends with `--after-batch`, given the batch's end.
+    let next = match (&o.chain, &batch) {
+        (Some(c), Some((_, upto))) => format!("{} {upto}", c.next),
+        _ => String::new(),
+    };
+    ctx.insert("chain", &next);
     let (array, index_map) = array_spec(o.scheduler, &tasks);
     ctx.insert("array", &array);
     ctx.insert("index_map", &index_map);
@@ -313,6 +374,8 @@ pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendere
         array_script: render(false)?,
         report_script: render(true)?,
         points,
+        layout_note,
+        batch,
     }))
 }
 
@@ -401,7 +464,8 @@ pub fn write(dir: &Path, r: &Rendered) -> Result<(PathBuf, PathBuf)> {
     let io = |p: &Path, e: std::io::Error| Error::Internal(format!("{}: {e}", p.display()));
     std::fs::create_dir_all(cdir.join("logs")).map_err(|e| io(&cdir, e))?;
     let lpath = Layout::path(dir);
-    if !lpath.exists() {
+    let existing = Layout::read(dir)?;
+    if existing.is_none_or(|l| l.per_task != r.layout.per_task) {
         let text = serde_json::to_string_pretty(&r.layout).expect("layout serialises");
         crate::sys::atomic::write(&lpath, text.as_bytes()).map_err(|e| io(&lpath, e))?;
     }
@@ -497,6 +561,8 @@ pub struct WorkOptions {
     pub per_task: usize,
     /// Help with other tasks' unfinished points once its own are done.
     pub steal: bool,
+    /// Run only points below this index (one batch of a chain).
+    pub upto: Option<usize>,
     /// MPI ranks per LIGGGHTS run; the pool runs `jobs / ranks` runs at once.
     pub ranks: u32,
 }
@@ -521,9 +587,28 @@ pub fn work(
         )));
     }
     let sweep = crate::run::load_dir_sweep(dir)?;
+    if crate::run::standin::selected(&sweep) {
+        let exec = crate::run::standin::StandIn::new(sweep);
+        return work_with(dir, &manifest, &exec, w, opts, cancel);
+    }
     let exec = crate::run::PointExecutor::new(sweep)?.with_ranks(w.ranks);
+    work_with(dir, &manifest, &exec, w, opts, cancel)
+}
+
+/// [`work`] on an executor: the real engine, or the stand-in of a demo sweep.
+fn work_with<E: crate::run::pool::Executor>(
+    dir: &Path,
+    manifest: &Manifest,
+    exec: &E,
+    w: &WorkOptions,
+    opts: &crate::run::RunOptions,
+    cancel: &crate::sys::process::CancelToken,
+) -> Result<crate::run::Summary> {
+    let n = manifest.points.len();
+    let upto = w.upto.unwrap_or(usize::MAX);
     let run = |order: crate::run::Order| {
-        crate::run::resume_share(dir, &exec, opts, Some(order), &mut crate::run::RunAll, cancel)
+        let batch = |u: &[usize]| order(u).into_iter().filter(|&i| i < upto).collect();
+        crate::run::resume_share(dir, exec, opts, Some(&batch), &mut crate::run::RunAll, cancel)
     };
     // Its own points first, waiting for any another task holds (and taking them over if that
     // task is lost); then, in a second pass, the leftovers nobody holds *now*: a helper must
@@ -531,7 +616,7 @@ pub fn work(
     let none = BTreeSet::new();
     let mut summary = run(&|u: &[usize]| share_order(w.task, w.per_task, false, &none, u))?;
     if w.steal && !summary.interrupted {
-        let held = held_points(&manifest, &Store::open(dir));
+        let held = held_points(manifest, &Store::open(dir));
         let own = task_points(w.task, w.per_task, n);
         let others = |u: &[usize]| {
             share_order(w.task, w.per_task, true, &held, u).into_iter().filter(|i| !own.contains(i)).collect()

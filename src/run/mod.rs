@@ -117,6 +117,36 @@ pub fn start<E: Executor>(
     hook: &mut dyn SpaceHook,
     cancel: &CancelToken,
 ) -> Result<Summary> {
+    let (store, manifest, jobs) = create(sweep, design, out, exec, opts.progress, cancel)?;
+    execute(&store, &manifest, exec, jobs, sweep, opts, None, hook, cancel)
+}
+
+/// `sweep lattice|lds --plan`: create (or extend) the sweep directory `out` — manifest,
+/// sweep.toml, results.csv with every unfinished point pending — and run nothing. Returns the
+/// number of points and how many of them are unfinished.
+pub fn plan_dir<E: Executor>(
+    sweep: &Sweep,
+    design: DesignRecord,
+    out: &Path,
+    exec: &E,
+    progress: ProgressMode,
+    cancel: &CancelToken,
+) -> Result<(usize, usize)> {
+    let (store, manifest, _) = create(sweep, design, out, exec, progress, cancel)?;
+    rewrite_results(out)?;
+    let unfinished = manifest.points.iter().filter(|p| store.finished(&p.hash).is_none()).count();
+    Ok((manifest.points.len(), unfinished))
+}
+
+/// Plan the design and write (or check and extend) the directory's manifest, under its lock.
+fn create<E: Executor>(
+    sweep: &Sweep,
+    design: DesignRecord,
+    out: &Path,
+    exec: &E,
+    progress: ProgressMode,
+    cancel: &CancelToken,
+) -> Result<(Store, Manifest, Vec<E::Job>)> {
     check_out_dir(out)?;
     if !Store::manifest_path(out).exists() {
         if let Some(stranger) = store::foreign_entry(out) {
@@ -127,7 +157,7 @@ pub fn start<E: Executor>(
             )));
         }
     }
-    let SweepPlan { spaces, points, jobs } = plan_with_progress(exec, sweep, &design, cancel, opts.progress)?;
+    let SweepPlan { spaces, points, jobs } = plan_with_progress(exec, sweep, &design, cancel, progress)?;
     let toml = resolved_toml(sweep, &design)?;
     let manifest = Manifest {
         format: MANIFEST_FORMAT,
@@ -146,7 +176,7 @@ pub fn start<E: Executor>(
         Some((old, old_toml)) => check_extension(out, &old, &old_toml, &manifest, &toml),
         None => Ok(()),
     })?;
-    execute(&store, &manifest, exec, jobs, sweep, opts, None, hook, cancel)
+    Ok((store, manifest, jobs))
 }
 
 /// `sweep resume DIR`: re-prepare the manifest's points, refuse if the identity or the decks

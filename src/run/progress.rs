@@ -62,7 +62,7 @@ impl Progress {
         let bar = (mode == ProgressMode::Bar).then(|| {
             let b = ProgressBar::with_draw_target(Some(total as u64), ProgressDrawTarget::stderr());
             b.set_style(
-                ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
+                ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} finished: {msg}")
                     .expect("valid template")
                     .progress_chars("=> "),
             );
@@ -84,7 +84,7 @@ impl Progress {
             ProgressMode::Lines => {
                 if self.last_line.elapsed() >= LINE_EVERY {
                     self.last_line = Instant::now();
-                    eprintln!("sweep: {}/{} {}", c.finished(), c.total, self.message(c));
+                    eprintln!("sweep: {}/{} finished: {}", c.finished(), c.total, self.message(c));
                 }
             }
         }
@@ -118,10 +118,15 @@ impl Progress {
     }
 
     fn message(&self, c: &Counts) -> String {
-        let eta = eta(c, self.start.elapsed()).map_or("?".to_string(), human);
-        let screened = if c.screened > 0 { format!(" screened {}", c.screened) } else { String::new() };
-        format!("done {} failed {}{screened} running {} ETA {eta}", c.done, c.failed, c.running)
+        message(c, eta(c, self.start.elapsed()))
     }
+}
+
+/// What follows "9/12 finished: ": `9 done, 0 failed · 1 running · ETA 35 s`.
+fn message(c: &Counts, eta: Option<Duration>) -> String {
+    let screened = if c.screened > 0 { format!(", {} screened", c.screened) } else { String::new() };
+    let eta = eta.map_or("?".to_string(), human);
+    format!("{} done, {} failed{screened} · {} running · ETA {eta}", c.done, c.failed, c.running)
 }
 
 /// Remaining time at this session's rate: elapsed / finished-here × left. Runs reused from an
@@ -136,14 +141,15 @@ pub fn eta(c: &Counts, elapsed: Duration) -> Option<Duration> {
     Some(elapsed.mul_f64(left as f64 / here as f64))
 }
 
+/// A duration as people say it: `35 s`, `2 min 05 s`, `1 h 02 min`.
 fn human(d: Duration) -> String {
-    let s = d.as_secs();
+    let s = d.as_secs_f64().round() as u64;
     if s >= 3600 {
-        format!("{}h{:02}m", s / 3600, s % 3600 / 60)
+        format!("{} h {:02} min", s / 3600, s % 3600 / 60)
     } else if s >= 60 {
-        format!("{}m{:02}s", s / 60, s % 60)
+        format!("{} min {:02} s", s / 60, s % 60)
     } else {
-        format!("{:.1}s", d.as_secs_f64())
+        format!("{s} s")
     }
 }
 
@@ -158,5 +164,18 @@ mod tests {
         assert_eq!(eta(&c, Duration::from_secs(100)), Some(Duration::from_secs(200)));
         let fresh = Counts { reused: 20, ..c };
         assert_eq!(eta(&fresh, Duration::from_secs(100)), None);
+    }
+
+    #[test]
+    fn the_line_says_what_each_count_is() {
+        let c = Counts { total: 12, done: 9, failed: 0, running: 1, reused: 0, screened: 0 };
+        assert_eq!(
+            message(&c, Some(Duration::from_millis(34_600))),
+            "9 done, 0 failed · 1 running · ETA 35 s"
+        );
+        let c = Counts { total: 4, done: 0, failed: 1, running: 1, reused: 0, screened: 2 };
+        assert_eq!(message(&c, None), "0 done, 1 failed, 2 screened · 1 running · ETA ?");
+        assert_eq!(human(Duration::from_secs(125)), "2 min 05 s");
+        assert_eq!(human(Duration::from_secs(3720)), "1 h 02 min");
     }
 }

@@ -124,7 +124,9 @@ impl<'a> Reporter<'a> {
             next_space: 0,
             hook,
             stopped_after: None,
-            joblog: store.joblog()?,
+            joblog: store
+                .joblog()?
+                .with_indices(manifest.points.iter().map(|p| (p.hash.clone(), p.index)).collect()),
             counts,
             ran: 0,
             progress: Progress::new(mode, manifest.points.len()),

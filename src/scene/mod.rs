@@ -20,6 +20,7 @@ pub mod mesh;
 pub mod params;
 pub mod passage;
 pub mod pile;
+pub mod plausible;
 pub mod psd;
 pub mod settings;
 
@@ -91,6 +92,9 @@ pub fn check_rayleigh_fraction(fraction: f64) -> Result<(), String> {
 pub enum SceneError {
     #[error("parameter `{name}` = {value}: {why}")]
     Invalid { name: String, value: f64, why: String },
+    /// Far outside what the scene is built for ([`plausible`]); the message names the slip.
+    #[error("{0}")]
+    Implausible(String),
 }
 
 /// Every number the deck and the metrics need for one point.
@@ -274,7 +278,7 @@ impl Scene {
         } else {
             settings.rayleigh_fraction * rayleigh_time
         };
-        if !settings.force_timestep {
+        if !settings.force_bounds {
             if let Err(why) = check_rayleigh_fraction(timestep / rayleigh_time) {
                 return Err(SceneError::Invalid { name: "timestep".into(), value: timestep, why });
             }
@@ -466,7 +470,12 @@ impl Scene {
             ke_limit,
             conveyor: Conveyor::default(),
         };
-        Ok(if settings.layout == "conveyor" { Scene::conveyor(scene, &psd, settings) } else { scene })
+        let scene =
+            if settings.layout == "conveyor" { Scene::conveyor(scene, &psd, settings) } else { scene };
+        if !settings.force_bounds {
+            plausible::check(&scene, values, settings).map_err(SceneError::Implausible)?;
+        }
+        Ok(scene)
     }
 
     /// The conveyor layout's scene (see [`Conveyor`]), from what [`Scene::new`] derived.

@@ -89,10 +89,10 @@ pub struct SceneSettings {
     pub thesis_band: bool,
     /// Seed of the initial pile: diameters and lattice jitter.
     pub seed: u64,
-    /// Accept a timestep beyond [`crate::scene::MAX_RAYLEIGH_FRACTION`] (`--force`; never read
-    /// from a sweep file).
+    /// Accept a timestep beyond [`crate::scene::MAX_RAYLEIGH_FRACTION`] and a point outside the
+    /// bounds of [`crate::scene::plausible`] (`--force`; never read from a sweep file).
     #[serde(skip)]
-    pub force_timestep: bool,
+    pub force_bounds: bool,
 }
 
 /// The scene layouts (docs/scene.md): the gated dose, the thesis's free pile, and the blade's
@@ -178,7 +178,7 @@ impl SceneSettings {
             }
         }
         let mut resolved: SceneSettings = table.try_into().map_err(|e: toml::de::Error| e.to_string())?;
-        resolved.force_timestep = self.force_timestep;
+        resolved.force_bounds = self.force_bounds;
         Ok(resolved)
     }
 }
@@ -199,7 +199,7 @@ impl SceneSettings {
         s.vx_band_diameters = self.vx_band_diameters;
         s.thesis_band = self.thesis_band;
         s.seed = self.seed;
-        s.force_timestep = self.force_timestep;
+        s.force_bounds = self.force_bounds;
         s
     }
 
@@ -219,7 +219,7 @@ impl SceneSettings {
         let mut s: SceneSettings = table
             .try_into()
             .map_err(|e: toml::de::Error| format!("{key} = {value}: {}", e.message().trim()))?;
-        s.force_timestep = self.force_timestep;
+        s.force_bounds = self.force_bounds;
         Ok(s)
     }
 }
@@ -269,7 +269,7 @@ impl Default for SceneSettings {
             vx_band_diameters: 0.25,
             thesis_band: false,
             seed: 12345,
-            force_timestep: false,
+            force_bounds: false,
         }
     }
 }

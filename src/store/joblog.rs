@@ -1,5 +1,11 @@
 //! `joblog.tsv`: one line per attempt, appended and numbered under the directory lock.
+//!
+//! The columns are GNU parallel's `--joblog` (Seq, Host, Starttime, JobRuntime, Send, Receive,
+//! Exitval, Signal, Command), then the point's index, the run hash, the status, the failure
+//! class and the pid. A joblog of an earlier version (`seq host pid start runtime_s status class
+//! hash`) is still read, and appended to in its own format, so one file never mixes the two.
 
+use std::collections::HashMap;
 use std::fs::{self, File, OpenOptions};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -26,18 +32,38 @@ impl Store {
         self.joblog_header()?;
         let path = self.dir.join(JOBLOG);
         let file = OpenOptions::new().read(true).append(true).open(&path).map_err(io(&path))?;
-        Ok(Joblog { file, path, lock, host: self.host.clone() })
+        let first = fs::read_to_string(&path).map_err(io(&path))?.lines().next().unwrap_or("").to_string();
+        let old = first.starts_with(OLD_HEADER_START);
+        Ok(Joblog { file, path, lock, host: self.host.clone(), old, index: HashMap::new() })
     }
 }
 
 /// The joblog's file name.
 pub(super) const JOBLOG: &str = "joblog.tsv";
 
-/// Header of `joblog.tsv` (GNU parallel's `--joblog`, plus the run hash and the failure class).
-pub const JOBLOG_HEADER: &str = "seq\thost\tpid\tstart\truntime_s\tstatus\tclass\thash";
+/// Header of `joblog.tsv`: GNU parallel's `--joblog` columns, then the point's index, the run
+/// hash, the status, the failure class and the pid.
+pub const JOBLOG_HEADER: &str =
+    "Seq\tHost\tStarttime\tJobRuntime\tSend\tReceive\tExitval\tSignal\tCommand\tIndex\tHash\tStatus\tClass\tPid";
+/// Fields of a line under [`JOBLOG_HEADER`].
+const FIELDS: usize = 14;
+/// The header of an earlier version, and its field count.
+const OLD_HEADER_START: &str = "seq\thost\tpid\t";
+const OLD_FIELDS: usize = 8;
 
 fn is_header(line: &str) -> bool {
-    line.starts_with("seq\t")
+    line.starts_with("seq\t") || line.starts_with("Seq\t")
+}
+
+/// GNU parallel's Exitval for a status: 0 done, 1 failed, 130 cut off (cancelled, interrupted),
+/// 4 the directory could not be written.
+fn exitval(status: &str) -> u8 {
+    match status {
+        "done" => 0,
+        "failed" => 1,
+        "store-error" => 4,
+        _ => 130,
+    }
 }
 
 /// One attempt, as a joblog line.
@@ -61,9 +87,19 @@ pub struct Joblog {
     path: PathBuf,
     lock: PathBuf,
     host: String,
+    /// The file has the earlier version's header: append in its format.
+    old: bool,
+    /// The point index of each run hash (from the manifest).
+    index: HashMap<String, usize>,
 }
 
 impl Joblog {
+    /// Name each run's point index in its lines.
+    pub fn with_indices(mut self, index: HashMap<String, usize>) -> Joblog {
+        self.index = index;
+        self
+    }
+
     /// Append one attempt; returns its sequence number.
     pub fn append(&mut self, a: &AttemptRecord) -> Result<u64, StoreError> {
         let _lock = DirLock::take(&self.lock)?;
@@ -72,18 +108,18 @@ impl Joblog {
         let start = a.start.duration_since(UNIX_EPOCH).map(|d| d.as_secs_f64()).unwrap_or(0.0);
         // A line cut short (a full disk) is closed first, so that ours starts a line.
         let runtime = if a.runtime_s.is_finite() { format!("{:.3}", a.runtime_s) } else { "-".into() };
-        let line = format!(
-            "{}{}\t{}\t{}\t{:.3}\t{}\t{}\t{}\t{}\n",
-            if ends_with_newline { "" } else { "\n" },
-            seq,
-            self.host,
-            std::process::id(),
-            start,
-            runtime,
-            a.status,
-            a.class.unwrap_or("-"),
-            a.hash
-        );
+        let open = if ends_with_newline { "" } else { "\n" };
+        let (host, pid, status, class, hash) =
+            (&self.host, std::process::id(), a.status, a.class.unwrap_or("-"), &a.hash);
+        let line = if self.old {
+            format!("{open}{seq}\t{host}\t{pid}\t{start:.3}\t{runtime}\t{status}\t{class}\t{hash}\n")
+        } else {
+            let index = self.index.get(hash).map_or("-".to_string(), |i| i.to_string());
+            let exit = exitval(status);
+            format!(
+                "{open}{seq}\t{host}\t{start:.3}\t{runtime}\t0\t0\t{exit}\t0\truns/{hash}/in.liggghts\t{index}\t{hash}\t{status}\t{class}\t{pid}\n"
+            )
+        };
         self.file.write_all(line.as_bytes()).map_err(io(&self.path))?;
         Ok(seq)
     }
@@ -105,7 +141,7 @@ fn last_seq(file: &File) -> std::io::Result<(u64, bool)> {
         let seq = whole
             .lines()
             .rev()
-            .filter(|l| !is_header(l) && l.split('\t').count() == 8)
+            .filter(|l| !is_header(l) && matches!(l.split('\t').count(), FIELDS | OLD_FIELDS))
             .find_map(|l| l.split('\t').next()?.parse::<u64>().ok());
         match seq {
             Some(s) => return Ok((s, ends)),
@@ -119,6 +155,7 @@ fn last_seq(file: &File) -> std::io::Result<(u64, bool)> {
 #[derive(Debug, Clone, PartialEq)]
 pub struct JoblogLine {
     pub seq: u64,
+    pub host: String,
     pub pid: u32,
     pub status: String,
     pub class: String,
@@ -134,13 +171,25 @@ pub fn read_joblog(dir: &Path) -> Result<Vec<JoblogLine>, StoreError> {
         .filter(|l| !is_header(l))
         .filter_map(|l| {
             let f: Vec<&str> = l.split('\t').collect();
-            (f.len() == 8).then(|| JoblogLine {
-                seq: f[0].parse().unwrap_or(0),
-                pid: f[2].parse().unwrap_or(0),
-                status: f[5].to_string(),
-                class: f[6].to_string(),
-                hash: f[7].to_string(),
-            })
+            match f.len() {
+                FIELDS => Some(JoblogLine {
+                    seq: f[0].parse().unwrap_or(0),
+                    host: f[1].to_string(),
+                    pid: f[13].parse().unwrap_or(0),
+                    status: f[11].to_string(),
+                    class: f[12].to_string(),
+                    hash: f[10].to_string(),
+                }),
+                OLD_FIELDS => Some(JoblogLine {
+                    seq: f[0].parse().unwrap_or(0),
+                    host: f[1].to_string(),
+                    pid: f[2].parse().unwrap_or(0),
+                    status: f[5].to_string(),
+                    class: f[6].to_string(),
+                    hash: f[7].to_string(),
+                }),
+                _ => None,
+            }
         })
         .collect())
 }

@@ -385,5 +385,40 @@ mod tests {
             (lines[1].seq, lines[1].status.as_str(), lines[1].class.as_str()),
             (2, "failed", "timed-out")
         );
+        // GNU parallel's columns: Exitval 1 for the failure, the deck as the command.
+        let text = fs::read_to_string(dir.path().join("joblog.tsv")).unwrap();
+        let f: Vec<&str> = text.lines().nth(2).unwrap().split('\t').collect();
+        assert_eq!((f[4], f[5], f[6], f[7], f[8]), ("0", "0", "1", "0", "runs/b/in.liggghts"), "{text}");
+    }
+
+    #[test]
+    fn a_joblog_of_the_earlier_format_is_read_and_continued_in_its_format() {
+        let dir = tempfile::tempdir().unwrap();
+        let old = "seq\thost\tpid\tstart\truntime_s\tstatus\tclass\thash\n\
+                   1\tnode1\t42\t1700000000.000\t2.500\tdone\t-\taaa\n";
+        fs::write(dir.path().join("joblog.tsv"), old).unwrap();
+        let s = Store::open(dir.path());
+        let rec = AttemptRecord {
+            hash: "bbb".into(),
+            start: SystemTime::now(),
+            runtime_s: 1.0,
+            status: "failed",
+            class: Some("timed-out"),
+        };
+        let index = [("bbb".to_string(), 7)].into_iter().collect();
+        assert_eq!(s.joblog().unwrap().with_indices(index).append(&rec).unwrap(), 2);
+        let lines = read_joblog(dir.path()).unwrap();
+        assert_eq!(lines.len(), 2);
+        assert_eq!((lines[0].host.as_str(), lines[0].pid, lines[0].hash.as_str()), ("node1", 42, "aaa"));
+        assert_eq!((lines[1].status.as_str(), lines[1].hash.as_str()), ("failed", "bbb"));
+        let text = fs::read_to_string(dir.path().join("joblog.tsv")).unwrap();
+        assert!(text.lines().all(|l| l.split('\t').count() == 8), "one format per file: {text}");
+        // A new file gets the new columns, with the point's index.
+        let new = tempfile::tempdir().unwrap();
+        let index = [("bbb".to_string(), 7)].into_iter().collect();
+        Store::open(new.path()).joblog().unwrap().with_indices(index).append(&rec).unwrap();
+        let text = fs::read_to_string(new.path().join("joblog.tsv")).unwrap();
+        let f: Vec<&str> = text.lines().nth(1).unwrap().split('\t').collect();
+        assert_eq!((f.len(), f[9], f[10], f[11]), (14, "7", "bbb", "failed"), "{text}");
     }
 }

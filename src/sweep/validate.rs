@@ -112,7 +112,11 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>,
             if unit != info.unit {
                 return Err(bad(
                     &format!("{key}.unit"),
-                    format!("is \"{unit}\" but {name} is given in \"{}\"", info.unit),
+                    format!(
+                        "is \"{unit}\" but {name} is given in \"{}\"{}",
+                        info.unit,
+                        converted(&entry, unit, info.unit)
+                    ),
                 ));
             }
         }
@@ -308,6 +312,31 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>,
         ));
     }
     Ok((swept, fixed))
+}
+
+/// Units a value is often written in by mistake, and the factor to the catalogue's unit.
+const SLIPS: &[(&str, &str, f64)] = &[
+    ("m", "mm", 1e3),
+    ("cm", "mm", 10.0),
+    ("um", "mm", 1e-3),
+    ("µm", "mm", 1e-3),
+    ("Pa", "MPa", 1e-6),
+    ("GPa", "MPa", 1e3),
+    ("mm/s", "m/s", 1e-3),
+];
+
+/// For a unit slip with a known factor: `; values are in mm — did you mean lo = 2, hi = 4?`.
+fn converted(entry: &ParamEntry, written: &str, wanted: &str) -> String {
+    let Some(&(_, _, factor)) = SLIPS.iter().find(|(w, c, _)| *w == written && *c == wanted) else {
+        return String::new();
+    };
+    let show = |v: f64| crate::scene::plausible::show(v * factor);
+    let values = match (entry.lo, entry.hi, entry.value) {
+        (Some(lo), Some(hi), _) => format!("lo = {}, hi = {}", show(lo), show(hi)),
+        (_, _, Some(v)) => format!("value = {}", show(v)),
+        _ => return format!("; values are in {wanted}"),
+    };
+    format!("; values are in {wanted} — did you mean {values}, unit = \"{wanted}\"?")
 }
 
 fn as_f64(v: &toml::Value) -> Option<f64> {

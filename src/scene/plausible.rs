@@ -1,0 +1,134 @@
+//! Plausibility: is a point inside what the scene is built for, or is it a unit slip?
+//!
+//! Lengths are in mm and a value written in metres (0.002 for 2 mm) passes every domain check
+//! but gives a point no one meant: a 37-million-particle pile, or a gap no sphere fits under.
+//! A point far outside the bounds below is refused before anything is written, with one line
+//! naming the value, its unit and the likely slip; `--force` runs it anyway. Not responsible for
+//! the physical domains of the parameters (that is [`crate::scene::params`]) nor for the
+//! measured stability bound of the timestep ([`crate::scene::check_rayleigh_fraction`]).
+
+use std::collections::BTreeMap;
+
+use crate::scene::settings::{SceneSettings, SizeDistributionSpec};
+use crate::scene::Scene;
+
+/// Most particles (the dose; the substrate is not counted) the scene is built for: 40× the
+/// largest point of the shipped sweeps (4,950 at D 1 mm, gap 5 mm, reference fidelity; 2,304 at
+/// the fast one, a point of about 7 CPU s).
+pub const MAX_PARTICLES: usize = 200_000;
+/// Smallest mean diameter, mm (10 µm): below it cohesion, which the scene leaves out, dominates.
+pub const MIN_DIAMETER_MM: f64 = 0.01;
+/// Largest mean diameter, mm: a recoater spreads powder, not gravel.
+pub const MAX_DIAMETER_MM: f64 = 20.0;
+/// Smallest gap, in mean diameters: below it not even a sphere resting in a pocket fits under
+/// the blade (that starts at 0.55 D), so such a point is a sure zero or a slip.
+pub const MIN_GAP_DIAMETERS: f64 = 0.1;
+/// Smallest timestep, as a fraction of the Rayleigh time: 10× finer than the reference fidelity.
+pub const MIN_RAYLEIGH_FRACTION: f64 = 0.01;
+
+/// Refuse a point outside the bounds above, saying which value, in which unit, and what was
+/// probably meant. `values` are the catalogue parameters in catalogue units.
+pub fn check(scene: &Scene, values: &BTreeMap<String, f64>, settings: &SceneSettings) -> Result<(), String> {
+    const FORCE: &str = "(--force runs it anyway)";
+    let mm = |m: f64| m * 1e3;
+    let d = mm(scene.diameter);
+    // The parameter that sets the mean diameter.
+    let d_name = match settings.size_distribution {
+        SizeDistributionSpec::Weibull { .. } => "weibull_scale",
+        _ => "diameter",
+    };
+    let d_value = values.get(d_name).copied().unwrap_or(d);
+    if d < MIN_DIAMETER_MM {
+        return Err(format!(
+            "{d_name} {} mm: below the {} µm the scene is built for; values are in mm — did you mean {}? {FORCE}",
+            show(d_value),
+            show(MIN_DIAMETER_MM * 1e3),
+            show(d_value * 1e3)
+        ));
+    }
+    if d > MAX_DIAMETER_MM {
+        return Err(format!(
+            "{d_name} {} mm: above the {} mm the scene is built for; values are in mm — did you mean {}? {FORCE}",
+            show(d_value),
+            show(MAX_DIAMETER_MM),
+            show(d_value / 1e3)
+        ));
+    }
+    let gap = mm(scene.gap);
+    if gap < MIN_GAP_DIAMETERS * d {
+        return Err(format!(
+            "gap {} mm: below {} D (D = {} mm), where nothing passes under the blade; values are in \
+             mm — did you mean {}? {FORCE}",
+            show(gap),
+            show(MIN_GAP_DIAMETERS),
+            show(d),
+            show(gap * 1e3)
+        ));
+    }
+    if scene.particles > MAX_PARTICLES {
+        return Err(format!(
+            "{} particles at gap {} mm and {d_name} {} mm (gap = {} D): more than the {} the scene \
+             is built for; values are in mm — lower the gap or raise the diameter {FORCE}",
+            scene.particles,
+            show(gap),
+            show(d_value),
+            show(gap / d),
+            MAX_PARTICLES
+        ));
+    }
+    let fraction = scene.timestep / scene.rayleigh_time;
+    if fraction < MIN_RAYLEIGH_FRACTION {
+        return Err(format!(
+            "timestep {:.3e} s: {} of the Rayleigh time ({:.3e} s), below the {} the scene is built \
+             for (a run would take {:.1e} steps); scene.timestep_s is in seconds {FORCE}",
+            scene.timestep,
+            show(fraction),
+            scene.rayleigh_time,
+            show(MIN_RAYLEIGH_FRACTION),
+            scene.spread_steps() as f64
+        ));
+    }
+    Ok(())
+}
+
+/// A number for people: at most 6 significant digits, no trailing zeros, no float noise
+/// (0.30000000000000004 → 0.3). Files keep full precision.
+pub fn show(v: f64) -> String {
+    round_to(v, 6)
+}
+
+/// `v` with at most `digits` significant digits, printed without trailing zeros.
+pub fn round_to(v: f64, digits: i32) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let magnitude = v.abs().log10().floor() as i32;
+    let decimals = (digits - 1 - magnitude).max(0) as usize;
+    let text = format!("{v:.decimals$}");
+    let text = if text.contains('.') { text.trim_end_matches('0').trim_end_matches('.') } else { &text };
+    // Very small or large magnitudes: scientific notation says it shorter.
+    if !(-5..=9).contains(&magnitude) {
+        let e = format!("{:.*e}", (digits - 1) as usize, v);
+        let (m, x) = e.split_once('e').unwrap_or((&e, "0"));
+        let m = if m.contains('.') { m.trim_end_matches('0').trim_end_matches('.') } else { m };
+        return format!("{m}e{x}");
+    }
+    text.to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_print_without_float_noise() {
+        assert_eq!(show(0.30000000000000004), "0.3");
+        assert_eq!(show(2.0), "2");
+        assert_eq!(show(0.002 * 1e3), "2");
+        assert_eq!(show(1.23456789), "1.23457");
+        assert_eq!(show(-0.5), "-0.5");
+        assert_eq!(show(37057656.0), "37057656");
+        assert_eq!(show(1.5e-6), "1.5e-6");
+        assert_eq!(round_to(1.2345678901234567, 12), "1.23456789012");
+    }
+}
