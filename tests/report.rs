@@ -87,11 +87,12 @@ fn assert_self_contained(html_path: &Path) {
 #[test]
 fn lds_on_the_stand_in_stops_by_itself_and_its_statistics_are_the_prefixes() {
     let tmp = tempfile::tempdir().unwrap();
-    // The default rule wants the skewness known within ±τ: 0.15 brings that inside 4,000 runs.
-    let file = standin_sweep(tmp.path(), "stop", "tolerance = 0.15");
+    // The default rule wants the skewness known within ±τ: 0.2 brings that well inside 4,000 runs
+    // (0.15 converges near 3,600, too close to --max to see the sweep stop by itself).
+    let file = standin_sweep(tmp.path(), "stop", "tolerance = 0.2");
     let out = tmp.path().join("out");
     let o =
-        sweep(&["lds", p(&file), "--step", "200", "--max", "4000", "--jobs", "2", "-q", "--out", p(&out)]);
+        sweep(&["lds", p(&file), "--step", "400", "--max", "4000", "--jobs", "2", "-q", "--out", p(&out)]);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(0), "{err}");
     let s = summary(&out);
@@ -103,8 +104,8 @@ fn lds_on_the_stand_in_stops_by_itself_and_its_statistics_are_the_prefixes() {
     let rows = common::csv_rows(&out.join("results.csv"));
     let done: Vec<&BTreeMap<String, String>> = rows.iter().filter(|r| r["status"] == "done").collect();
     // The stand-in's runs take microseconds, so a few hundred more start while the rule
-    // bootstraps the space (1,000 resamples); real runs take seconds.
-    assert!(done.len() >= n && done.len() < n + 400 && n < 4000, "done {} n {n}", done.len());
+    // bootstraps the space (1,000 resamples; more on a loaded machine); real runs take seconds.
+    assert!(done.len() >= n && done.len() < n + 400 && done.len() < 4000, "done {} n {n}", done.len());
     assert_eq!(joblog_lines(&out), done.len());
     let conv = common::csv_rows(&out.join("convergence.csv"));
     assert_eq!(conv.last().unwrap()["space"], format!("lds {n}"));
