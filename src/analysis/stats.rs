@@ -158,6 +158,12 @@ pub fn bootstrap(x: &[f64], b: &Bootstrap) -> [Interval; 4] {
             }
         }
     }
+    percentile_intervals(draws, b)
+}
+
+/// The percentile intervals of each statistic's resampled values; undefined where more than half
+/// of the resamples left the statistic undefined.
+pub fn percentile_intervals(draws: [Vec<f64>; 4], b: &Bootstrap) -> [Interval; 4] {
     let alpha = (1.0 - b.level.clamp(0.0, 1.0)) / 2.0;
     draws.map(|mut d| {
         if d.len() * 2 < b.resamples {

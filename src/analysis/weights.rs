@@ -14,7 +14,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
-use crate::analysis::stats::{percentile_sorted, Bootstrap, Interval, Moments, STATISTICS};
+use crate::analysis::stats::{Bootstrap, Interval, Moments, STATISTICS};
 
 /// How a complete lattice's points are weighted.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -156,14 +156,7 @@ pub fn bootstrap(x: &[f64], w: Option<&[f64]>, b: &Bootstrap) -> [Interval; 4] {
             }
         }
     }
-    let alpha = (1.0 - b.level.clamp(0.0, 1.0)) / 2.0;
-    draws.map(|mut d| {
-        if d.len() * 2 < b.resamples {
-            return Interval::UNDEFINED;
-        }
-        d.sort_by(f64::total_cmp);
-        Interval { lo: Some(percentile_sorted(&d, alpha)), hi: Some(percentile_sorted(&d, 1.0 - alpha)) }
-    })
+    crate::analysis::stats::percentile_intervals(draws, b)
 }
 
 #[cfg(test)]
