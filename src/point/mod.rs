@@ -83,6 +83,44 @@ pub fn resolve(sweep: &Sweep, swept_values: &[f64]) -> BTreeMap<String, f64> {
     values
 }
 
+/// A catalogue parameter the design does not sweep, as every point of the sweep uses it.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct FixedValue {
+    pub name: String,
+    pub value: f64,
+    pub unit: &'static str,
+    /// True when the sweep file sets it; false for the catalogue's default.
+    pub written: bool,
+    pub description: &'static str,
+}
+
+/// Every catalogue parameter the sweep does not sweep, in catalogue order: the sweep file's
+/// value where it gives one, else the default (which the user may never have written).
+pub fn fixed_values(sweep: &Sweep) -> Vec<FixedValue> {
+    params::CATALOGUE
+        .iter()
+        .filter(|p| !sweep.swept.iter().any(|s| s.name == p.name))
+        .map(|p| {
+            let written = sweep.fixed.iter().find_map(|f| match f.kind {
+                ParamKind::Fixed(v) if f.name == p.name => Some(v),
+                _ => None,
+            });
+            FixedValue {
+                name: p.name.to_string(),
+                value: written.unwrap_or(p.default),
+                unit: p.unit,
+                written: written.is_some(),
+                description: p.description,
+            }
+        })
+        .collect()
+}
+
+/// [`fixed_values`] as results.csv's columns: (name, value).
+pub fn fixed_columns(sweep: &Sweep) -> Vec<(String, f64)> {
+    fixed_values(sweep).into_iter().map(|f| (f.name, f.value)).collect()
+}
+
 /// Parse `--set name=value,...` into swept values in file order; unset parameters take the
 /// middle of their range. Names must be swept parameters; values must lie in their range.
 pub fn swept_values_from_set(sweep: &Sweep, sets: &[String]) -> Result<Vec<f64>> {

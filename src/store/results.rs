@@ -23,7 +23,8 @@ impl PointStatus {
 
 /// Write `DIR/results.csv`: one row per design point, in index order, atomically.
 ///
-/// Columns: index, the swept parameters, status (`done`, `failed`, `pending`, `screened`),
+/// Columns: index, the swept parameters, the fixed ones (every other catalogue parameter, the
+/// same on every row, so a row says the whole point), status (`done`, `failed`, `pending`, `screened`),
 /// failure (class), mfr (0 when screened), mfr_flux, mfr_particles, steady, vx_1..vx_12 (m/s,
 /// empty for an empty layer), runtime_s, hash, quality (of the v_x profile, [`crate::point::quality`];
 /// empty unless done), screen (`closed` for a point the screen closes, `verification` for one of
@@ -31,6 +32,7 @@ impl PointStatus {
 pub fn write_results(
     dir: &Path,
     parameters: &[String],
+    fixed: &[(String, f64)],
     points: &[PointRecord],
     status: &[PointStatus],
     sample: &std::collections::BTreeSet<usize>,
@@ -39,6 +41,7 @@ pub fn write_results(
     let mut w = csv::Writer::from_writer(Vec::new());
     let mut header: Vec<String> = vec!["index".into()];
     header.extend(parameters.iter().cloned());
+    header.extend(fixed.iter().map(|f| f.0.clone()));
     header.extend(["status", "failure", "mfr", "mfr_flux", "mfr_particles", "steady"].map(String::from));
     header.extend((1..=VX_LAYERS).map(|k| format!("vx_{k}")));
     header.extend(["runtime_s", "hash", "quality", "screen"].map(String::from));
@@ -46,6 +49,7 @@ pub fn write_results(
     for (p, s) in points.iter().zip(status) {
         let mut row: Vec<String> = vec![p.index.to_string()];
         row.extend(p.values.iter().map(|v| v.to_string()));
+        row.extend(fixed.iter().map(|f| f.1.to_string()));
         match s {
             PointStatus::Pending => {
                 row.push("pending".into());
