@@ -38,6 +38,10 @@ pub struct RunResult {
     pub vx: Vec<Option<f64>>,
     /// Particles in the pile.
     pub particles: usize,
+    /// The spread layer's quality behind the blade at the window's end (absent in results
+    /// written before it was measured, and from engines that give none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub layer: Option<crate::point::layer::Layer>,
     /// Timesteps of the settle (until at rest, or the fixed settle of the thesis layout).
     pub settle_steps: u64,
     /// Timesteps run in all: settle and spread.

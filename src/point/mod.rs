@@ -4,6 +4,7 @@
 //! run in a directory it is given. The pool calls both; `sweep render` and `sweep run` too.
 
 pub mod deck;
+pub mod layer;
 pub mod metrics;
 pub mod quality;
 
@@ -250,6 +251,7 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
         steady_p: m.steady_p,
         vx: m.vx,
         particles: m.particles,
+        layer: m.layer,
         settle_steps,
         steps,
         simulated_time: steps as f64 * p.scene.timestep,

@@ -12,6 +12,7 @@
 mod html;
 mod maps;
 mod plots;
+pub mod show;
 pub use plots::to_png;
 
 use std::collections::BTreeMap;

@@ -71,6 +71,10 @@ pub struct SceneSettings {
     /// from a sweep file).
     #[serde(skip)]
     pub force_timestep: bool,
+    /// Write particle (`custom/vtk`) and blade (`mesh/vtk`) VTK files over the spread for
+    /// ParaView (`sweep run --vtk`; never read from a sweep file).
+    #[serde(skip)]
+    pub vtk: bool,
 }
 
 /// The fidelity presets, fastest first.
@@ -230,6 +234,7 @@ impl Default for SceneSettings {
             thesis_band: false,
             seed: 12345,
             force_timestep: false,
+            vtk: false,
         }
     }
 }

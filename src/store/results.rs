@@ -5,6 +5,9 @@ use std::path::Path;
 use super::{write_atomic, PointRecord, StoreError};
 use crate::outcome::{RunFailure, RunResult, VX_LAYERS};
 
+/// results.csv's columns of the spread layer's quality.
+pub const LAYER_COLUMNS: [&str; 4] = ["layer_cv", "layer_cv_noise", "covered_fraction", "roughness_d"];
+
 /// The state of one design point in results.csv.
 #[derive(Debug, Clone, PartialEq)]
 pub enum PointStatus {
@@ -28,7 +31,9 @@ impl PointStatus {
 /// failure (class), mfr (0 when screened), mfr_flux, mfr_particles, steady, vx_1..vx_12 (m/s,
 /// empty for an empty layer), runtime_s, hash, quality (of the v_x profile, [`crate::point::quality`];
 /// empty unless done), screen (`closed` for a point the screen closes, `verification` for one of
-/// its verification sample, empty for an open point).
+/// its verification sample, empty for an open point), and the spread layer's quality where the
+/// run measured it ([`crate::point::layer`]): layer_cv and layer_cv_noise (–),
+/// covered_fraction (–), roughness_d (top-surface RMS height, in D).
 pub fn write_results(
     dir: &Path,
     parameters: &[String],
@@ -45,6 +50,7 @@ pub fn write_results(
     header.extend(["status", "failure", "mfr", "mfr_flux", "mfr_particles", "steady"].map(String::from));
     header.extend((1..=VX_LAYERS).map(|k| format!("vx_{k}")));
     header.extend(["runtime_s", "hash", "quality", "screen"].map(String::from));
+    header.extend(LAYER_COLUMNS.map(String::from));
     w.write_record(&header).expect("in-memory csv");
     for (p, s) in points.iter().zip(status) {
         let mut row: Vec<String> = vec![p.index.to_string()];
@@ -89,6 +95,16 @@ pub fn write_results(
             (true, true) => "verification".into(),
             (true, false) => "closed".into(),
             (false, _) => String::new(),
+        });
+        let layer = match s {
+            PointStatus::Done(r) => r.layer,
+            _ => None,
+        };
+        row.extend(match layer {
+            Some(l) => {
+                [l.layer_cv, l.layer_cv_noise, l.covered_fraction, l.roughness_d].map(|v| v.to_string())
+            }
+            None => std::array::from_fn(|_| String::new()),
         });
         w.write_record(&row).expect("in-memory csv");
     }
