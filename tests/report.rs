@@ -408,18 +408,18 @@ fn report_sections_for_failed_and_screened_sweeps_and_a_points_page() {
     let tmp = tempfile::tempdir().unwrap();
     let text = "name = \"sections\"\n[parameters]\ngap = { lo = 2.0, hi = 4.0, unit = \"mm\" }\n\
                 blade_speed = { lo = 1.2, hi = 1.6, unit = \"m/s\" }\nfriction = 0.3\n[run]\nscreen_sample = 0.0\nscreen_sample_min = 1\n";
-    let sweep = demsweep::sweep::Sweep::parse(text, &tmp.path().join("s.toml")).unwrap();
+    let sw = demsweep::sweep::Sweep::parse(text, &tmp.path().join("s.toml")).unwrap();
     let opts = RunOptions {
         jobs: 2,
         progress: demsweep::run::progress::ProgressMode::Quiet,
         retry_failed: false,
         force: false,
     };
-    let criteria = demsweep::analysis::convergence::Criteria::from_settings(&sweep.file.convergence);
+    let criteria = demsweep::analysis::convergence::Criteria::from_settings(&sw.file.convergence);
     let build = |name: &str, exec: &FakeExecutor| -> (PathBuf, String) {
         let out = tmp.path().join(name);
         let design = demsweep::store::DesignRecord::Lattice { levels: vec![3] };
-        run::start(&sweep, design, &out, exec, &opts, &mut run::RunAll, &Default::default()).unwrap();
+        run::start(&sw, design, &out, exec, &opts, &mut run::RunAll, &Default::default()).unwrap();
         let a = demsweep::report::analyse(&out, &criteria, &Default::default()).unwrap();
         demsweep::report::write(&a).unwrap();
         demsweep::run::rewrite_results(&out).unwrap();

@@ -114,3 +114,91 @@ pub fn measure(scene: &Scene, frame: &Frame, x0: f64, x1: f64) -> Option<Layer> 
         particles: deposit.len(),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::settings::SceneSettings;
+    use std::collections::BTreeMap;
+
+    fn scene() -> Scene {
+        let values: BTreeMap<String, f64> =
+            [("diameter", 2.0), ("gap", 4.0)].iter().map(|(k, v)| (k.to_string(), *v)).collect();
+        Scene::new(&values, &SceneSettings::default()).unwrap()
+    }
+
+    /// Spheres of diameter D resting on z = 0 at the given (x, y) centres.
+    fn frame(s: &Scene, xy: &[(f64, f64)]) -> Frame {
+        let m = s.density * std::f64::consts::PI / 6.0 * s.diameter.powi(3);
+        Frame {
+            step: 0,
+            id: (1..=xy.len() as u64).collect(),
+            x: xy.iter().map(|p| p.0).collect(),
+            y: Some(xy.iter().map(|p| p.1).collect()),
+            z: vec![0.5 * s.diameter; xy.len()],
+            vx: vec![0.0; xy.len()],
+            mass: vec![m; xy.len()],
+        }
+    }
+
+    #[test]
+    fn a_square_monolayer_is_even_covers_pi_over_four_and_has_the_cap_roughness() {
+        let s = scene();
+        let d = s.diameter;
+        // A strip of 38 D: 36 D measured (the last 2 D behind the blade left out), 12 bins of 3 D.
+        let (x0, x1) = (0.0, 38.0 * d);
+        let ny = (s.depth / d).round() as usize;
+        // Touching spheres on a square lattice of pitch D over the measured 36 D.
+        let xy: Vec<(f64, f64)> = (0..36)
+            .flat_map(|i| (0..ny).map(move |j| ((i as f64 + 0.5) * d, (j as f64 + 0.5) * d)))
+            .collect();
+        let l = measure(&s, &frame(&s, &xy), x0, x1).unwrap();
+        // Every bin holds 3·ny spheres: no variation at all.
+        assert!(l.layer_cv < 1e-9, "{l:?}");
+        assert_eq!(l.particles, 36 * ny);
+        // Counting noise of n equal masses per bin: √(n m²)/(n m) = 1/√n, n = 3·ny.
+        assert!((l.layer_cv_noise - 1.0 / (3.0 * ny as f64).sqrt()).abs() < 1e-12, "{l:?}");
+        // Discs of diameter D on a pitch of D cover π/4 of the plane; on a D/4 grid the sampled
+        // share is 12 of the 16 cell centres per D² (those within D/2 of the disc's centre).
+        assert!((l.covered_fraction - 12.0 / 16.0).abs() < 1e-9, "{l:?}");
+        // Heights: D/2 + √(r² − d²) at the 12 covered cell centres (d² = (k²+l²)(D/8)², k,l odd
+        // in ±1, ±3), 0 at the 4 uncovered: the RMS about the mean, in D, worked out here.
+        let r = 0.5;
+        let hs: Vec<f64> = [1.0f64, 3.0]
+            .iter()
+            .flat_map(|&a| [1.0f64, 3.0].map(move |b| (a, b)))
+            .map(|(a, b)| {
+                let d2 = (a * a + b * b) / 64.0;
+                if d2 < r * r {
+                    0.5 + (r * r - d2).sqrt()
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let mean = hs.iter().sum::<f64>() / 4.0;
+        let rms = (hs.iter().map(|h| (h - mean).powi(2)).sum::<f64>() / 4.0).sqrt();
+        assert!((l.roughness_d - rms).abs() < 1e-9 && (l.height_d - mean).abs() < 1e-9, "{l:?} {rms} {mean}");
+    }
+
+    #[test]
+    fn an_empty_half_shows_in_coverage_and_uniformity() {
+        let s = scene();
+        let d = s.diameter;
+        let ny = (s.depth / d).round() as usize;
+        // Spheres over the first half of a 38 D strip only (38 D measured of 40 D).
+        let xy: Vec<(f64, f64)> = (0..19)
+            .flat_map(|i| (0..ny).map(move |j| ((i as f64 + 0.5) * d, (j as f64 + 0.5) * d)))
+            .collect();
+        let l = measure(&s, &frame(&s, &xy), 0.0, 40.0 * d).unwrap();
+        assert!((l.covered_fraction - 0.5 * 0.75).abs() < 0.02, "{l:?}");
+        // Half the bins full and half empty: CV ≈ 1, far above the counting noise.
+        assert!(l.layer_cv > 0.9 && l.layer_cv > 3.0 * l.layer_cv_noise, "{l:?}");
+        // Nothing behind the blade: no layer, all zeros; a dump without y: no measure.
+        let empty = measure(&s, &frame(&s, &[]), 0.0, 40.0 * d).unwrap();
+        assert_eq!((empty.covered_fraction, empty.roughness_d, empty.particles), (0.0, 0.0, 0));
+        let mut no_y = frame(&s, &xy);
+        no_y.y = None;
+        assert!(measure(&s, &no_y, 0.0, 40.0 * d).is_none());
+    }
+}

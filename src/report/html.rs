@@ -192,6 +192,105 @@ fn failures_section(a: &Analysis, figures: &[Figure]) -> String {
     h
 }
 
+fn opt(v: Option<f64>, digits: usize) -> String {
+    v.map_or("–".into(), |v| format!("{v:.digits$}"))
+}
+
+/// The layer, the v_x classes against it, the recommended settings, the thesis's conclusions.
+fn advice_section(a: &Analysis, figures: &[Figure]) -> String {
+    let ad = &a.advice;
+    let mut h = String::from(
+        "<h2>The spread layer</h2>\n<p>Measured on the deposit behind the blade at the window's end (docs/layer.md): \
+         <b>covered fraction</b>, the share of the substrate under the layer (its complement is the empty-patch area, \
+         after Nan et al. 2018); <b>CV / noise</b>, the coefficient of variation of the deposited mass in bins of 3 D \
+         along the travel over what independently placed particles would give (≈ 1: even; above: gaps and clumps); \
+         <b>roughness</b>, the RMS height of the top surface (D).</p>\n",
+    );
+    let maps: Vec<&Figure> = figures.iter().filter(|f| f.name.starts_with("map-covered-")).collect();
+    if !maps.is_empty() {
+        h.push_str("<div class=\"grid\">\n");
+        for f in maps {
+            h.push_str(&img(f));
+        }
+        h.push_str("</div>\n");
+    }
+    h.push_str(
+        "<h2>Spreading quality and recommended settings</h2>\n<p>Each done point's v_x profile in front of the blade \
+         (thesis §4.1) is <b>unstable</b> when its layers depart from their neighbours' mean by more than 3% of the \
+         blade speed (RMS), else <b>inefficient</b> when the top three layers move less than 6% of the blade speed \
+         faster than the bottom three (nearly uniform), else <b>ideal</b>. The classes against the layer they leave:</p>\n\
+         <div class=\"wide\"><table><tr><th class=\"l\">v_x class</th><th>points</th><th>mean MFR (–)</th><th>covered fraction (–)</th>\
+         <th>CV / noise (–)</th><th>roughness (D)</th></tr>\n",
+    );
+    for c in &ad.classes.by_class {
+        h.push_str(&format!(
+            "<tr><td class=\"l\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+            c.class,
+            c.points,
+            opt(c.mfr, 4),
+            opt(c.covered_fraction, 3),
+            opt(c.cv_over_noise, 2),
+            opt(c.roughness_d, 3)
+        ));
+    }
+    h.push_str(&format!("</table></div>\n<p><b>{}.</b></p>\n", esc(&ad.classes.sentence)));
+    h.push_str(&format!("<p>Recommended settings, by this criterion: {}.</p>\n", esc(&ad.criterion)));
+    if ad.recommended.is_empty() {
+        h.push_str("<p>No point meets the criterion, so none is recommended.</p>\n");
+    } else {
+        h.push_str(&format!(
+            "<div class=\"wide\"><table><tr><th>point</th>{}<th>MFR ± SE (–)</th><th>covered fraction (–)</th><th>CV / noise (–)</th><th>roughness (D)</th></tr>\n",
+            parameter_headers(a)
+        ));
+        for r in &ad.recommended {
+            h.push_str(&format!("<tr><td>#{}</td>", r.index));
+            for p in &a.parameters {
+                h.push_str(&format!("<td>{}</td>", fmt_short(r.parameters[p])));
+            }
+            let l = r.layer;
+            h.push_str(&format!(
+                "<td>{:.4} ± {:.4}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+                r.mfr,
+                r.mfr_se,
+                opt(l.map(|l| l.covered_fraction), 3),
+                opt(l.filter(|l| l.layer_cv_noise > 0.0).map(|l| l.layer_cv / l.layer_cv_noise), 2),
+                opt(l.map(|l| l.roughness_d), 3)
+            ));
+        }
+        h.push_str("</table></div>\n");
+        if let Some(d) = ad.best_is_distinct {
+            h.push_str(&format!(
+                "<p>{}</p>\n",
+                if d {
+                    "The first point's MFR is above the second's by more than twice their combined standard error."
+                } else {
+                    "The first two points' MFRs differ by less than twice their combined standard error: within noise, either will do."
+                }
+            ));
+        }
+    }
+    h.push_str(
+        "<h2>The thesis's conclusions against this sweep</h2>\n<div class=\"wide\"><table><tr><th class=\"l\">thesis</th>\
+         <th class=\"l\">claim</th><th class=\"l\">here</th><th class=\"l\">evidence</th></tr>\n",
+    );
+    for c in &ad.conclusions {
+        let mark = match c.verdict {
+            "holds" => "✓ holds",
+            "fails" => "✗ fails",
+            _ => "not enough points",
+        };
+        h.push_str(&format!(
+            "<tr><td class=\"l\">{}</td><td class=\"l\">{}</td><td class=\"l\"><b>{}</b></td><td class=\"l\">{}</td></tr>\n",
+            esc(c.section),
+            esc(c.claim),
+            mark,
+            esc(&c.evidence)
+        ));
+    }
+    h.push_str("</table></div>\n");
+    h
+}
+
 /// The page.
 pub fn render(a: &Analysis, figures: &[Figure]) -> String {
     let mut h = String::new();
@@ -386,41 +485,7 @@ fn measured_sections(a: &Analysis, figures: &[Figure]) -> String {
         }
         push(&mut h, "</div>\n");
     }
-    // Quality and recommendation.
-    push(
-        &mut h,
-        "<h2>Spreading quality and recommended settings</h2>\n<p>Each done point's v_x profile in front of the blade \
-         (thesis §4.1) is <b>unstable</b> when its layers depart from their neighbours' mean by more than 3% of the \
-         blade speed (RMS), else <b>inefficient</b> when the top three layers move less than 6% of the blade speed \
-         faster than the bottom three (nearly uniform), else <b>ideal</b>.</p>\n<table><tr>",
-    );
-    for k in a.quality.keys() {
-        push(&mut h, &format!("<th>{k}</th>"));
-    }
-    push(&mut h, "</tr><tr>");
-    for v in a.quality.values() {
-        push(&mut h, &format!("<td>{v}</td>"));
-    }
-    push(&mut h, "</tr></table>\n");
-    if a.best_ideal.is_empty() {
-        push(&mut h, "<p>No point has an ideal profile, so none is recommended.</p>\n");
-    } else {
-        push(
-            &mut h,
-            &format!(
-                "<p>Highest MFR among the ideal points:</p>\n<div class=\"wide\"><table><tr><th>point</th>{}<th>MFR (–)</th></tr>\n",
-                parameter_headers(a)
-            ),
-        );
-        for b in &a.best_ideal {
-            push(&mut h, &format!("<tr><td>#{}</td>", b.index));
-            for p in &a.parameters {
-                push(&mut h, &format!("<td>{}</td>", fmt_short(b.parameters[p])));
-            }
-            push(&mut h, &format!("<td>{:.4}</td></tr>\n", b.mfr));
-        }
-        push(&mut h, "</table></div>\n");
-    }
+    push(&mut h, &advice_section(a, figures));
     for f in figures.iter().filter(|f| f.name == "profiles") {
         push(&mut h, &img(f));
         push(&mut h, &points_table(a, f));

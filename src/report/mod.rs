@@ -9,6 +9,7 @@
 //! Not responsible for running anything or for the statistics themselves ([`crate::analysis::stats`],
 //! [`crate::analysis::convergence`], [`crate::analysis::sensitivity`], [`crate::point::quality`]).
 
+mod advice;
 mod html;
 mod maps;
 mod plots;
@@ -260,6 +261,8 @@ pub struct Analysis {
     pub best_ideal: Vec<BestPoint>,
     /// Every failed point, by index.
     pub failures: Vec<FailedPoint>,
+    /// The v_x classes against the layer, the recommended settings, the thesis's conclusions.
+    pub advice: advice::Advice,
     #[serde(skip)]
     pub points: Vec<PointRow>,
 }
@@ -333,6 +336,7 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
         })
         .collect();
     let setup = Setup::of(&sweep, &manifest);
+    let advice = advice::advise(&manifest.parameters, &points, &sensitivity);
     let engine = manifest
         .identity
         .get("engine")
@@ -361,6 +365,7 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
         quality,
         best_ideal,
         failures,
+        advice,
         points,
     })
 }

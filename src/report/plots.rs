@@ -150,6 +150,16 @@ pub fn draw_all(a: &Analysis) -> Res<Vec<Figure>> {
             cells: super::maps::CellValue::Points,
         },
     )?);
+    let covered = |p: &PointRow| p.done().and_then(|(r, _)| r.layer.map(|l| l.covered_fraction));
+    out.extend(super::maps::pair_maps(
+        a,
+        &super::maps::MapSpec {
+            stem: "covered",
+            label: "covered fraction (–)",
+            value: &covered,
+            cells: super::maps::CellValue::Points,
+        },
+    )?);
     if a.points.iter().any(|p| p.done().is_some()) {
         out.push(profiles(a)?);
     }
