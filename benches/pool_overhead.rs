@@ -11,9 +11,10 @@ use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-use demsweep::outcome::{write_json_atomic, RunOutcome, RunResult, RESULT_FORMAT};
+use demsweep::outcome::{RunOutcome, RunResult, RESULT_FORMAT};
 use demsweep::run::pool::{self, Executor, Flow, PoolOptions};
 use demsweep::store::Store;
+use demsweep::sys::atomic::write_json;
 use demsweep::sys::process::{self, CancelToken, ProcessOutcome};
 
 /// Runs `true` and records a trivial result.
@@ -58,7 +59,7 @@ impl Executor for TrueExecutor {
             engine_version: "true".into(),
             warnings: vec![],
         };
-        write_json_atomic(&run_dir.join("result.json"), &r).unwrap();
+        write_json(&run_dir.join("result.json"), &r).unwrap();
         RunOutcome::Done(r)
     }
 }

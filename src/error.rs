@@ -1,7 +1,7 @@
 //! The top-level error type and the exit codes it maps to.
 //!
 //! Library modules return their own `thiserror` enums; this type is what the CLI sees, and its
-//! [`Error::code`] is the process exit code (DESIGN §4).
+//! [`Error::code`] is the process exit code (`sweep --help` lists them).
 
 /// Exit codes, documented in `sweep --help` and the README.
 pub mod exit {
@@ -77,3 +77,6 @@ pub fn did_you_mean<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str
 pub fn hint<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str>) -> String {
     did_you_mean(word, candidates).map(|c| format!(" (did you mean `{c}`?)")).unwrap_or_default()
 }
+
+/// The result of drawing a figure: plotters and resvg fail with errors of their own types.
+pub type Res<T> = std::result::Result<T, Box<dyn std::error::Error>>;

@@ -1,7 +1,12 @@
 //! demsweep: parameter sweeps of LIGGGHTS powder-spreading simulations.
 //!
-//! The pipeline (DESIGN §2), one module per stage, data flowing one way:
-//! sweep file → [`sweep`] → [`space`] + [`design`] → [`scene`] → deck → engine → dump → metrics.
+//! One module per stage of the pipeline, and every import points down it (docs/architecture.md
+//! has the order and what each may import): a sweep file ([`sweep`]) and a [`design`] give
+//! points; each point is a [`scene`] rendered into a deck and run by LIGGGHTS ([`engine`]),
+//! measured into a result ([`point`]); the drivers ([`run`]) run many points into a sweep
+//! directory ([`store`]); [`analysis`] and [`report`] say what the results mean. [`contact`]
+//! checks the contact model, [`bench`] measures speed against error, and [`sys`] holds the
+//! operating-system plumbing beneath them all.
 
 pub mod analysis;
 pub mod bench;

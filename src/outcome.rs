@@ -4,7 +4,6 @@
 //! into a number: it carries its class (which decides the retry policy) and a one-line reason.
 
 use std::collections::BTreeMap;
-use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
@@ -22,7 +21,7 @@ pub struct RunResult {
     pub hash: String,
     /// Every scene parameter, swept and fixed, in the sweep file's units.
     pub parameters: BTreeMap<String, f64>,
-    /// Mass flow rate from the deposited layer (DESIGN §5, thesis Eq. 15–17), dimensionless.
+    /// Mass flow rate from the deposited layer (docs/scene.md "Metrics", thesis Eq. 15–17), dimensionless.
     pub mfr: f64,
     /// The same from the flux of particles past the blade's front face (cross-check).
     pub mfr_flux: f64,
@@ -127,11 +126,4 @@ pub enum RunOutcome {
     Failed(RunFailure),
     /// Stopped by Ctrl-C / SIGTERM; the run dir is incomplete and will be re-run on resume.
     Cancelled,
-}
-
-/// Write `value` as pretty JSON to `path` atomically ([`crate::sys::atomic::write`]).
-pub fn write_json_atomic<T: Serialize>(path: &Path, value: &T) -> std::io::Result<()> {
-    let mut bytes = serde_json::to_vec_pretty(value)?;
-    bytes.push(b'\n');
-    crate::sys::atomic::write(path, &bytes)
 }

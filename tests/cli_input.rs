@@ -1,10 +1,12 @@
 //! `sweep points` end to end: bad sweep files and flags fail with exit code 2 and one line
 //! naming the file and the key; good ones print the designs the thesis describes.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-const SWEEP: &str = env!("CARGO_BIN_EXE_sweep");
+use common::SWEEP;
 
 fn repo(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)

@@ -18,10 +18,6 @@ use std::time::{Duration, Instant};
 
 use demsweep::store::{ClaimAttempt, ClaimInfo, Store};
 
-fn sweep_bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_sweep"))
-}
-
 fn run(cmd: &mut Command) -> Output {
     cmd.stdin(Stdio::null()).output().unwrap()
 }
@@ -52,7 +48,7 @@ fn reference() -> &'static Path {
         let root = tempfile::Builder::new().prefix("cluster-ref-").tempdir().unwrap().keep();
         std::fs::write(root.join("s.toml"), SWEEP).unwrap();
         let dir = root.join("local");
-        let o = run(sweep_bin()
+        let o = run(common::sweep_bin()
             .args(["lds", "s.toml", "--step", "3", "--max", "3", "--jobs", "2", "-q", "--out", "local"])
             .current_dir(&root));
         assert!(matches!(o.status.code(), Some(0 | 1)), "local run: {}", text(&o.stderr));
@@ -142,7 +138,7 @@ fn squeue(conf: &str, job: &str) -> Vec<(String, String)> {
 }
 
 fn submit(conf: &str, dir: &Path, extra: &[&str]) -> (String, String) {
-    let o = run(sweep_bin()
+    let o = run(common::sweep_bin()
         .env("SLURM_CONF", conf)
         .args(["submit", dir.to_str().unwrap(), "--scheduler", "slurm", "--walltime", "00:20:00"])
         .args(extra));
@@ -209,7 +205,7 @@ fn slurm_array_with_a_cancelled_task_completes_on_resubmission() {
     assert_eq!(subs.lines().count(), 2, "{subs}");
 
     // Nothing left: a third submission says so and submits nothing.
-    let o = run(sweep_bin().env("SLURM_CONF", &conf).args([
+    let o = run(common::sweep_bin().env("SLURM_CONF", &conf).args([
         "submit",
         dir.to_str().unwrap(),
         "--scheduler",
@@ -246,7 +242,7 @@ fn pbs_task(script: &Path, index: usize, torque: bool, workdir: &Path) -> Child 
 #[test]
 fn pbs_task_bodies_under_the_pbs_environment_equal_a_local_run() {
     let (root, dir) = fresh_copy("cluster-pbs-");
-    let o = run(sweep_bin().args([
+    let o = run(common::sweep_bin().args([
         "submit",
         dir.to_str().unwrap(),
         "--scheduler",
@@ -269,7 +265,7 @@ fn pbs_task_bodies_under_the_pbs_environment_equal_a_local_run() {
     }
     assert_same_as_reference(&dir);
 
-    let o = run(sweep_bin().args([
+    let o = run(common::sweep_bin().args([
         "submit",
         dir.to_str().unwrap(),
         "--scheduler",
@@ -334,7 +330,7 @@ fn scripts_match_their_snapshots() {
         let root = tempfile::tempdir().unwrap();
         let dir = root.path().join("snap");
         synthetic(&dir, 10);
-        let o = run(sweep_bin()
+        let o = run(common::sweep_bin()
             .args(["submit", dir.to_str().unwrap(), "--scheduler", scheduler, "--tasks", "4", "--dry-run"])
             .args(["--jobs-per-task", "2", "--ranks", "2", "--walltime", "02:00:00"])
             .args(extra));
@@ -344,7 +340,7 @@ fn scripts_match_their_snapshots() {
             let got = std::fs::read_to_string(dir.join(format!("cluster/{kind}.{ext}"))).unwrap();
             let got = got
                 .replace(dir.to_str().unwrap(), "DIR")
-                .replace(env!("CARGO_BIN_EXE_sweep"), "SWEEP")
+                .replace(common::SWEEP, "SWEEP")
                 .replace(env!("CARGO_PKG_VERSION"), "VERSION");
             snapshot(&format!("{scheduler}-{kind}.txt"), &got);
         }
@@ -364,13 +360,13 @@ fn bad_submit_input_is_refused_and_writes_nothing() {
         (&["--scheduler", "pbs", "--tasks", "2", "--queue", "a b", "--dry-run"][..], "--queue \"a b\""),
         (&["--scheduler", "pbs", "--tasks", "2", "--ranks", "0", "--dry-run"][..], "--ranks 0"),
     ] {
-        let o = run(sweep_bin().arg("submit").arg(d).args(args));
+        let o = run(common::sweep_bin().arg("submit").arg(d).args(args));
         let err = text(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
         assert!(err.contains(needle) && err.lines().count() == 1, "{args:?}: {err}");
         assert!(!dir.join("cluster").exists(), "{args:?} wrote something");
     }
-    let o = run(sweep_bin().args([
+    let o = run(common::sweep_bin().args([
         "submit",
         root.path().to_str().unwrap(),
         "--scheduler",
@@ -452,7 +448,7 @@ fn a_frozen_task_is_taken_over_after_its_lease_and_a_live_one_is_not() {
     let hash = want[k].0.clone();
     let task = k.to_string();
     let work = |host: &str| {
-        sweep_bin()
+        common::sweep_bin()
             .args(["work", dir.to_str().unwrap(), "--task", &task, "--per-task", "1", "--jobs", "1"])
             .args(["--lease", "3", "--no-steal", "-q", "--host", host])
             .stdin(Stdio::null())

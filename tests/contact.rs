@@ -1,8 +1,9 @@
 //! The contact solver against closed-form Hertz theory, rigid-body impulse–momentum theory and
 //! the installed LIGGGHTS (`sweep contact-check`).
 
+mod common;
+
 use std::path::Path;
-use std::process::Command;
 
 use demsweep::bench::contact::timestep::{self, ClosedForm};
 use demsweep::contact::{self, bounce, check, solver, Case, ContactError, Material, Outcome, Regime, Target};
@@ -253,6 +254,7 @@ fn damped_sliding_impact_transfers_more_than_mu_times_the_normal_impulse() {
 
 #[test]
 fn contact_check_passes_against_liggghts() {
+    common::require_liggghts!("contact_check_passes_against_liggghts");
     let cases = check::default_cases();
     let report = check::run_cases(&cases, Path::new("liggghts"), None).expect("LIGGGHTS runs");
     println!("{}", report.table());
@@ -387,6 +389,9 @@ fn a_centre_that_would_cross_the_wall_is_refused_at_the_closed_form_modulus() {
 
 #[test]
 fn solver_and_liggghts_agree_along_a_timestep_ladder_while_both_leave_the_closed_form() {
+    common::require_liggghts!(
+        "solver_and_liggghts_agree_along_a_timestep_ladder_while_both_leave_the_closed_form"
+    );
     // D 2 mm scene particle, e = 0.5, at t_c/1000 (the default), t_c/10 and t_c/1.
     let c = case(Target::Wall(SPREAD), 1e-3, 7980.0, SPREAD, 0.5, 0.0, 1.0, 0.0, 0.0);
     let rows = timestep::run(
@@ -424,7 +429,7 @@ fn sweep_bench_contact_rejects_bad_input_with_exit_2() {
 }
 
 fn sweep(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_sweep")).args(args).output().expect("sweep starts")
+    common::sweep_bin().args(args).output().expect("sweep starts")
 }
 
 const WALL_ARGS: [&str; 16] = [
@@ -478,6 +483,7 @@ fn sweep_contact_rejects_bad_input_with_exit_2() {
 
 #[test]
 fn sweep_contact_check_runs_one_case_from_flags() {
+    common::require_liggghts!("sweep_contact_check_runs_one_case_from_flags");
     let mut args = vec!["contact-check"];
     args.extend(WALL_ARGS);
     args.extend(["--vt", "2"]);

@@ -5,14 +5,14 @@
 //! runs back instead of running them again. Speed is measured by the bench, not asserted here
 //! (BENCHMARKS.md "Fidelity").
 
+mod common;
+
 use std::collections::HashMap;
 use std::path::Path;
-use std::process::Command;
 
 fn sweep_file(dir: &Path) -> std::path::PathBuf {
-    let path = dir.join("space.toml");
-    std::fs::write(
-        &path,
+    common::write_file(
+        &dir.join("space.toml"),
         r#"name = "space"
 [parameters]
 gap         = { lo = 2.0, hi = 3.0, unit = "mm" }
@@ -20,8 +20,6 @@ blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
 diameter    = 2.0
 "#,
     )
-    .unwrap();
-    path
 }
 
 fn rows(path: &Path) -> Vec<HashMap<String, String>> {
@@ -41,11 +39,14 @@ fn result(dir: &Path, hash: &str) -> serde_json::Value {
 
 #[test]
 fn one_point_under_each_preset_is_measured_against_the_reference_and_read_back_on_a_rerun() {
+    common::require_liggghts!(
+        "one_point_under_each_preset_is_measured_against_the_reference_and_read_back_on_a_rerun"
+    );
     let tmp = tempfile::tempdir().unwrap();
     let file = sweep_file(tmp.path());
     let out = tmp.path().join("bench");
     let bench = || {
-        Command::new(env!("CARGO_BIN_EXE_sweep"))
+        common::sweep_bin()
             .args([
                 "bench",
                 "fidelity",
@@ -131,6 +132,7 @@ fn one_point_under_each_preset_is_measured_against_the_reference_and_read_back_o
 
 #[test]
 fn bad_bench_input_is_one_line_and_writes_nothing() {
+    common::require_liggghts!("bad_bench_input_is_one_line_and_writes_nothing");
     let tmp = tempfile::tempdir().unwrap();
     let file = sweep_file(tmp.path());
     let out = tmp.path().join("bench");
@@ -142,7 +144,7 @@ fn bad_bench_input_is_one_line_and_writes_nothing() {
         vec!["--variant", "x:supply_factor=2"],
         vec!["--variant", "x:rayleigh_fraction=0.9"],
     ] {
-        let r = Command::new(env!("CARGO_BIN_EXE_sweep"))
+        let r = common::sweep_bin()
             .args(["bench", "fidelity", file.to_str().unwrap(), "--out", out.to_str().unwrap()])
             .args(&extra)
             .output()

@@ -6,23 +6,20 @@
 //! Sweeps that only exercise the directory run on the deterministic fake executor; those whose
 //! path involves LIGGGHTS run it for real on small scenes.
 
+mod common;
+
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::Duration;
 
-use demsweep::run::pool::fake::{Behaviour, FakeExecutor};
-use demsweep::run::progress::ProgressMode;
-use demsweep::run::{self, RunAll, RunOptions};
+use demsweep::run::fake::{Behaviour, FakeExecutor};
+use demsweep::run::{self, RunAll};
 use demsweep::store::{self, DesignRecord};
 use demsweep::sweep::{Scrambling, Sweep};
 use demsweep::sys::process::CancelToken;
 
 const MS: Duration = Duration::from_millis(1);
-
-fn sweep_bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_sweep"))
-}
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
@@ -30,22 +27,15 @@ fn stderr(o: &Output) -> String {
 
 /// The quick scene with gap and blade speed swept (as tests/resume.rs), in `dir/NAME.toml`.
 fn write_sweep(dir: &Path, name: &str, extra_run: &str) -> PathBuf {
-    let text = format!(
-        r#"name = "{name}"
-[parameters]
-gap         = {{ lo = 2.0, hi = 3.0, unit = "mm" }}
-blade_speed = {{ lo = 1.2, hi = 1.6, unit = "m/s" }}
-diameter    = {{ value = 1.5, unit = "mm" }}
-[design.lds]
+    let tables = format!(
+        r#"[design.lds]
 step = 2
 max = 4
 [run]
 {extra_run}
 "#
     );
-    let path = dir.join(format!("{name}.toml"));
-    std::fs::write(&path, text).unwrap();
-    path
+    common::write_file(&dir.join(format!("{name}.toml")), &common::quick_scene(name, &tables))
 }
 
 /// Every file under `dir` with its contents, to show that nothing changed.
@@ -70,7 +60,7 @@ fn snapshot(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
 /// panic, and nothing in `cwd` changed.
 fn refused(cwd: &Path, args: &[&str], needles: &[&str]) {
     let before = snapshot(cwd);
-    let o = sweep_bin().args(args).current_dir(cwd).stdin(Stdio::null()).output().unwrap();
+    let o = common::sweep_bin().args(args).current_dir(cwd).stdin(Stdio::null()).output().unwrap();
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(2), "{args:?}\nstderr: {err}");
     assert_eq!(err.lines().count(), 1, "{args:?}\nstderr: {err}");
@@ -79,10 +69,6 @@ fn refused(cwd: &Path, args: &[&str], needles: &[&str]) {
         assert!(err.contains(n), "{args:?}: stderr {err:?} lacks {n:?}");
     }
     assert_eq!(snapshot(cwd), before, "{args:?} wrote in the caller's directory");
-}
-
-fn opts(jobs: usize) -> RunOptions {
-    RunOptions { jobs, progress: ProgressMode::Quiet, retry_failed: false, force: false }
 }
 
 fn lds(max: usize, step: usize) -> DesignRecord {
@@ -159,7 +145,7 @@ fn refused_commands_write_nothing_in_the_callers_directory_not_even_a_liggghts_l
 
     // A command that identifies the engine and succeeds writes only where it was told to.
     let before = snapshot(&cwd);
-    let o = sweep_bin()
+    let o = common::sweep_bin()
         .args(["render", "s.toml", "--set", "gap=3", "--out", deck])
         .current_dir(&cwd)
         .output()
@@ -255,7 +241,7 @@ fn two_sweeps_started_at_once_on_one_new_directory_share_the_work() {
                 .map(|e| {
                     let (s, out) = (&s, &out);
                     scope.spawn(move || {
-                        run::start(s, lds(6, 3), out, e, &opts(1), &mut RunAll, &CancelToken::new())
+                        run::start(s, lds(6, 3), out, e, &common::quiet(1), &mut RunAll, &CancelToken::new())
                     })
                 })
                 .collect();
@@ -280,7 +266,7 @@ fn joblog_seq_is_unique_when_two_resumes_share_a_directory() {
     let out = tmp.path().join("out");
     // A directory with its manifest and nothing run (a copy made elsewhere, a killed start).
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    run::start(&s, lds(12, 12), &out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
+    run::start(&s, lds(12, 12), &out, &exec, &common::quiet(1), &mut RunAll, &CancelToken::new()).unwrap();
     std::fs::remove_dir_all(out.join("runs")).unwrap();
     std::fs::write(out.join("joblog.tsv"), format!("{}\n", store::JOBLOG_HEADER)).unwrap();
     let execs = [
@@ -290,7 +276,9 @@ fn joblog_seq_is_unique_when_two_resumes_share_a_directory() {
     std::thread::scope(|scope| {
         for e in &execs {
             let out = &out;
-            scope.spawn(move || run::resume(out, e, &opts(2), &mut RunAll, &CancelToken::new()).unwrap());
+            scope.spawn(move || {
+                run::resume(out, e, &common::quiet(2), &mut RunAll, &CancelToken::new()).unwrap()
+            });
         }
     });
     assert!(execs.iter().all(|e| !e.attempts().is_empty()), "both resumes should have run points");
@@ -304,7 +292,7 @@ fn a_killed_attempt_shows_as_interrupted_in_status_and_the_joblog() {
     let s = fake_sweep(tmp.path());
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    run::start(&s, lds(3, 3), &out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
+    run::start(&s, lds(3, 3), &out, &exec, &common::quiet(1), &mut RunAll, &CancelToken::new()).unwrap();
     let (manifest, _) = store::Store::read_manifest(&out).unwrap();
     let hash = &manifest.points[2].hash;
     let run = out.join("runs").join(hash);
@@ -319,12 +307,12 @@ fn a_killed_attempt_shows_as_interrupted_in_status_and_the_joblog() {
     std::fs::write(run.join("claim"), claim.to_string()).unwrap();
     let st = run::status(&out).unwrap();
     assert_eq!((st.done, st.pending, st.interrupted), (2, 1, 1));
-    let o = sweep_bin().arg("status").arg(&out).output().unwrap();
+    let o = common::sweep_bin().arg("status").arg(&out).output().unwrap();
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("(1 interrupted"), "{text}");
 
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    run::resume(&out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
+    run::resume(&out, &exec, &common::quiet(1), &mut RunAll, &CancelToken::new()).unwrap();
     let lines: Vec<_> = store::read_joblog(&out).unwrap().into_iter().filter(|l| &l.hash == hash).collect();
     let statuses: Vec<&str> = lines.iter().map(|l| l.status.as_str()).collect();
     assert_eq!(statuses, ["done", "interrupted", "done"], "the killed attempt is in the joblog");
@@ -346,7 +334,7 @@ fn an_inconsistent_or_truncated_manifest_is_refused_naming_the_field() {
     let s = fake_sweep(tmp.path());
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    run::start(&s, lds(4, 2), &out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
+    run::start(&s, lds(4, 2), &out, &exec, &common::quiet(1), &mut RunAll, &CancelToken::new()).unwrap();
     let path = out.join("manifest.json");
     let good = std::fs::read_to_string(&path).unwrap();
     let edit = |f: &dyn Fn(&mut serde_json::Value)| {
@@ -386,7 +374,7 @@ fn an_inconsistent_or_truncated_manifest_is_refused_naming_the_field() {
             commands.push(vec!["status"]);
         }
         for args in commands {
-            let o = sweep_bin().args(&args).arg(&out).output().unwrap();
+            let o = common::sweep_bin().args(&args).arg(&out).output().unwrap();
             let err = stderr(&o);
             assert_eq!(o.status.code(), Some(2), "{args:?} {needle}: {err}");
             assert_eq!(err.lines().count(), 1, "{err}");
@@ -418,8 +406,8 @@ fn a_full_disk_stops_the_sweep_says_where_and_resume_finishes_it() {
     // Each run leaves 40 kB of "log": about five fit.
     let mut exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
     exec.output_bytes = 40_000;
-    let err =
-        run::start(&s, lds(12, 12), &out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap_err();
+    let err = run::start(&s, lds(12, 12), &out, &exec, &common::quiet(1), &mut RunAll, &CancelToken::new())
+        .unwrap_err();
     let msg = err.to_string();
     assert_ne!(err.code(), 0);
     assert!(msg.contains(&format!("no space left on tmpfs ({})", fs.display())), "{msg}");
@@ -451,7 +439,7 @@ fn a_full_disk_stops_the_sweep_says_where_and_resume_finishes_it() {
     mount.remount("size=4m");
     std::fs::write(&stale, "half").unwrap();
     let exec2 = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    let sum = run::resume(&out, &exec2, &opts(2), &mut RunAll, &CancelToken::new()).unwrap();
+    let sum = run::resume(&out, &exec2, &common::quiet(2), &mut RunAll, &CancelToken::new()).unwrap();
     assert_eq!((sum.done, sum.failed, sum.reused), (12, 0, done));
     assert!(temporaries(&out).is_empty(), "{:?}", temporaries(&out));
     let per_hash = done_per_hash(&out);
@@ -474,7 +462,7 @@ fn a_full_disk_under_liggghts_is_a_store_error_not_failed_runs_and_resume_finish
         }
     };
     let out = fs.join("out");
-    let o = sweep_bin()
+    let o = common::sweep_bin()
         .args(["lds", sweep.to_str().unwrap(), "--max", "3", "--step", "3", "--jobs", "1", "-q", "--out"])
         .arg(&out)
         .stdin(Stdio::null())
@@ -496,8 +484,12 @@ fn a_full_disk_under_liggghts_is_a_store_error_not_failed_runs_and_resume_finish
     assert!(done >= 1, "the first run should have fitted: {lines:?}");
 
     mount.remount("size=16m");
-    let o =
-        sweep_bin().args(["resume", "--jobs", "2", "-q"]).arg(&out).stdin(Stdio::null()).output().unwrap();
+    let o = common::sweep_bin()
+        .args(["resume", "--jobs", "2", "-q"])
+        .arg(&out)
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let per_hash = done_per_hash(&out);
     assert!(per_hash.len() == 3 && per_hash.values().all(|&n| n == 1), "{per_hash:?}");
@@ -535,15 +527,15 @@ fn an_unreadable_result_is_named_in_status_and_run_again() {
     let s = fake_sweep(tmp.path());
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    run::start(&s, lds(3, 3), &out, &exec, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
+    run::start(&s, lds(3, 3), &out, &exec, &common::quiet(1), &mut RunAll, &CancelToken::new()).unwrap();
     let (manifest, _) = store::Store::read_manifest(&out).unwrap();
     let result = out.join("runs").join(&manifest.points[1].hash).join("result.json");
     std::fs::write(&result, "{\"format\": 1, \"hash\": ").unwrap();
-    let o = sweep_bin().arg("status").arg(&out).output().unwrap();
+    let o = common::sweep_bin().arg("status").arg(&out).output().unwrap();
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains(&format!("warning: {}: unreadable", result.display())), "{text}");
     let exec2 = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    let sum = run::resume(&out, &exec2, &opts(1), &mut RunAll, &CancelToken::new()).unwrap();
+    let sum = run::resume(&out, &exec2, &common::quiet(1), &mut RunAll, &CancelToken::new()).unwrap();
     assert_eq!((sum.done, sum.ran), (3, 1));
     assert_eq!(exec2.attempts().keys().collect::<Vec<_>>(), vec![&manifest.points[1].hash]);
 }
@@ -554,7 +546,7 @@ fn planning_a_large_lattice_shows_progress_and_an_interrupt_writes_nothing() {
     let sweep = write_sweep(tmp.path(), "big", "");
     let out = tmp.path().join("out");
     // 2-D level 150: 22,500 decks to render and hash, several seconds of planning.
-    let mut child = sweep_bin()
+    let mut child = common::sweep_bin()
         .args(["lattice", sweep.to_str().unwrap(), "--levels", "150", "--out"])
         .arg(&out)
         .stdin(Stdio::null())

@@ -2,20 +2,17 @@
 //!
 //! These run the installed `liggghts` on small scenes (seconds each).
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use serde_json::Value;
 
-fn sweep_bin() -> &'static str {
-    env!("CARGO_BIN_EXE_sweep")
-}
-
 /// A sweep file over the thesis's D and gap ranges at μ = 0.3, v = 1.6 m/s, written to `dir`.
 fn thesis_space(dir: &Path) -> PathBuf {
-    let path = dir.join("space.toml");
-    std::fs::write(
-        &path,
+    common::write_file(
+        &dir.join("space.toml"),
         r#"name = "space"
 [parameters]
 diameter = { lo = 1.0, hi = 3.0, unit = "mm" }
@@ -24,14 +21,11 @@ friction = 0.3
 blade_speed = 1.6
 "#,
     )
-    .unwrap();
-    path
 }
 
 /// `sweep run --json` of one point; returns (exit code, parsed JSON, stderr).
 fn run_point(sweep: &Path, set: &str) -> (i32, Value, String) {
-    let out =
-        Command::new(sweep_bin()).args(["run"]).arg(sweep).args(["--set", set, "--json"]).output().unwrap();
+    let out = common::sweep_bin().args(["run"]).arg(sweep).args(["--set", set, "--json"]).output().unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
     let json = serde_json::from_slice(&out.stdout).unwrap_or(Value::Null);
     (out.status.code().unwrap_or(-1), json, stderr)
@@ -58,6 +52,7 @@ fn assert_open_case(r: &Value, what: &str) {
 
 #[test]
 fn gap_of_two_diameters_flows_and_fills_the_profile() {
+    common::require_liggghts!("gap_of_two_diameters_flows_and_fills_the_profile");
     let dir = tempfile::tempdir().unwrap();
     let (code, r, err) = run_point(&thesis_space(dir.path()), "diameter=2,gap=4");
     assert_eq!(code, 0, "{err}");
@@ -74,6 +69,7 @@ fn gap_of_two_diameters_flows_and_fills_the_profile() {
 
 #[test]
 fn thesis_corners_run_without_errors_or_lost_atoms() {
+    common::require_liggghts!("thesis_corners_run_without_errors_or_lost_atoms");
     // D 1 and 3 mm × gap 1 and 5 mm at μ = 0.3, v = 1.6 m/s. A failed run (LIGGGHTS ERROR,
     // lost atoms, unstable energy) exits 1 with its class; all four must complete.
     let dir = tempfile::tempdir().unwrap();
@@ -96,9 +92,10 @@ fn thesis_corners_run_without_errors_or_lost_atoms() {
 
 #[test]
 fn render_writes_the_three_files_of_a_point() {
+    common::require_liggghts!("render_writes_the_three_files_of_a_point");
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("deck");
-    let status = Command::new(sweep_bin())
+    let status = common::sweep_bin()
         .args(["render"])
         .arg(thesis_space(dir.path()))
         .args(["--set", "gap=3", "--out"])
@@ -117,6 +114,7 @@ fn render_writes_the_three_files_of_a_point() {
 
 #[test]
 fn a_point_outside_the_space_or_an_unknown_name_is_bad_input() {
+    common::require_liggghts!("a_point_outside_the_space_or_an_unknown_name_is_bad_input");
     let dir = tempfile::tempdir().unwrap();
     let sweep = thesis_space(dir.path());
     for (set, needle) in [("gap=9", "gap=9"), ("gapp=3", "did you mean `gap`"), ("friction=0.2", "fixed")] {
@@ -140,6 +138,7 @@ fn sweep_with_template(dir: &Path, template: &str, extra: &str) -> PathBuf {
 
 #[test]
 fn a_template_variable_the_scene_lacks_is_an_error_naming_it() {
+    common::require_liggghts!("a_template_variable_the_scene_lacks_is_an_error_naming_it");
     let dir = tempfile::tempdir().unwrap();
     let sweep = sweep_with_template(dir.path(), "units si\nrun {{ scene.blade_angle }}\n", "");
     let (code, _, err) = run_point(&sweep, "gap=1.5");
@@ -149,6 +148,7 @@ fn a_template_variable_the_scene_lacks_is_an_error_naming_it() {
 
 #[test]
 fn a_deck_that_makes_liggghts_fail_is_reported_with_its_reason() {
+    common::require_liggghts!("a_deck_that_makes_liggghts_fail_is_reported_with_its_reason");
     let dir = tempfile::tempdir().unwrap();
     let deck = "units si\natom_style granular\nregion d block 0 1 0 1 0 1 units box\ncreate_box 1 d\n\
                 fix blade all mesh/surface file missing.stl type 1\nrun 10\n";
@@ -167,6 +167,7 @@ fn a_deck_that_makes_liggghts_fail_is_reported_with_its_reason() {
 /// rendered for real and cut after its first `run` (1 step): setup errors surface there.
 #[test]
 fn every_thesis_geometry_passes_liggghts_setup() {
+    common::require_liggghts!("every_thesis_geometry_passes_liggghts_setup");
     let dir = tempfile::tempdir().unwrap();
     let mono = thesis_space(dir.path());
     let psd = dir.path().join("psd.toml");
@@ -185,7 +186,7 @@ fn every_thesis_geometry_passes_liggghts_setup() {
     }
     for (i, (sweep, set)) in cases.iter().enumerate() {
         let out = dir.path().join(format!("case{i}"));
-        let r = Command::new(sweep_bin())
+        let r = common::sweep_bin()
             .arg("render")
             .arg(sweep)
             .args(["--set", set, "--out"])
@@ -213,6 +214,7 @@ fn every_thesis_geometry_passes_liggghts_setup() {
 /// stops a run whose energy explodes).
 #[test]
 fn an_unstable_timestep_fails_the_run_instead_of_giving_a_number() {
+    common::require_liggghts!("an_unstable_timestep_fails_the_run_instead_of_giving_a_number");
     let dir = tempfile::tempdir().unwrap();
     let builtin = include_str!("../templates/spreading.liggghts.tera");
     let unstable =
@@ -231,6 +233,7 @@ fn an_unstable_timestep_fails_the_run_instead_of_giving_a_number() {
 /// never a number: here the rest criterion asks for an rms speed no pile reaches (1e-9 √(gD)).
 #[test]
 fn a_pile_still_moving_at_the_settle_cap_fails_as_not_settled() {
+    common::require_liggghts!("a_pile_still_moving_at_the_settle_cap_fails_as_not_settled");
     let dir = tempfile::tempdir().unwrap();
     let sweep = dir.path().join("s.toml");
     std::fs::write(
@@ -250,6 +253,7 @@ fn a_pile_still_moving_at_the_settle_cap_fails_as_not_settled() {
 /// reachable: its deck has no gate and no substrate, and it runs.
 #[test]
 fn the_thesis_layout_runs_on_a_smooth_plate() {
+    common::require_liggghts!("the_thesis_layout_runs_on_a_smooth_plate");
     let dir = tempfile::tempdir().unwrap();
     let sweep = dir.path().join("s.toml");
     std::fs::write(

@@ -3,12 +3,14 @@
 //! real LIGGGHTS on `sweeps/quick.toml` for one sweep that ends with a report. Statistics are
 //! checked against values recomputed here from results.csv, never against our own output.
 
+mod common;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Output, Stdio};
 
 fn sweep(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sweep")).args(args).stdin(Stdio::null()).output().unwrap()
+    common::sweep_bin().args(args).stdin(Stdio::null()).output().unwrap()
 }
 
 fn stderr(o: &Output) -> String {
@@ -37,23 +39,6 @@ engine = "stand-in"
     let path = dir.join(format!("{name}.toml"));
     std::fs::write(&path, text).unwrap();
     path
-}
-
-/// results.csv by header name: one map per row.
-fn results(dir: &Path) -> Vec<BTreeMap<String, String>> {
-    let mut r = csv::Reader::from_path(dir.join("results.csv")).unwrap();
-    let h = r.headers().unwrap().clone();
-    r.records()
-        .map(|rec| h.iter().zip(rec.unwrap().iter()).map(|(k, v)| (k.into(), v.into())).collect())
-        .collect()
-}
-
-fn convergence_rows(dir: &Path) -> Vec<BTreeMap<String, String>> {
-    let mut r = csv::Reader::from_path(dir.join("convergence.csv")).unwrap();
-    let h = r.headers().unwrap().clone();
-    r.records()
-        .map(|rec| h.iter().zip(rec.unwrap().iter()).map(|(k, v)| (k.into(), v.into())).collect())
-        .collect()
 }
 
 fn summary(dir: &Path) -> serde_json::Value {
@@ -114,11 +99,11 @@ fn lds_on_the_stand_in_stops_by_itself_and_its_statistics_are_the_prefixes() {
     assert!(err.contains(&format!("converged at N = {n} (lds {n})")), "{err}");
     assert!(err.contains("report.html"), "{err}");
     // It stopped: far fewer runs than --max, and no space past the converged one was judged.
-    let rows = results(&out);
+    let rows = common::csv_rows(&out.join("results.csv"));
     let done: Vec<&BTreeMap<String, String>> = rows.iter().filter(|r| r["status"] == "done").collect();
     assert!(done.len() >= n && done.len() < n + 50 && n < 4000, "done {} n {n}", done.len());
     assert_eq!(joblog_lines(&out), done.len());
-    let conv = convergence_rows(&out);
+    let conv = common::csv_rows(&out.join("convergence.csv"));
     assert_eq!(conv.last().unwrap()["space"], format!("lds {n}"));
     assert_eq!(conv.iter().filter(|r| r["converged"] == "true").count(), 1);
     // The default rule needs two consecutive spaces that hold.
@@ -190,7 +175,7 @@ fn lattice_on_the_stand_in_names_its_converged_level_and_the_thesis_rule_is_weak
     let s = summary(&out);
     let level = s["verdict"]["space"].as_str().expect("converged").to_string();
     assert!(err.contains(&format!("({level})")), "{err}");
-    let conv = convergence_rows(&out);
+    let conv = common::csv_rows(&out.join("convergence.csv"));
     assert_eq!(conv.last().unwrap()["space"], level);
     assert_ne!(level, "lattice 8", "stopped before the last level");
     assert!(s["counts"]["pending"].as_u64().unwrap() > 0);
@@ -293,6 +278,7 @@ fn bad_input_is_one_line_and_exit_2_with_nothing_written() {
 /// The README's main command on real LIGGGHTS: a small sweep that ends with a report.
 #[test]
 fn quick_sweep_on_liggghts_ends_with_a_report() {
+    common::require_liggghts!("quick_sweep_on_liggghts_ends_with_a_report");
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("quick");
     let quick = Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps/quick.toml");
@@ -302,12 +288,12 @@ fn quick_sweep_on_liggghts_ends_with_a_report() {
     let s = summary(&out);
     assert!(["converged", "not-converged"].contains(&s["verdict"]["status"].as_str().unwrap()), "{s}");
     assert!(err.contains(&format!("report: {}", out.join("report/report.html").display())), "{err}");
-    let rows = results(&out);
+    let rows = common::csv_rows(&out.join("results.csv"));
     let done: Vec<f64> =
         rows.iter().filter(|r| r["status"] == "done").map(|r| r["mfr"].parse().unwrap()).collect();
     assert_eq!(s["counts"]["done"].as_u64().unwrap() as usize, done.len());
     // The last space is all four points: its mean is the mean of results.csv's MFR.
-    let conv = convergence_rows(&out);
+    let conv = common::csv_rows(&out.join("convergence.csv"));
     let last = conv.last().unwrap();
     assert_eq!(last["n"], "4");
     assert_eq!(last["done"], done.len().to_string());
@@ -324,7 +310,7 @@ fn quick_sweep_on_liggghts_ends_with_a_report() {
 #[test]
 fn failed_runs_are_excluded_and_counted() {
     use demsweep::outcome::FailureClass;
-    use demsweep::run::pool::fake::{fake_mfr, Behaviour, FakeExecutor};
+    use demsweep::run::fake::{fake_mfr, Behaviour, FakeExecutor};
     use demsweep::run::{self, RunOptions};
     let tmp = tempfile::tempdir().unwrap();
     let text = r#"name = "fails"
@@ -372,7 +358,7 @@ blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
         assert!((space.statistics.mean.unwrap() - mean).abs() < 1e-12, "{}", space.label);
     }
     demsweep::report::write(&a).unwrap();
-    let conv = convergence_rows(&out);
+    let conv = common::csv_rows(&out.join("convergence.csv"));
     assert_eq!((conv[1]["failed"].as_str(), conv[1]["done"].as_str()), ("5", "20"));
 
     // Every run failed: undefined statistics, empty cells, a report all the same.
@@ -390,7 +376,7 @@ blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
     assert_eq!(a.verdict.status, "not-converged");
     assert_eq!(a.spaces[1].statistics.mean, None);
     demsweep::report::write(&a).unwrap();
-    let conv = convergence_rows(&out);
+    let conv = common::csv_rows(&out.join("convergence.csv"));
     assert_eq!((conv[1]["mean"].as_str(), conv[1]["kurtosis"].as_str()), ("", ""));
     let json = std::fs::read_to_string(out.join("summary.json")).unwrap();
     assert!(!json.contains("NaN") && !json.contains("inf"));
@@ -402,7 +388,7 @@ blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
 #[test]
 fn report_sections_for_failed_and_screened_sweeps_and_a_points_page() {
     use demsweep::outcome::FailureClass;
-    use demsweep::run::pool::fake::{Behaviour, FakeExecutor};
+    use demsweep::run::fake::{Behaviour, FakeExecutor};
     use demsweep::run::{self, RunOptions};
     use std::time::Duration;
     let tmp = tempfile::tempdir().unwrap();
@@ -518,7 +504,7 @@ fn report_sections_for_failed_and_screened_sweeps_and_a_points_page() {
     let closed = |v: &[f64]| v[0] < 2.5;
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(Duration::ZERO))
         .with_closed(closed)
-        .with_mfr(move |v| if closed(v) { 0.0 } else { demsweep::run::pool::fake::fake_mfr(v) });
+        .with_mfr(move |v| if closed(v) { 0.0 } else { demsweep::run::fake::fake_mfr(v) });
     let (out, html) = build("screened", &exec);
     let s = summary(&out);
     assert_eq!((s["counts"]["screened"].as_u64(), s["counts"]["failed"].as_u64()), (Some(2), Some(0)));

@@ -11,28 +11,17 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-fn sweep_bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_sweep"))
-}
-
 /// The quick demo scene, with gap and blade speed swept.
 fn write_sweep(dir: &Path, name: &str, extra_run: &str, template: Option<&Path>) -> PathBuf {
     let template = template.map_or(String::new(), |t| format!("template = {:?}\n", t));
-    let text = format!(
-        r#"name = "{name}"
-[parameters]
-gap         = {{ lo = 2.0, hi = 3.0, unit = "mm" }}
-blade_speed = {{ lo = 1.2, hi = 1.6, unit = "m/s" }}
-diameter    = {{ value = 1.5, unit = "mm" }}
-[scene]
+    let tables = format!(
+        r#"[scene]
 {template}
 [run]
 {extra_run}
 "#
     );
-    let path = dir.join(format!("{name}.toml"));
-    std::fs::write(&path, text).unwrap();
-    path
+    common::write_file(&dir.join(format!("{name}.toml")), &common::quick_scene(name, &tables))
 }
 
 fn run(cmd: &mut Command) -> Output {
@@ -41,8 +30,9 @@ fn run(cmd: &mut Command) -> Output {
 
 /// Start `sweep ARGS DIR` twice at once; both must succeed.
 fn run_two_at_once(args: &[&str], dir: &Path) {
-    let spawn =
-        || sweep_bin().args(args).arg(dir).stdin(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    let spawn = || {
+        common::sweep_bin().args(args).arg(dir).stdin(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap()
+    };
     let (a, b) = (spawn(), spawn());
     for c in [a, b] {
         let o = c.wait_with_output().unwrap();
@@ -126,7 +116,7 @@ fn any_result(dir: &Path) -> bool {
 /// Start `sweep lds` on `out`, wait until one run has finished while another is running, and
 /// send `signal`. Returns the child's exit status and its jobs' process groups.
 fn interrupt(sweep: &Path, out: &Path, signal: i32) -> (std::process::ExitStatus, BTreeSet<i32>) {
-    let mut child: Child = sweep_bin()
+    let mut child: Child = common::sweep_bin()
         .args(["lds", sweep.to_str().unwrap(), "--max", "3", "--step", "3"])
         .args(["--jobs", "2", "-q", "--out"])
         .arg(out)
@@ -147,10 +137,11 @@ fn interrupt(sweep: &Path, out: &Path, signal: i32) -> (std::process::ExitStatus
 
 #[test]
 fn killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results() {
+    common::require_liggghts!("killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results");
     let tmp = tempfile::tempdir().unwrap();
     let sweep = write_sweep(tmp.path(), "kr", "", None);
     let lds = |out: &Path| {
-        let mut c = sweep_bin();
+        let mut c = common::sweep_bin();
         c.args(["lds", sweep.to_str().unwrap(), "--max", "3", "--step", "3", "--jobs", "2", "-q", "--out"])
             .arg(out);
         c
@@ -170,10 +161,10 @@ fn killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results() {
     wait_until("the killed sweep's jobs to die", Duration::from_secs(10), || alive_in(&groups).is_empty());
     let finished_before: Vec<String> = attempts(&killed).into_keys().collect();
     // The run cut off by the kill left its claim: status shows it as interrupted.
-    let st = run(sweep_bin().args(["status", "--json"]).arg(&killed));
+    let st = run(common::sweep_bin().args(["status", "--json"]).arg(&killed));
     let st: serde_json::Value = serde_json::from_slice(&st.stdout).unwrap();
     assert!(st["interrupted"].as_u64().unwrap() >= 1, "{st}");
-    let o = run(sweep_bin().args(["resume", "--jobs", "2", "-q"]).arg(&killed));
+    let o = run(common::sweep_bin().args(["resume", "--jobs", "2", "-q"]).arg(&killed));
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert_done_once(&killed);
     let a = attempts(&killed);
@@ -189,11 +180,11 @@ fn killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results() {
     assert_eq!(alive_in(&groups), Vec::<i32>::new(), "a LIGGGHTS job outlived `sweep`");
     let a = attempts(&interrupted);
     assert!(a.values().flatten().any(|s| s == "cancelled"), "{a:?}");
-    let st = run(sweep_bin().args(["status", "--json"]).arg(&interrupted));
+    let st = run(common::sweep_bin().args(["status", "--json"]).arg(&interrupted));
     let st: serde_json::Value = serde_json::from_slice(&st.stdout).unwrap();
     assert_eq!(st["running"], 0, "no claim is left behind");
     assert!(st["pending"].as_u64().unwrap() >= 1);
-    let o = run(sweep_bin().args(["resume", "--jobs", "2", "-q"]).arg(&interrupted));
+    let o = run(common::sweep_bin().args(["resume", "--jobs", "2", "-q"]).arg(&interrupted));
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert_done_once(&interrupted);
     assert_eq!(results(&interrupted), want);
@@ -213,10 +204,11 @@ fn killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results() {
 
 #[test]
 fn a_run_past_its_timeout_is_killed_retried_and_reported() {
+    common::require_liggghts!("a_run_past_its_timeout_is_killed_retried_and_reported");
     let tmp = tempfile::tempdir().unwrap();
     let sweep = write_sweep(tmp.path(), "slow", "timeout_s = 0.5\nretries = 1", None);
     let out = tmp.path().join("out");
-    let o = run(sweep_bin()
+    let o = run(common::sweep_bin()
         .args(["lds", sweep.to_str().unwrap(), "--max", "1", "--step", "1", "-q", "--out"])
         .arg(&out));
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
@@ -225,13 +217,14 @@ fn a_run_past_its_timeout_is_killed_retried_and_reported() {
     assert_eq!(a.values().next().unwrap(), &vec!["failed", "failed"], "one retry");
     let r = results(&out);
     assert_eq!((r[0].1.as_str(), r[0].2.as_str()), ("failed", "timed-out"));
-    let st = run(sweep_bin().arg("status").arg(&out));
+    let st = run(common::sweep_bin().arg("status").arg(&out));
     let text = String::from_utf8_lossy(&st.stdout);
     assert!(text.contains("timed-out: 1"), "{text}");
 }
 
 #[test]
 fn a_deck_that_makes_liggghts_fail_is_reported_and_the_sweep_goes_on() {
+    common::require_liggghts!("a_deck_that_makes_liggghts_fail_is_reported_and_the_sweep_goes_on");
     let tmp = tempfile::tempdir().unwrap();
     // The built-in deck with an unknown command for gaps above 2.5 mm.
     let builtin = std::fs::read_to_string(
@@ -247,7 +240,7 @@ fn a_deck_that_makes_liggghts_fail_is_reported_and_the_sweep_goes_on() {
     let sweep = write_sweep(tmp.path(), "broken", "", Some(&template));
     let out = tmp.path().join("out");
     // A 2 x 2 lattice: gap 2 mm (runs) and 3 mm (fails), each at two blade speeds.
-    let o = run(sweep_bin()
+    let o = run(common::sweep_bin()
         .args(["lattice", sweep.to_str().unwrap(), "--levels", "2", "--jobs", "2", "-q", "--out"])
         .arg(&out));
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
@@ -265,7 +258,7 @@ fn a_deck_that_makes_liggghts_fail_is_reported_and_the_sweep_goes_on() {
         }
     }
     assert_eq!(seen, (2, 2));
-    let st = run(sweep_bin().args(["status", "--json"]).arg(&out));
+    let st = run(common::sweep_bin().args(["status", "--json"]).arg(&out));
     let st: serde_json::Value = serde_json::from_slice(&st.stdout).unwrap();
     assert_eq!((st["done"].as_u64(), st["failed"].as_u64()), (Some(2), Some(2)));
     let reason = st["failures"]["engine-error"]["first"][0]["reason"].as_str().unwrap();
@@ -274,7 +267,7 @@ fn a_deck_that_makes_liggghts_fail_is_reported_and_the_sweep_goes_on() {
     // The template changes: resume refuses, naming what changed, and touches nothing.
     std::fs::write(&template, format!("# edited\n{}", std::fs::read_to_string(&template).unwrap())).unwrap();
     let manifest = std::fs::read(out.join("manifest.json")).unwrap();
-    let o = run(sweep_bin().args(["resume", "--retry-failed", "-q"]).arg(&out));
+    let o = run(common::sweep_bin().args(["resume", "--retry-failed", "-q"]).arg(&out));
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("template_hash"), "{}", stderr(&o));
     assert!(stderr(&o).contains("--force"), "{}", stderr(&o));
@@ -284,6 +277,7 @@ fn a_deck_that_makes_liggghts_fail_is_reported_and_the_sweep_goes_on() {
 
 #[test]
 fn two_sweep_processes_started_at_once_on_one_new_directory_share_the_work() {
+    common::require_liggghts!("two_sweep_processes_started_at_once_on_one_new_directory_share_the_work");
     let tmp = tempfile::tempdir().unwrap();
     let sweep = write_sweep(tmp.path(), "pair", "", None);
     let out = tmp.path().join("out");

@@ -7,55 +7,32 @@
 //! sets what those points give), then a tiny sweep on real LIGGGHTS whose space holds two closed
 //! points: the verification run must give MFR = 0 on the engine, the other must be skipped.
 
+mod common;
+
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
-use std::process::{Command, Output, Stdio};
+use std::process::{Output, Stdio};
 use std::time::Duration;
 
 use demsweep::analysis::stats::Bootstrap;
-use demsweep::run::pool::fake::{fake_mfr, Behaviour, FakeExecutor};
+use demsweep::run::fake::{fake_mfr, Behaviour, FakeExecutor};
 use demsweep::run::pool::Flow;
-use demsweep::run::progress::ProgressMode;
 use demsweep::run::screen::Verdict;
-use demsweep::run::{self, RunOptions, SpaceHook};
+use demsweep::run::{self, SpaceHook};
 use demsweep::store::{
     self, DesignRecord, Manifest, PointRecord, PointStatus, SpaceRecord, Store, MANIFEST_FORMAT,
 };
-use demsweep::sweep::Sweep;
 use demsweep::sys::process::CancelToken;
 
 const MS: Duration = Duration::from_millis(1);
-
-/// Gap and blade speed swept; the fake closes the points at gap 2 (below 2.5).
-fn fake_sweep(dir: &Path, run: &str) -> Sweep {
-    let text = format!(
-        "name = \"t\"\n[parameters]\ngap = {{ lo = 2.0, hi = 4.0 }}\nblade_speed = {{ lo = 1.2, hi = 1.6 }}\n[run]\n{run}\n"
-    );
-    let path = dir.join("t.toml");
-    std::fs::write(&path, &text).unwrap();
-    Sweep::load(&path).unwrap()
-}
 
 fn closed(v: &[f64]) -> bool {
     v[0] < 2.5
 }
 
-fn opts(jobs: usize) -> RunOptions {
-    RunOptions { jobs, progress: ProgressMode::Quiet, retry_failed: false, force: false }
-}
-
 /// A 3 × 3 lattice: three points at gap 2 are closed.
 fn lattice3() -> DesignRecord {
     DesignRecord::Lattice { levels: vec![3] }
-}
-
-/// results.csv by header name: one map per row.
-fn rows(dir: &Path) -> Vec<BTreeMap<String, String>> {
-    let mut r = csv::Reader::from_path(dir.join("results.csv")).unwrap();
-    let h = r.headers().unwrap().clone();
-    r.records()
-        .map(|rec| h.iter().zip(rec.unwrap().iter()).map(|(k, v)| (k.into(), v.into())).collect())
-        .collect()
 }
 
 /// Records the MFR each completed space is judged on (`None`: not a number).
@@ -81,7 +58,7 @@ impl SpaceHook for Seen {
 #[test]
 fn a_verified_screen_skips_the_closed_points_and_counts_them_as_zero() {
     let tmp = tempfile::tempdir().unwrap();
-    let s = fake_sweep(tmp.path(), "screen_sample = 0.0\nscreen_sample_min = 1");
+    let s = common::fake_sweep(tmp.path(), "screen_sample = 0.0\nscreen_sample_min = 1");
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(20 * MS)).with_closed(closed).with_mfr(|v| {
         if closed(v) {
@@ -91,7 +68,8 @@ fn a_verified_screen_skips_the_closed_points_and_counts_them_as_zero() {
         }
     });
     let mut seen = Seen::default();
-    let sum = run::start(&s, lattice3(), &out, &exec, &opts(2), &mut seen, &CancelToken::new()).unwrap();
+    let sum =
+        run::start(&s, lattice3(), &out, &exec, &common::quiet(2), &mut seen, &CancelToken::new()).unwrap();
     assert_eq!((sum.done, sum.screened, sum.failed, sum.pending, sum.exit_code()), (7, 2, 0, 0, 0));
     assert_eq!(sum.screen.verdict, Verdict::Verified);
     assert_eq!((sum.screen.closed, sum.screen.sample, sum.screen.ran, sum.screen.skipped), (3, 1, 1, 2));
@@ -99,7 +77,7 @@ fn a_verified_screen_skips_the_closed_points_and_counts_them_as_zero() {
     let (manifest, _) = Store::read_manifest(&out).unwrap();
     assert_eq!(manifest.points.iter().filter(|p| p.closed).count(), 3);
     let attempts = exec.attempts();
-    let rows = rows(&out);
+    let rows = common::csv_rows(&out.join("results.csv"));
     for (p, row) in manifest.points.iter().zip(&rows) {
         let run_dir = out.join("runs").join(&p.hash);
         match row["status"].as_str() {
@@ -137,7 +115,8 @@ fn a_verified_screen_skips_the_closed_points_and_counts_them_as_zero() {
     assert_eq!((st.done, st.screened, st.pending, st.screen.verdict), (7, 2, 0, Verdict::Verified));
 
     // A resume decides the same and runs nothing.
-    let again = run::resume(&out, &exec, &opts(2), &mut Seen::default(), &CancelToken::new()).unwrap();
+    let again =
+        run::resume(&out, &exec, &common::quiet(2), &mut Seen::default(), &CancelToken::new()).unwrap();
     assert_eq!((again.ran, again.done, again.screened), (0, 7, 2));
     assert_eq!(exec.attempts(), attempts);
 }
@@ -146,11 +125,12 @@ fn a_verified_screen_skips_the_closed_points_and_counts_them_as_zero() {
 fn a_verification_run_with_mfr_above_zero_refutes_the_screen_and_every_closed_point_runs() {
     // The fake's criterion closes gap 2, but the points there flow (fake_mfr > 0): a wrong screen.
     let tmp = tempfile::tempdir().unwrap();
-    let s = fake_sweep(tmp.path(), "screen_sample = 0.0\nscreen_sample_min = 1");
+    let s = common::fake_sweep(tmp.path(), "screen_sample = 0.0\nscreen_sample_min = 1");
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(20 * MS)).with_closed(closed);
     let mut seen = Seen::default();
-    let sum = run::start(&s, lattice3(), &out, &exec, &opts(2), &mut seen, &CancelToken::new()).unwrap();
+    let sum =
+        run::start(&s, lattice3(), &out, &exec, &common::quiet(2), &mut seen, &CancelToken::new()).unwrap();
     assert_eq!((sum.done, sum.screened, sum.pending), (9, 0, 0));
     assert_eq!(sum.screen.verdict, Verdict::Refuted);
     assert_eq!((sum.screen.closed, sum.screen.ran, sum.screen.skipped), (3, 3, 0));
@@ -159,7 +139,7 @@ fn a_verification_run_with_mfr_above_zero_refutes_the_screen_and_every_closed_po
     // Every point ran once, with its real MFR in results.csv; none is screened.
     let (manifest, _) = Store::read_manifest(&out).unwrap();
     assert!(exec.attempts().values().all(|&n| n == 1) && exec.attempts().len() == 9);
-    for (p, row) in manifest.points.iter().zip(rows(&out)) {
+    for (p, row) in manifest.points.iter().zip(common::csv_rows(&out.join("results.csv"))) {
         assert_eq!(row["status"], "done");
         assert!((row["mfr"].parse::<f64>().unwrap() - fake_mfr(&p.values)).abs() < 1e-12);
     }
@@ -177,7 +157,7 @@ fn an_array_task_runs_the_verification_sample_before_it_skips_its_own_closed_poi
     // A task whose share holds closed points but not the sample point runs the sample point
     // first (the screen is trusted only once verified), then skips its own.
     let tmp = tempfile::tempdir().unwrap();
-    let s = fake_sweep(tmp.path(), "screen_sample = 0.0\nscreen_sample_min = 1");
+    let s = common::fake_sweep(tmp.path(), "screen_sample = 0.0\nscreen_sample_min = 1");
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(20 * MS)).with_closed(closed).with_mfr(|v| {
         if closed(v) {
@@ -205,9 +185,15 @@ fn an_array_task_runs_the_verification_sample_before_it_skips_its_own_closed_poi
     let share: Vec<usize> =
         manifest.points.iter().filter(|p| p.closed && p.index != sample_point).map(|p| p.index).collect();
     let order = |u: &[usize]| u.iter().copied().filter(|i| share.contains(i)).collect::<Vec<_>>();
-    let sum =
-        run::resume_share(&out, &exec, &opts(1), Some(&order), &mut Seen::default(), &CancelToken::new())
-            .unwrap();
+    let sum = run::resume_share(
+        &out,
+        &exec,
+        &common::quiet(1),
+        Some(&order),
+        &mut Seen::default(),
+        &CancelToken::new(),
+    )
+    .unwrap();
     assert_eq!(sum.screen.verdict, Verdict::Verified);
     let ran: BTreeSet<String> = exec.attempts().into_keys().collect();
     assert_eq!(ran, BTreeSet::from([manifest.points[sample_point].hash.clone()]));
@@ -219,7 +205,7 @@ fn an_array_task_runs_the_verification_sample_before_it_skips_its_own_closed_poi
 // ---- real LIGGGHTS ----
 
 fn sweep_bin(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sweep")).args(args).stdin(Stdio::null()).output().unwrap()
+    common::sweep_bin().args(args).stdin(Stdio::null()).output().unwrap()
 }
 
 fn stderr(o: &Output) -> String {
@@ -233,6 +219,9 @@ fn json(o: &Output) -> serde_json::Value {
 
 #[test]
 fn on_liggghts_the_verification_run_gives_mfr_zero_and_the_other_closed_point_is_skipped() {
+    common::require_liggghts!(
+        "on_liggghts_the_verification_run_gives_mfr_zero_and_the_other_closed_point_is_skipped"
+    );
     // D = 2.5 mm on the rough substrate at 1.4 m/s: the screen closes gaps below 0.538 D
     // = 1.34 mm. Gaps 0.5, 1.25 (closed), 2.0 and 2.75 mm (0.8 D and 1.1 D: open, they flow).
     // A short window and a narrow domain keep each run to a few seconds.
@@ -261,7 +250,7 @@ screen_sample_min = 1
     assert_eq!(run.status.code(), Some(0), "{err}");
     assert!(err.contains("screen verified: 1 of 2 closed point(s) ran and gave MFR = 0; 1 skipped"), "{err}");
 
-    let table = rows(&out);
+    let table = common::csv_rows(&out.join("results.csv"));
     let gaps: Vec<f64> = table.iter().map(|r| r["gap"].parse().unwrap()).collect();
     assert_eq!(gaps, [0.5, 1.25, 2.0, 2.75]);
     let joblog = std::fs::read_to_string(out.join("joblog.tsv")).unwrap();
@@ -322,11 +311,12 @@ screen_sample_min = 1
     let resumed = sweep_bin(&["resume", o, "-q"]);
     assert_eq!(resumed.status.code(), Some(0), "{}", stderr(&resumed));
     assert_eq!(std::fs::read_to_string(out.join("joblog.tsv")).unwrap(), joblog);
-    assert_eq!(rows(&out), table);
+    assert_eq!(common::csv_rows(&out.join("results.csv")), table);
 }
 
 #[test]
 fn the_points_preview_marks_the_closed_points_of_the_thesis_space() {
+    common::require_liggghts!("the_points_preview_marks_the_closed_points_of_the_thesis_space");
     // `sweep points --screen`: closed exactly where gap/D is below 0.670 D less the margin,
     // 0.1472 D × (v / 1.6 m/s)^0.8 (v 1.2–1.6 m/s: the bound is 0.523–0.553 D).
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps/thesis-lds.toml");
@@ -354,6 +344,7 @@ fn the_points_preview_marks_the_closed_points_of_the_thesis_space() {
 
 #[test]
 fn on_liggghts_a_failed_verification_run_refutes_the_screen_loudly() {
+    common::require_liggghts!("on_liggghts_a_failed_verification_run_refutes_the_screen_loudly");
     // Every run is cut off at 0.3 s (LIGGGHTS takes seconds), so the verification run fails:
     // the screen is refuted, said so on stderr and in summary.json, and the other closed point
     // runs too (here, failing the same way) instead of being counted as MFR = 0.
@@ -389,7 +380,7 @@ retries = 0
         (summary["screen"]["ran"].as_u64(), summary["counts"]["screened"].as_u64()),
         (Some(2), Some(0))
     );
-    let table = rows(&out);
+    let table = common::csv_rows(&out.join("results.csv"));
     assert!(table.iter().all(|r| r["status"] == "failed"), "{table:?}");
     let joblog = std::fs::read_to_string(out.join("joblog.tsv")).unwrap();
     assert!(table.iter().all(|r| joblog.contains(&r["hash"])), "every point was attempted");

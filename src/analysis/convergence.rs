@@ -1,4 +1,4 @@
-//! Convergence of the MFR statistics across nested spaces (DESIGN §6, thesis §3.3).
+//! Convergence of the MFR statistics across nested spaces (thesis §3.3; README "Convergence and the report").
 //!
 //! A sweep's spaces (lattice levels, LDS prefixes) each have [`Moments`]; this module compares
 //! each space with the one before and says whether, and where, the sweep converged:

@@ -1,4 +1,4 @@
-//! `sweep bench fidelity`: run time against error (issue 10, DESIGN §8).
+//! `sweep bench fidelity`: run time against error (BENCHMARKS.md "Fidelity").
 //!
 //! A fixed seeded LDS draw of K points of a sweep's space is run under each fidelity preset
 //! (and any extra variant of the fast knobs) with S pile seeds, jobs interleaved so that the
@@ -17,8 +17,8 @@ use std::sync::Mutex;
 
 use plotters::prelude::*;
 
-use crate::bench::stability::opt;
-use crate::error::{Error, Result};
+use crate::bench::opt;
+use crate::error::{Error, Res, Result};
 use crate::outcome::{FailureClass, RunOutcome, RunResult};
 use crate::point::{self, PointContext};
 use crate::scene::settings::SceneSettings;
@@ -100,7 +100,7 @@ impl Run {
 }
 
 /// What the bench was asked to do.
-pub struct Plan {
+pub struct FidelityPlan {
     /// Swept values of each point, in file order.
     pub points: Vec<Vec<f64>>,
     pub seeds: u64,
@@ -112,7 +112,7 @@ pub struct Plan {
 pub fn run(
     variants: &[Variant],
     contexts: &[PointContext],
-    plan: &Plan,
+    plan: &FidelityPlan,
     cancel: &CancelToken,
     progress: &(dyn Fn(&Run, usize, usize) + Sync),
 ) -> Result<Vec<Run>> {
@@ -430,8 +430,6 @@ pub fn summary_csv(summaries: &[Summary], variants: &[Variant]) -> String {
     s
 }
 
-type Res<T> = std::result::Result<T, Box<dyn std::error::Error>>;
-
 /// The frontier: per variant, CPU seconds per point (log x) against the mean |MFR error|
 /// (filled) and the worst (hollow), with the mean noise of an error as a dashed line.
 pub fn plot_svg(summaries: &[Summary], variants: &[Variant], title: &str) -> Res<String> {
@@ -486,7 +484,7 @@ pub fn plot_svg(summaries: &[Summary], variants: &[Variant], title: &str) -> Res
 
 /// Write fidelity-runs.csv, fidelity.csv, fidelity-summary.csv, fidelity.svg and .png in `out`.
 pub fn write(
-    plan: &Plan,
+    plan: &FidelityPlan,
     runs: &[Run],
     cells: &[Cell],
     summaries: &[Summary],

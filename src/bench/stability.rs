@@ -1,4 +1,4 @@
-//! `sweep bench stability`: the stability edge of the scene's numerics (issue 10, DESIGN §8).
+//! `sweep bench stability`: the stability edge of the scene's numerics (BENCHMARKS.md "Stability edge").
 //!
 //! At the harshest corner of a sweep's space ([`harshest_corner`]) the real point is run with
 //! the timestep driven up in fractions of the Rayleigh time, and with the stiffness (Young's
@@ -13,7 +13,8 @@ use std::path::{Path, PathBuf};
 
 use plotters::prelude::*;
 
-use crate::error::{Error, Result};
+use super::opt;
+use crate::error::{Error, Res, Result};
 use crate::outcome::{FailureClass, RunOutcome};
 use crate::point::{self, PointContext};
 use crate::sweep::{ParamKind, Parameter, Sweep};
@@ -111,21 +112,6 @@ impl LevelResult {
     }
 }
 
-/// Mean and standard error of the mean over seeds (`MEDIAN_SEED_SPREAD` of the mean for one).
-pub fn mean_se(v: &[f64]) -> Option<(f64, f64)> {
-    if v.is_empty() {
-        return None;
-    }
-    let n = v.len() as f64;
-    let mean = v.iter().sum::<f64>() / n;
-    let se = if v.len() < 2 {
-        MEDIAN_SEED_SPREAD * mean
-    } else {
-        (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() / n.sqrt()
-    };
-    Some((mean, se))
-}
-
 /// The MFR drift bound of a level against the first level, relative to the first level's
 /// mean: max([`DRIFT_FLOOR`], 2 × the standard error of the difference of the two means).
 pub fn drift_bound(base: (f64, f64), this: (f64, f64)) -> f64 {
@@ -134,7 +120,7 @@ pub fn drift_bound(base: (f64, f64), this: (f64, f64)) -> f64 {
 }
 
 /// What the bench was asked to do.
-pub struct Plan {
+pub struct StabilityPlan {
     pub corner: Vec<f64>,
     pub fractions: Vec<f64>,
     pub moduli: Vec<f64>,
@@ -178,7 +164,7 @@ fn level_sweep(sweep: &Sweep, corner: &[f64], level: Level) -> (Sweep, Vec<f64>)
     (sweep, values)
 }
 
-fn levels(ctx: &PointContext, plan: &Plan) -> [(&'static str, Vec<Level>); 2] {
+fn levels(ctx: &PointContext, plan: &StabilityPlan) -> [(&'static str, Vec<Level>); 2] {
     let default_fraction = ctx.sweep.file.scene.rayleigh_fraction;
     let e0 = plan.moduli[0];
     [
@@ -191,7 +177,7 @@ fn levels(ctx: &PointContext, plan: &Plan) -> [(&'static str, Vec<Level>); 2] {
 }
 
 /// Every level's scene and deck build (bad input is found before anything runs).
-pub fn check(ctx: &PointContext, plan: &Plan) -> Result<()> {
+pub fn check(ctx: &PointContext, plan: &StabilityPlan) -> Result<()> {
     for (_, ls) in levels(ctx, plan) {
         for level in ls {
             let (sweep, values) = level_sweep(&ctx.sweep, &plan.corner, level);
@@ -210,7 +196,7 @@ pub fn check(ctx: &PointContext, plan: &Plan) -> Result<()> {
 /// Run one level: every seed, `jobs` at a time, in `dir/<name>-s<seed>`.
 fn run_level(
     ctx: &PointContext,
-    plan: &Plan,
+    plan: &StabilityPlan,
     level: Level,
     name: &str,
     cancel: &CancelToken,
@@ -327,7 +313,7 @@ fn judge(ladder: &'static str, level: Level, runs: Vec<Run>, base: Option<(f64, 
 /// Run both ladders, each up to its first failing level. `progress` is told of each level.
 pub fn run(
     ctx: &PointContext,
-    plan: &Plan,
+    plan: &StabilityPlan,
     cancel: &CancelToken,
     progress: &dyn Fn(&LevelResult),
 ) -> Result<Vec<LevelResult>> {
@@ -372,11 +358,6 @@ pub fn edge<'a>(
 ) -> (Option<&'a LevelResult>, Option<&'a LevelResult>) {
     let rows: Vec<&LevelResult> = results.iter().filter(|r| r.ladder == ladder).collect();
     (rows.iter().rev().find(|r| r.passed()).copied(), rows.iter().find(|r| !r.passed()).copied())
-}
-
-/// An optional number with `digits` decimals, empty when absent (a CSV cell).
-pub fn opt(v: Option<f64>, digits: usize) -> String {
-    v.map(|v| format!("{v:.digits$}")).unwrap_or_default()
 }
 
 /// One row per level.
@@ -427,8 +408,6 @@ pub fn runs_csv(results: &[LevelResult]) -> String {
     }
     s
 }
-
-type Res<T> = std::result::Result<T, Box<dyn std::error::Error>>;
 
 /// The stability map: mean MFR ± 2 SE per level against the timestep fraction (left) and the
 /// modulus (right); failed levels as red crosses on the axis.
@@ -533,6 +512,21 @@ pub fn describe_corner(sweep: &Sweep, corner: &[f64]) -> String {
     .filter_map(|n| values.get(*n).map(|v| format!("{n}={v}")))
     .collect::<Vec<_>>()
     .join(" ")
+}
+
+/// Mean and standard error of the mean over seeds (`MEDIAN_SEED_SPREAD` of the mean for one).
+pub fn mean_se(v: &[f64]) -> Option<(f64, f64)> {
+    if v.is_empty() {
+        return None;
+    }
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let se = if v.len() < 2 {
+        MEDIAN_SEED_SPREAD * mean
+    } else {
+        (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() / n.sqrt()
+    };
+    Some((mean, se))
 }
 
 #[cfg(test)]

@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use super::contact::contact_error;
+use super::jobs;
 use clap::{Args, Subcommand};
 use demsweep::error::{exit, Error};
 use demsweep::point::{self, PointContext};
@@ -125,11 +126,7 @@ pub(super) fn bench_fidelity(a: FidelityArgs) -> Result<i32, Error> {
     if a.seeds == 0 {
         return bad("--seeds 0: expected at least 1".into());
     }
-    let jobs = match a.jobs {
-        Some(0) => return bad("--jobs 0: expected at least 1".into()),
-        Some(n) => n,
-        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
-    };
+    let jobs = jobs(a.jobs)?;
     let variants = fidelity::variants(&sweep, &a.presets, &a.variant)?;
     if variants.is_empty() {
         return bad("--presets: expected at least one preset or --variant".into());
@@ -143,7 +140,7 @@ pub(super) fn bench_fidelity(a: FidelityArgs) -> Result<i32, Error> {
     for v in &variants {
         contexts.push(PointContext::new(v.sweep.clone())?);
     }
-    let plan = fidelity::Plan { points, seeds: a.seeds, jobs, out };
+    let plan = fidelity::FidelityPlan { points, seeds: a.seeds, jobs, out };
     demsweep::sys::process::install_interrupt_handler();
     let cancel = CancelToken::new();
     let started = std::time::Instant::now();
@@ -167,7 +164,7 @@ pub(super) fn bench_fidelity(a: FidelityArgs) -> Result<i32, Error> {
     let names = sweep.names();
     let title = format!("{}: {} points × {} seeds", sweep.file.name, plan.points.len(), plan.seeds);
     let files = fidelity::write(&plan, &runs, &cells, &summaries, &variants, &names, &title)?;
-    let x = |v: Option<f64>, d: usize| v.map(|v| format!("{v:.d$}")).unwrap_or_else(|| "-".into());
+    let x = |v: Option<f64>, d: usize| demsweep::bench::opt_or(v, d, "-");
     println!(
         "{:<14} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7}",
         "variant", "cpu s/pt", "×thesis", "×ref", "worst|e|", "mean|e|", "noise", "vx err", "failed"
@@ -226,11 +223,7 @@ pub(super) fn bench_stability(a: StabilityArgs) -> Result<i32, Error> {
     if a.seeds == 0 {
         return bad("--seeds 0: expected at least 1".into());
     }
-    let jobs = match a.jobs {
-        Some(0) => return bad("--jobs 0: expected at least 1".into()),
-        Some(n) => n,
-        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
-    };
+    let jobs = jobs(a.jobs)?;
     let out = a.out.unwrap_or_else(|| PathBuf::from("runs").join(format!("{}-stability", sweep.file.name)));
     driver::check_out_dir(&out)?;
     if std::fs::read_dir(&out).map(|mut d| d.next().is_some()).unwrap_or(false) {
@@ -238,7 +231,7 @@ pub(super) fn bench_stability(a: StabilityArgs) -> Result<i32, Error> {
     }
     let ctx = PointContext::new(sweep)?;
     // Every level's scene must build (the bound aside) before anything is written.
-    let plan = stability::Plan { corner, fractions: a.fractions, moduli, seeds: a.seeds, jobs, out };
+    let plan = stability::StabilityPlan { corner, fractions: a.fractions, moduli, seeds: a.seeds, jobs, out };
     stability::check(&ctx, &plan)?;
     let heading = stability::describe_corner(&ctx.sweep, &plan.corner);
     demsweep::sys::process::install_interrupt_handler();

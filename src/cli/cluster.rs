@@ -188,7 +188,7 @@ pub(super) fn work(a: WorkArgs) -> Result<i32, Error> {
     if a.ranks == 0 {
         return Err(Error::input("--ranks 0: expected at least 1"));
     }
-    let cores = a.jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let cores = a.jobs.unwrap_or_else(super::default_jobs);
     if cores < a.ranks as usize {
         return Err(Error::input(format!(
             "--jobs {cores} --ranks {}: a run needs {} cores; give --jobs at least --ranks",

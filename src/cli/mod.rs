@@ -177,10 +177,20 @@ fn check_timestep(sweep: &mut Sweep, force: bool) -> Result<(), Error> {
 }
 
 fn run_options(p: &PoolArgs, retry_failed: bool, force: bool) -> Result<RunOptions, Error> {
-    let jobs = match p.jobs {
-        Some(0) => return Err(Error::input("--jobs 0: expected at least 1")),
-        Some(n) => n,
-        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
-    };
+    let jobs = jobs(p.jobs)?;
     Ok(RunOptions { jobs, progress: ProgressMode::detect(p.quiet), retry_failed, force })
+}
+
+/// The `--jobs` default: the machine's cores.
+fn default_jobs() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// The value of a `--jobs` flag: at least 1, the machine's cores when not given.
+fn jobs(flag: Option<usize>) -> Result<usize, Error> {
+    match flag {
+        Some(0) => Err(Error::input("--jobs 0: expected at least 1")),
+        Some(n) => Ok(n),
+        None => Ok(default_jobs()),
+    }
 }

@@ -188,13 +188,8 @@ pub(super) fn start(
     demsweep::sys::process::install_interrupt_handler();
     let mut watch = Watch::new(Criteria::from_settings(&sweep.file.convergence));
     let cancel = CancelToken::new();
-    let summary = if demsweep::run::standin::selected(&sweep) {
-        let exec = demsweep::run::standin::StandIn::new(sweep.clone());
-        driver::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?
-    } else {
-        let exec = driver::PointExecutor::new(sweep.clone())?;
-        driver::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?
-    };
+    let exec = driver::SweepExecutor::for_sweep(&sweep)?;
+    let summary = driver::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?;
     finish(&summary, &sweep)
 }
 
@@ -207,13 +202,8 @@ pub(super) fn resume(a: ResumeArgs) -> Result<i32, Error> {
     // stays stopped where it converged.
     let mut watch = Watch::new(Criteria::from_settings(&sweep.file.convergence));
     let cancel = CancelToken::new();
-    let summary = if demsweep::run::standin::selected(&sweep) {
-        let exec = demsweep::run::standin::StandIn::new(sweep.clone());
-        driver::resume(&a.dir, &exec, &opts, &mut watch, &cancel)?
-    } else {
-        let exec = driver::PointExecutor::new(sweep.clone())?;
-        driver::resume(&a.dir, &exec, &opts, &mut watch, &cancel)?
-    };
+    let exec = driver::SweepExecutor::for_sweep(&sweep)?;
+    let summary = driver::resume(&a.dir, &exec, &opts, &mut watch, &cancel)?;
     finish(&summary, &sweep)
 }
 

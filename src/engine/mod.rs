@@ -1,5 +1,5 @@
 //! The real engine: find LIGGGHTS, identify it, run one deck in its own directory, and read its
-//! log for what went wrong.
+//! log for what went wrong; its dump files are read by [`dump`]. Knows nothing of sweeps.
 //!
 //! A run fails — with a class and a one-line reason, the log's tail kept — on a LIGGGHTS
 //! `ERROR`, a non-zero exit, a drop in the atom count (nothing in our scenes removes atoms, so a
@@ -20,7 +20,7 @@ use crate::sys::process::{self, CancelToken, ProcessOutcome};
 /// Log file name in the run directory.
 pub const LOG: &str = "log.liggghts";
 /// Screen output (LIGGGHTS crashes when told `-screen none` while reading a mesh, so keep it).
-pub const SCREEN: &str = "screen.txt";
+pub const CONSOLE: &str = "screen.txt";
 /// Lines of the log kept with a failure.
 const TAIL_LINES: usize = 20;
 
@@ -109,7 +109,7 @@ impl Engine {
         let cmd = match command_ranks(&self.path, dir, deck, self.ranks) {
             Ok(c) => c,
             Err(e) => {
-                let reason = format!("cannot create {SCREEN} in {}: {e}", dir.display());
+                let reason = format!("cannot create {CONSOLE} in {}: {e}", dir.display());
                 return EngineRun::failed(FailureClass::CouldNotStart, reason, String::new(), 0.0);
             }
         };
@@ -197,7 +197,7 @@ impl Engine {
 }
 
 /// The command that runs `deck` (a file in `dir`) with LIGGGHTS at `engine`, in `dir`: log to
-/// [`LOG`], screen output to [`SCREEN`], no echo.
+/// [`LOG`], screen output to [`CONSOLE`], no echo.
 ///
 /// LIGGGHTS aborts through MPI_Abort without flushing its log or a redirected stdout, so the
 /// ERROR line would be lost; stdout is line-buffered with coreutils' stdbuf when it is there.
@@ -211,7 +211,7 @@ pub fn command(engine: &Path, dir: &Path, deck: &str) -> std::io::Result<Command
 /// core 0. `--oversubscribe`: `sweep` counts the cores itself (`--jobs` in ranks). As root,
 /// Open MPI refuses to start without `--allow-run-as-root`.
 pub fn command_ranks(engine: &Path, dir: &Path, deck: &str, ranks: u32) -> std::io::Result<Command> {
-    let screen = std::fs::File::create(dir.join(SCREEN))?;
+    let screen = std::fs::File::create(dir.join(CONSOLE))?;
     let screen_err = screen.try_clone()?;
     let mut argv: Vec<std::ffi::OsString> = Vec::new();
     if ranks > 1 {
@@ -258,7 +258,7 @@ pub fn settled_at(log: &str) -> Result<u64, (FailureClass, String)> {
 
 /// The first LIGGGHTS ERROR line a run in `dir` left, in its log or on its screen output.
 pub fn first_error_in(dir: &Path) -> Option<String> {
-    first_error(&read_lossy(&dir.join(LOG))).or_else(|| first_error(&read_lossy(&dir.join(SCREEN))))
+    first_error(&read_lossy(&dir.join(LOG))).or_else(|| first_error(&read_lossy(&dir.join(CONSOLE))))
 }
 
 /// A log as text, whatever it holds: LIGGGHTS prints stray bytes after some errors, and a

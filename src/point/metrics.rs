@@ -1,6 +1,6 @@
 //! The answers of one run: MFR, its cross-check, its steadiness, and the v_x profile.
 //!
-//! Definitions (DESIGN §5, thesis Eq. 15–17 and Appendix A), with t1, t2 the window's ends and
+//! Definitions (docs/scene.md "Metrics", thesis Eq. 15–17 and Appendix A), with t1, t2 the window's ends and
 //! x_r(t), x_f(t) the blade's rear and front faces:
 //! - MFR = Σ m_i / (ρ · w · h · v · Δt): the mass that passed under the blade during the window
 //!   (thesis Eq. 17, "mass of flow under blade"), over the mass of a full flow through the gap

@@ -14,11 +14,12 @@ use std::time::Duration;
 
 use crate::engine::{Engine, LogLimits, RunStatus};
 use crate::error::{hint, Error, Result};
-use crate::outcome::{write_json_atomic, FailureClass, RunFailure, RunOutcome, RunResult, RESULT_FORMAT};
+use crate::outcome::{FailureClass, RunFailure, RunOutcome, RunResult, RESULT_FORMAT};
 use crate::point::deck::{Deck, Template};
 use crate::point::metrics::Frame;
 use crate::scene::{mesh, params, Scene};
 use crate::sweep::{ParamKind, Sweep};
+use crate::sys::atomic::write_json;
 use crate::sys::process::CancelToken;
 
 /// File names in a run directory.
@@ -201,7 +202,7 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
             wall_time: wall,
             measured,
         };
-        let _ = write_json_atomic(&run_dir.join(FAILURE), &f);
+        let _ = write_json(&run_dir.join(FAILURE), &f);
         RunOutcome::Failed(f)
     };
     let fail = |class, reason, log_tail, wall| fail_measured(class, reason, log_tail, wall, None);
@@ -269,7 +270,7 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
         );
         return fail_measured(FailureClass::Unsteady, reason, String::new(), wall, Some(Box::new(result)));
     }
-    if let Err(e) = write_json_atomic(&run_dir.join(RESULT), &result) {
+    if let Err(e) = write_json(&run_dir.join(RESULT), &result) {
         return fail(FailureClass::Unparsable, format!("cannot write {RESULT}: {e}"), String::new(), wall);
     }
     RunOutcome::Done(result)

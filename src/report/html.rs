@@ -472,7 +472,7 @@ fn measured_sections(a: &Analysis, figures: &[Figure]) -> String {
     for f in figures.iter().filter(|f| f.name == "scatter") {
         push(&mut h, &img(f));
     }
-    let maps: Vec<&Figure> = figures.iter().filter(|f| f.name.starts_with("map-")).collect();
+    let maps: Vec<&Figure> = figures.iter().filter(|f| f.name.starts_with("map-mfr-")).collect();
     if !maps.is_empty() {
         push(
             &mut h,

@@ -50,12 +50,12 @@ fn viridis(t: f64) -> RGBColor {
 
 /// The cell edges of one parameter: for a lattice, one cell per level (edges halfway between
 /// levels); otherwise `n` equal cells over the points' range.
-fn edges(values: &[f64], n: usize) -> Vec<f64> {
+fn edges(values: &[f64], n: usize, lattice: bool) -> Vec<f64> {
     let mut levels: Vec<f64> = values.to_vec();
     levels.sort_by(f64::total_cmp);
     levels.dedup();
     let (lo, hi) = (levels[0], levels[levels.len() - 1]);
-    if levels.len() <= 12 {
+    if levels.len() == 1 || (lattice && levels.len() <= 12) {
         if levels.len() == 1 {
             let w = 0.1 * lo.abs().max(1e-3);
             return vec![lo - w, lo + w];
@@ -115,7 +115,8 @@ fn pair_map(
     let n = cells_for(valued.len());
     let xi: Vec<f64> = all.iter().map(|p| p.values[i]).collect();
     let xj: Vec<f64> = all.iter().map(|p| p.values[j]).collect();
-    let (ex, ey) = (edges(&xi, n), edges(&xj, n));
+    let lattice = matches!(a.design, crate::store::DesignRecord::Lattice { .. });
+    let (ex, ey) = (edges(&xi, n, lattice), edges(&xj, n, lattice));
     let (nx, ny) = (ex.len() - 1, ey.len() - 1);
     // Per cell: sum, count, and whether every point in it had MFR = 0.
     let mut sum = vec![vec![0.0; ny]; nx];
@@ -209,8 +210,8 @@ fn pair_map(
 
 /// A vertical colour bar with its range, in its own area beside the chart.
 fn colour_bar(area: &Area, label: &str, lo: f64, hi: f64) -> Res<()> {
-    let (w, h) = area.dim_in_pixel();
-    let (top, bottom) = (40i32, h as i32 - 70);
+    let h = area.dim_in_pixel().1;
+    let (top, bottom) = (66i32, h as i32 - 70);
     let x0 = 12i32;
     let steps = 60;
     for s in 0..steps {
@@ -222,10 +223,22 @@ fn colour_bar(area: &Area, label: &str, lo: f64, hi: f64) -> Res<()> {
     let style = (FONT, TICK_FONT).into_font().color(&BLACK);
     area.draw(&Text::new(fmt_short(hi), (x0 + 22, top - 6), style.clone()))?;
     area.draw(&Text::new(fmt_short(lo), (x0 + 22, bottom - 8), style.clone()))?;
-    area.draw(&Text::new(label.to_string(), (2, 8), style.clone()))?;
+    // The label in lines of a word or two, to fit the bar's column.
+    let mut lines: Vec<String> = Vec::new();
+    for w in label.split_whitespace() {
+        match lines.last_mut() {
+            Some(l) if l.len() + w.len() < 10 => {
+                l.push(' ');
+                l.push_str(w);
+            }
+            _ => lines.push(w.to_string()),
+        }
+    }
+    for (k, l) in lines.iter().enumerate() {
+        area.draw(&Text::new(l.clone(), (2, 4 + 16 * k as i32), style.clone()))?;
+    }
     area.draw(&Rectangle::new([(x0, bottom + 14), (x0 + 18, bottom + 30)], ZERO.filled()))?;
     area.draw(&Text::new("= 0", (x0 + 22, bottom + 14), style))?;
-    let _ = w;
     Ok(())
 }
 

@@ -1,5 +1,5 @@
 //! The report of a sweep directory: `convergence.csv`, `summary.json` and `report/` (plots as
-//! SVG and PNG, and a self-contained `report.html`), DESIGN §4 and §6.
+//! SVG and PNG, and a self-contained `report.html`); README "Convergence and the report".
 //!
 //! [`analyse`] reads the directory (manifest, run dirs, joblog) and computes everything: the
 //! statistics of each complete space with bootstrap intervals, the convergence verdict, counts,
@@ -119,7 +119,7 @@ pub struct Verdict {
 }
 
 #[derive(Debug, Clone, Serialize)]
-pub struct Counts {
+pub struct SummaryCounts {
     pub points: usize,
     pub done: usize,
     pub failed: usize,
@@ -250,7 +250,7 @@ pub struct Analysis {
     pub screen: ScreenReport,
     /// Statistics of the converged space, or of the last complete one.
     pub statistics: Option<Moments>,
-    pub counts: Counts,
+    pub counts: SummaryCounts,
     pub timing: Timing,
     pub spaces: Vec<SpaceRow>,
     /// First-order indices of MFR over every done point, largest first.
@@ -407,8 +407,8 @@ fn judge_spaces(manifest: &Manifest, points: &[PointRow], c: &Criteria, boot: &B
     rows
 }
 
-fn count(manifest: &Manifest, points: &[PointRow], complete: usize) -> Counts {
-    let mut c = Counts {
+fn count(manifest: &Manifest, points: &[PointRow], complete: usize) -> SummaryCounts {
+    let mut c = SummaryCounts {
         points: points.len(),
         done: 0,
         failed: 0,
@@ -436,7 +436,7 @@ fn pct(v: Option<f64>) -> String {
     v.map_or("undefined".into(), |v| format!("{:.1}%", v * 100.0))
 }
 
-fn verdict(spaces: &[SpaceRow], counts: &Counts, c: &Criteria) -> Verdict {
+fn verdict(spaces: &[SpaceRow], counts: &SummaryCounts, c: &Criteria) -> Verdict {
     let last_changes = spaces
         .last()
         .and_then(|s| s.changes.as_ref())
@@ -542,7 +542,7 @@ pub fn write(a: &Analysis) -> Result<PathBuf> {
     let csv_path = a.dir.join("convergence.csv");
     crate::sys::atomic::write(&csv_path, convergence_csv(a).as_bytes()).map_err(|e| io(&csv_path, e))?;
     let json_path = a.dir.join("summary.json");
-    crate::outcome::write_json_atomic(&json_path, a).map_err(|e| io(&json_path, e))?;
+    crate::sys::atomic::write_json(&json_path, a).map_err(|e| io(&json_path, e))?;
     let out = a.dir.join("report");
     std::fs::create_dir_all(&out).map_err(|e| io(&out, e))?;
     let figures = plots::draw_all(a).map_err(|e| Error::Internal(format!("cannot draw the plots: {e}")))?;

@@ -19,7 +19,7 @@ use crate::analysis::stats::STATISTICS;
 use crate::outcome::VX_LAYERS;
 use crate::point::quality::Quality;
 
-pub(super) type Res<T> = std::result::Result<T, Box<dyn std::error::Error>>;
+pub(super) use crate::error::Res;
 pub(super) type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
 /// N, the statistic, and its interval's bounds.
 type StatPoint = (f64, Option<f64>, Option<f64>, Option<f64>);

@@ -214,9 +214,9 @@ pub struct Rendered {
     pub points: usize,
 }
 
-/// Counts of a directory, for the message when there is nothing to submit.
+/// SubmitCounts of a directory, for the message when there is nothing to submit.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct Counts {
+pub struct SubmitCounts {
     pub points: usize,
     pub done: usize,
     pub failed: usize,
@@ -227,7 +227,7 @@ pub struct Counts {
 
 /// Plan a submission of `dir`: the layout (read, or made from `--tasks`), the array indices to
 /// run, and both scripts. Writes nothing. `Ok(Err(counts))` when no point needs running.
-pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendered, Counts>> {
+pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendered, SubmitCounts>> {
     let (manifest, toml) = Store::read_manifest(dir)?;
     let sweep = crate::sweep::Sweep::parse(&toml, &dir.join("sweep.toml"))?;
     let dir = std::path::absolute(dir).map_err(|e| Error::input(format!("{}: {e}", dir.display())))?;
@@ -376,8 +376,8 @@ fn tera_chain(e: &tera::Error) -> String {
     s
 }
 
-fn counts(status: &[PointStatus]) -> Counts {
-    let mut c = Counts { points: status.len(), ..Counts::default() };
+fn counts(status: &[PointStatus]) -> SubmitCounts {
+    let mut c = SubmitCounts { points: status.len(), ..SubmitCounts::default() };
     for s in status {
         match s {
             PointStatus::Done(_) => c.done += 1,

@@ -6,6 +6,7 @@ use crate::error::Result;
 use crate::outcome::RunOutcome;
 use crate::point::{self, PointContext};
 use crate::run::pool::Executor;
+use crate::run::standin::{self, StandIn, StandInJob};
 use crate::sweep::Sweep;
 use crate::sys::process::CancelToken;
 
@@ -78,6 +79,72 @@ fn point_failure(job: &PointJob, run_dir: &Path, reason: String) -> RunOutcome {
         wall_time: 0.0,
         measured: None,
     };
-    let _ = crate::outcome::write_json_atomic(&run_dir.join(point::FAILURE), &f);
+    let _ = crate::sys::atomic::write_json(&run_dir.join(point::FAILURE), &f);
     RunOutcome::Failed(f)
+}
+
+/// The executor a sweep file asks for, chosen once: LIGGGHTS, or the stand-in
+/// (`run.engine = "stand-in"`).
+pub enum SweepExecutor {
+    Real(Box<PointExecutor>),
+    StandIn(Box<StandIn>),
+}
+
+/// A job of a [`SweepExecutor`].
+pub enum SweepJob {
+    Real(PointJob),
+    StandIn(StandInJob),
+}
+
+impl SweepExecutor {
+    /// The stand-in when the sweep selects it, else LIGGGHTS (found and identified here).
+    pub fn for_sweep(sweep: &Sweep) -> Result<SweepExecutor> {
+        if standin::selected(sweep) {
+            Ok(SweepExecutor::StandIn(Box::new(StandIn::new(sweep.clone()))))
+        } else {
+            Ok(SweepExecutor::Real(Box::new(PointExecutor::new(sweep.clone())?)))
+        }
+    }
+}
+
+impl Executor for SweepExecutor {
+    type Job = SweepJob;
+
+    fn identity(&self) -> serde_json::Value {
+        match self {
+            SweepExecutor::Real(e) => e.identity(),
+            SweepExecutor::StandIn(e) => e.identity(),
+        }
+    }
+
+    fn prepare(&self, swept: &[f64]) -> Result<SweepJob> {
+        match self {
+            SweepExecutor::Real(e) => e.prepare(swept).map(SweepJob::Real),
+            SweepExecutor::StandIn(e) => e.prepare(swept).map(SweepJob::StandIn),
+        }
+    }
+
+    fn hash<'a>(&self, job: &'a SweepJob) -> &'a str {
+        match (self, job) {
+            (SweepExecutor::Real(e), SweepJob::Real(j)) => e.hash(j),
+            (SweepExecutor::StandIn(e), SweepJob::StandIn(j)) => e.hash(j),
+            _ => unreachable!("a job is prepared by the executor that runs it"),
+        }
+    }
+
+    fn closed(&self, job: &SweepJob) -> bool {
+        match (self, job) {
+            (SweepExecutor::Real(e), SweepJob::Real(j)) => e.closed(j),
+            (SweepExecutor::StandIn(e), SweepJob::StandIn(j)) => e.closed(j),
+            _ => unreachable!("a job is prepared by the executor that runs it"),
+        }
+    }
+
+    fn execute(&self, job: &SweepJob, run_dir: &Path, cancel: &CancelToken) -> RunOutcome {
+        match (self, job) {
+            (SweepExecutor::Real(e), SweepJob::Real(j)) => e.execute(j, run_dir, cancel),
+            (SweepExecutor::StandIn(e), SweepJob::StandIn(j)) => e.execute(j, run_dir, cancel),
+            _ => unreachable!("a job is prepared by the executor that runs it"),
+        }
+    }
 }

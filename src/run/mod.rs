@@ -1,4 +1,9 @@
-//! The sweep drivers: `sweep lattice`, `sweep lds`, `sweep resume` and `sweep status`.
+//! The sweep drivers: `sweep lattice`, `sweep lds`, `sweep resume` and `sweep status`, and what
+//! they are built from: the executor ([`SweepExecutor`]: LIGGGHTS or the stand-in), the plan
+//! (manifest and directory checks), the job [`pool`], the reporter of its events, the status of a
+//! directory, the [`screen`] policy, [`progress`], and cluster arrays ([`cluster`]). Knows what
+//! to run and in which order; how a point is computed is [`crate::point`]'s, and what the
+//! results say is [`crate::analysis`]'s.
 //!
 //! A driver turns a sweep and a design into the directory's manifest (every distinct point with
 //! its content hash, every nested space as a list of points), checks an existing directory
@@ -19,6 +24,8 @@
 
 pub mod cluster;
 mod executor;
+#[cfg(any(test, feature = "test-support"))]
+pub mod fake;
 mod plan;
 pub mod pool;
 pub mod progress;
@@ -42,11 +49,11 @@ use crate::store::{self, DesignRecord, Manifest, PointStatus, RunState, Store, M
 use crate::sweep::Sweep;
 use crate::sys::process::CancelToken;
 
-pub use executor::{PointExecutor, PointJob};
+pub use executor::{PointExecutor, PointJob, SweepExecutor, SweepJob};
 use plan::{check_extension, check_parameters};
 pub use plan::{
     check_out_dir, default_out, identity_diff, judge_from, load_dir_sweep, plan, plan_with_progress,
-    resolved_toml, Plan,
+    resolved_toml, SweepPlan,
 };
 use reporter::Reporter;
 pub use reporter::{RunAll, SpaceHook, Watch};
@@ -87,7 +94,7 @@ pub struct Summary {
 }
 
 impl Summary {
-    /// 130 interrupted, 1 when runs failed, else 0 (DESIGN §4).
+    /// 130 interrupted, 1 when runs failed, else 0 (the exit codes of `sweep --help`).
     pub fn exit_code(&self) -> i32 {
         use crate::error::exit;
         if self.interrupted {
@@ -120,7 +127,7 @@ pub fn start<E: Executor>(
             )));
         }
     }
-    let Plan { spaces, points, jobs } = plan_with_progress(exec, sweep, &design, cancel, opts.progress)?;
+    let SweepPlan { spaces, points, jobs } = plan_with_progress(exec, sweep, &design, cancel, opts.progress)?;
     let toml = resolved_toml(sweep, &design)?;
     let manifest = Manifest {
         format: MANIFEST_FORMAT,

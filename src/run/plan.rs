@@ -23,7 +23,7 @@ pub fn default_out(sweep: &Sweep) -> PathBuf {
 }
 
 /// A design laid out for running.
-pub struct Plan<J> {
+pub struct SweepPlan<J> {
     pub spaces: Vec<SpaceRecord>,
     /// Distinct points (by hash), in order of first appearance.
     pub points: Vec<PointRecord>,
@@ -39,7 +39,7 @@ pub fn plan<E: Executor>(
     sweep: &Sweep,
     design: &DesignRecord,
     cancel: &CancelToken,
-) -> Result<Plan<E::Job>> {
+) -> Result<SweepPlan<E::Job>> {
     plan_with_progress(exec, sweep, design, cancel, ProgressMode::Quiet)
 }
 
@@ -99,7 +99,7 @@ pub fn plan_with_progress<E: Executor>(
     design: &DesignRecord,
     cancel: &CancelToken,
     progress: ProgressMode,
-) -> Result<Plan<E::Job>> {
+) -> Result<SweepPlan<E::Job>> {
     let dim = sweep.dim();
     // Each space as a list of unit points.
     let spaces: Vec<(String, Vec<Vec<f64>>)> = match design {
@@ -177,7 +177,7 @@ pub fn plan_with_progress<E: Executor>(
             points: members.into_iter().map(|v| point_of_value[v]).collect(),
         })
         .collect();
-    Ok(Plan { spaces: records, points, jobs })
+    Ok(SweepPlan { spaces: records, points, jobs })
 }
 
 /// The sweep file as resolved for `DIR/sweep.toml`: defaults filled in, the design actually run,

@@ -20,10 +20,11 @@ use std::path::Path;
 use sha2::{Digest, Sha256};
 
 use crate::error::Result;
-use crate::outcome::{write_json_atomic, RunOutcome, RunResult, RESULT_FORMAT, VX_LAYERS};
+use crate::outcome::{RunOutcome, RunResult, RESULT_FORMAT, VX_LAYERS};
 use crate::point::{resolve, RESULT};
 use crate::run::pool::Executor;
 use crate::sweep::Sweep;
+use crate::sys::atomic::write_json;
 use crate::sys::process::CancelToken;
 
 /// The `run.engine` value that selects the stand-in.
@@ -110,7 +111,7 @@ impl Executor for StandIn {
             engine_version: format!("{NAME} {MODEL_VERSION}"),
             warnings: vec![format!("{NAME}: a made-up model, not LIGGGHTS")],
         };
-        match write_json_atomic(&run_dir.join(RESULT), &r) {
+        match write_json(&run_dir.join(RESULT), &r) {
             Ok(()) => RunOutcome::Done(r),
             Err(e) => RunOutcome::Failed(crate::outcome::RunFailure {
                 format: RESULT_FORMAT,

@@ -4,7 +4,7 @@
 //! lengths in this struct are metres, times seconds, moduli pascals (the catalogue's mm and MPa
 //! are converted once, in [`Scene::new`]).
 //!
-//! Geometry (DESIGN §5): x is the blade's travel, z is up, y is across the blade and periodic
+//! Geometry (docs/scene.md "Geometry"): x is the blade's travel, z is up, y is across the blade and periodic
 //! (the domain depth is the blade width w). A pile is inserted in front of the blade, settles on
 //! the plate z = 0, and the blade — a box whose tip is at z = gap — then pushes it over the bare
 //! plate in +x, leaving a layer behind. Walls at both x ends keep every particle in the box, so

@@ -11,7 +11,7 @@ use std::time::{Duration, SystemTime};
 use serde::{Deserialize, Serialize};
 
 use super::joblog::JOBLOG;
-use super::{io, write_atomic, DirLock, Store, StoreError, LOCK};
+use super::{io, DirLock, Store, StoreError, LOCK};
 use crate::outcome::{RunFailure, RunResult};
 use crate::sys::host::{process_start_ticks, unix_now};
 
@@ -254,7 +254,8 @@ fn renew(lock: &Path, path: &Path, session: &str) -> Result<(), StoreError> {
         return Ok(());
     }
     c.renewed_at = Some(unix_now());
-    write_atomic(path, serde_json::to_string(&c).expect("claim serialises").as_bytes())
+    crate::sys::atomic::write(path, serde_json::to_string(&c).expect("claim serialises").as_bytes())
+        .map_err(io(path))
 }
 
 /// The running heartbeat of a [`Store`]; stops when dropped.

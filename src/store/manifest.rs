@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use super::{io, write_atomic, DirLock, Store, StoreError, LOCK};
+use super::{io, DirLock, Store, StoreError, LOCK};
 
 impl Store {
     pub fn manifest_path(dir: &Path) -> PathBuf {
@@ -38,8 +38,8 @@ impl Store {
         fs::create_dir_all(&runs).map_err(io(&runs))?;
         self.joblog_header()?;
         let toml_path = self.dir.join("sweep.toml");
-        write_atomic(&toml_path, sweep_toml.as_bytes())?;
-        crate::outcome::write_json_atomic(&path, manifest).map_err(io(&path))?;
+        crate::sys::atomic::write(&toml_path, sweep_toml.as_bytes()).map_err(io(&toml_path))?;
+        crate::sys::atomic::write_json(&path, manifest).map_err(io(&path))?;
         Ok(())
     }
 

@@ -1,4 +1,4 @@
-//! The sweep directory (DESIGN §4): manifest, content-addressed run dirs, claims, joblog and
+//! The sweep directory: manifest, content-addressed run dirs, claims, joblog and
 //! results.csv.
 //!
 //! ```text
@@ -154,10 +154,10 @@ impl Store {
             (RunOutcome::Done(r), Some(RunState::Done(d))) if *d == *r => return Ok(()),
             (RunOutcome::Failed(f), Some(RunState::Failed(d))) if *d == *f => return Ok(()),
             (RunOutcome::Done(r), _) => {
-                ("result.json", crate::outcome::write_json_atomic(&dir.join("result.json"), r))
+                ("result.json", crate::sys::atomic::write_json(&dir.join("result.json"), r))
             }
             (RunOutcome::Failed(f), _) => {
-                ("failure.json", crate::outcome::write_json_atomic(&dir.join("failure.json"), f))
+                ("failure.json", crate::sys::atomic::write_json(&dir.join("failure.json"), f))
             }
             (RunOutcome::Cancelled, _) => return Ok(()),
         };
@@ -224,9 +224,25 @@ impl Store {
     }
 }
 
-/// Write `bytes` to a temporary name beside `path` and rename it into place.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), StoreError> {
-    crate::sys::atomic::write(path, bytes).map_err(io(path))
+/// `flock(2)` on a lock file, held while the guard lives. Released by the kernel if we die.
+struct DirLock(File);
+
+impl DirLock {
+    fn take(path: &Path) -> Result<DirLock, StoreError> {
+        let f = OpenOptions::new().create(true).truncate(false).write(true).open(path).map_err(io(path))?;
+        // SAFETY: flock on a file descriptor we own.
+        if unsafe { libc::flock(f.as_raw_fd(), libc::LOCK_EX) } != 0 {
+            return Err(io(path)(std::io::Error::last_os_error()));
+        }
+        Ok(DirLock(f))
+    }
+}
+
+impl Drop for DirLock {
+    fn drop(&mut self) {
+        // SAFETY: unlocking the descriptor we locked.
+        unsafe { libc::flock(self.0.as_raw_fd(), libc::LOCK_UN) };
+    }
 }
 
 #[cfg(test)]
@@ -361,25 +377,5 @@ mod tests {
             (lines[1].seq, lines[1].status.as_str(), lines[1].class.as_str()),
             (2, "failed", "timed-out")
         );
-    }
-}
-/// `flock(2)` on a lock file, held while the guard lives. Released by the kernel if we die.
-struct DirLock(File);
-
-impl DirLock {
-    fn take(path: &Path) -> Result<DirLock, StoreError> {
-        let f = OpenOptions::new().create(true).truncate(false).write(true).open(path).map_err(io(path))?;
-        // SAFETY: flock on a file descriptor we own.
-        if unsafe { libc::flock(f.as_raw_fd(), libc::LOCK_EX) } != 0 {
-            return Err(io(path)(std::io::Error::last_os_error()));
-        }
-        Ok(DirLock(f))
-    }
-}
-
-impl Drop for DirLock {
-    fn drop(&mut self) {
-        // SAFETY: unlocking the descriptor we locked.
-        unsafe { libc::flock(self.0.as_raw_fd(), libc::LOCK_UN) };
     }
 }

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use super::{write_atomic, PointRecord, StoreError};
+use super::{io, PointRecord, StoreError};
 use crate::outcome::{RunFailure, RunResult, VX_LAYERS};
 
 /// results.csv's columns of the spread layer's quality.
@@ -109,5 +109,5 @@ pub fn write_results(
         w.write_record(&row).expect("in-memory csv");
     }
     let bytes = w.into_inner().expect("in-memory csv");
-    write_atomic(&path, &bytes)
+    crate::sys::atomic::write(&path, &bytes).map_err(io(&path))
 }

@@ -10,7 +10,8 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::{cell, scene_case};
+use super::scene_case;
+use crate::bench::cell;
 use crate::contact::bounce::{bounce, kinetic_energy};
 use crate::contact::solver::initial_state;
 use crate::contact::{Case, ContactError};

@@ -1,4 +1,4 @@
-//! The reference solver's own stability (issue 10, `sweep bench contact`).
+//! The reference solver's own stability (`sweep bench contact`; BENCHMARKS.md "Reference solver stability").
 //!
 //! Three studies, each a list of rows with a CSV and a table rendering:
 //! - [`drift`]: kinetic-energy drift at e = 1 over many consecutive contacts, against the closed
@@ -54,9 +54,4 @@ pub fn to_csv<T: serde::Serialize>(rows: &[T]) -> Result<String, ContactError> {
     }
     let bytes = w.into_inner().map_err(|e| std::io::Error::other(e.to_string()))?;
     String::from_utf8(bytes).map_err(|e| ContactError::Io(std::io::Error::other(e)))
-}
-
-/// `v` in scientific notation for a table cell, or "-".
-fn cell(v: Option<f64>) -> String {
-    v.map_or("-".to_string(), |v| format!("{v:.2e}"))
 }

@@ -12,7 +12,8 @@
 
 use serde::Serialize;
 
-use super::{cell, scene_case, SCENE_MATERIAL};
+use super::{scene_case, SCENE_MATERIAL};
+use crate::bench::cell;
 use crate::contact::{Case, ContactError, Material, Target};
 
 /// δmax/R above which a row is flagged: Hertz assumes a contact radius a = √(Rδ) ≪ R; here

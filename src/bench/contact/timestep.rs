@@ -10,7 +10,8 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use super::{cell, scene_case, CLOSED_FORM_TOLERANCE, SCENE_DENSITY, STEEL};
+use super::{scene_case, CLOSED_FORM_TOLERANCE, SCENE_DENSITY, STEEL};
+use crate::bench::cell;
 use crate::contact::analysis::Outcome;
 use crate::contact::check::{self, TOLERANCE};
 use crate::contact::{Case, ContactError, Target};
