@@ -65,7 +65,7 @@ const STYLE: &str = "body{font-family:sans-serif;max-width:1240px;margin:1em aut
 h1{margin-bottom:0}h2{border-bottom:1px solid #ccc;margin-top:1.6em}
 .wide{max-width:100%;overflow-x:auto}
 table{border-collapse:collapse;margin:.5em 0;font-size:.9em}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}
-td small{color:#666}td.path{font-family:monospace;font-size:.85em;text-align:left;word-break:break-all}
+th{overflow-wrap:normal}td small{color:#666}td.path{font-family:monospace;font-size:.85em;text-align:left;word-break:break-all}
 th{background:#f2f2f2}td.l,th.l{text-align:left}
 .verdict{padding:.7em 1em;border-radius:6px;font-size:1.1em;margin:1em 0}
 .converged{background:#e3f5e6;border:1px solid #3a3}.not-converged{background:#fde8e8;border:1px solid #c33}
@@ -341,16 +341,17 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
                 esc(&failures)
             ),
         );
+    } else {
+        push(
+            &mut h,
+            &format!(
+                "<div class=\"verdict {}\"><b>{}</b>: {}</div>\n",
+                a.verdict.status,
+                a.verdict.status,
+                esc(&a.verdict.reason)
+            ),
+        );
     }
-    push(
-        &mut h,
-        &format!(
-            "<div class=\"verdict {}\"><b>{}</b>: {}</div>\n",
-            a.verdict.status,
-            a.verdict.status,
-            esc(&a.verdict.reason)
-        ),
-    );
     push(
         &mut h,
         &format!(
