@@ -475,7 +475,7 @@ fn report_sections_for_failed_and_screened_sweeps_and_a_points_page() {
     }
     assert!(html.contains("<h2>Convergence</h2>") && html.contains("Maps over pairs of parameters"));
     assert!(html.contains("<th>gap (mm)</th>") && html.contains("<th>blade_speed (m/s)</th>"));
-    let rows = results(&out);
+    let rows = common::csv_rows(&out.join("results.csv"));
     assert!(rows
         .iter()
         .all(|r| r["friction"] == "0.3" && r["rolling_friction"] == "0.1" && r["density"] == "7980"));

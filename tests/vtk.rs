@@ -1,6 +1,8 @@
 //! `sweep run --vtk` on real LIGGGHTS: the particle and blade files parse as legacy VTK (the
 //! format ParaView opens), hold every atom of the deck, and the blade moves between them.
 
+mod common;
+
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::{Command, Stdio};
@@ -30,7 +32,7 @@ fn parse_vtk(text: &str) -> Result<Vtk, String> {
         return Err("expected DATASET POLYDATA".into());
     }
     let mut t = lines.flat_map(str::split_whitespace).peekable();
-    let mut num = |t: &mut std::iter::Peekable<_>| -> Result<f64, String> {
+    let num = |t: &mut std::iter::Peekable<_>| -> Result<f64, String> {
         let s: &str = t.next().ok_or("truncated")?;
         s.parse::<f64>().map_err(|_| format!("expected a number, found {s}"))
     };
@@ -97,6 +99,7 @@ fn series(dir: &Path, prefix: &str) -> BTreeMap<u64, std::path::PathBuf> {
 
 #[test]
 fn run_with_vtk_writes_particle_and_blade_files_paraview_reads() {
+    common::require_liggghts!("run_with_vtk_writes_particle_and_blade_files_paraview_reads");
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("point");
     let quick = Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps/quick.toml");
