@@ -62,7 +62,8 @@ pub fn measure(scene: &Scene, frame: &Frame, x0: f64, x1: f64) -> Option<Layer> 
         (0..frame.len()).filter(|&i| frame.x[i] >= x0 && frame.x[i] < x1 && frame.z[i] < scene.gap).collect();
 
     // Uniformity along the travel.
-    let nb = ((x1 - x0) / (BIN_DIAMETERS * d)).floor() as usize;
+    // Whole bins over the strip (the small epsilon keeps an exact multiple from rounding down).
+    let nb = ((x1 - x0) / (BIN_DIAMETERS * d) + 1e-9).floor() as usize;
     let bin = (x1 - x0) / nb as f64;
     let (mut mass, mut mass_sq) = (vec![0.0; nb], vec![0.0; nb]);
     for &i in &deposit {
@@ -121,10 +122,13 @@ mod tests {
     use crate::scene::settings::SceneSettings;
     use std::collections::BTreeMap;
 
+    /// A scene whose depth is exactly 6 D, so a square lattice of pitch D tiles it.
     fn scene() -> Scene {
         let values: BTreeMap<String, f64> =
             [("diameter", 2.0), ("gap", 4.0)].iter().map(|(k, v)| (k.to_string(), *v)).collect();
-        Scene::new(&values, &SceneSettings::default()).unwrap()
+        let mut s = Scene::new(&values, &SceneSettings::default()).unwrap();
+        s.depth = 6.0 * s.diameter;
+        s
     }
 
     /// Spheres of diameter D resting on z = 0 at the given (x, y) centres.
