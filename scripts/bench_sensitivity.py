@@ -11,6 +11,9 @@
 2. The same data as a real report: a stand-in LDS sweep over the thesis's 4-D space
    (sweeps/thesis-lds.toml with `[run] engine = "stand-in"`, 2,400 points), whose results.csv
    goes through `sweep stats --by` and both SALib estimators.
+3. Intervals: on the first N = 100, 400 and 2,400 points of that sweep, our 95 % bootstrap
+   interval of each index (`sweep stats --by`: lo, hi) beside SALib's delta S1 ± S1_conf (its
+   bootstrap, 95 %), half-widths side by side.
 """
 import argparse
 import csv
@@ -38,6 +41,14 @@ def ours(sweep, path, column, by):
         check=True, capture_output=True, text=True).stdout
     s = {d["parameter"]: d["first_order"] for d in json.loads(out)["sensitivity"]}
     return [s[b] for b in by]
+
+
+def ours_intervals(sweep, path, column, by):
+    out = subprocess.run(
+        [sweep, "stats", path, "--column", column, "--by", ",".join(by), "--json"],
+        check=True, capture_output=True, text=True).stdout
+    s = {d["parameter"]: d for d in json.loads(out)["sensitivity"]}
+    return [(s[b]["first_order"], s[b]["lo"], s[b]["hi"]) for b in by]
 
 
 def salib(names, bounds, x, y, seed):
@@ -101,6 +112,23 @@ def main():
     print(f"N = {len(rows)}; parameters: {' '.join(f'{n:>11s}' for n in names)}")
     for k, v in [("sweep", mine), ("rbd-fast", r), ("delta", d)]:
         print(f"  {k:18s} " + " ".join(f"{c:11.4f}" for c in v))
+
+    print("\nIntervals (95 %): ours [lo, hi] (half-width) against SALib delta S1 ± S1_conf")
+    problem = {"num_vars": 4, "names": names, "bounds": bounds}
+    for n in [100, 400, len(rows)]:
+        path = os.path.join(tmp, f"first-{n}.csv")
+        with open(path, "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(names + ["mfr"])
+            for row, v in zip(x[:n], y[:n]):
+                w.writerow([repr(float(c)) for c in row] + [repr(float(v))])
+        mine = ours_intervals(a.sweep, path, "mfr", names)
+        dd = delta.analyze(problem, x[:n], y[:n], seed=0, num_resamples=100)
+        print(f"N = {n}")
+        for k, nm in enumerate(names):
+            s1, lo, hi = mine[k]
+            print(f"  {nm:11s} ours {s1:.3f} [{lo:.3f}, {hi:.3f}] (±{(hi - lo) / 2:.3f})   "
+                  f"delta {dd['S1'][k]:.3f} ± {dd['S1_conf'][k]:.3f}")
 
 
 if __name__ == "__main__":

@@ -45,7 +45,10 @@ impl Error {
             Error::Input(_) | Error::NotYet(_) => exit::BAD_INPUT,
             Error::Engine(_) => exit::ENGINE,
             Error::Internal(_) => exit::INTERNAL,
-            Error::Interrupted => exit::INTERRUPTED,
+            // Death by signal n is 128 + n (SIGINT: 130, SIGTERM: 143).
+            Error::Interrupted => {
+                crate::sys::process::interrupt_signal().map_or(exit::INTERRUPTED, |s| 128 + s)
+            }
             Error::RunsFailed(_) => exit::RUNS_FAILED,
         }
     }

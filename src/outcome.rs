@@ -27,6 +27,12 @@ pub struct RunResult {
     pub mfr_flux: f64,
     /// Particles counted in `mfr`: its counting noise is about 1/√n relative.
     pub mfr_particles: usize,
+    /// Standard error of `mfr` (conveyor layout: batch means over the steady window).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mfr_se: Option<f64>,
+    /// The steady-state measurement: block series, transient, batches, trend, heap, stop.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub steady_state: Option<Box<crate::point::steady::SteadyState>>,
     /// MFR over consecutive sub-windows of the measurement window.
     pub mfr_windows: Vec<f64>,
     /// False when the sub-window MFRs show the flow had not reached a steady state.
@@ -35,6 +41,9 @@ pub struct RunResult {
     pub steady_p: f64,
     /// Mean v_x (m/s) per layer k = 1..12 at z = gap + k·D/2; `None` for an empty layer.
     pub vx: Vec<Option<f64>>,
+    /// Standard error of each v_x layer over the steady window's snapshots (conveyor layout).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub vx_se: Vec<Option<f64>>,
     /// Particles in the pile.
     pub particles: usize,
     /// The spread layer's quality behind the blade at the window's end (absent in results
@@ -76,15 +85,19 @@ pub enum FailureClass {
     Unparsable,
     /// The dose was still moving when the settle's time cap ran out.
     NotSettled,
+    /// The engine's output or the result holds a number that is not physically possible (a
+    /// negative mass, a non-finite velocity, an MFR above the densest packing).
+    Implausible,
     /// The flow through the gap was not steady over the window (its halves disagree beyond
     /// counting noise): the MFR is not a property of the point.
     Unsteady,
 }
 
 impl FailureClass {
-    /// Transient failures may succeed on a retry; physics failures never will.
+    /// Transient failures may succeed on a retry; physics failures never will, nor a timeout:
+    /// the same deck runs as many steps again (`--retry-failed` or a longer `timeout_s` does).
     pub fn is_transient(self) -> bool {
-        matches!(self, FailureClass::CouldNotStart | FailureClass::Signalled | FailureClass::TimedOut)
+        matches!(self, FailureClass::CouldNotStart | FailureClass::Signalled)
     }
 
     pub fn as_str(self) -> &'static str {
@@ -97,6 +110,7 @@ impl FailureClass {
             FailureClass::Unstable => "unstable",
             FailureClass::Unparsable => "unparsable",
             FailureClass::NotSettled => "not-settled",
+            FailureClass::Implausible => "implausible",
             FailureClass::Unsteady => "unsteady",
         }
     }

@@ -203,8 +203,8 @@ fn killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results() {
 }
 
 #[test]
-fn a_run_past_its_timeout_is_killed_retried_and_reported() {
-    common::require_liggghts!("a_run_past_its_timeout_is_killed_retried_and_reported");
+fn a_run_past_its_timeout_is_killed_not_retried_and_reported() {
+    common::require_liggghts!("a_run_past_its_timeout_is_killed_not_retried_and_reported");
     let tmp = tempfile::tempdir().unwrap();
     let sweep = write_sweep(tmp.path(), "slow", "timeout_s = 0.5\nretries = 1", None);
     let out = tmp.path().join("out");
@@ -214,7 +214,11 @@ fn a_run_past_its_timeout_is_killed_retried_and_reported() {
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("1 of 1 runs failed"), "{}", stderr(&o));
     let a = attempts(&out);
-    assert_eq!(a.values().next().unwrap(), &vec!["failed", "failed"], "one retry");
+    assert_eq!(
+        a.values().next().unwrap(),
+        &vec!["failed"],
+        "a timeout is not retried: the deck would run as long again"
+    );
     let r = results(&out);
     assert_eq!((r[0].1.as_str(), r[0].2.as_str()), ("failed", "timed-out"));
     let st = run(common::sweep_bin().arg("status").arg(&out));

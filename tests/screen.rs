@@ -22,9 +22,21 @@ use demsweep::run::{self, SpaceHook};
 use demsweep::store::{
     self, DesignRecord, Manifest, PointRecord, PointStatus, SpaceRecord, Store, MANIFEST_FORMAT,
 };
+use demsweep::sweep::Sweep;
 use demsweep::sys::process::CancelToken;
 
 const MS: Duration = Duration::from_millis(1);
+
+/// Gap and blade speed swept; the fake closes the points at gap 2 (below 2.5). Equal lattice
+/// weights: the screen's zeros are under test here, not the weights.
+fn fake_sweep(dir: &Path, run: &str) -> Sweep {
+    let text = format!(
+        "name = \"t\"\n[parameters]\ngap = {{ lo = 2.0, hi = 4.0 }}\nblade_speed = {{ lo = 1.2, hi = 1.6 }}\n[convergence]\nlattice_weights = \"equal\"\n[run]\n{run}\n"
+    );
+    let path = dir.join("t.toml");
+    std::fs::write(&path, &text).unwrap();
+    Sweep::load(&path).unwrap()
+}
 
 fn closed(v: &[f64]) -> bool {
     v[0] < 2.5
@@ -58,7 +70,7 @@ impl SpaceHook for Seen {
 #[test]
 fn a_verified_screen_skips_the_closed_points_and_counts_them_as_zero() {
     let tmp = tempfile::tempdir().unwrap();
-    let s = common::fake_sweep(tmp.path(), "screen_sample = 0.0\nscreen_sample_min = 1");
+    let s = fake_sweep(tmp.path(), "screen_sample = 0.0\nscreen_sample_min = 1");
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(20 * MS)).with_closed(closed).with_mfr(|v| {
         if closed(v) {
@@ -125,7 +137,7 @@ fn a_verified_screen_skips_the_closed_points_and_counts_them_as_zero() {
 fn a_verification_run_with_mfr_above_zero_refutes_the_screen_and_every_closed_point_runs() {
     // The fake's criterion closes gap 2, but the points there flow (fake_mfr > 0): a wrong screen.
     let tmp = tempfile::tempdir().unwrap();
-    let s = common::fake_sweep(tmp.path(), "screen_sample = 0.0\nscreen_sample_min = 1");
+    let s = fake_sweep(tmp.path(), "screen_sample = 0.0\nscreen_sample_min = 1");
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(20 * MS)).with_closed(closed);
     let mut seen = Seen::default();
@@ -157,7 +169,7 @@ fn an_array_task_runs_the_verification_sample_before_it_skips_its_own_closed_poi
     // A task whose share holds closed points but not the sample point runs the sample point
     // first (the screen is trusted only once verified), then skips its own.
     let tmp = tempfile::tempdir().unwrap();
-    let s = common::fake_sweep(tmp.path(), "screen_sample = 0.0\nscreen_sample_min = 1");
+    let s = fake_sweep(tmp.path(), "screen_sample = 0.0\nscreen_sample_min = 1");
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(20 * MS)).with_closed(closed).with_mfr(|v| {
         if closed(v) {
@@ -233,6 +245,8 @@ fn on_liggghts_the_verification_run_gives_mfr_zero_and_the_other_closed_point_is
 [parameters]
 gap      = { lo = 0.5, hi = 2.75, unit = "mm" }
 diameter = { value = 2.5, unit = "mm" }
+[convergence]
+lattice_weights = "equal"   # the screen's zeros are under test here, not the weights
 [scene]
 window_diameters = 8
 window_start_diameters = 10

@@ -1,43 +1,58 @@
 //! Convergence of the MFR statistics across nested spaces (thesis §3.3; README "Convergence and the report").
 //!
-//! A sweep's spaces (lattice levels, LDS prefixes) each have [`Moments`]; this module compares
-//! each space with the one before and says whether, and where, the sweep converged:
+//! A sweep's spaces (lattice levels, LDS prefixes) each have [`SpaceStats`]: the statistics and
+//! the half-width of each one's 95 % bootstrap interval (its noise at that N). This module
+//! compares each space with the one before and says whether, and where, the sweep converged:
 //!
+//! - `rule = "scaled"`, the default: *every* statistic passes two tests against the tolerance τ
+//!   on that statistic's own scale ([`scale`]): it stopped moving, |s_k − s_{k−1}| ≤ τ·scale,
+//!   and it is known, half-width of its bootstrap interval ≤ τ·scale; and this holds for `hold`
+//!   consecutive comparisons. The scales: the mean against max(|mean|, std) (the MFR's own size
+//!   or its spread, whichever is larger), the std against itself, the skewness (Pearson's, which
+//!   lies in [−3, 3]) against max(|skewness|, 1), so a skewness near zero is judged by an
+//!   absolute change of τ, and the kurtosis (always ≥ 1) against itself. No floor.
 //! - `rule = "any"`, the thesis's rule (§3.3, after Eq. 21): the space converges when the
 //!   relative change |s_k − s_{k−1}| / |s_{k−1}| of *any one* of mean, std, skewness and
-//!   kurtosis is within the tolerance. Floor and hold do not apply: this is the rule as published.
-//! - `rule = "all"`, the default: *every* statistic must be within the tolerance, or have moved
-//!   by no more than `floor` in absolute terms (a statistic near zero, such as the skewness of a
-//!   symmetric set, makes any relative change meaningless), and this must hold for `hold`
-//!   consecutive comparisons.
+//!   kurtosis is within the tolerance. Floor, noise and hold do not apply: the rule as published.
+//! - `rule = "all"`: every statistic within the tolerance relatively, or moved by no more than
+//!   `floor` in absolute terms, held for `hold` comparisons (the default before "scaled"; kept so
+//!   that older sweep files mean what they meant).
 //!
 //! Either way a space with fewer than `min_points` points is never the converged one (an
 //! extended sweep is judged again only past its old extent). An undefined statistic (S = 0)
 //! or a relative change from exactly zero is never "within".
 //!
-//! [`Watch`] applies the rule while a sweep runs. Not responsible for computing the statistics
-//! ([`crate::analysis::stats`]) or for running the sweep ([`crate::run`]).
+//! The run driver applies the rule while a sweep runs. Not responsible for computing the statistics
+//! ([`crate::analysis::stats`], [`crate::analysis::weights`]) or for running the sweep
+//! ([`crate::run`]).
 
 use serde::Serialize;
 
-use crate::analysis::stats::{Moments, STATISTICS};
+use crate::analysis::stats::{Bootstrap, Moments, Statistic, STATISTICS};
+use crate::analysis::weights::LatticeWeights;
 use crate::sweep::ConvergenceSettings;
 
-/// Which statistics must be within tolerance.
+/// Which statistics must be within tolerance, and how.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Rule {
-    /// Any one (the thesis's rule).
+    /// Any one, relatively (the thesis's rule).
     Any,
-    /// All four, with the floor, held for `hold` comparisons (the default).
+    /// All four, relatively or by the floor, held for `hold` comparisons.
     All,
+    /// All four on their own scales, moved and known within τ, held for `hold` (the default).
+    Scaled,
 }
+
+/// The rule names a sweep file and `--rule` accept.
+pub const RULES: [&str; 3] = ["scaled", "any", "all"];
 
 impl Rule {
     pub fn parse(s: &str) -> Option<Rule> {
         match s {
             "any" => Some(Rule::Any),
             "all" => Some(Rule::All),
+            "scaled" => Some(Rule::Scaled),
             _ => None,
         }
     }
@@ -46,6 +61,7 @@ impl Rule {
         match self {
             Rule::Any => "any",
             Rule::All => "all",
+            Rule::Scaled => "scaled",
         }
     }
 }
@@ -58,47 +74,90 @@ pub struct Criteria {
     pub floor: f64,
     pub hold: usize,
     pub min_points: usize,
+    /// How a complete lattice's points are weighted in its statistics.
+    pub lattice_weights: LatticeWeights,
 }
 
 impl Criteria {
-    /// From a validated sweep file's `[convergence]` (the sweep module checks the rule's name).
+    /// From a validated sweep file's `[convergence]` (the sweep module checks the names).
     pub fn from_settings(c: &ConvergenceSettings) -> Criteria {
         Criteria {
-            rule: Rule::parse(&c.rule).unwrap_or(Rule::All),
+            rule: Rule::parse(&c.rule).unwrap_or(Rule::Scaled),
             tolerance: c.tolerance,
             floor: c.floor,
             hold: c.hold.max(1),
             min_points: c.min_points,
+            lattice_weights: LatticeWeights::parse(&c.lattice_weights).unwrap_or(LatticeWeights::Trapezoid),
         }
     }
 
     /// One line for the terminal and the report.
     pub fn describe(&self) -> String {
+        let t = self.tolerance * 100.0;
         match self.rule {
-            Rule::Any => format!(
-                "rule \"any\" (thesis): any one statistic within {}% of the previous space",
-                self.tolerance * 100.0
-            ),
+            Rule::Any => {
+                format!("rule \"any\" (thesis): any one statistic within {t}% of the previous space")
+            }
             Rule::All => format!(
-                "rule \"all\": every statistic within {}% (or {} absolute) of the previous space, \
+                "rule \"all\": every statistic within {t}% (or {} absolute) of the previous space, \
                  for {} consecutive space(s)",
-                self.tolerance * 100.0,
-                self.floor,
+                self.floor, self.hold
+            ),
+            Rule::Scaled => format!(
+                "rule \"scaled\": every statistic moved by at most {t}% of its scale since the previous \
+                 space and its 95% bootstrap half-width at most {t}% of its scale, for {} consecutive \
+                 space(s)",
                 self.hold
             ),
         }
     }
 }
 
-/// How one statistic moved from the previous space.
+/// A space as the rules see it: its point count (done and failed: what min_points counts), the
+/// statistics of its done runs, and each statistic's noise.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SpaceStats {
+    pub n: usize,
+    pub moments: Moments,
+    /// Half-width of the 95 % bootstrap interval of mean, std, skewness, kurtosis.
+    pub noise: [Option<f64>; 4],
+}
+
+impl SpaceStats {
+    /// The (weighted) statistics of `x` and their bootstrap noise; `n` points in the space.
+    pub fn of(n: usize, x: &[f64], w: Option<&[f64]>, boot: &Bootstrap) -> SpaceStats {
+        let moments = crate::analysis::weights::moments(x, w);
+        let iv = crate::analysis::weights::bootstrap(x, w, boot);
+        SpaceStats { n, moments, noise: iv.map(|i| i.lo.zip(i.hi).map(|(lo, hi)| (hi - lo) / 2.0)) }
+    }
+}
+
+/// The scale a statistic of `m` is judged on by rule "scaled" (see the module docs).
+pub fn scale(s: Statistic, m: &Moments) -> Option<f64> {
+    match s {
+        Statistic::Mean => Some(m.mean?.abs().max(m.std?)),
+        Statistic::Std => m.std,
+        Statistic::Skewness => Some(m.skewness?.abs().max(1.0)),
+        Statistic::Kurtosis => m.kurtosis,
+    }
+}
+
+/// How one statistic moved from the previous space, and the test it passed or failed.
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Change {
     /// s_k − s_{k−1}; `None` when either is undefined.
     pub abs: Option<f64>,
     /// |s_k − s_{k−1}| / |s_{k−1}|; `None` when either is undefined or s_{k−1} = 0 ≠ s_k.
     pub rel: Option<f64>,
+    /// The statistic's scale ([`scale`], of space k; rule "scaled" only).
+    pub scale: Option<f64>,
+    /// Half-width of the statistic's 95 % bootstrap interval at space k.
+    pub noise: Option<f64>,
     /// Whether it counts as converged under the rule.
     pub within: bool,
+    /// The test in words, with its numbers, e.g. "passed: |Δ| 0.0012 ≤ 0.0031 and ±0.0020 ≤
+    /// 0.0031 (5% of scale 0.0612)".
+    pub test: String,
 }
 
 /// One space's standing.
@@ -114,12 +173,19 @@ pub struct Judgement {
     pub converged: bool,
 }
 
-/// The change of one statistic between two spaces.
-pub fn change(prev: Option<f64>, cur: Option<f64>, rule: Rule, c: &Criteria) -> Change {
-    let (Some(p), Some(s)) = (prev, cur) else {
-        return Change { abs: None, rel: None, within: false };
+fn g(v: f64) -> String {
+    format!("{v:.4}")
+}
+
+/// The change of statistic `s` from space `prev` to `cur`.
+pub fn change(s: Statistic, prev: &SpaceStats, cur: &SpaceStats, c: &Criteria) -> Change {
+    let idx = STATISTICS.iter().position(|&t| t == s).expect("one of the four");
+    let noise = cur.noise[idx];
+    let (Some(p), Some(v)) = (s.of(&prev.moments), s.of(&cur.moments)) else {
+        let test = "failed: undefined (no spread in the space)".to_string();
+        return Change { abs: None, rel: None, scale: None, noise, within: false, test };
     };
-    let abs = s - p;
+    let abs = v - p;
     let rel = if abs == 0.0 {
         Some(0.0)
     } else if p == 0.0 {
@@ -127,34 +193,72 @@ pub fn change(prev: Option<f64>, cur: Option<f64>, rule: Rule, c: &Criteria) -> 
     } else {
         Some(abs.abs() / p.abs())
     };
-    let by_rel = rel.is_some_and(|r| r <= c.tolerance);
-    let within = match rule {
-        Rule::Any => by_rel,
-        Rule::All => by_rel || abs.abs() <= c.floor,
-    };
-    Change { abs: Some(abs), rel, within }
+    let t = c.tolerance;
+    let pct = t * 100.0;
+    let by_rel = rel.is_some_and(|r| r <= t);
+    let rel_words = rel.map_or("undefined (from 0)".into(), |r| format!("{:.1}%", r * 100.0));
+    let verdict = |ok: bool| if ok { "passed" } else { "failed" };
+    match c.rule {
+        Rule::Any => {
+            let test = format!("{}: relative change {rel_words} vs {pct}%", verdict(by_rel));
+            Change { abs: Some(abs), rel, scale: None, noise, within: by_rel, test }
+        }
+        Rule::All => {
+            let within = by_rel || abs.abs() <= c.floor;
+            let test = format!(
+                "{}: relative change {rel_words} vs {pct}%, or |Δ| {} vs floor {}",
+                verdict(within),
+                g(abs.abs()),
+                c.floor
+            );
+            Change { abs: Some(abs), rel, scale: None, noise, within, test }
+        }
+        Rule::Scaled => {
+            let sc = scale(s, &cur.moments).expect("defined where the statistic is");
+            let limit = t * sc;
+            let moved = abs.abs() <= limit;
+            let known = noise.is_some_and(|h| h <= limit);
+            let within = moved && known;
+            let noise_words = noise.map_or("noise unknown".into(), |h| format!("±{}", g(h)));
+            let what = match (moved, known) {
+                (true, true) => "passed",
+                (false, true) => "failed (moved)",
+                (true, false) => "failed (noisy)",
+                (false, false) => "failed (moved, noisy)",
+            };
+            let test = format!(
+                "{what}: |Δ| {} {} {}, {noise_words} {} {} ({pct}% of scale {})",
+                g(abs.abs()),
+                if moved { "≤" } else { ">" },
+                g(limit),
+                if known { "≤" } else { ">" },
+                g(limit),
+                g(sc)
+            );
+            Change { abs: Some(abs), rel, scale: Some(sc), noise, within, test }
+        }
+    }
 }
 
-/// Judge every space of a sweep, in order; `spaces` holds each space's point count (done and
-/// failed: what min_points counts) and the statistics of its done runs.
-pub fn judge(spaces: &[(usize, Moments)], c: &Criteria) -> Vec<Judgement> {
+/// Judge every space of a sweep, in order.
+pub fn judge(spaces: &[SpaceStats], c: &Criteria) -> Vec<Judgement> {
     let mut out: Vec<Judgement> = Vec::with_capacity(spaces.len());
-    for (k, (n, m)) in spaces.iter().enumerate() {
-        let Some((_, prev)) = k.checked_sub(1).map(|i| &spaces[i]) else {
+    for (k, cur) in spaces.iter().enumerate() {
+        let Some(prev) = k.checked_sub(1).map(|i| &spaces[i]) else {
             out.push(Judgement { changes: None, holds: false, streak: 0, converged: false });
             continue;
         };
-        let changes = STATISTICS.map(|s| change(s.of(prev), s.of(m), c.rule, c));
+        let changes = STATISTICS.map(|s| change(s, prev, cur, c));
         let holds = match c.rule {
             Rule::Any => changes.iter().any(|ch| ch.within),
-            Rule::All => changes.iter().all(|ch| ch.within),
+            Rule::All | Rule::Scaled => changes.iter().all(|ch| ch.within),
         };
         let streak = if holds { out[k - 1].streak + 1 } else { 0 };
         let needed = match c.rule {
             Rule::Any => 1,
-            Rule::All => c.hold,
+            Rule::All | Rule::Scaled => c.hold,
         };
-        let converged = streak >= needed && *n >= c.min_points;
+        let converged = streak >= needed && cur.n >= c.min_points;
         out.push(Judgement { changes: Some(changes), holds, streak, converged });
     }
     out
@@ -181,7 +285,7 @@ impl Overrides {
         let bad = |flag: &str, what: String| crate::Error::input(format!("{flag} {what}"));
         if let Some(r) = &self.rule {
             if Rule::parse(r).is_none() {
-                return Err(bad("--rule", format!("{r}: expected \"all\" or \"any\"")));
+                return Err(bad("--rule", format!("{r}: expected \"scaled\", \"any\" or \"all\"")));
             }
             c.rule = r.clone();
         }
@@ -205,6 +309,23 @@ impl Overrides {
     }
 }
 
+/// The MFR values of a space's points that count (`None`: failed, left out) and their weights:
+/// trapezoid weights when the points form a complete lattice and `lw` asks for them.
+pub fn space_values(
+    values: &[&[f64]],
+    mfr: &[Option<f64>],
+    lw: LatticeWeights,
+) -> (Vec<f64>, Option<Vec<f64>>) {
+    let all: Vec<Vec<f64>> = values.iter().map(|v| v.to_vec()).collect();
+    let w = match lw {
+        LatticeWeights::Trapezoid => crate::analysis::weights::trapezoid(&all),
+        LatticeWeights::Equal => None,
+    };
+    let x: Vec<f64> = mfr.iter().flatten().copied().collect();
+    let w = w.map(|w| w.iter().zip(mfr).filter(|(_, m)| m.is_some()).map(|(w, _)| *w).collect());
+    (x, w)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -223,15 +344,44 @@ mod tests {
     }
 
     fn all(tol: f64, floor: f64, hold: usize) -> Criteria {
-        Criteria { rule: Rule::All, tolerance: tol, floor, hold, min_points: 0 }
+        Criteria {
+            rule: Rule::All,
+            tolerance: tol,
+            floor,
+            hold,
+            min_points: 0,
+            lattice_weights: LatticeWeights::Equal,
+        }
     }
 
     fn any(tol: f64) -> Criteria {
-        Criteria { rule: Rule::Any, tolerance: tol, floor: 0.0, hold: 1, min_points: 0 }
+        Criteria {
+            rule: Rule::Any,
+            tolerance: tol,
+            floor: 0.0,
+            hold: 1,
+            min_points: 0,
+            lattice_weights: LatticeWeights::Equal,
+        }
     }
 
-    fn spaces(ms: &[Moments]) -> Vec<(usize, Moments)> {
-        ms.iter().enumerate().map(|(k, m)| (400 * (k + 1), *m)).collect()
+    fn scaled(tol: f64, hold: usize) -> Criteria {
+        Criteria {
+            rule: Rule::Scaled,
+            tolerance: tol,
+            floor: 0.0,
+            hold,
+            min_points: 0,
+            lattice_weights: LatticeWeights::Equal,
+        }
+    }
+
+    /// Spaces of 400, 800, ... points with no bootstrap noise.
+    fn spaces(ms: &[Moments]) -> Vec<SpaceStats> {
+        ms.iter()
+            .enumerate()
+            .map(|(k, m)| SpaceStats { n: 400 * (k + 1), moments: *m, noise: [Some(0.0); 4] })
+            .collect()
     }
 
     #[test]
@@ -252,7 +402,7 @@ mod tests {
         assert_eq!(converged_at(&j), Some(3));
         // Held once is enough with hold = 1.
         assert_eq!(converged_at(&judge(&s, &all(0.05, 0.0, 1))), Some(2));
-        let ch = j[1].changes.unwrap();
+        let ch = j[1].changes.clone().unwrap();
         assert!((ch[0].rel.unwrap() - 0.2).abs() < 1e-12 && (ch[0].abs.unwrap() + 0.05).abs() < 1e-12);
     }
 
@@ -275,7 +425,7 @@ mod tests {
         let s = spaces(&[m(0.2, 0.1, 0.4, 3.0), m(0.26, 0.13, 0.5, 3.03)]);
         assert_eq!(converged_at(&judge(&s, &any(0.05))), Some(1));
         assert_eq!(converged_at(&judge(&s, &all(0.05, 0.01, 1))), None);
-        let ch = judge(&s, &any(0.05))[1].changes.unwrap();
+        let ch = judge(&s, &any(0.05))[1].changes.clone().unwrap();
         assert_eq!(ch.map(|c| c.within), [false, false, false, true]);
     }
 
@@ -284,11 +434,11 @@ mod tests {
         // Skewness 0.004 → −0.003: a relative change of 175 %, an absolute one of 0.007.
         let s = spaces(&[m(0.2, 0.1, 0.004, 2.0), m(0.201, 0.1005, -0.003, 2.01)]);
         let strict = judge(&s, &all(0.05, 0.0, 1));
-        let skew = strict[1].changes.unwrap()[2];
+        let skew = strict[1].changes.clone().unwrap()[2].clone();
         assert!((skew.rel.unwrap() - 1.75).abs() < 1e-12);
         assert!(!skew.within && converged_at(&strict).is_none(), "no floor: the zero crossing blocks");
         let floored = judge(&s, &all(0.05, 0.01, 1));
-        assert!(floored[1].changes.unwrap()[2].within);
+        assert!(floored[1].changes.clone().unwrap()[2].within);
         assert_eq!(converged_at(&floored), Some(1));
         // A large swing across zero stays blocked by the floor.
         let big = spaces(&[m(0.2, 0.1, 0.3, 2.0), m(0.2, 0.1, -0.3, 2.0)]);
@@ -298,9 +448,62 @@ mod tests {
     #[test]
     fn a_change_from_exactly_zero_has_no_relative_size() {
         let c = all(0.05, 0.0, 1);
-        assert_eq!(change(Some(0.0), Some(0.1), Rule::All, &c).rel, None);
-        assert_eq!(change(Some(0.0), Some(0.0), Rule::All, &c).rel, Some(0.0));
-        assert!(change(Some(0.0), Some(0.0), Rule::Any, &c).within);
+        let one = |mean: f64| spaces(&[m(0.0, 0.1, 0.0, 2.0), m(mean, 0.1, 0.0, 2.0)]);
+        let s = one(0.1);
+        assert_eq!(change(Statistic::Mean, &s[0], &s[1], &c).rel, None);
+        let s = one(0.0);
+        assert_eq!(change(Statistic::Mean, &s[0], &s[1], &c).rel, Some(0.0));
+        assert!(change(Statistic::Mean, &s[0], &s[1], &any(0.05)).within);
+    }
+
+    #[test]
+    fn scaled_rule_judges_each_statistic_on_its_own_scale() {
+        // MFR ≈ 0.06 with std 0.02: the mean's scale is max(0.06, 0.02) = 0.06, so 5 % is
+        // 0.003; the std's is 0.02 (limit 0.001); the skewness 0.01 → −0.02 (a relative change
+        // of 300 %) is judged on scale max(|−0.02|, 1) = 1 (limit 0.05); the kurtosis on 2.5
+        // (limit 0.125).
+        let s = spaces(&[m(0.0610, 0.0205, 0.01, 2.45), m(0.0600, 0.0200, -0.02, 2.5)]);
+        let j = judge(&s, &scaled(0.05, 1));
+        let ch = j[1].changes.clone().unwrap();
+        assert_eq!(ch.each_ref().map(|c| c.within), [true, true, true, true]);
+        assert!((ch[0].scale.unwrap() - 0.06).abs() < 1e-15);
+        assert_eq!(ch[2].scale, Some(1.0));
+        assert!(ch[2].rel.unwrap() > 2.9, "the thesis's relative change would read 300 %");
+        assert!(ch[0].test.starts_with("passed: |Δ| 0.0010 ≤ 0.0030"), "{}", ch[0].test);
+        // The old floor of 0.01 would let the std move by half itself; here 0.0020 → fails.
+        let s = spaces(&[m(0.06, 0.0220, 0.0, 2.5), m(0.06, 0.0200, 0.0, 2.5)]);
+        let ch = judge(&s, &scaled(0.05, 1))[1].changes.clone().unwrap();
+        assert!(!ch[1].within && ch[1].test.starts_with("failed (moved)"), "{}", ch[1].test);
+        assert!(judge(&s, &all(0.05, 0.01, 1))[1].holds, "the old default passed it by the floor");
+    }
+
+    #[test]
+    fn scaled_rule_needs_the_statistic_known_not_only_still() {
+        // Nothing moved, but the std's bootstrap half-width 0.003 exceeds 5 % of 0.02.
+        let mut s = spaces(&[m(0.06, 0.02, 0.1, 2.5), m(0.06, 0.02, 0.1, 2.5)]);
+        s[1].noise = [Some(0.001), Some(0.003), Some(0.01), Some(0.05)];
+        let j = judge(&s, &scaled(0.05, 1));
+        let ch = j[1].changes.clone().unwrap();
+        assert_eq!(ch.each_ref().map(|c| c.within), [true, false, true, true]);
+        assert!(
+            ch[1].test.starts_with("failed (noisy): |Δ| 0.0000 ≤ 0.0010, ±0.0030 > 0.0010"),
+            "{}",
+            ch[1].test
+        );
+        assert_eq!(converged_at(&j), None);
+        s[1].noise[1] = None;
+        assert!(!judge(&s, &scaled(0.05, 1))[1].holds, "unknown noise never passes");
+    }
+
+    #[test]
+    fn bootstrap_noise_of_a_real_sample_shrinks_as_root_n() {
+        // Uniform values: the mean's half-width ≈ 1.96·0.2887/√N.
+        let x: Vec<f64> = (0..1600).map(|i| ((i as f64) * 0.618_033_988_75).fract()).collect();
+        let b = Bootstrap::default();
+        let (a, c) = (SpaceStats::of(400, &x[..400], None, &b), SpaceStats::of(1600, &x, None, &b));
+        let (ha, hc) = (a.noise[0].unwrap(), c.noise[0].unwrap());
+        assert!((ha - 1.96 * 0.2887 / 20.0).abs() < 0.005, "{ha}");
+        assert!((ha / hc - 2.0).abs() < 0.35, "{ha} {hc}");
     }
 
     #[test]
@@ -321,6 +524,7 @@ mod tests {
         let s = spaces(&[q, q, q, q]);
         let mut c = all(0.05, 0.0, 1);
         assert_eq!(converged_at(&judge(&s, &c)), Some(1));
+        assert_eq!(converged_at(&judge(&s, &scaled(0.05, 1))), Some(1));
         c.min_points = 1200;
         assert_eq!(converged_at(&judge(&s, &c)), Some(2), "space 2 holds 1,200 points");
     }

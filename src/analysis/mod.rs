@@ -5,5 +5,8 @@
 //! a sweep directory.
 
 pub mod convergence;
+pub mod emulator;
+pub mod noise;
 pub mod sensitivity;
 pub mod stats;
+pub mod weights;

@@ -17,6 +17,11 @@ use serde::Serialize;
 /// Most bins per parameter for continuous samples.
 pub const MAX_BINS: usize = 64;
 
+/// Below this many points per parameter the report says the ranking is not yet reliable (a
+/// stated threshold: with ⌈√N⌉ bins, 50 points per parameter leaves about 7 points per bin at
+/// N = 200 in 4-D; the overlap test in [`reliability`] catches the rest).
+pub const RELIABLE_PER_PARAMETER: usize = 50;
+
 /// The first-order index of one parameter.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Index {
@@ -24,6 +29,10 @@ pub struct Index {
     /// Adjusted correlation ratio ε², in [0, 1]; `None` when Y has no variance or N ≤ M.
     pub first_order: Option<f64>,
     pub bins: usize,
+    /// 95 % percentile bootstrap interval of the index (points resampled with replacement);
+    /// `None` without [`with_intervals`] or when too few resamples defined it.
+    pub lo: Option<f64>,
+    pub hi: Option<f64>,
 }
 
 /// First-order indices of `y` for each column of `x` (`x[i][j]`: point i, parameter j), in
@@ -35,9 +44,83 @@ pub fn first_order(names: &[String], x: &[Vec<f64>], y: &[f64]) -> Vec<Index> {
         .map(|(j, name)| {
             let col: Vec<f64> = x.iter().map(|p| p[j]).collect();
             let (s, bins) = correlation_ratio(&col, y);
-            Index { parameter: name.clone(), first_order: s, bins }
+            Index { parameter: name.clone(), first_order: s, bins, lo: None, hi: None }
         })
         .collect()
+}
+
+/// [`first_order`] with bootstrap intervals: `b.resamples` resamples of the points (pairs of x
+/// and y, with replacement, ChaCha8 seeded by `b.seed`), each index recomputed on each; the
+/// percentile interval is shifted by the bootstrap's bias (mean of the draws less the index).
+pub fn with_intervals(
+    names: &[String],
+    x: &[Vec<f64>],
+    y: &[f64],
+    b: &crate::analysis::stats::Bootstrap,
+) -> Vec<Index> {
+    use rand::{Rng, SeedableRng};
+    let mut out = first_order(names, x, y);
+    let n = y.len().min(x.len());
+    if n < 3 || b.resamples == 0 {
+        return out;
+    }
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(b.seed);
+    let mut draws: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
+    let (mut col, mut ys) = (vec![0.0; n], vec![0.0; n]);
+    let picks: Vec<Vec<usize>> =
+        (0..b.resamples).map(|_| (0..n).map(|_| rng.gen_range(0..n)).collect()).collect();
+    for (j, d) in draws.iter_mut().enumerate() {
+        for pick in &picks {
+            for (k, &i) in pick.iter().enumerate() {
+                col[k] = x[i][j];
+                ys[k] = y[i];
+            }
+            if let (Some(v), _) = correlation_ratio(&col, &ys) {
+                d.push(v);
+            }
+        }
+    }
+    let alpha = (1.0 - b.level.clamp(0.0, 1.0)) / 2.0;
+    for (ix, mut d) in out.iter_mut().zip(draws) {
+        if d.len() * 2 < b.resamples {
+            continue;
+        }
+        d.sort_by(f64::total_cmp);
+        // A resample repeats points, which the binned estimator reads as agreement within a
+        // bin: its draws sit above the index by a bias. Shift the percentiles back by it.
+        let bias = d.iter().sum::<f64>() / d.len() as f64 - ix.first_order.unwrap_or(0.0);
+        let at = |p: f64| (crate::analysis::stats::percentile_sorted(&d, p) - bias).clamp(0.0, 1.0);
+        ix.lo = Some(at(alpha));
+        ix.hi = Some(at(1.0 - alpha));
+    }
+    out
+}
+
+/// Whether a ranking of `d` parameters from `n` points is reliable, and why not in words.
+pub fn reliability(n: usize, ranked: &[Index]) -> (bool, String) {
+    let d = ranked.len().max(1);
+    if n < RELIABLE_PER_PARAMETER * d {
+        return (
+            false,
+            format!(
+                "ranking not yet reliable: {n} points for {d} parameters, fewer than {RELIABLE_PER_PARAMETER} per parameter"
+            ),
+        );
+    }
+    if let [a, b, ..] = ranked {
+        if let (Some(alo), Some(bhi)) = (a.lo, b.hi) {
+            if alo <= bhi {
+                return (
+                    false,
+                    format!(
+                        "the top two ({}, {}) are not told apart: their 95% intervals overlap",
+                        a.parameter, b.parameter
+                    ),
+                );
+            }
+        }
+    }
+    (true, format!("{n} points for {d} parameters; the leading index's interval clears the next"))
 }
 
 /// Largest index first; undefined ones last.
@@ -119,6 +202,28 @@ mod tests {
         assert!(got[2] < 0.02, "{got:?}");
         let r = ranked(s);
         assert_eq!(r[0].parameter, "x2");
+    }
+
+    #[test]
+    fn intervals_bracket_the_index_and_narrow_with_n() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2);
+        let pi = std::f64::consts::PI;
+        let x: Vec<Vec<f64>> = (0..1600).map(|_| (0..3).map(|_| rng.gen_range(-pi..pi)).collect()).collect();
+        let y: Vec<f64> = x.iter().map(|p| ishigami(p)).collect();
+        let names: Vec<String> = ["x1", "x2", "x3"].map(String::from).to_vec();
+        let b = crate::analysis::stats::Bootstrap { resamples: 300, ..Default::default() };
+        let small = with_intervals(&names, &x[..200], &y[..200], &b);
+        let large = with_intervals(&names, &x, &y, &b);
+        for (s, l) in small.iter().zip(&large) {
+            assert!(l.lo.unwrap() <= l.first_order.unwrap() && l.first_order.unwrap() <= l.hi.unwrap());
+            assert!(l.hi.unwrap() - l.lo.unwrap() < s.hi.unwrap() - s.lo.unwrap(), "{s:?} {l:?}");
+        }
+        // The true S2 = 0.4424 lies inside the large sample's interval (width about 0.08).
+        assert!(large[1].lo.unwrap() < 0.4424 && 0.4424 < large[1].hi.unwrap(), "{:?}", large[1]);
+        let (ok, why) = reliability(100, &ranked(small));
+        assert!(!ok && why.contains("fewer than 50 per parameter"), "{why}");
+        let (ok, _) = reliability(1600, &ranked(large));
+        assert!(ok);
     }
 
     #[test]

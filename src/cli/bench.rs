@@ -136,12 +136,12 @@ pub(super) fn bench_fidelity(a: FidelityArgs) -> Result<i32, Error> {
     let points: Vec<Vec<f64>> = unit.iter().map(|p| demsweep::sweep::space::scale_point(&sweep, p)).collect();
     let out = a.out.unwrap_or_else(|| PathBuf::from("runs").join(format!("{}-fidelity", sweep.file.name)));
     driver::check_out_dir(&out)?;
+    demsweep::sys::process::install_interrupt_handler();
     let mut contexts = Vec::new();
     for v in &variants {
         contexts.push(PointContext::new(v.sweep.clone())?);
     }
     let plan = fidelity::FidelityPlan { points, seeds: a.seeds, jobs, out };
-    demsweep::sys::process::install_interrupt_handler();
     let cancel = CancelToken::new();
     let started = std::time::Instant::now();
     let show = |r: &fidelity::Run, n: usize, total: usize| {
@@ -229,12 +229,12 @@ pub(super) fn bench_stability(a: StabilityArgs) -> Result<i32, Error> {
     if std::fs::read_dir(&out).map(|mut d| d.next().is_some()).unwrap_or(false) {
         return bad(format!("{}: not empty; choose another --out", out.display()));
     }
+    demsweep::sys::process::install_interrupt_handler();
     let ctx = PointContext::new(sweep)?;
     // Every level's scene must build (the bound aside) before anything is written.
     let plan = stability::StabilityPlan { corner, fractions: a.fractions, moduli, seeds: a.seeds, jobs, out };
     stability::check(&ctx, &plan)?;
     let heading = stability::describe_corner(&ctx.sweep, &plan.corner);
-    demsweep::sys::process::install_interrupt_handler();
     std::fs::create_dir_all(&plan.out)
         .map_err(|e| Error::Internal(format!("cannot create {}: {e}", plan.out.display())))?;
     println!("harshest corner: {heading}; {} seeds per level", plan.seeds);

@@ -156,6 +156,10 @@ pub(super) fn submit(a: SubmitArgs) -> Result<i32, Error> {
         }
     };
     let (array, report) = cluster::write(&a.dir, &rendered)?;
+    if opts.only.failed {
+        // The tasks retry each failure once between them, however far apart they start.
+        demsweep::store::retry::begin_submission_round(&a.dir)?;
+    }
     let what = format!(
         "{} points as array tasks {} ({} per task)",
         rendered.points,
@@ -204,6 +208,9 @@ pub(super) fn work(a: WorkArgs) -> Result<i32, Error> {
     }
     let pool = PoolArgs { jobs: Some(cores / a.ranks as usize), quiet: a.quiet };
     let opts = run_options(&pool, a.retry_failed, false)?;
+    if a.retry_failed {
+        demsweep::store::retry::join_submission_round(&a.dir);
+    }
     demsweep::sys::process::install_interrupt_handler();
     let w = demsweep::run::cluster::WorkOptions {
         task: a.task,

@@ -6,6 +6,7 @@ mod bench;
 mod cluster;
 mod contact;
 mod point;
+mod predict;
 mod stats;
 mod sweep;
 
@@ -58,6 +59,10 @@ enum Command {
     Resume(sweep::ResumeArgs),
     /// Counts of a sweep directory: done, failed, running, screened, pending; the screen's verdict.
     Status(sweep::DirArgs),
+    /// Release the claims of a sweep directory that no live process on this machine holds:
+    /// another host's (a lost node, a clock far ahead, an old claim without a lease) or a dead
+    /// process's. Use it once their holders are known to be gone; `status` names them.
+    Unclaim(sweep::UnclaimArgs),
     /// Write convergence.csv, summary.json and report/ (plots, report.html) of a sweep directory.
     ///
     /// Also rewrites results.csv from the run directories. One row per complete space in convergence.csv (statistics of the done runs' MFR with 95%
@@ -93,6 +98,13 @@ enum Command {
     /// One array task of `sweep submit`: run the task's share of a sweep directory.
     #[command(hide = true)]
     Work(cluster::WorkArgs),
+    /// MFR at a setting from the sweep's emulator (a Gaussian process fitted to its done
+    /// points), with the predictive standard error.
+    ///
+    /// The same emulator as report.html's: Matérn 5/2, each point's own noise where its result
+    /// records an mfr_se. Prints the leave-one-out error beside the prediction; warns when a
+    /// value lies outside the swept range.
+    Predict(predict::PredictArgs),
     /// Benchmarks: run time against error of the fidelity presets (`fidelity`), the scene's
     /// stability edge (`stability`), and the contact reference solver's own stability
     /// (`contact`).
@@ -104,17 +116,20 @@ enum Command {
 /// rule holds; `lattice`/`lds` record the overrides in DIR/sweep.toml, so `resume` keeps them.
 #[derive(Args)]
 struct ConvergenceArgs {
-    /// "all" (default: every statistic within the tolerance or the floor, for --hold
-    /// consecutive spaces) or "any" (the thesis's rule: any one statistic within the tolerance).
+    /// "scaled" (default: every statistic moved by at most the tolerance times its own scale and
+    /// known to within it, its 95% bootstrap half-width, for --hold consecutive spaces), "any"
+    /// (the thesis's rule: any one statistic within the tolerance relatively) or "all" (every
+    /// statistic within the tolerance relatively or the floor). docs/statistics.md.
     #[arg(long)]
     rule: Option<String>,
-    /// Relative change between consecutive spaces that counts as converged (e.g. 0.05).
+    /// The fraction of a statistic's scale ("scaled") or of its previous value ("any", "all")
+    /// that counts as converged (e.g. 0.05).
     #[arg(long, allow_negative_numbers = true)]
     tolerance: Option<f64>,
     /// Absolute change that counts as converged whatever the relative one (rule "all").
     #[arg(long, allow_negative_numbers = true)]
     floor: Option<f64>,
-    /// Consecutive spaces the rule must hold for (rule "all").
+    /// Consecutive spaces the rule must hold for (rules "scaled" and "all").
     #[arg(long)]
     hold: Option<usize>,
 }
@@ -147,11 +162,13 @@ pub fn run(cli: Cli) -> Result<i32, Error> {
         Command::Lds(a) => sweep::lds(a),
         Command::Resume(a) => sweep::resume(a),
         Command::Status(a) => sweep::status(a),
+        Command::Unclaim(a) => sweep::unclaim(a),
         Command::Report(a) => sweep::report(a),
         Command::Show(a) => sweep::show(a),
         Command::Render(a) => point::render(a),
         Command::Run(a) => point::run_one(a),
         Command::Stats(a) => stats::stats(a),
+        Command::Predict(a) => predict::predict(a),
         Command::Contact(a) => contact::contact(a),
         Command::ContactCheck(a) => contact::contact_check(a),
         Command::Submit(a) => cluster::submit(a),

@@ -30,7 +30,12 @@ pub(super) fn stats(a: StatsArgs) -> Result<i32, Error> {
         Vec::new()
     } else {
         let (x, y): (Vec<Vec<f64>>, Vec<f64>) = table.xy.iter().cloned().unzip();
-        demsweep::analysis::sensitivity::ranked(demsweep::analysis::sensitivity::first_order(&a.by, &x, &y))
+        demsweep::analysis::sensitivity::ranked(demsweep::analysis::sensitivity::with_intervals(
+            &a.by,
+            &x,
+            &y,
+            &Bootstrap::default(),
+        ))
     };
     let iv = demsweep::analysis::stats::bootstrap(&column.values, &Bootstrap::default());
     if a.json {

@@ -83,6 +83,12 @@ pub(super) struct ResumeArgs {
 }
 
 #[derive(Args)]
+pub(super) struct UnclaimArgs {
+    /// A sweep directory (holding manifest.json).
+    dir: PathBuf,
+}
+
+#[derive(Args)]
 pub(super) struct DirArgs {
     dir: PathBuf,
     #[arg(long)]
@@ -249,6 +255,22 @@ pub(super) fn status(a: DirArgs) -> Result<i32, Error> {
     } else {
         print!("{}", report.to_text());
     }
+    Ok(exit::SUCCESS)
+}
+
+pub(super) fn unclaim(a: UnclaimArgs) -> Result<i32, Error> {
+    let (manifest, _) = demsweep::store::Store::read_manifest(&a.dir)?;
+    let store = demsweep::store::Store::open(&a.dir);
+    let hashes: Vec<String> = manifest.points.iter().map(|p| p.hash.clone()).collect();
+    let (released, kept) = store.unclaim(&hashes)?;
+    for (hash, c) in &released {
+        eprintln!("released {} ({})", demsweep::store::short(hash), demsweep::store::holders::describe(c));
+    }
+    eprintln!(
+        "released {} claims; kept {kept} held by live processes here; `sweep resume {}` runs the released points",
+        released.len(),
+        a.dir.display()
+    );
     Ok(exit::SUCCESS)
 }
 

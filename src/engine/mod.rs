@@ -30,6 +30,8 @@ pub enum EngineError {
     NotFound(String),
     #[error("cannot identify LIGGGHTS at {path}: {reason}")]
     Identify { path: String, reason: String },
+    #[error("interrupted while identifying LIGGGHTS")]
+    Interrupted,
 }
 
 /// A located LIGGGHTS executable and what it says it is.
@@ -47,7 +49,11 @@ pub struct Engine {
 
 impl Engine {
     /// Find LIGGGHTS: the given path, else `liggghts` on PATH.
-    pub fn locate(setting: Option<&Path>) -> Result<Engine, EngineError> {
+    ///
+    /// The identification (`liggghts -h`) runs under [`IDENTIFY_TIMEOUT`] and `cancel` (Ctrl-C,
+    /// SIGTERM), in its own process group, in a scratch directory that is removed whatever
+    /// happens (and, after a SIGKILL, by the next identification).
+    pub fn locate(setting: Option<&Path>, cancel: &CancelToken) -> Result<Engine, EngineError> {
         let path = match setting {
             Some(p) => {
                 if !p.is_file() {
@@ -59,27 +65,10 @@ impl Engine {
                 .ok_or_else(|| EngineError::NotFound("`liggghts` is not on PATH".into()))?,
         };
         let identify = |reason: String| EngineError::Identify { path: path.display().to_string(), reason };
-        // `-log none`: LIGGGHTS opens `log.liggghts` in its working directory even for `-h`.
-        // And in an empty scratch directory, so that nothing is written where `sweep` was
-        // started whatever a future LIGGGHTS does with `-h`.
-        let scratch = tempfile::Builder::new()
-            .prefix("sweep-engine-")
-            .tempdir()
-            .map_err(|e| identify(format!("cannot create a scratch directory: {e}")))?;
-        let out = Command::new(&path)
-            .args(["-log", "none", "-h"])
-            .current_dir(scratch.path())
-            .stdin(Stdio::null())
-            .stderr(Stdio::null())
-            .output()
-            .map_err(|e| identify(e.to_string()))?;
-        drop(scratch);
-        let text = String::from_utf8_lossy(&out.stdout);
-        let version = text
-            .lines()
-            .find(|l| l.contains("LIGGGHTS"))
-            .map(|l| l.trim().to_string())
-            .ok_or_else(|| identify("`-h` did not print a LIGGGHTS version".into()))?;
+        let version = identify_version(&path, cancel).map_err(|e| match e {
+            Identification::Interrupted => EngineError::Interrupted,
+            Identification::Failed(reason) => identify(reason),
+        })?;
         // The Debian binary is a small launcher around libliggghts; hash both when we can see the
         // library, so an updated library is a different engine too.
         let mut h = Sha256::new();
@@ -146,10 +135,7 @@ impl Engine {
                 return fail(class, format!("{reason} (stopped early)"));
             }
             ProcessOutcome::TimedOut => {
-                return fail(
-                    FailureClass::TimedOut,
-                    format!("timed out after {:.0} s", timeout.as_secs_f64()),
-                )
+                return fail(FailureClass::TimedOut, format!("timed out after {} s", timeout.as_secs_f64()))
             }
             ProcessOutcome::Cancelled => {
                 return EngineRun {
@@ -192,6 +178,87 @@ impl Engine {
                 warnings: analysis.warnings,
                 log,
             },
+        }
+    }
+}
+
+/// Longest wait for `liggghts -h` to print its version (it takes well under a second).
+pub const IDENTIFY_TIMEOUT: Duration = Duration::from_secs(15);
+/// Prefix of the identification's scratch directories in the temp directory; the pid follows.
+const SCRATCH_PREFIX: &str = "sweep-engine-";
+
+enum Identification {
+    Interrupted,
+    Failed(String),
+}
+
+/// The first line of `path -log none -h` that names LIGGGHTS.
+fn identify_version(path: &Path, cancel: &CancelToken) -> Result<String, Identification> {
+    let failed = Identification::Failed;
+    remove_dead_scratch_dirs();
+    // `-log none`: LIGGGHTS opens `log.liggghts` in its working directory even for `-h`.
+    // And in an empty scratch directory, so that nothing is written where `sweep` was
+    // started whatever a future LIGGGHTS does with `-h`.
+    let scratch = tempfile::Builder::new()
+        .prefix(&format!("{SCRATCH_PREFIX}{}-", std::process::id()))
+        .tempdir()
+        .map_err(|e| failed(format!("cannot create a scratch directory: {e}")))?;
+    let file = |name: &str| {
+        std::fs::File::create(scratch.path().join(name))
+            .map_err(|e| failed(format!("cannot write in the scratch directory: {e}")))
+    };
+    let mut cmd = Command::new(path);
+    cmd.args(["-log", "none", "-h"])
+        .current_dir(scratch.path())
+        .stdin(Stdio::null())
+        .stdout(file("out")?)
+        .stderr(file("err")?);
+    let (outcome, _) = process::run(cmd, IDENTIFY_TIMEOUT, cancel);
+    let read = |name: &str| std::fs::read(scratch.path().join(name)).unwrap_or_default();
+    let (out, err) = (read("out"), read("err"));
+    drop(scratch);
+    match outcome {
+        ProcessOutcome::Cancelled => return Err(Identification::Interrupted),
+        ProcessOutcome::TimedOut => {
+            return Err(failed(format!(
+                "`-h` did not answer within {} s (killed it)",
+                IDENTIFY_TIMEOUT.as_secs()
+            )))
+        }
+        ProcessOutcome::SpawnFailed(e) => return Err(failed(e)),
+        _ => {}
+    }
+    let text = String::from_utf8_lossy(&out);
+    text.lines().find(|l| l.contains("LIGGGHTS")).map(|l| l.trim().to_string()).ok_or_else(|| {
+        // What it said instead (OpenMPI's "system limit on number of pipes", a missing library).
+        let said = String::from_utf8_lossy(&err);
+        match said.lines().map(str::trim).find(|l| !l.is_empty()) {
+            Some(l) => failed(format!("`-h` did not print a LIGGGHTS version; it said: {l}")),
+            None => failed("`-h` did not print a LIGGGHTS version".into()),
+        }
+    })
+}
+
+/// Remove the scratch directories of identifications whose process is gone (SIGKILLed).
+fn remove_dead_scratch_dirs() {
+    let Ok(entries) = std::fs::read_dir(std::env::temp_dir()) else { return };
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let Some(pid) = name.strip_prefix(SCRATCH_PREFIX).and_then(|r| r.split('-').next()) else { continue };
+        let Ok(pid) = pid.parse::<u32>() else { continue };
+        if pid != std::process::id() && crate::sys::host::process_start_ticks(pid).is_none() {
+            let _ = std::fs::remove_dir_all(e.path());
+        }
+    }
+}
+
+/// Remove the `restart_forced_liggghts_*.data` files LIGGGHTS writes when it is stopped (about
+/// 1 MB each): a failed run's directory keeps its log and failure, not a restart nobody reads.
+pub fn remove_forced_restarts(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for e in entries.flatten() {
+        if e.file_name().to_string_lossy().starts_with("restart_forced_") {
+            let _ = std::fs::remove_file(e.path());
         }
     }
 }
@@ -276,8 +343,9 @@ fn find_on_path(name: &str) -> Option<PathBuf> {
 pub struct LogLimits {
     /// Kinetic energy above which the run is unstable, J.
     pub ke_limit: f64,
-    /// Atoms expected once inserted; fewer at the end is lost atoms.
-    pub atoms: u64,
+    /// Atoms expected once inserted; fewer at the end is lost atoms. None: the count varies by
+    /// design (a fed scene inserts and deletes); LIGGGHTS's own lost-atom error guards it.
+    pub atoms: Option<u64>,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -377,7 +445,7 @@ fn analyse_log(log: &str, limits: &LogLimits) -> LogAnalysis {
                     FailureClass::Unstable,
                     format!("kinetic energy {ke:.3e} J at step {step} exceeds {:.3e} J", limits.ke_limit),
                 ));
-            } else if atoms < max_atoms {
+            } else if limits.atoms.is_some() && atoms < max_atoms {
                 a.failure = Some((
                     FailureClass::LostAtoms,
                     format!("atom count fell from {max_atoms} to {atoms} by step {step} (lost atoms)"),
@@ -389,14 +457,11 @@ fn analyse_log(log: &str, limits: &LogLimits) -> LogAnalysis {
     if a.failure.is_none() {
         match a.thermo.last() {
             None => a.failure = Some((FailureClass::Unparsable, "no thermo output in the log".into())),
-            Some(last) if last.atoms != limits.atoms => {
+            Some(last) if limits.atoms.is_some_and(|n| last.atoms != n) => {
+                let expected = limits.atoms.unwrap_or(0);
                 a.failure = Some((
-                    if last.atoms < limits.atoms {
-                        FailureClass::LostAtoms
-                    } else {
-                        FailureClass::Unparsable
-                    },
-                    format!("{} atoms at the end, expected {}", last.atoms, limits.atoms),
+                    if last.atoms < expected { FailureClass::LostAtoms } else { FailureClass::Unparsable },
+                    format!("{} atoms at the end, expected {expected}", last.atoms),
                 ))
             }
             _ => {}
@@ -409,7 +474,7 @@ fn analyse_log(log: &str, limits: &LogLimits) -> LogAnalysis {
 mod tests {
     use super::*;
 
-    const LIMITS: LogLimits = LogLimits { ke_limit: 1.0, atoms: 700 };
+    const LIMITS: LogLimits = LogLimits { ke_limit: 1.0, atoms: Some(700) };
 
     fn log(rows: &str) -> String {
         format!("LIGGGHTS (Version LIGGGHTS-PUBLIC 3.8.0)\n    Step    Atoms         KinEng \nINFO: inserted\n{rows}Loop time of 2.8 on 1 procs\n")

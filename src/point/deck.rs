@@ -12,6 +12,8 @@ use crate::sys::hex;
 
 /// The built-in spreading deck.
 pub const SPREADING_TEMPLATE: &str = include_str!("../../templates/spreading.liggghts.tera");
+/// The built-in deck of the conveyor layout (the blade's frame, a held heap).
+pub const CONVEYOR_TEMPLATE: &str = include_str!("../../templates/conveyor.liggghts.tera");
 
 #[derive(Debug, thiserror::Error)]
 pub enum DeckError {
@@ -29,13 +31,25 @@ pub struct Template {
     name: String,
     source: String,
     tera: tera::Tera,
+    /// The built-in templates only: the conveyor layout's own deck (a user's template renders
+    /// every layout itself).
+    conveyor: Option<String>,
 }
 
 impl Template {
     /// The built-in template, or the file at `path`.
     pub fn load(path: Option<&Path>) -> Result<Template, DeckError> {
         match path {
-            None => Template::from_source("spreading.liggghts.tera", SPREADING_TEMPLATE),
+            None => {
+                let mut t = Template::from_source("spreading.liggghts.tera", SPREADING_TEMPLATE)?;
+                let name = "conveyor.liggghts.tera";
+                t.tera
+                    .add_raw_template(name, CONVEYOR_TEMPLATE)
+                    .map_err(|e| DeckError::Syntax { name: name.into(), reason: chain(&e) })?;
+                t.conveyor = Some(name.into());
+                t.source.push_str(CONVEYOR_TEMPLATE);
+                Ok(t)
+            }
             Some(p) => {
                 let source = std::fs::read_to_string(p)
                     .map_err(|e| DeckError::Read { path: p.display().to_string(), reason: e.to_string() })?;
@@ -49,7 +63,7 @@ impl Template {
         tera.autoescape_on(vec![]);
         tera.add_raw_template(name, source)
             .map_err(|e| DeckError::Syntax { name: name.into(), reason: chain(&e) })?;
-        Ok(Template { name: name.into(), source: source.into(), tera })
+        Ok(Template { name: name.into(), source: source.into(), tera, conveyor: None })
     }
 
     /// sha256 of the template source, for the manifest.
@@ -61,9 +75,13 @@ impl Template {
     pub fn render(&self, scene: &Scene) -> Result<String, DeckError> {
         let mut context = tera::Context::new();
         context.insert("scene", scene);
+        let name = match &self.conveyor {
+            Some(c) if scene.is_conveyor() => c,
+            _ => &self.name,
+        };
         self.tera
-            .render(&self.name, &context)
-            .map_err(|e| DeckError::Render { name: self.name.clone(), reason: chain(&e) })
+            .render(name, &context)
+            .map_err(|e| DeckError::Render { name: name.clone(), reason: chain(&e) })
     }
 }
 

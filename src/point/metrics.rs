@@ -197,7 +197,7 @@ fn standard_normal_cdf(z: f64) -> f64 {
 }
 
 /// Mean v_x per layer, pooled over `frames`.
-fn vx_profile<'a>(scene: &Scene, frames: impl Iterator<Item = &'a Frame>) -> Vec<Option<f64>> {
+pub(crate) fn vx_profile<'a>(scene: &Scene, frames: impl Iterator<Item = &'a Frame>) -> Vec<Option<f64>> {
     let mut sum = [0.0; VX_LAYERS];
     let mut count = [0usize; VX_LAYERS];
     for f in frames {

@@ -6,7 +6,9 @@
 pub mod deck;
 pub mod layer;
 pub mod metrics;
+pub mod plausible;
 pub mod quality;
+pub mod steady;
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -40,8 +42,12 @@ impl PointContext {
         // The template first: a bad one is bad input, found before the engine is run.
         let template =
             Template::load(sweep.template_path().as_deref()).map_err(|e| Error::input(e.to_string()))?;
+        // Under the process's interrupt flag (Ctrl-C, SIGTERM), like every run.
         let engine =
-            Engine::locate(sweep.file.run.engine.as_deref()).map_err(|e| Error::Engine(e.to_string()))?;
+            Engine::locate(sweep.file.run.engine.as_deref(), &CancelToken::new()).map_err(|e| match e {
+                crate::engine::EngineError::Interrupted => Error::Interrupted,
+                e => Error::Engine(e.to_string()),
+            })?;
         let timeout = Duration::from_secs_f64(sweep.file.run.timeout_s);
         Ok(PointContext { sweep, engine, template, timeout })
     }
@@ -202,6 +208,7 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
             wall_time: wall,
             measured,
         };
+        crate::engine::remove_forced_restarts(run_dir);
         let _ = write_json(&run_dir.join(FAILURE), &f);
         RunOutcome::Failed(f)
     };
@@ -217,7 +224,8 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
             0.0,
         );
     }
-    let limits = LogLimits { ke_limit: p.scene.ke_limit, atoms: p.scene.atoms() as u64 };
+    let atoms = (!p.scene.is_conveyor()).then_some(p.scene.atoms() as u64);
+    let limits = LogLimits { ke_limit: p.scene.ke_limit, atoms };
     let run = ctx.engine.run(run_dir, Deck::INPUT, &limits, ctx.timeout, cancel);
     let wall = run.wall_time;
     match run.status {
@@ -235,6 +243,14 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
         Ok(f) => f,
         Err(e) => return fail(FailureClass::Unparsable, e.to_string(), String::new(), wall),
     };
+    // What the engine wrote must be possible before the metrics read it.
+    let blade_speed = p.parameters.get("blade_speed").copied().unwrap_or(f64::NAN);
+    if let Some(e) = frames.iter().find_map(|f| plausible::check_frame(f, blade_speed).err()) {
+        return fail(FailureClass::Implausible, format!("{DUMP}: {e}"), String::new(), wall);
+    }
+    if p.scene.is_conveyor() {
+        return finish_conveyor(ctx, p, run_dir, &run, &frames, fail_measured);
+    }
     let m = match metrics::compute(&p.scene, &frames) {
         Ok(m) => m,
         Err(e) => return fail(FailureClass::Unparsable, e.to_string(), String::new(), wall),
@@ -247,6 +263,9 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
         mfr: m.mfr,
         mfr_flux: m.mfr_flux,
         mfr_particles: m.mfr_particles,
+        mfr_se: None,
+        steady_state: None,
+        vx_se: Vec::new(),
         mfr_windows: m.mfr_windows,
         steady: m.steady,
         steady_p: m.steady_p,
@@ -270,8 +289,76 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
         );
         return fail_measured(FailureClass::Unsteady, reason, String::new(), wall, Some(Box::new(result)));
     }
+    if let Err(e) = plausible::check_result(&result) {
+        return fail(FailureClass::Implausible, e, String::new(), wall);
+    }
     if let Err(e) = write_json(&run_dir.join(RESULT), &result) {
         return fail(FailureClass::Unparsable, format!("cannot write {RESULT}: {e}"), String::new(), wall);
+    }
+    RunOutcome::Done(result)
+}
+
+/// The conveyor layout's result: the block series from the log, the steady window, MFR with its
+/// SE; a run that did not become steady fails as `unsteady` with its numbers kept.
+fn finish_conveyor(
+    ctx: &PointContext,
+    p: &Prepared,
+    run_dir: &Path,
+    run: &crate::engine::EngineRun,
+    frames: &[Frame],
+    fail: impl Fn(FailureClass, String, String, f64, Option<Box<RunResult>>) -> RunOutcome,
+) -> RunOutcome {
+    let wall = run.wall_time;
+    let (blocks, stop) = match steady::parse_log(&run.log) {
+        Ok(b) => b,
+        Err(e) => return fail(FailureClass::Unparsable, e.to_string(), String::new(), wall, None),
+    };
+    let st = steady::compute(&p.scene, &blocks, &stop, frames);
+    // The steady window in quarters (the gated scene's sub-windows, for the same readers).
+    let w = &st.state.block_mfr[st.state.transient_blocks..];
+    let quarter = w.len().div_ceil(4).max(1);
+    let mfr_windows = w.chunks(quarter).map(|c| c.iter().sum::<f64>() / c.len() as f64).collect();
+    let steps = blocks.last().map(|b| b.step).unwrap_or(0);
+    let result = RunResult {
+        format: RESULT_FORMAT,
+        hash: p.hash.clone(),
+        parameters: p.parameters.clone(),
+        mfr: st.mfr,
+        mfr_flux: st.mfr_deleted,
+        mfr_particles: st.particles,
+        mfr_se: Some(st.mfr_se),
+        steady_state: Some(Box::new(st.state)),
+        vx_se: st.vx_se,
+        mfr_windows,
+        steady: st.unsteady.is_none(),
+        steady_p: 1.0,
+        vx: st.vx,
+        particles: p.scene.conveyor.heap_particles,
+        // The conveyor deletes its deposit behind the blade: the layer is not measured yet.
+        layer: None,
+        settle_steps: 0,
+        steps,
+        simulated_time: steps as f64 * p.scene.timestep,
+        wall_time: wall,
+        cpu_time: run.cpu_time,
+        engine_version: ctx.engine.version.clone(),
+        warnings: run.warnings.clone(),
+    };
+    if let Some(why) = st.unsteady {
+        let reason = format!("MFR not steady: {why}");
+        return fail(FailureClass::Unsteady, reason, String::new(), wall, Some(Box::new(result)));
+    }
+    if let Err(e) = plausible::check_result(&result) {
+        return fail(FailureClass::Implausible, e, String::new(), wall, None);
+    }
+    if let Err(e) = write_json(&run_dir.join(RESULT), &result) {
+        return fail(
+            FailureClass::Unparsable,
+            format!("cannot write {RESULT}: {e}"),
+            String::new(),
+            wall,
+            None,
+        );
     }
     RunOutcome::Done(result)
 }

@@ -412,12 +412,20 @@ fn measured_sections(a: &Analysis, figures: &[Figure]) -> String {
         );
         for st in STATISTICS {
             let iv = s.intervals[st.name()];
-            let ch = s.changes.as_ref().map(|c| c[st.name()]);
+            let ch = s.changes.as_ref().map(|c| &c[st.name()]);
+            // On the scaled rule the change is shown on the statistic's own scale; the cell's
+            // tooltip holds the whole test in words.
             let change = match ch {
                 None => "".to_string(),
                 Some(c) => format!(
-                    "<br>{}{}",
-                    c.rel.map_or("undef.".into(), |r| format!("{:+.1}%", r * 100.0)),
+                    "<br><span title=\"{}\">{}{}</span>",
+                    esc(&c.test),
+                    match (c.abs, c.scale, c.rel) {
+                        (Some(d), Some(sc), _) if sc > 0.0 =>
+                            format!("{:.1}% of scale", d.abs() / sc * 100.0),
+                        (_, _, Some(r)) => format!("{:.1}%", r * 100.0),
+                        _ => "undef.".into(),
+                    },
                     if c.within { " ✓" } else { "" }
                 ),
             };
@@ -442,6 +450,32 @@ fn measured_sections(a: &Analysis, figures: &[Figure]) -> String {
         );
     }
     push(&mut h, "</table></div>\n");
+    if let Some(s) = a.spaces.iter().find(|s| s.converged).or(a.spaces.last()) {
+        if let Some(ch) = &s.changes {
+            push(&mut h, &format!("<p>The tests at {} (N = {}):</p>\n<ul>\n", esc(&s.label), s.n));
+            for st in STATISTICS {
+                push(&mut h, &format!("<li>{}: {}</li>\n", st.name(), esc(&ch[st.name()].test)));
+            }
+            push(&mut h, "</ul>\n");
+        }
+        push(&mut h, &format!("<p>{}</p>\n", esc(&super::weights_sentence(s))));
+        match &s.noise {
+            Some(n) => push(
+                &mut h,
+                &format!(
+                    "<p>Noise in each point ({} points with a standard error): variance of MFR {:.3e}, of which the \
+                     per-point noise (mean se²) {:.3e} ({:.1}%); std {:.4} raw, {:.4} with the noise removed.</p>\n",
+                    n.points_with_se,
+                    n.variance,
+                    n.noise_variance,
+                    n.noise_share * 100.0,
+                    n.std_raw,
+                    n.std_without_noise
+                ),
+            ),
+            None => push(&mut h, "<p>No point records its MFR's standard error, so the spread above holds the per-point noise unseen.</p>\n"),
+        }
+    }
     for f in figures.iter().filter(|f| f.name == "statistics") {
         push(&mut h, &img(f));
     }
@@ -455,24 +489,28 @@ fn measured_sections(a: &Analysis, figures: &[Figure]) -> String {
         &mut h,
         "<h2>Which parameter matters</h2>\n<p>First-order sensitivity indices of MFR over every done point \
          (adjusted correlation ratio: the share of MFR's variance explained by one parameter alone; no extra runs).</p>\n\
-         <table><tr><th class=\"l\">parameter</th><th>S₁ (–)</th><th class=\"l\"></th><th>bins</th></tr>\n",
+         <table><tr><th class=\"l\">parameter</th><th>S₁ (–)</th><th>95% interval</th><th class=\"l\"></th><th>bins</th></tr>\n",
     );
     for s in &a.sensitivity {
         let w = s.first_order.unwrap_or(0.0) * 240.0;
         push(
             &mut h,
             &format!(
-                "<tr><td class=\"l\">{}</td><td>{}</td><td class=\"l\"><span class=\"bar\" style=\"width:{w:.0}px\"></span></td><td>{}</td></tr>\n",
+                "<tr><td class=\"l\">{}</td><td>{}</td><td>[{}, {}]</td><td class=\"l\"><span class=\"bar\" style=\"width:{w:.0}px\"></span></td><td>{}</td></tr>\n",
                 esc(&s.parameter),
                 num(s.first_order),
+                num(s.lo),
+                num(s.hi),
                 s.bins
             ),
         );
     }
     push(&mut h, "</table>\n");
+    push(&mut h, &format!("<p>{}.</p>\n", esc(&a.sensitivity_note)));
     for f in figures.iter().filter(|f| f.name == "scatter") {
         push(&mut h, &img(f));
     }
+    push(&mut h, &emulator_section(a));
     let maps: Vec<&Figure> = figures.iter().filter(|f| f.name.starts_with("map-mfr-")).collect();
     if !maps.is_empty() {
         push(
@@ -497,6 +535,75 @@ fn measured_sections(a: &Analysis, figures: &[Figure]) -> String {
         for f in lattice {
             push(&mut h, &img(f));
         }
+    }
+    h
+}
+
+/// The emulator: how well it predicts left-out points, the space's statistics from it beside
+/// the raw sample's, its verdict, the zero region and the best settings per quality class.
+fn emulator_section(a: &Analysis) -> String {
+    let mut h = String::from("<h2>Emulator of MFR over the space</h2>\n");
+    let Some(e) = &a.emulator else {
+        h.push_str("<p>No emulator: too few done points, or MFR does not vary.</p>\n");
+        return h;
+    };
+    let cv = &e.cross_validation;
+    h.push_str(&format!(
+        "<p>A Gaussian process (Matérn 5/2, constant mean, each point's own noise where it records an \
+         <code>mfr_se</code> plus a fitted nugget) fitted to {} points. Leave-one-out: RMSE {:.4} against a \
+         per-point noise of {:.4}; Q² = {:.3} (share of MFR's variance predicted out of sample); {:.0}% of \
+         left-out points within their 95% band.</p>\n",
+        e.points,
+        cv.rmse,
+        cv.noise_se,
+        cv.q2,
+        cv.coverage95 * 100.0
+    ));
+    h.push_str("<table><tr><th class=\"l\">statistic</th><th>raw sample</th><th>emulator <small>[95% interval]</small></th></tr>\n");
+    let raw = a.statistics;
+    for (k, st) in STATISTICS.iter().enumerate() {
+        let iv = e.statistics.intervals[k];
+        h.push_str(&format!(
+            "<tr><td class=\"l\">{}</td><td>{}</td><td>{} <small>[{}, {}]</small></td></tr>\n",
+            st.name(),
+            num(raw.as_ref().and_then(|m| st.of(m))),
+            num(st.of(&e.statistics.statistics)),
+            sig(iv.lo),
+            sig(iv.hi)
+        ));
+    }
+    h.push_str("</table>\n");
+    if let Some(v) = &e.verdict {
+        h.push_str(&format!(
+            "<p>The rule on the emulator's statistics of the last two spaces: {}.</p>\n<ul>\n",
+            if v.holds { "holds" } else { "does not hold" }
+        ));
+        for st in STATISTICS {
+            h.push_str(&format!("<li>{}: {}</li>\n", st.name(), esc(&v.changes[st.name()].test)));
+        }
+        h.push_str("</ul>\n");
+    }
+    h.push_str(&format!(
+        "<p>MFR is zero (the emulator's mean below {:.4}) over {:.1}% of the space; for sure (its upper 95% \
+         bound below it) over {:.1}%.</p>\n",
+        e.zero_level,
+        e.zero_fraction * 100.0,
+        e.zero_fraction_sure * 100.0
+    ));
+    for (class, list) in &e.best {
+        if list.is_empty() {
+            continue;
+        }
+        h.push_str(&format!(
+            "<p>Best {class} points by the emulator's MFR:</p>\n<table><tr><th>point</th><th>run MFR</th><th>emulator MFR ± SE</th></tr>\n"
+        ));
+        for b in list {
+            h.push_str(&format!(
+                "<tr><td>#{}</td><td>{:.4}</td><td>{:.4} ± {:.4}</td></tr>\n",
+                b.index, b.mfr, b.emulator_mfr, b.emulator_se
+            ));
+        }
+        h.push_str("</table>\n");
     }
     h
 }

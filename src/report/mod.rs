@@ -10,6 +10,7 @@
 //! [`crate::analysis::convergence`], [`crate::analysis::sensitivity`], [`crate::point::quality`]).
 
 mod advice;
+pub mod emulation;
 mod html;
 mod maps;
 mod plots;
@@ -21,14 +22,14 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use crate::analysis::convergence::{self, Change, Criteria, Judgement};
+use crate::analysis::convergence::{self, Change, Criteria, Judgement, SpaceStats};
 use crate::analysis::sensitivity;
 use crate::analysis::stats::{self, Bootstrap, Interval, Moments, STATISTICS};
 use crate::error::{Error, Result};
 use crate::outcome::RunResult;
 use crate::point::quality::{self, Quality};
 use crate::run::screen::{Screen, ScreenReport};
-use crate::store::{DesignRecord, Manifest, PointStatus, Store};
+use crate::store::{DesignRecord, Manifest, PointStatus, RunState, Store};
 use crate::sweep::Sweep;
 
 /// Version of `summary.json`.
@@ -44,6 +45,8 @@ pub struct PointRow {
     /// The run's hash: its directory is `DIR/runs/<hash>`.
     pub hash: String,
     pub state: PointState,
+    /// The standard error of the point's MFR, where its result.json records one (`mfr_se`).
+    pub mfr_se: Option<f64>,
 }
 
 #[derive(Debug, Clone)]
@@ -89,14 +92,22 @@ pub struct SpaceRow {
     pub n: usize,
     pub done: usize,
     pub failed: usize,
-    /// Statistics of the done runs' MFR.
+    /// Statistics of the done runs' MFR (weighted as `weights` says).
     pub statistics: Moments,
+    /// `"trapezoid"` (a complete lattice weighted by the trapezoid rule) or `"equal"`.
+    pub weights: &'static str,
+    /// The equal-weight statistics beside the trapezoid ones (a complete lattice only), so the
+    /// report can say how far the two differ.
+    pub equal_weights: Option<Moments>,
     /// Bootstrap intervals of mean, std, skewness, kurtosis.
     pub intervals: BTreeMap<&'static str, Interval>,
     /// Changes from the previous space (`None` for the first).
     pub changes: Option<BTreeMap<&'static str, Change>>,
     pub holds: bool,
     pub converged: bool,
+    /// The variance split into the parameters' share and the per-point noise (mean of
+    /// `mfr_se`²); `None` when no point of the space has an `mfr_se`.
+    pub noise: Option<crate::analysis::noise::NoiseSplit>,
     /// Indices (into the manifest's points) of the space's points: for plots, not the JSON.
     #[serde(skip)]
     pub members: Vec<usize>,
@@ -255,6 +266,12 @@ pub struct Analysis {
     pub spaces: Vec<SpaceRow>,
     /// First-order indices of MFR over every done point, largest first.
     pub sensitivity: Vec<sensitivity::Index>,
+    /// Whether the ranking can be trusted yet, and why (or why not) in words.
+    pub sensitivity_reliable: bool,
+    pub sensitivity_note: String,
+    /// The emulator fitted to the last complete space: cross-validation, statistics, verdict,
+    /// zero region, best settings; `None` with too few points or no spread in MFR.
+    pub emulator: Option<emulation::EmulatorReport>,
     /// Done points per spreading-quality class.
     pub quality: BTreeMap<&'static str, usize>,
     /// Highest MFR among the ideal points.
@@ -267,11 +284,22 @@ pub struct Analysis {
     pub points: Vec<PointRow>,
 }
 
-/// Read a sweep directory and analyse it with `criteria`.
-pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Analysis> {
+/// A sweep directory's manifest, sweep file and points (with their states and `mfr_se`), and
+/// what the screen did.
+pub fn read_points(dir: &Path) -> Result<(Manifest, Sweep, Vec<PointRow>, ScreenReport)> {
     let (manifest, toml) = Store::read_manifest(dir)?;
     let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
     let store = Store::open(dir);
+    store.check_pairing(&manifest)?;
+    for p in &manifest.points {
+        if let Some(RunState::Damaged { file, reason }) = store.point_finished(&manifest, p) {
+            eprintln!(
+                "warning: {}: {reason}; point {} is left out (`sweep resume` runs it again)",
+                file.display(),
+                p.index
+            );
+        }
+    }
     let (statuses, _, screen) = Screen::of(&sweep).statuses(&store, &manifest);
     let points: Vec<PointRow> = manifest
         .points
@@ -281,6 +309,7 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
             index: p.index,
             values: p.values.clone(),
             hash: p.hash.clone(),
+            mfr_se: matches!(s, PointStatus::Done(_)).then(|| mfr_se(dir, &p.hash)).flatten(),
             state: match s {
                 PointStatus::Done(r) => {
                     let quality = quality::of_result(&r);
@@ -294,7 +323,14 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
             },
         })
         .collect();
+    Ok((manifest, sweep, points, screen))
+}
+
+/// Read a sweep directory and analyse it with `criteria`.
+pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Analysis> {
+    let (manifest, sweep, points, screen) = read_points(dir)?;
     let spaces = judge_spaces(&manifest, &points, criteria, boot);
+    let emulator = emulation::analyse(&sweep, &points, &spaces, criteria);
     let counts = count(&manifest, &points, spaces.len());
     let verdict = verdict(&spaces, &counts, criteria);
     let statistics = spaces.iter().find(|s| s.converged).or(spaces.last()).map(|s| s.statistics);
@@ -303,7 +339,9 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
     // Screened points are real zeros of MFR, and part of how it depends on the parameters.
     let (x, y): (Vec<Vec<f64>>, Vec<f64>) =
         points.iter().filter_map(|p| p.mfr().map(|m| (p.values.clone(), m))).unzip();
-    let sensitivity = sensitivity::ranked(sensitivity::first_order(&manifest.parameters, &x, &y));
+    let sboot = Bootstrap { resamples: boot.resamples.min(500), ..*boot };
+    let sensitivity = sensitivity::ranked(sensitivity::with_intervals(&manifest.parameters, &x, &y, &sboot));
+    let (sensitivity_reliable, sensitivity_note) = sensitivity::reliability(y.len(), &sensitivity);
     let mut quality: BTreeMap<&'static str, usize> = Quality::ALL.iter().map(|q| (q.as_str(), 0)).collect();
     for (_, _, q) in &done {
         *quality.entry(q.as_str()).or_default() += 1;
@@ -330,7 +368,7 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
                 parameters: manifest.parameters.iter().cloned().zip(p.values.iter().copied()).collect(),
                 class: class.clone(),
                 reason: reason.clone(),
-                run_dir: store.run_dir(&p.hash),
+                run_dir: crate::store::Store::open(dir).run_dir(&p.hash),
             }),
             _ => None,
         })
@@ -362,6 +400,9 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
         timing: timing(dir),
         spaces,
         sensitivity,
+        sensitivity_reliable,
+        sensitivity_note,
+        emulator,
         quality,
         best_ideal,
         failures,
@@ -370,20 +411,33 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
     })
 }
 
+/// The `mfr_se` a run's result.json records, if it does (results written before the per-point
+/// standard error was measured have none). Read as plain JSON so that either form reads.
+fn mfr_se(dir: &Path, hash: &str) -> Option<f64> {
+    let text = std::fs::read_to_string(dir.join("runs").join(hash).join("result.json")).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    v.get("mfr_se")?.as_f64().filter(|s| s.is_finite() && *s >= 0.0)
+}
+
 /// Statistics, intervals and judgements of the complete spaces, in order, up to the first
 /// space that still has pending points.
 fn judge_spaces(manifest: &Manifest, points: &[PointRow], c: &Criteria, boot: &Bootstrap) -> Vec<SpaceRow> {
     let mut rows = Vec::new();
-    let mut judged: Vec<(usize, Moments)> = Vec::new();
+    let mut judged: Vec<SpaceStats> = Vec::new();
     for space in &manifest.spaces {
         let members: Vec<&PointRow> = space.points.iter().map(|&i| &points[i]).collect();
         if members.iter().any(|p| matches!(p.state, PointState::Pending)) {
             break;
         }
-        let mfr: Vec<f64> = members.iter().filter_map(|p| p.mfr()).collect();
-        let m = stats::moments(&mfr);
-        let iv = stats::bootstrap(&mfr, boot);
-        judged.push((members.len(), m));
+        let values: Vec<&[f64]> = members.iter().map(|p| p.values.as_slice()).collect();
+        let all_mfr: Vec<Option<f64>> = members.iter().map(|p| p.mfr()).collect();
+        let (mfr, w) = convergence::space_values(&values, &all_mfr, c.lattice_weights);
+        let se: Vec<Option<f64>> = members.iter().filter(|p| p.mfr().is_some()).map(|p| p.mfr_se).collect();
+        let noise = crate::analysis::noise::split(&mfr, &se, w.as_deref());
+        let st = SpaceStats::of(members.len(), &mfr, w.as_deref(), boot);
+        let m = st.moments;
+        let iv = crate::analysis::weights::bootstrap(&mfr, w.as_deref(), boot);
+        judged.push(st);
         rows.push(SpaceRow {
             label: space.label.clone(),
             n: members.len(),
@@ -391,6 +445,9 @@ fn judge_spaces(manifest: &Manifest, points: &[PointRow], c: &Criteria, boot: &B
             done: mfr.len(),
             failed: members.iter().filter(|p| matches!(p.state, PointState::Failed { .. })).count(),
             statistics: m,
+            weights: if w.is_some() { "trapezoid" } else { "equal" },
+            equal_weights: w.as_ref().map(|_| stats::moments(&mfr)),
+            noise,
             intervals: STATISTICS.iter().zip(iv).map(|(s, i)| (s.name(), i)).collect(),
             changes: None,
             holds: false,
@@ -432,6 +489,29 @@ fn count(manifest: &Manifest, points: &[PointRow], complete: usize) -> SummaryCo
     c
 }
 
+/// Which weights a space's statistics used and, for a lattice, how far the thesis's equal
+/// weights would move the mean and the std.
+pub fn weights_sentence(s: &SpaceRow) -> String {
+    match &s.equal_weights {
+        None => format!("{}: every point weighted equally.", s.label),
+        Some(eq) => {
+            let rel = |a: Option<f64>, b: Option<f64>| match (a, b) {
+                (Some(a), Some(b)) if a != 0.0 => format!("{:+.1}%", (b - a) / a.abs() * 100.0),
+                _ => "undefined".into(),
+            };
+            format!(
+                "{}: lattice points weighted by the trapezoid rule (½ per coordinate on a face of the box); \
+                 equal weights (the thesis) would give mean {} ({}) and std {} ({}).",
+                s.label,
+                eq.mean.map_or("–".into(), |v| format!("{v:.4}")),
+                rel(s.statistics.mean, eq.mean),
+                eq.std.map_or("–".into(), |v| format!("{v:.4}")),
+                rel(s.statistics.std, eq.std),
+            )
+        }
+    }
+}
+
 fn pct(v: Option<f64>) -> String {
     v.map_or("undefined".into(), |v| format!("{:.1}%", v * 100.0))
 }
@@ -466,6 +546,17 @@ fn verdict(spaces: &[SpaceRow], counts: &SummaryCounts, c: &Criteria) -> Verdict
             .join(", ")
     };
     let last = match (spaces.last(), &last_changes) {
+        (Some(s), Some(ch)) if c.rule == convergence::Rule::Scaled => {
+            let tests = s.changes.as_ref().map_or(String::new(), |t| {
+                STATISTICS
+                    .iter()
+                    .map(|st| format!("{} {}", st.name(), t[st.name()].test))
+                    .collect::<Vec<_>>()
+                    .join("; ")
+            });
+            let _ = ch;
+            format!("; last space ({}): {tests}", s.label)
+        }
         (Some(s), Some(ch)) => format!("; last changes ({}): {}", s.label, changes(ch)),
         _ => String::new(),
     };
@@ -628,7 +719,16 @@ pub fn convergence_csv(a: &Analysis) -> String {
     }
     header.extend(["moment_skewness", "median"].map(String::from));
     header.extend(STATISTICS.iter().map(|s| format!("change_{}", s.name())));
-    header.extend(["holds", "converged"].map(String::from));
+    for s in STATISTICS {
+        let n = s.name();
+        header.extend([
+            format!("delta_{n}"),
+            format!("scale_{n}"),
+            format!("noise_{n}"),
+            format!("test_{n}"),
+        ]);
+    }
+    header.extend(["holds", "converged", "weights"].map(String::from));
     w.write_record(&header).expect("in-memory csv");
     for s in &a.spaces {
         let mut row = vec![s.label.clone(), s.n.to_string(), s.done.to_string(), s.failed.to_string()];
@@ -640,7 +740,13 @@ pub fn convergence_csv(a: &Analysis) -> String {
         for st in STATISTICS {
             row.push(opt(s.changes.as_ref().and_then(|c| c[st.name()].rel)));
         }
-        row.extend([s.holds.to_string(), s.converged.to_string()]);
+        for st in STATISTICS {
+            match s.changes.as_ref().map(|c| &c[st.name()]) {
+                Some(c) => row.extend([opt(c.abs), opt(c.scale), opt(c.noise), c.test.clone()]),
+                None => row.extend([String::new(), String::new(), String::new(), String::new()]),
+            }
+        }
+        row.extend([s.holds.to_string(), s.converged.to_string(), s.weights.to_string()]);
         w.write_record(&row).expect("in-memory csv");
     }
     String::from_utf8(w.into_inner().expect("in-memory csv")).expect("utf-8")

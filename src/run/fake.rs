@@ -65,10 +65,11 @@ pub struct FakeExecutor {
     pub overlap: AtomicUsize,
 }
 
-/// The fake's MFR: a smooth function of the swept values, in (0, 1).
+/// The fake's MFR: a smooth function of the swept values, in [0.05, 0.65].
 pub fn fake_mfr(values: &[f64]) -> f64 {
     let s: f64 = values.iter().enumerate().map(|(i, v)| (i + 1) as f64 * v).sum();
-    0.5 + 0.4 * s.sin()
+    // Within [0.05, 0.65]: a possible MFR (below the densest packing), never zero.
+    0.35 + 0.3 * s.sin()
 }
 
 impl FakeExecutor {
@@ -198,6 +199,9 @@ impl Executor for FakeExecutor {
                     mfr: (self.mfr)(&job.values),
                     mfr_flux: (self.mfr)(&job.values),
                     mfr_particles: 0,
+                    mfr_se: None,
+                    steady_state: None,
+                    vx_se: Vec::new(),
                     mfr_windows: vec![],
                     steady: true,
                     steady_p: 1.0,

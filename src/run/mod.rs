@@ -36,7 +36,6 @@ mod status;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
-use std::time::SystemTime;
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -98,7 +97,8 @@ impl Summary {
     pub fn exit_code(&self) -> i32 {
         use crate::error::exit;
         if self.interrupted {
-            exit::INTERRUPTED
+            // Death by signal n is 128 + n; a cancel without a signal reads as Ctrl-C.
+            crate::sys::process::interrupt_signal().map_or(exit::INTERRUPTED, |s| 128 + s)
         } else if self.failed > 0 {
             exit::RUNS_FAILED
         } else {
@@ -184,6 +184,10 @@ pub fn resume_share<E: Executor>(
         .map(|p| if cancel.is_cancelled() { Err(Error::Interrupted) } else { exec.prepare(&p.values) })
         .collect::<Result<_>>()?;
     let changed = manifest.points.iter().zip(&jobs).filter(|(p, j)| exec.hash(j) != p.hash).count();
+    if changed > 0 {
+        refuse_swapped(dir, &manifest, &jobs.iter().map(|j| exec.hash(j)).collect::<Vec<_>>())?;
+    }
+    Store::open(dir).check_pairing(&manifest)?;
     let identity = exec.identity();
     let diff = identity_diff(&manifest.identity, &identity);
     if !opts.force && (!diff.is_empty() || changed > 0) {
@@ -218,6 +222,30 @@ pub fn resume_share<E: Executor>(
     execute(&store, &manifest, exec, jobs, &sweep, opts, order, hook, cancel)
 }
 
+/// Refuse a manifest whose hashes are those its points render to, but paired with the wrong
+/// points: an edit (two hashes swapped), not a changed engine or template, which `--force`
+/// must not paper over.
+fn refuse_swapped(dir: &Path, manifest: &Manifest, rendered: &[&str]) -> Result<()> {
+    let mut theirs: Vec<&str> = manifest.points.iter().map(|p| p.hash.as_str()).collect();
+    let mut ours = rendered.to_vec();
+    theirs.sort_unstable();
+    ours.sort_unstable();
+    if theirs != ours {
+        return Ok(());
+    }
+    let wrong: Vec<usize> =
+        manifest.points.iter().zip(rendered).filter(|(p, h)| p.hash != **h).map(|(p, _)| p.index).collect();
+    let pair = match wrong.as_slice() {
+        [i, j] => format!("points {i} and {j}"),
+        w => format!("{} points (first {:?})", w.len(), &w[..w.len().min(4)]),
+    };
+    Err(Error::input(format!(
+        "{}: the hashes of {pair} are swapped: each point names the run another point renders to; \
+         the manifest was edited or is damaged (swap them back, or start the sweep in a new directory)",
+        Store::manifest_path(dir).display()
+    )))
+}
+
 /// Run the unfinished points of a manifest.
 ///
 /// The screen ([`crate::run::screen`]): the unfinished points of its verification sample go first in
@@ -236,18 +264,24 @@ fn execute<E: Executor>(
     hook: &mut dyn SpaceHook,
     cancel: &CancelToken,
 ) -> Result<Summary> {
-    let session_start = SystemTime::now();
     // Leftovers of atomic writes cut off by a kill or a full disk.
     store.remove_stale_temporaries()?;
     let screen = Screen::of(sweep);
     let sample = screen.sample(&manifest.points);
     let mut status = Vec::with_capacity(manifest.points.len());
+    let mut recovered: Vec<(String, store::ClaimInfo)> = Vec::new();
     let mut queued: BTreeMap<usize, E::Job> = BTreeMap::new();
     let mut held: BTreeMap<usize, E::Job> = BTreeMap::new();
     for (p, job) in manifest.points.iter().zip(jobs) {
-        let state = store.state(&p.hash);
+        let state = store.point_state(manifest, p);
         if let RunState::Damaged { file, reason } = &state {
-            eprintln!("warning: {}: unreadable ({reason}); point {} runs again", file.display(), p.index);
+            eprintln!("warning: {}: {reason}; point {} runs again", file.display(), p.index);
+        }
+        if matches!(state, RunState::Done(_) | RunState::Failed(_)) {
+            // Killed between its outcome and its joblog line: the claim is still there.
+            if let Some(c) = store.remove_dead_claim_of_finished(&p.hash)? {
+                recovered.push((p.hash.clone(), c));
+            }
         }
         let s = match state {
             RunState::Done(r) => PointStatus::Done(r),
@@ -276,6 +310,9 @@ fn execute<E: Executor>(
     if rep.verdict == Verdict::Refuted {
         queued.append(&mut held);
     }
+    if !recovered.is_empty() {
+        rep.log_recovered(store, &recovered)?;
+    }
     let pick = |all: &mut BTreeMap<usize, E::Job>, sample_first: bool| -> Vec<E::Job> {
         let (first, rest): (Vec<usize>, Vec<usize>) =
             all.keys().copied().partition(|i| sample_first && sample.contains(i));
@@ -292,7 +329,7 @@ fn execute<E: Executor>(
     let popts = PoolOptions {
         slots: opts.jobs.max(1),
         retries: sweep.file.run.retries,
-        retry_failed_before: opts.retry_failed.then_some(session_start),
+        retry_failed_before: if opts.retry_failed { Some(store.retry_round()?) } else { None },
     };
     pool::run(exec, store, queue, &popts, cancel, |e| rep.event(e));
     // Refuted while the pool ran: the held-back closed points run now, for real.

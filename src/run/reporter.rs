@@ -13,8 +13,8 @@ use crate::run::progress::{Counts, Progress, ProgressMode};
 use crate::run::screen::{Screen, Verdict};
 use crate::store::{self, Manifest, PointRecord, PointStatus, SpaceRecord, Store};
 
-use crate::analysis::convergence::{judge, Criteria};
-use crate::analysis::stats::Moments;
+use crate::analysis::convergence::{judge, space_values, Criteria, SpaceStats};
+use crate::analysis::stats::Bootstrap;
 
 /// Least time between two rewrites of results.csv while points finish.
 const RESULTS_EVERY: std::time::Duration = std::time::Duration::from_secs(1);
@@ -65,6 +65,36 @@ pub(super) struct Reporter<'a> {
 }
 
 impl<'a> Reporter<'a> {
+    /// Write the joblog line of each finished run whose process was killed before writing it
+    /// (its dead claim was still in the run directory), unless a line is there.
+    pub(super) fn log_recovered(
+        &mut self,
+        store: &Store,
+        recovered: &[(String, store::ClaimInfo)],
+    ) -> Result<()> {
+        let logged: BTreeSet<String> = store::read_joblog(store.dir())?
+            .into_iter()
+            .filter(|l| l.status == "done" || l.status == "failed")
+            .map(|l| l.hash)
+            .collect();
+        for (hash, claim) in recovered.iter().filter(|(h, _)| !logged.contains(h)) {
+            let (status, class, runtime_s) = match store.finished(hash) {
+                Some(store::RunState::Done(r)) => ("done", None, r.wall_time),
+                Some(store::RunState::Failed(f)) => ("failed", Some(f.class.as_str()), f.wall_time),
+                _ => continue,
+            };
+            let start = std::time::UNIX_EPOCH + std::time::Duration::from_secs_f64(claim.claimed_at.max(0.0));
+            self.joblog.append(&store::AttemptRecord {
+                hash: hash.clone(),
+                start,
+                runtime_s,
+                status,
+                class,
+            })?;
+        }
+        Ok(())
+    }
+
     #[expect(clippy::too_many_arguments, reason = "the reporter's whole starting state, one call site")]
     pub(super) fn new(
         store: &'a Store,
@@ -308,7 +338,7 @@ impl<'a> Reporter<'a> {
 /// out) and stops the sweep ([`Flow::Drain`]: no new runs start) at the first converged space.
 pub struct Watch {
     criteria: Criteria,
-    spaces: Vec<(usize, Moments)>,
+    spaces: Vec<SpaceStats>,
     labels: Vec<String>,
     /// The space (label, point count) the sweep converged at, once it has.
     pub converged_at: Option<(String, usize)>,
@@ -322,16 +352,19 @@ impl Watch {
 
 impl SpaceHook for Watch {
     fn space_complete(&mut self, space: &SpaceRecord, points: &[(&PointRecord, &PointStatus)]) -> Flow {
-        let mfr: Vec<f64> = points
+        let mfr: Vec<Option<f64>> = points
             .iter()
-            .filter_map(|(_, s)| match s {
+            .map(|(_, s)| match s {
                 PointStatus::Done(r) if r.mfr.is_finite() => Some(r.mfr),
                 // A closed gap passes nothing: a real zero, not a missing value.
                 PointStatus::Screened => Some(0.0),
                 _ => None,
             })
             .collect();
-        self.spaces.push((points.len(), crate::analysis::stats::moments(&mfr)));
+        // A complete lattice is weighted as a quadrature; each statistic carries its noise.
+        let values: Vec<&[f64]> = points.iter().map(|(p, _)| p.values.as_slice()).collect();
+        let (x, w) = space_values(&values, &mfr, self.criteria.lattice_weights);
+        self.spaces.push(SpaceStats::of(points.len(), &x, w.as_deref(), &Bootstrap::default()));
         self.labels.push(space.label.clone());
         match judge(&self.spaces, &self.criteria).last() {
             Some(j) if j.converged => {

@@ -224,7 +224,7 @@ impl Screen {
         let mut status: Vec<PointStatus> = manifest
             .points
             .iter()
-            .map(|p| match store.finished(&p.hash) {
+            .map(|p| match store.point_finished(manifest, p) {
                 Some(RunState::Done(r)) => PointStatus::Done(r),
                 Some(RunState::Failed(f)) => PointStatus::Failed(f),
                 _ => PointStatus::Pending,
@@ -311,6 +311,9 @@ mod tests {
             mfr,
             mfr_flux: mfr,
             mfr_particles: 0,
+            mfr_se: None,
+            steady_state: None,
+            vx_se: Vec::new(),
             mfr_windows: vec![],
             steady: true,
             steady_p: 1.0,

@@ -31,6 +31,8 @@ pub struct StatusReport {
     pub interrupted: usize,
     /// Result files that cannot be read (their runs count as pending and run again).
     pub damaged: Vec<String>,
+    /// Who holds each running claim: point, hash, holder, age and lease (the first few).
+    pub holders: Vec<String>,
     /// Failures by class: count and the first few (by point index) with their reasons.
     pub failures: BTreeMap<String, FailureGroup>,
     /// Convergence verdict of the last report (summary.json); `None` before the first.
@@ -72,6 +74,7 @@ pub fn status(dir: &Path) -> Result<StatusReport> {
         pending: 0,
         interrupted: 0,
         damaged: Vec::new(),
+        holders: Vec::new(),
         failures: BTreeMap::new(),
         converged: read_verdict(dir),
         screen,
@@ -85,7 +88,7 @@ pub fn status(dir: &Path) -> Result<StatusReport> {
     }
     let cut_off = |h: &str| last.get(h).is_some_and(|s| s == "cancelled" || s == "interrupted");
     for p in &manifest.points {
-        match store.state(&p.hash) {
+        match store.point_state(&manifest, p) {
             RunState::Done(_) => r.done += 1,
             RunState::Failed(f) => {
                 r.failed += 1;
@@ -99,14 +102,20 @@ pub fn status(dir: &Path) -> Result<StatusReport> {
                     });
                 }
             }
-            RunState::Running(_) => r.running += 1,
+            RunState::Running(c) => {
+                r.running += 1;
+                if r.holders.len() < FIRST_FAILURES {
+                    let h = store::short(&p.hash);
+                    r.holders.push(format!("point {} ({h}): {}", p.index, store::holders::describe(&c)));
+                }
+            }
             RunState::Interrupted(_) => {
                 r.pending += 1;
                 r.interrupted += 1;
             }
             RunState::Damaged { file, reason } => {
                 r.pending += 1;
-                r.damaged.push(format!("{}: unreadable ({reason})", file.display()));
+                r.damaged.push(format!("{}: {reason}", file.display()));
             }
             RunState::Incomplete | RunState::Pending
                 if matches!(statuses[p.index], PointStatus::Screened) =>
@@ -154,6 +163,18 @@ impl StatusReport {
                 &format!("  ({} interrupted: killed or cancelled part-way)", self.interrupted),
             );
         }
+        for h in &self.holders {
+            s.push_str(&format!("    {h}\n"));
+        }
+        if self.running > self.holders.len() {
+            s.push_str(&format!("    and {} more\n", self.running - self.holders.len()));
+        }
+        if self.running > 0 {
+            s.push_str(&format!(
+                "    a claim whose holder is gone for good (a lost node, a clock far ahead): `sweep unclaim {}` releases it\n",
+                self.dir.display()
+            ));
+        }
         for d in &self.damaged {
             s.push_str(&format!("  warning: {d}\n"));
         }
@@ -166,6 +187,9 @@ impl StatusReport {
                     &n.hash[..12.min(n.hash.len())],
                     n.reason
                 ));
+            }
+            if g.count > g.first.len() {
+                s.push_str(&format!("    and {} more\n", g.count - g.first.len()));
             }
         }
         if let Some(line) = self.screen.sentence() {

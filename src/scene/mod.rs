@@ -187,6 +187,54 @@ pub struct Scene {
     pub vx_length: f64,
     /// Kinetic energy above which the run is unstable, J.
     pub ke_limit: f64,
+    /// Conveyor layout (zero elsewhere): the held heap and the block series.
+    pub conveyor: Conveyor,
+}
+
+/// The blade's frame (conveyor layout): the blade stands still with its rear face at
+/// `blade_x0`, the rough substrate moves under it at −v (x periodic), a heap of
+/// `heap_particles` is topped up in the box ahead of the blade, and the deposit is deleted
+/// downstream. All lengths in m.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Conveyor {
+    /// Height of the held heap (gap + heap_diameters·D), and the particles it holds at a
+    /// packing of 0.6 in its 30° repose triangle.
+    pub heap_height: f64,
+    pub heap_particles: usize,
+    /// The box the heap is counted and topped up in: from the blade's front face to a wall at
+    /// `heap_x1`, from the substrate to `heap_z1`.
+    pub heap_x1: f64,
+    pub heap_z1: f64,
+    /// Deposit strip behind the blade: from `delete_x1` to the blade's rear face; everything
+    /// behind `delete_x1` is deleted after each block.
+    pub delete_x1: f64,
+    pub block_steps: u64,
+    pub insert_every: u64,
+    pub warmup_blocks: u64,
+    pub min_window_blocks: u64,
+    pub max_blocks: u64,
+    /// Mass of a full flow through the gap over one block: ρ · w · h · v · Δt_block, kg.
+    pub ideal_block_mass: f64,
+    pub mfr_rel_se: f64,
+    pub mfr_abs_se: f64,
+    /// Particle templates of the feed: diameter, mass fraction, prime seed.
+    pub feed: Vec<FeedClass>,
+    /// Prime seeds of the feed's distribution and insertion.
+    pub distribution_seed: u64,
+    pub insert_seed: u64,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct FeedClass {
+    pub diameter: f64,
+    pub mass_fraction: f64,
+    pub seed: u64,
+}
+
+/// The `n`-th prime above 10,000 after `start` (LIGGGHTS wants prime seeds above 10,000).
+fn prime_seed(start: u64, n: usize) -> u64 {
+    let is_prime = |k: u64| k > 1 && (2..).take_while(|d| d * d <= k).all(|d| !k.is_multiple_of(d));
+    (10_007 + start % 1_000_000..).filter(|&k| is_prime(k)).nth(n).expect("primes are infinite")
 }
 
 impl Scene {
@@ -367,7 +415,7 @@ impl Scene {
         let rest_speed = settings.rest_speed * (GRAVITY * d).sqrt();
         let rest_ke = if gated { 0.5 * mass * rest_speed * rest_speed } else { 0.0 };
 
-        Ok(Scene {
+        let scene = Scene {
             density,
             youngs_modulus: youngs,
             poisson,
@@ -424,7 +472,94 @@ impl Scene {
             vx_band,
             vx_length: 6.0 * profile_diameter,
             ke_limit,
-        })
+            conveyor: Conveyor::default(),
+        };
+        Ok(if settings.layout == "conveyor" { Scene::conveyor(scene, &psd, settings) } else { scene })
+    }
+
+    /// The conveyor layout's scene (see [`Conveyor`]), from what [`Scene::new`] derived.
+    fn conveyor(mut s: Scene, psd: &SizeDistribution, settings: &SceneSettings) -> Scene {
+        let d = s.diameter;
+        let (gap, v, dt) = (s.gap, s.blade_speed, s.timestep);
+        let heap_height = gap + settings.heap_diameters * d;
+        let heap_base = heap_height / REPOSE_DEG.to_radians().tan();
+        let heap_particles = (LAYER_FRACTION_MAX * 0.5 * heap_height * heap_base * s.depth
+            / psd.mean_volume())
+        .ceil() as usize;
+        // Behind the blade: 10 D of deposit strip, then the delete region (6 D).
+        let blade_x0 = 16.0 * d;
+        let front0 = blade_x0 + s.blade_thickness;
+        let heap_x1 = front0 + heap_base + 3.0 * d;
+        // The substrate's lattice fills the periodic length exactly.
+        let n_y = ((s.depth / d).floor() as usize).max(1);
+        let spacing = s.depth / n_y as f64;
+        let n_x = ((heap_x1 + 2.0 * d) / spacing).ceil() as usize;
+        let x_hi = n_x as f64 * spacing;
+        let block_steps = ((settings.block_diameters * d / (v * dt)).ceil() as u64).max(1);
+        let blocks = |travel: f64| (travel / settings.block_diameters).ceil() as u64;
+        let max_blocks = blocks(settings.window_cap_diameters);
+        let blade_top = 2.0 * heap_height + 2.0 * d;
+        let mean_volume = psd.mean_volume();
+        let mass = heap_particles as f64 * s.density * mean_volume;
+        let feed_total: f64 = psd.classes.iter().map(|c| c.fraction * c.diameter.powi(3)).sum();
+        let feed = psd
+            .classes
+            .iter()
+            .enumerate()
+            .map(|(i, c)| FeedClass {
+                diameter: c.diameter,
+                mass_fraction: c.fraction * c.diameter.powi(3) / feed_total,
+                seed: prime_seed(s.seed, i + 2),
+            })
+            .collect();
+        s.conveyor = Conveyor {
+            heap_height,
+            heap_particles,
+            heap_x1,
+            heap_z1: 1.6 * heap_height,
+            delete_x1: blade_x0 - 10.0 * d,
+            block_steps,
+            insert_every: (block_steps / 5).max(1),
+            // Never more than the cap leaves room for: the cap wins, and the point says so.
+            warmup_blocks: blocks((settings.warmup_s * v).max(10.0 * d) / d)
+                .min(max_blocks.saturating_sub(settings.min_window_blocks as u64)),
+            min_window_blocks: settings.min_window_blocks as u64,
+            max_blocks,
+            ideal_block_mass: s.density * s.depth * gap * v * dt * block_steps as f64,
+            mfr_rel_se: settings.mfr_rel_se,
+            mfr_abs_se: settings.mfr_abs_se,
+            feed,
+            distribution_seed: prime_seed(s.seed, 0),
+            insert_seed: prime_seed(s.seed, 1),
+        };
+        s.particles = 0;
+        s.pile_n = [0, 0, 0];
+        s.blade_x0 = blade_x0;
+        s.blade_top = blade_top;
+        s.x_hi = x_hi;
+        s.z_hi = blade_top + 2.0 * d + v * v / GRAVITY;
+        s.z_lo = -d;
+        s.substrate_n = [n_x, n_y];
+        s.substrate_spacing = spacing;
+        s.substrate_diameter = d;
+        s.substrate_particles = n_x * n_y;
+        s.gate_x = 0.0;
+        s.rest_ke = 0.0;
+        s.settle_steps = 0;
+        s.approach_steps = 0;
+        s.ramp_steps = 1;
+        s.dump_every = block_steps;
+        s.window_length_steps = max_blocks * block_steps;
+        s.traverse_steps = 0;
+        s.thermo_every = block_steps.min(1000);
+        let v_ref = v.max((2.0 * GRAVITY * blade_top).sqrt());
+        s.ke_limit = 0.5 * mass * (10.0 * v_ref).powi(2);
+        s
+    }
+
+    /// The conveyor layout: the blade stands still and the substrate moves.
+    pub fn is_conveyor(&self) -> bool {
+        self.layout == "conveyor"
     }
 
     /// Timestep at which the blade starts moving: the spread's steps count from it (the deck
@@ -452,6 +587,9 @@ impl Scene {
     /// x of the blade's rear face at timestep `step`: at rest until the blade starts, then a
     /// linear velocity ramp over `ramp_steps` (travel v·t²/(2 t_r)), then full speed.
     pub fn blade_rear_at(&self, step: u64) -> f64 {
+        if self.is_conveyor() {
+            return self.blade_x0;
+        }
         let k = step.saturating_sub(self.blade_start_step()) as f64;
         let r = self.ramp_steps as f64;
         let travel_steps = if k <= r { k * k / (2.0 * r) } else { k - 0.5 * r };

@@ -44,6 +44,24 @@ pub struct SceneSettings {
     /// Keep the blade going after the window to the end of the domain (the thesis's full
     /// traverse) instead of stopping once the window is measured.
     pub run_to_end: bool,
+    /// Conveyor layout: substrate travel per block of the deposit series, in diameters.
+    pub block_diameters: f64,
+    /// Conveyor layout: simulated time before the precision target is first checked, s (at
+    /// least 10 D of travel). The heap's start-up transient is a time, not a travel: measured
+    /// 0.10–0.14 s by MSER truncation at 0.1, 0.4 and 1.4 m/s. The deck's stop rule averages the
+    /// blocks after it; the steady window itself is chosen afterwards by MSER truncation.
+    pub warmup_s: f64,
+    /// Conveyor layout: the most travel, warm-up included, in diameters: where it ends the run
+    /// before the precision target is met, the point says so (`stop = "cap"`).
+    pub window_cap_diameters: f64,
+    /// Conveyor layout: the window runs until the standard error of MFR is at most this
+    /// fraction of MFR ...
+    pub mfr_rel_se: f64,
+    /// ... or at most this absolute value (MFR near zero), whichever is reached first.
+    pub mfr_abs_se: f64,
+    /// Conveyor layout: the least number of blocks after the warm-up before the target can stop
+    /// the run.
+    pub min_window_blocks: usize,
     // What the point is.
     /// The scene's layout: `"gated"` (default: the dose settles at rest in a closed region on a
     /// rough substrate and is released when the blade starts) or `"thesis"` (the thesis's pile
@@ -56,6 +74,10 @@ pub struct SceneSettings {
     pub settle_max_s: f64,
     /// Gated layout: blade travel past the opened gate before the window starts, in diameters.
     pub window_start_diameters: f64,
+    /// Conveyor layout: height of the heap held in front of the blade above the gap, in
+    /// diameters (the heap is gap + this × D tall at 30° repose, topped up to its particle count
+    /// every fifth of a block).
+    pub heap_diameters: f64,
     /// Size of the heap in front of the blade, relative to the planned one (gated: gap + 10 D
     /// tall at 30° repose; thesis: the heap left at the end, gap + 6 D tall).
     pub supply_factor: f64,
@@ -77,12 +99,16 @@ pub struct SceneSettings {
     pub vtk: bool,
 }
 
+/// The scene layouts (docs/scene.md): the gated dose, the thesis's free pile, and the blade's
+/// frame with a held heap.
+pub const LAYOUTS: [&str; 3] = ["gated", "thesis", "conveyor"];
+
 /// The fidelity presets, fastest first.
 pub const FIDELITIES: [&str; 3] = ["fast", "reference", "thesis"];
 
 /// The numerical knobs a preset sets (field names of [`SceneSettings`]); everything else in
 /// `[scene]` says what the point is and is the same in every preset.
-pub const KNOBS: [&str; 11] = [
+pub const KNOBS: [&str; 17] = [
     "rayleigh_fraction",
     "timestep_s",
     "stiffness_factor",
@@ -94,6 +120,12 @@ pub const KNOBS: [&str; 11] = [
     "skin_diameters",
     "full_dump_every_s",
     "run_to_end",
+    "block_diameters",
+    "warmup_s",
+    "window_cap_diameters",
+    "mfr_rel_se",
+    "mfr_abs_se",
+    "min_window_blocks",
 ];
 
 impl SceneSettings {
@@ -166,6 +198,7 @@ impl SceneSettings {
         s.settle_max_s = self.settle_max_s;
         s.window_start_diameters = self.window_start_diameters;
         s.supply_factor = self.supply_factor;
+        s.heap_diameters = self.heap_diameters;
         s.size_distribution = self.size_distribution.clone();
         s.vx_band_diameters = self.vx_band_diameters;
         s.thesis_band = self.thesis_band;
@@ -224,11 +257,18 @@ impl Default for SceneSettings {
             skin_diameters: 0.5,
             full_dump_every_s: 0.0,
             run_to_end: false,
+            block_diameters: 5.0,
+            warmup_s: 0.15,
+            window_cap_diameters: 600.0,
+            mfr_rel_se: 0.05,
+            mfr_abs_se: 0.005,
+            min_window_blocks: 8,
             layout: "gated".into(),
             substrate: "rough".into(),
             settle_max_s: 1.0,
             window_start_diameters: 30.0,
             supply_factor: 1.0,
+            heap_diameters: 10.0,
             size_distribution: SizeDistributionSpec::default(),
             vx_band_diameters: 0.25,
             thesis_band: false,

@@ -113,7 +113,7 @@ impl Store {
     }
 
     /// Whether the process named by a claim is still running it.
-    fn owner_alive(&self, c: &ClaimInfo) -> bool {
+    pub(super) fn owner_alive(&self, c: &ClaimInfo) -> bool {
         if c.host != self.host {
             // Cannot look at another host's processes: its claim stands while its lease does.
             return lease_alive(c, unix_now());
@@ -202,14 +202,25 @@ pub struct Claim {
 pub(super) fn finished_state(dir: &Path) -> Option<RunState> {
     fn read<T: serde::de::DeserializeOwned>(path: &Path) -> Option<Result<T, String>> {
         match fs::read(path) {
-            Ok(bytes) => Some(serde_json::from_slice(&bytes).map_err(|e| e.to_string())),
+            Ok(bytes) => Some(serde_json::from_slice(&bytes).map_err(|e| format!("unreadable ({e})"))),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
-            Err(e) => Some(Err(e.to_string())),
+            Err(e) => Some(Err(format!("unreadable ({e})"))),
         }
     }
     let mut damaged = None;
     let result = dir.join("result.json");
-    match read::<RunResult>(&result) {
+    // A result counts only if it is this directory's run and every number in it is possible.
+    let own = |r: &RunResult| -> Result<(), String> {
+        let name = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        if r.hash != name {
+            return Err(format!(
+                "holds the result of another run ({}), not of {name}",
+                super::short(&r.hash)
+            ));
+        }
+        crate::point::plausible::check_result(r)
+    };
+    match read::<RunResult>(&result).map(|r| r.and_then(|r| own(&r).map(|()| r))) {
         Some(Ok(r)) => return Some(RunState::Done(Box::new(r))),
         Some(Err(reason)) => damaged = Some(RunState::Damaged { file: result, reason }),
         None => {}
@@ -233,7 +244,7 @@ pub fn foreign_entry(dir: &Path) -> Option<String> {
     })
 }
 
-fn read_claim(path: &Path) -> Option<ClaimInfo> {
+pub(super) fn read_claim(path: &Path) -> Option<ClaimInfo> {
     serde_json::from_str(&fs::read_to_string(path).ok()?).ok()
 }
 

@@ -29,10 +29,13 @@
 //! Not responsible for deciding what to run (the driver, [`crate::run`]) or running it
 //! ([`crate::run::pool`]).
 
+mod belongs;
 mod claim;
+pub mod holders;
 mod joblog;
 mod manifest;
 mod results;
+pub mod retry;
 
 pub use claim::{
     foreign_entry, lease_alive, set_default_lease, Claim, ClaimAttempt, ClaimInfo, Heartbeat, RunState,
@@ -78,6 +81,11 @@ impl StoreError {
     pub fn is_no_space(&self) -> bool {
         matches!(self, StoreError::Io { source, .. } if is_no_space(source))
     }
+}
+
+/// The first 12 characters of a hash, as status and warnings show it.
+pub fn short(hash: &str) -> &str {
+    &hash[..12.min(hash.len())]
 }
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> StoreError + '_ {

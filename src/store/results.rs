@@ -31,9 +31,10 @@ impl PointStatus {
 /// failure (class), mfr (0 when screened), mfr_flux, mfr_particles, steady, vx_1..vx_12 (m/s,
 /// empty for an empty layer), runtime_s, hash, quality (of the v_x profile, [`crate::point::quality`];
 /// empty unless done), screen (`closed` for a point the screen closes, `verification` for one of
-/// its verification sample, empty for an open point), and the spread layer's quality where the
-/// run measured it ([`crate::point::layer`]): layer_cv and layer_cv_noise (–),
-/// covered_fraction (–), roughness_d (top-surface RMS height, in D).
+/// its verification sample, empty for an open point), mfr_se (the standard error of MFR, from
+/// batch means over the steady window), stop (`target` or `cap`: what ended the window), and
+/// the spread layer's quality where the run measured it ([`crate::point::layer`]): layer_cv and
+/// layer_cv_noise (–), covered_fraction (–), roughness_d (top-surface RMS height, in D).
 pub fn write_results(
     dir: &Path,
     parameters: &[String],
@@ -49,7 +50,7 @@ pub fn write_results(
     header.extend(fixed.iter().map(|f| f.0.clone()));
     header.extend(["status", "failure", "mfr", "mfr_flux", "mfr_particles", "steady"].map(String::from));
     header.extend((1..=VX_LAYERS).map(|k| format!("vx_{k}")));
-    header.extend(["runtime_s", "hash", "quality", "screen"].map(String::from));
+    header.extend(["runtime_s", "hash", "quality", "screen", "mfr_se", "stop"].map(String::from));
     header.extend(LAYER_COLUMNS.map(String::from));
     w.write_record(&header).expect("in-memory csv");
     for (p, s) in points.iter().zip(status) {
@@ -96,6 +97,20 @@ pub fn write_results(
             (true, false) => "closed".into(),
             (false, _) => String::new(),
         });
+        // The steady-state measurement's SE and what ended its window (empty for a layout
+        // without them).
+        let (se, stop) = match s {
+            PointStatus::Done(r) => (
+                r.mfr_se.map_or(String::new(), |v| v.to_string()),
+                r.steady_state.as_ref().map_or(String::new(), |st| st.stop.clone()),
+            ),
+            PointStatus::Failed(f) => (
+                f.measured.as_ref().and_then(|r| r.mfr_se).map_or(String::new(), |v| v.to_string()),
+                String::new(),
+            ),
+            _ => (String::new(), String::new()),
+        };
+        row.extend([se, stop]);
         let layer = match s {
             PointStatus::Done(r) => r.layer,
             _ => None,

@@ -6,6 +6,28 @@
 
 use crate::sweep::{ParamKind, Scale, Sweep};
 
+/// The unit coordinate of `v` on [lo, hi] (the inverse of [`scale`]; not clamped, so a value
+/// outside the range lands outside [0, 1]).
+pub fn unscale(v: f64, lo: f64, hi: f64, scale: Scale) -> f64 {
+    match scale {
+        Scale::Linear => (v - lo) / (hi - lo),
+        Scale::Log => (v.ln() - lo.ln()) / (hi.ln() - lo.ln()),
+    }
+}
+
+/// A point of swept values in unit coordinates (the inverse of [`scale_point`]).
+pub fn unit_point(sweep: &Sweep, values: &[f64]) -> Vec<f64> {
+    sweep
+        .swept
+        .iter()
+        .zip(values)
+        .map(|(p, &v)| match p.kind {
+            ParamKind::Swept { lo, hi, scale: s } if hi != lo => unscale(v, lo, hi, s),
+            _ => 0.5,
+        })
+        .collect()
+}
+
 /// Scale one coordinate in [0, 1] onto [lo, hi].
 pub fn scale(x: f64, lo: f64, hi: f64, scale: Scale) -> f64 {
     if x <= 0.0 {

@@ -7,7 +7,7 @@ use super::file::*;
 use super::{ParamKind, Parameter};
 use crate::error::{hint, Error, Result};
 use crate::scene::params::{self, ParamInfo};
-use crate::scene::settings::{quoted, SizeDistributionSpec, FIDELITIES};
+use crate::scene::settings::{quoted, SizeDistributionSpec, FIDELITIES, LAYOUTS};
 
 pub(super) fn io_reason(e: &std::io::Error) -> String {
     match e.kind() {
@@ -169,8 +169,17 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>,
         crate::design::lds_size(n).map_err(|e| bad(key, format!("{n}: {e}")))?;
     }
     let c = &file.convergence;
-    if c.rule != "all" && c.rule != "any" {
-        return Err(bad("convergence.rule", format!("\"{}\": expected \"all\" or \"any\"", c.rule)));
+    if crate::analysis::convergence::Rule::parse(&c.rule).is_none() {
+        return Err(bad(
+            "convergence.rule",
+            format!("\"{}\": expected \"scaled\", \"any\" or \"all\"", c.rule),
+        ));
+    }
+    if crate::analysis::weights::LatticeWeights::parse(&c.lattice_weights).is_none() {
+        return Err(bad(
+            "convergence.lattice_weights",
+            format!("\"{}\": expected \"trapezoid\" or \"equal\"", c.lattice_weights),
+        ));
     }
     for (k, v) in [("convergence.tolerance", c.tolerance), ("convergence.floor", c.floor)] {
         if !v.is_finite() || v < 0.0 {
@@ -187,8 +196,44 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>,
             format!("\"{}\": expected one of {}", s.fidelity, quoted(&FIDELITIES)),
         ));
     }
-    if s.layout != "gated" && s.layout != "thesis" {
-        return Err(bad("scene.layout", format!("\"{}\": expected \"gated\" or \"thesis\"", s.layout)));
+    if !LAYOUTS.contains(&s.layout.as_str()) {
+        return Err(bad("scene.layout", format!("\"{}\": expected one of {}", s.layout, quoted(&LAYOUTS))));
+    }
+    if s.layout == "conveyor" {
+        for (k, v) in [
+            ("scene.block_diameters", s.block_diameters),
+            ("scene.window_cap_diameters", s.window_cap_diameters),
+            ("scene.heap_diameters", s.heap_diameters),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(bad(k, format!("{v}: expected a positive number")));
+            }
+        }
+        for (k, v) in [
+            ("scene.warmup_s", s.warmup_s),
+            ("scene.mfr_rel_se", s.mfr_rel_se),
+            ("scene.mfr_abs_se", s.mfr_abs_se),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(bad(k, format!("{v}: expected a number ≥ 0")));
+            }
+        }
+        if s.min_window_blocks < 3 {
+            return Err(bad(
+                "scene.min_window_blocks",
+                format!("{}: expected at least 3", s.min_window_blocks),
+            ));
+        }
+        if (s.min_window_blocks as f64 + 1.0) * s.block_diameters > s.window_cap_diameters {
+            return Err(bad(
+                "scene.window_cap_diameters",
+                format!(
+                    "{}: expected more than min_window_blocks × block_diameters = {}",
+                    s.window_cap_diameters,
+                    s.min_window_blocks as f64 * s.block_diameters
+                ),
+            ));
+        }
     }
     if s.substrate != "rough" && s.substrate != "smooth" {
         return Err(bad("scene.substrate", format!("\"{}\": expected \"rough\" or \"smooth\"", s.substrate)));

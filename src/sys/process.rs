@@ -7,7 +7,7 @@
 
 use std::os::unix::process::{CommandExt, ExitStatusExt};
 use std::process::{Child, Command};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -192,10 +192,11 @@ fn kill_group(child: &mut Child) {
     let _ = child.wait();
 }
 
-static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+/// The signal that interrupted this process, 0 if none.
+static INTERRUPTED: AtomicI32 = AtomicI32::new(0);
 
-extern "C" fn on_signal(_: libc::c_int) {
-    INTERRUPTED.store(true, Ordering::SeqCst);
+extern "C" fn on_signal(sig: libc::c_int) {
+    INTERRUPTED.store(sig, Ordering::SeqCst);
 }
 
 /// Install SIGINT and SIGTERM handlers that set the global interrupt flag, which every
@@ -210,7 +211,12 @@ pub fn install_interrupt_handler() {
 
 /// Whether SIGINT or SIGTERM has been received.
 pub fn interrupted() -> bool {
-    INTERRUPTED.load(Ordering::SeqCst)
+    interrupt_signal().is_some()
+}
+
+/// The signal (SIGINT, SIGTERM) that interrupted this process, if one did.
+pub fn interrupt_signal() -> Option<i32> {
+    Some(INTERRUPTED.load(Ordering::SeqCst)).filter(|&s| s != 0)
 }
 
 #[cfg(test)]

@@ -1,0 +1,77 @@
+#!/usr/bin/env bash
+# The thesis's study on real LIGGGHTS (docs/study/thesis.md): the 4-D LDS sweep to 2,400 points,
+# the 4-D lattice at levels 5, 6, 7, and an LDS over the blade speeds real machines use.
+#
+#   bash scripts/thesis_study.sh [lds|lattice|slow ...]      (default: all three, in that order)
+#
+# It takes hours on two cores and is meant to be cut off and started again: each sweep runs in
+# WORK/<name> (default WORK=/tmp/thesis-study) with `sweep lds|lattice`, which continues a
+# directory it finds; every SYNC_S seconds, and at the end, the sweep's slim record is copied to
+# docs/study/thesis/<name>/: sweep.toml, manifest.json, joblog.tsv, results.csv, convergence.csv,
+# summary.json and each run's result.json or failure.json (no decks, logs or dumps). On a fresh
+# clone the record is copied back into WORK/<name> first, so `sweep` reuses every finished run.
+# Commit docs/study/thesis/ to carry the study across machines.
+#
+# The LDS sweeps run with --hold 1000 so that they go on to their --max whatever the verdict (the
+# thesis's figures need the whole space); `sweep report` then judges them with the default rule
+# and with the thesis's (README "Reading the verdict").
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bin=${SWEEP_BIN:-$PWD/target/release/sweep}
+work=${WORK:-/tmp/thesis-study}
+jobs=${JOBS:-2}
+sync_s=${SYNC_S:-300}
+record=docs/study/thesis
+mkdir -p "$work" "$record"
+
+# Copy the slim record of sweep directory $1 to $2 (either way round).
+slim_copy() {
+  local from=$1 to=$2
+  [ -f "$from/manifest.json" ] || return 0
+  mkdir -p "$to/runs"
+  for f in sweep.toml manifest.json joblog.tsv results.csv convergence.csv summary.json; do
+    [ -f "$from/$f" ] && cp "$from/$f" "$to/$f.tmp" && mv "$to/$f.tmp" "$to/$f"
+  done
+  local d h
+  for d in "$from"/runs/*/; do
+    h=$(basename "$d")
+    for f in result.json failure.json; do
+      if [ -f "$d$f" ] && [ ! -f "$to/runs/$h/$f" ]; then
+        mkdir -p "$to/runs/$h" && cp "$d$f" "$to/runs/$h/$f"
+      fi
+    done
+  done
+}
+
+run_sweep() { # name, then the sweep command's arguments
+  local name=$1; shift
+  local dir=$work/$name
+  if [ ! -d "$dir" ] && [ -f "$record/$name/manifest.json" ]; then
+    echo "study: restoring $name from $record/$name" >&2
+    slim_copy "$record/$name" "$dir"
+  fi
+  ( while sleep "$sync_s"; do slim_copy "$dir" "$record/$name"; done ) &
+  local syncer=$!
+  local start=$SECONDS rc=0
+  "$bin" "$@" --out "$dir" --jobs "$jobs" || rc=$?
+  kill "$syncer" 2>/dev/null || true
+  "$bin" report "$dir" >/dev/null 2>&1 || true
+  slim_copy "$dir" "$record/$name"
+  echo "study: $name exited $rc after $((SECONDS - start)) s" >&2
+  printf '%s\t%s\t%s\t%s\t%s\n' "$(date -u +%FT%TZ)" "$name" "$rc" "$((SECONDS - start))" \
+    "$("$bin" --version)" >> "$record/sessions.tsv"
+  [ "$rc" -eq 130 ] && exit 130
+  return 0
+}
+
+[ -f "$record/sessions.tsv" ] || printf 'ended\tsweep\texit\twall_s\tversion\n' > "$record/sessions.tsv"
+order=("$@")
+[ ${#order[@]} -gt 0 ] || order=(lds lattice slow)
+for s in "${order[@]}"; do
+  case $s in
+    lds) run_sweep lds lds sweeps/thesis-lds.toml --max 2400 --hold 1000 ;;
+    lattice) run_sweep lattice lattice sweeps/thesis-lattice.toml --levels 5,6,7 --hold 1000 ;;
+    slow) run_sweep slow lds "$record/machine-speeds.toml" --hold 1000 ;;
+    *) echo "study: unknown sweep '$s' (expected lds, lattice or slow)" >&2; exit 2 ;;
+  esac
+done

@@ -1,0 +1,578 @@
+//! An emulator of MFR over the space: a Gaussian-process (kriging) surrogate fitted to the done
+//! points (DESIGN §6).
+//!
+//! The model: MFR(u) = μ + f(u) + e, u the point in unit coordinates, f a zero-mean GP with an
+//! anisotropic Matérn-5/2 covariance σ²·k(r), r² = Σ((u_j − u'_j)/θ_j)², and e independent
+//! noise of variance se_i² (the point's `mfr_se`, where its result records one) plus a fitted
+//! nugget τ² (the noise no point reports, and what keeps the matrix well conditioned). μ is the
+//! generalised-least-squares constant; θ, σ², τ² maximise the marginal likelihood (Nelder–Mead on
+//! their logarithms, on at most [`FIT_POINTS`] of the points, spread over the design; the
+//! prediction then conditions on every point).
+//!
+//! Why our own ~400 lines rather than a crate: `egobox-gp` (the best-kept Rust kriging crate)
+//! takes one scalar nugget, not a noise variance per point, and brings ndarray and linfa for a
+//! model this size; the closed-form leave-one-out residuals (Rasmussen & Williams 2006, Eq.
+//! 5.12) need the inverse covariance, which is a few lines here.
+//!
+//! Uses: [`Emulator::predict`] (MFR with its predictive SE at a setting), [`Emulator::loo`]
+//! (cross-validation on every sweep), [`Emulator::space_statistics`] (the space's MFR statistics
+//! from many cheap draws, with their uncertainty), [`Emulator::zero_fraction`] (where MFR is
+//! zero) and [`Emulator::rank`] (the best settings among candidates, with SE).
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
+
+use crate::analysis::stats::{percentile_sorted, Interval, Moments, STATISTICS};
+
+/// Most points the hyperparameters are fitted on (the likelihood costs N³/3 per evaluation).
+pub const FIT_POINTS: usize = 250;
+/// Fewest points an emulator is fitted to.
+pub const MIN_POINTS: usize = 8;
+
+/// A fitted emulator.
+#[derive(Debug, Clone)]
+pub struct Emulator {
+    x: Vec<Vec<f64>>,
+    /// Standardisation of y: y = y_mean + y_scale·z.
+    y_mean: f64,
+    y_scale: f64,
+    /// Length scales (unit coordinates), signal variance and nugget, all on the z scale.
+    pub theta: Vec<f64>,
+    pub sigma2: f64,
+    pub nugget: f64,
+    mu: f64,
+    /// Cholesky factor of K (row-major, lower) and K⁻¹(z − μ).
+    chol: Vec<f64>,
+    alpha: Vec<f64>,
+}
+
+/// Leave-one-out cross-validation, in MFR units.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CrossValidation {
+    pub points: usize,
+    /// Root mean square of y_i − ŷ_(−i).
+    pub rmse: f64,
+    /// 1 − Σ(y_i − ŷ_(−i))² / Σ(y_i − ȳ)²: the share of MFR's variance predicted out of sample.
+    pub q2: f64,
+    /// Share of points whose left-out residual is within 1.96 predictive SE (0.95 if calibrated).
+    pub coverage95: f64,
+    /// √(mean se² + nugget): the noise the emulator assumes in each point, for comparison.
+    pub noise_se: f64,
+}
+
+/// The space's statistics from the emulator, with 95 % intervals from its posterior.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EmulatedStatistics {
+    /// Points of the design the mean surface was evaluated on (scrambled Halton).
+    pub draws: usize,
+    /// Posterior sample paths behind the intervals.
+    pub paths: usize,
+    pub statistics: Moments,
+    /// Intervals of mean, std, skewness, kurtosis.
+    pub intervals: [Interval; 4],
+}
+
+fn matern52(r: f64) -> f64 {
+    let s = 5f64.sqrt() * r;
+    (1.0 + s + s * s / 3.0) * (-s).exp()
+}
+
+fn dist(a: &[f64], b: &[f64], theta: &[f64]) -> f64 {
+    a.iter().zip(b).zip(theta).map(|((p, q), t)| ((p - q) / t).powi(2)).sum::<f64>().sqrt()
+}
+
+/// In-place Cholesky of the n×n row-major `a` (lower triangle); `false` if not positive definite.
+fn cholesky(a: &mut [f64], n: usize) -> bool {
+    for j in 0..n {
+        let mut d = a[j * n + j];
+        for k in 0..j {
+            d -= a[j * n + k] * a[j * n + k];
+        }
+        if d <= 0.0 || !d.is_finite() {
+            return false;
+        }
+        let d = d.sqrt();
+        a[j * n + j] = d;
+        for i in j + 1..n {
+            let mut s = a[i * n + j];
+            for k in 0..j {
+                s -= a[i * n + k] * a[j * n + k];
+            }
+            a[i * n + j] = s / d;
+        }
+        for i in 0..j {
+            a[i * n + j] = 0.0;
+        }
+    }
+    true
+}
+
+/// Solve L·v = b (forward substitution).
+fn forward(l: &[f64], n: usize, b: &[f64]) -> Vec<f64> {
+    let mut v = b.to_vec();
+    for i in 0..n {
+        let s: f64 = (0..i).map(|k| l[i * n + k] * v[k]).sum();
+        v[i] = (v[i] - s) / l[i * n + i];
+    }
+    v
+}
+
+/// Solve Lᵀ·v = b (back substitution).
+fn backward(l: &[f64], n: usize, b: &[f64]) -> Vec<f64> {
+    let mut v = b.to_vec();
+    for i in (0..n).rev() {
+        let s: f64 = (i + 1..n).map(|k| l[k * n + i] * v[k]).sum();
+        v[i] = (v[i] - s) / l[i * n + i];
+    }
+    v
+}
+
+/// The covariance matrix of `x` with noise variances `noise` on the diagonal.
+fn covariance(x: &[Vec<f64>], theta: &[f64], sigma2: f64, noise: &[f64]) -> Vec<f64> {
+    let n = x.len();
+    let mut k = vec![0.0; n * n];
+    for i in 0..n {
+        for j in 0..i {
+            let v = sigma2 * matern52(dist(&x[i], &x[j], theta));
+            k[i * n + j] = v;
+            k[j * n + i] = v;
+        }
+        k[i * n + i] = sigma2 + noise[i];
+    }
+    k
+}
+
+/// GLS constant, K⁻¹(z − μ) and the Cholesky factor; `None` when K is not positive definite.
+fn condition(
+    x: &[Vec<f64>],
+    z: &[f64],
+    theta: &[f64],
+    sigma2: f64,
+    noise: &[f64],
+) -> Option<(f64, Vec<f64>, Vec<f64>)> {
+    let n = x.len();
+    let mut l = covariance(x, theta, sigma2, noise);
+    if !cholesky(&mut l, n) {
+        return None;
+    }
+    let ones = vec![1.0; n];
+    let ki1 = backward(&l, n, &forward(&l, n, &ones));
+    let kiz = backward(&l, n, &forward(&l, n, z));
+    let mu = kiz.iter().sum::<f64>() / ki1.iter().sum::<f64>();
+    let r: Vec<f64> = z.iter().map(|v| v - mu).collect();
+    let alpha = backward(&l, n, &forward(&l, n, &r));
+    Some((mu, alpha, l))
+}
+
+/// Negative log marginal likelihood (up to a constant) at log-parameters `p` = (ln θ…, ln σ², ln τ²).
+fn nll(x: &[Vec<f64>], z: &[f64], se2: &[f64], p: &[f64]) -> f64 {
+    let d = x[0].len();
+    let theta: Vec<f64> = p[..d].iter().map(|v| v.exp()).collect();
+    let (sigma2, tau2) = (p[d].exp(), p[d + 1].exp());
+    let noise: Vec<f64> = se2.iter().map(|s| s + tau2).collect();
+    let Some((mu, alpha, l)) = condition(x, z, &theta, sigma2, &noise) else {
+        return f64::INFINITY;
+    };
+    let n = x.len();
+    let logdet: f64 = (0..n).map(|i| l[i * n + i].ln()).sum::<f64>() * 2.0;
+    let quad: f64 = z.iter().zip(&alpha).map(|(v, a)| (v - mu) * a).sum();
+    0.5 * (quad + logdet)
+}
+
+/// Bounds of the log-parameters: length scales 0.01–10 of the unit cube, σ² 10⁻³–10² and
+/// τ² 10⁻⁸–1 of the standardised variance.
+fn clamp_params(p: &mut [f64], d: usize) {
+    for (i, v) in p.iter_mut().enumerate() {
+        let (lo, hi) = if i < d {
+            (0.01f64.ln(), 10f64.ln())
+        } else if i == d {
+            (1e-3f64.ln(), 1e2f64.ln())
+        } else {
+            (1e-8f64.ln(), 0.0)
+        };
+        *v = v.clamp(lo, hi);
+    }
+}
+
+/// Nelder–Mead minimisation of `f` from `start` (steps of `step` in every coordinate).
+fn nelder_mead(f: &dyn Fn(&[f64]) -> f64, start: &[f64], step: f64, iters: usize, d: usize) -> Vec<f64> {
+    let m = start.len();
+    let mut simplex: Vec<(Vec<f64>, f64)> = (0..=m)
+        .map(|i| {
+            let mut p = start.to_vec();
+            if i > 0 {
+                p[i - 1] += step;
+            }
+            clamp_params(&mut p, d);
+            let v = f(&p);
+            (p, v)
+        })
+        .collect();
+    for _ in 0..iters {
+        simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+        if (simplex[m].1 - simplex[0].1).abs() < 1e-6 {
+            break;
+        }
+        let centroid: Vec<f64> =
+            (0..m).map(|j| simplex[..m].iter().map(|s| s.0[j]).sum::<f64>() / m as f64).collect();
+        let along = |t: f64| {
+            let mut p: Vec<f64> = centroid.iter().zip(&simplex[m].0).map(|(c, w)| c + t * (c - w)).collect();
+            clamp_params(&mut p, d);
+            let v = f(&p);
+            (p, v)
+        };
+        let r = along(1.0);
+        if r.1 < simplex[0].1 {
+            let e = along(2.0);
+            simplex[m] = if e.1 < r.1 { e } else { r };
+        } else if r.1 < simplex[m - 1].1 {
+            simplex[m] = r;
+        } else {
+            let c = along(-0.5);
+            if c.1 < simplex[m].1 {
+                simplex[m] = c;
+            } else {
+                let best = simplex[0].0.clone();
+                for s in simplex.iter_mut().skip(1) {
+                    let mut p: Vec<f64> = best.iter().zip(&s.0).map(|(b, q)| b + 0.5 * (q - b)).collect();
+                    clamp_params(&mut p, d);
+                    let v = f(&p);
+                    *s = (p, v);
+                }
+            }
+        }
+    }
+    simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+    simplex.swap_remove(0).0
+}
+
+impl Emulator {
+    /// Fit to points `x` (unit coordinates), values `y` and their standard errors `se` (`None`:
+    /// not recorded). `None` when there are fewer than [`MIN_POINTS`] points, y has no spread, or
+    /// no covariance could be factorised.
+    pub fn fit(x: &[Vec<f64>], y: &[f64], se: &[Option<f64>]) -> Option<Emulator> {
+        let n = x.len();
+        if n < MIN_POINTS || y.len() != n || se.len() != n {
+            return None;
+        }
+        let d = x[0].len();
+        let y_mean = y.iter().sum::<f64>() / n as f64;
+        let y_scale = (y.iter().map(|v| (v - y_mean).powi(2)).sum::<f64>() / n as f64).sqrt();
+        let big = y.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        if y_scale <= 1e-12 * big || !y_scale.is_finite() {
+            return None;
+        }
+        let z: Vec<f64> = y.iter().map(|v| (v - y_mean) / y_scale).collect();
+        let se2: Vec<f64> = se.iter().map(|s| s.map_or(0.0, |s| (s / y_scale).powi(2))).collect();
+        // The fit subset: a seeded random one (every k-th point of a Halton sequence would share
+        // its leading digits, and sit in one slice of the box).
+        let idx = subset(n, FIT_POINTS, 1);
+        let (fx, fz, fs): (Vec<Vec<f64>>, Vec<f64>, Vec<f64>) = {
+            let mut a = (Vec::new(), Vec::new(), Vec::new());
+            for &i in &idx {
+                a.0.push(x[i].clone());
+                a.1.push(z[i]);
+                a.2.push(se2[i]);
+            }
+            a
+        };
+        let f = |p: &[f64]| nll(&fx, &fz, &fs, p);
+        let mut start = vec![0.3f64.ln(); d];
+        start.extend([0.0, 1e-3f64.ln()]);
+        let mut best = nelder_mead(&f, &start, 1.0, 300 * (d + 2), d);
+        // A restart from the optimum escapes an early collapse of the simplex.
+        best = nelder_mead(&f, &best, 0.5, 150 * (d + 2), d);
+        let theta: Vec<f64> = best[..d].iter().map(|v| v.exp()).collect();
+        let (sigma2, mut nugget) = (best[d].exp(), best[d + 1].exp());
+        // All points: add jitter until the factorisation succeeds.
+        for _ in 0..6 {
+            let noise: Vec<f64> = se2.iter().map(|s| s + nugget).collect();
+            if let Some((mu, alpha, chol)) = condition(x, &z, &theta, sigma2, &noise) {
+                return Some(Emulator {
+                    x: x.to_vec(),
+                    y_mean,
+                    y_scale,
+                    theta,
+                    sigma2,
+                    nugget,
+                    mu,
+                    chol,
+                    alpha,
+                });
+            }
+            nugget = (nugget * 10.0).max(1e-8);
+        }
+        None
+    }
+
+    fn n(&self) -> usize {
+        self.x.len()
+    }
+
+    fn kstar(&self, u: &[f64]) -> Vec<f64> {
+        self.x.iter().map(|p| self.sigma2 * matern52(dist(p, u, &self.theta))).collect()
+    }
+
+    /// The emulator's MFR at `u` (unit coordinates) and its predictive SE (of the latent MFR,
+    /// without the point noise). The mean is not clamped: callers read a negative value as 0.
+    pub fn predict(&self, u: &[f64]) -> (f64, f64) {
+        let k = self.kstar(u);
+        let mean = self.mu + k.iter().zip(&self.alpha).map(|(a, b)| a * b).sum::<f64>();
+        let v = forward(&self.chol, self.n(), &k);
+        let var = (self.sigma2 - v.iter().map(|t| t * t).sum::<f64>()).max(0.0);
+        (self.y_mean + self.y_scale * mean, self.y_scale * var.sqrt())
+    }
+
+    /// Leave-one-out residuals in closed form (hyperparameters held), given the true `y`.
+    pub fn loo(&self, y: &[f64], se: &[Option<f64>]) -> CrossValidation {
+        let n = self.n();
+        // K⁻¹ = L⁻ᵀL⁻¹: its diagonal is the column sums of squares of L⁻¹.
+        let mut diag = vec![0.0; n];
+        for j in 0..n {
+            let mut e = vec![0.0; n];
+            e[j] = 1.0;
+            let c = forward(&self.chol, n, &e);
+            diag[j] = c[j..].iter().map(|v| v * v).sum();
+        }
+        let ybar = y.iter().sum::<f64>() / n as f64;
+        let (mut ss, mut st, mut inside) = (0.0, 0.0, 0usize);
+        for i in 0..n {
+            let r = self.alpha[i] / diag[i] * self.y_scale;
+            let sd = (1.0 / diag[i]).sqrt() * self.y_scale;
+            ss += r * r;
+            st += (y[i] - ybar).powi(2);
+            if r.abs() <= 1.96 * sd {
+                inside += 1;
+            }
+        }
+        let se2: Vec<f64> = se.iter().flatten().map(|s| s * s).collect();
+        let mean_se2 = if se2.is_empty() { 0.0 } else { se2.iter().sum::<f64>() / se2.len() as f64 };
+        CrossValidation {
+            points: n,
+            rmse: (ss / n as f64).sqrt(),
+            q2: if st > 0.0 { 1.0 - ss / st } else { 0.0 },
+            coverage95: inside as f64 / n as f64,
+            noise_se: (mean_se2 + self.nugget * self.y_scale.powi(2)).sqrt(),
+        }
+    }
+
+    /// The space's MFR statistics from the emulator: the mean surface, clamped at 0 (MFR cannot
+    /// be negative), on `draws` scrambled-Halton points of the unit cube; the 95 % intervals from
+    /// `paths` posterior sample paths on the first 256 of them (each path's statistic less the
+    /// mean surface's on the same points, added to the estimate: the spread the emulator's own
+    /// uncertainty puts on each statistic).
+    pub fn space_statistics(&self, draws: usize, paths: usize, seed: u64) -> EmulatedStatistics {
+        let d = self.x[0].len();
+        let pts = crate::design::halton::halton(d, draws, crate::sweep::Scrambling::Random, seed);
+        let surface: Vec<f64> = pts.iter().map(|u| self.predict(u).0.max(0.0)).collect();
+        let statistics = crate::analysis::stats::moments(&surface);
+        let m = pts.len().min(256);
+        let sub = &pts[..m];
+        let n = self.n();
+        // Posterior covariance on the sub-design: K** − VᵀV, V = L⁻¹K*.
+        let v: Vec<Vec<f64>> = sub.iter().map(|u| forward(&self.chol, n, &self.kstar(u))).collect();
+        let mut cov = vec![0.0; m * m];
+        for i in 0..m {
+            for j in 0..=i {
+                let kij = self.sigma2 * matern52(dist(&sub[i], &sub[j], &self.theta));
+                let c = kij - v[i].iter().zip(&v[j]).map(|(a, b)| a * b).sum::<f64>();
+                cov[i * m + j] = c;
+                cov[j * m + i] = c;
+            }
+            cov[i * m + i] += 1e-10 * self.sigma2;
+        }
+        let mut jitter = 1e-8 * self.sigma2;
+        while !cholesky(&mut cov.clone(), m) && jitter < self.sigma2 {
+            for i in 0..m {
+                cov[i * m + i] += jitter;
+            }
+            jitter *= 10.0;
+        }
+        let ok = cholesky(&mut cov, m);
+        let mean_sub: Vec<f64> = sub.iter().map(|u| self.predict(u).0).collect();
+        let base = crate::analysis::stats::moments(&mean_sub.iter().map(|v| v.max(0.0)).collect::<Vec<_>>());
+        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed);
+        let mut shifts: [Vec<f64>; 4] = Default::default();
+        if ok {
+            for _ in 0..paths {
+                let e: Vec<f64> = (0..m).map(|_| normal(&mut rng)).collect();
+                let path: Vec<f64> = (0..m)
+                    .map(|i| {
+                        let c: f64 = (0..=i).map(|k| cov[i * m + k] * e[k]).sum();
+                        (mean_sub[i] + self.y_scale * c).max(0.0)
+                    })
+                    .collect();
+                let pm = crate::analysis::stats::moments(&path);
+                for (sh, s) in shifts.iter_mut().zip(STATISTICS) {
+                    if let (Some(a), Some(b)) = (s.of(&pm), s.of(&base)) {
+                        sh.push(a - b);
+                    }
+                }
+            }
+        }
+        let intervals = std::array::from_fn(|k| {
+            let s = STATISTICS[k];
+            let (Some(est), true) = (s.of(&statistics), shifts[k].len() * 2 >= paths.max(1)) else {
+                return Interval::UNDEFINED;
+            };
+            let mut d = shifts[k].clone();
+            d.sort_by(f64::total_cmp);
+            Interval {
+                lo: Some(est + percentile_sorted(&d, 0.025)),
+                hi: Some(est + percentile_sorted(&d, 0.975)),
+            }
+        });
+        EmulatedStatistics { draws: pts.len(), paths, statistics, intervals }
+    }
+
+    /// Where MFR is zero to the emulator among `pts` (unit coordinates): the share where its
+    /// mean is below `level` (the estimate), and the share where even its upper 95 % bound
+    /// (mean + 1.96 SE) is (zero for sure: the smooth surface rounds the kink, so this share is
+    /// the smaller).
+    pub fn zero_fraction(&self, pts: &[Vec<f64>], level: f64) -> (f64, f64) {
+        let (mut likely, mut sure) = (0usize, 0usize);
+        for u in pts {
+            let (m, s) = self.predict(u);
+            likely += usize::from(m < level);
+            sure += usize::from(m + 1.96 * s < level);
+        }
+        let n = pts.len().max(1) as f64;
+        (likely as f64 / n, sure as f64 / n)
+    }
+
+    /// Candidates (unit coordinates) ranked by the emulator's MFR, highest first: (index into
+    /// `candidates`, mean, SE).
+    pub fn rank(&self, candidates: &[Vec<f64>]) -> Vec<(usize, f64, f64)> {
+        let mut r: Vec<(usize, f64, f64)> = candidates
+            .iter()
+            .enumerate()
+            .map(|(i, u)| {
+                let (m, s) = self.predict(u);
+                (i, m.max(0.0), s)
+            })
+            .collect();
+        r.sort_by(|a, b| b.1.total_cmp(&a.1));
+        r
+    }
+}
+
+/// `k` of the indices 0..n (all of them when n ≤ k), a seeded random choice, in order.
+pub fn subset(n: usize, k: usize, seed: u64) -> Vec<usize> {
+    use rand::seq::SliceRandom;
+    let mut idx: Vec<usize> = (0..n).collect();
+    if n > k {
+        idx.shuffle(&mut ChaCha8Rng::seed_from_u64(seed));
+        idx.truncate(k);
+        idx.sort_unstable();
+    }
+    idx
+}
+
+/// A standard normal deviate (Box–Muller).
+fn normal(rng: &mut ChaCha8Rng) -> f64 {
+    use rand::Rng;
+    let (u, v): (f64, f64) = (rng.gen_range(f64::EPSILON..1.0), rng.gen());
+    (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A smooth 2-D function and a kinked one (zero over a third of the square).
+    fn smooth(u: &[f64]) -> f64 {
+        (3.0 * u[0]).sin() + u[1] * u[1]
+    }
+
+    fn kinked(u: &[f64]) -> f64 {
+        (u[0] + 0.5 * u[1] - 0.5).max(0.0)
+    }
+
+    fn design(n: usize) -> Vec<Vec<f64>> {
+        crate::design::halton::halton(2, n, crate::sweep::Scrambling::Random, 3)
+    }
+
+    #[test]
+    fn cholesky_solves_a_hand_system() {
+        // [[4, 2], [2, 3]] = L Lᵀ with L = [[2, 0], [1, √2]].
+        let mut a = vec![4.0, 2.0, 2.0, 3.0];
+        assert!(cholesky(&mut a, 2));
+        assert!(
+            (a[0] - 2.0).abs() < 1e-15 && (a[2] - 1.0).abs() < 1e-15 && (a[3] - 2f64.sqrt()).abs() < 1e-15
+        );
+        // Solve [[4, 2], [2, 3]] v = [2, 5]: v = [−0.5, 2].
+        let v = backward(&a, 2, &forward(&a, 2, &[2.0, 5.0]));
+        assert!((v[0] + 0.5).abs() < 1e-14 && (v[1] - 2.0).abs() < 1e-14, "{v:?}");
+        assert!(!cholesky(&mut [1.0, 2.0, 2.0, 1.0], 2));
+    }
+
+    #[test]
+    fn interpolates_a_smooth_function_and_knows_its_error() {
+        let x = design(60);
+        let y: Vec<f64> = x.iter().map(|u| smooth(u)).collect();
+        let e = Emulator::fit(&x, &y, &vec![None; 60]).unwrap();
+        let test = crate::design::halton::halton(2, 200, crate::sweep::Scrambling::Random, 99);
+        let err: f64 = test.iter().map(|u| (e.predict(u).0 - smooth(u)).powi(2)).sum::<f64>() / 200.0;
+        assert!(err.sqrt() < 0.01, "rmse {}", err.sqrt());
+        let cv = e.loo(&y, &vec![None; 60]);
+        assert!(cv.q2 > 0.99 && cv.rmse < 0.02, "{cv:?}");
+        // Far from the data the SE grows.
+        let (_, near) = e.predict(&x[5]);
+        let (_, far) = e.predict(&[1.6, 1.6]);
+        assert!(far > 10.0 * near.max(1e-6), "{near} {far}");
+    }
+
+    #[test]
+    fn noisy_data_give_a_nugget_and_honest_loo_coverage() {
+        let x = design(150);
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let y: Vec<f64> = x.iter().map(|u| smooth(u) + 0.05 * normal(&mut rng)).collect();
+        let se = vec![Some(0.05); 150];
+        let e = Emulator::fit(&x, &y, &se).unwrap();
+        let cv = e.loo(&y, &se);
+        // The left-out residuals are about the noise (0.05), and ~95 % fall inside ±1.96 SE.
+        assert!(cv.rmse > 0.04 && cv.rmse < 0.08, "{cv:?}");
+        assert!(cv.coverage95 > 0.88, "{cv:?}");
+        // The prediction averages the noise out: closer to the truth than the data are.
+        let test = crate::design::halton::halton(2, 200, crate::sweep::Scrambling::Random, 98);
+        let err = (test.iter().map(|u| (e.predict(u).0 - smooth(u)).powi(2)).sum::<f64>() / 200.0).sqrt();
+        assert!(err < 0.035, "{err}");
+    }
+
+    #[test]
+    fn statistics_of_a_kinked_function_come_near_the_truth_and_the_zero_region_is_found() {
+        // Truth by a dense grid: P(MFR = 0) = P(u + v/2 < 0.5) = 0.3125 - 0.0625 = 0.25 + ... ;
+        // computed here on 400 × 400 cell midpoints.
+        let g = 400;
+        let truth: Vec<f64> = (0..g * g)
+            .map(|k| kinked(&[((k / g) as f64 + 0.5) / g as f64, ((k % g) as f64 + 0.5) / g as f64]))
+            .collect();
+        let tm = crate::analysis::stats::moments(&truth);
+        let zero_share = truth.iter().filter(|v| **v == 0.0).count() as f64 / truth.len() as f64;
+        let x = design(100);
+        let y: Vec<f64> = x.iter().map(|u| kinked(u)).collect();
+        let e = Emulator::fit(&x, &y, &vec![None; 100]).unwrap();
+        let s = e.space_statistics(4096, 100, 1);
+        let (m, sd) = (s.statistics.mean.unwrap(), s.statistics.std.unwrap());
+        assert!((m / tm.mean.unwrap() - 1.0).abs() < 0.02, "{m} vs {:?}", tm.mean);
+        assert!((sd / tm.std.unwrap() - 1.0).abs() < 0.03, "{sd} vs {:?}", tm.std);
+        let iv = s.intervals[0];
+        assert!(iv.lo.unwrap() <= m && m <= iv.hi.unwrap());
+        let pts = crate::design::halton::halton(2, 2000, crate::sweep::Scrambling::Random, 7);
+        let (likely, sure) = e.zero_fraction(&pts, 0.01);
+        assert!((likely - zero_share).abs() < 0.05, "{likely} vs {zero_share}");
+        assert!(sure > 0.5 * zero_share && sure <= likely, "{sure} vs {zero_share}");
+        // The best candidate is the corner (1, 1), where the function is largest.
+        let r = e.rank(&[vec![0.2, 0.2], vec![1.0, 1.0], vec![0.5, 0.5]]);
+        assert_eq!(r[0].0, 1);
+    }
+
+    #[test]
+    fn too_few_points_or_a_constant_output_give_no_emulator() {
+        let x = design(5);
+        assert!(Emulator::fit(&x, &[1.0; 5], &[None; 5]).is_none());
+        let x = design(20);
+        assert!(Emulator::fit(&x, &[0.3; 20], &[None; 20]).is_none());
+    }
+}

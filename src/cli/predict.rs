@@ -1,0 +1,38 @@
+//! `sweep predict`: MFR at a setting from a sweep's emulator.
+
+use std::path::PathBuf;
+
+use clap::Args;
+use demsweep::error::Error;
+
+#[derive(Args)]
+pub(super) struct PredictArgs {
+    /// A sweep directory (holding manifest.json) with done points.
+    dir: PathBuf,
+    /// Parameter values, e.g. --set diameter=2,gap=4 (units of the sweep file); unset
+    /// parameters take the middle of their range. Values outside the swept range are predicted
+    /// with a warning: the emulator extrapolates there.
+    #[arg(long, value_delimiter = ',')]
+    set: Vec<String>,
+    /// Print the prediction as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+pub(super) fn predict(a: PredictArgs) -> Result<i32, Error> {
+    let p = demsweep::report::emulation::predict(&a.dir, &a.set)?;
+    for name in &p.outside {
+        eprintln!(
+            "warning: {name} = {} lies outside the sampled range: the emulator extrapolates",
+            p.parameters[name]
+        );
+    }
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&p).map_err(|e| Error::Internal(e.to_string()))?);
+    } else {
+        let setting: Vec<String> = p.parameters.iter().map(|(k, v)| format!("{k}={v}")).collect();
+        println!("MFR {:.4} ± {:.4} (predictive SE) at {}", p.mfr, p.se, setting.join(", "));
+        println!("emulator: {} points, leave-one-out RMSE {:.4}", p.points, p.loo_rmse);
+    }
+    Ok(0)
+}

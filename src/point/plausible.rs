@@ -1,0 +1,148 @@
+//! What is physically possible: the checks every number passes before it counts, on what the
+//! engine hands the metrics (each dump frame) and on every result, fresh or read back.
+//!
+//! An engine that exits 0 can still write garbage (a negative mass, a velocity of 1e300), and a
+//! result file can be edited or damaged; none of it may become a number in results.csv. Not
+//! responsible for whether a result belongs to its run directory or point (the store checks
+//! that).
+
+use crate::outcome::RunResult;
+use crate::point::metrics::Frame;
+
+/// Highest possible MFR. MFR is the packing fraction of the spread layer over the gap height
+/// (DESIGN §5), so it cannot exceed the densest packing of equal spheres, π/√18 ≈ 0.7405
+/// (Kepler; random close packing is ≈ 0.64).
+pub const MFR_MAX: f64 = 0.74;
+
+/// Highest possible |v_x| of a particle, in multiples of the blade speed. The blade pushes the
+/// heap at its own speed; grains thrown ahead of it move at a few times that at most, and a run
+/// whose energy explodes is stopped by the engine's log watch long before 10×.
+pub const VX_MAX_BLADE_SPEEDS: f64 = 10.0;
+
+/// Why a number is not possible, naming it.
+fn bad(what: &str, v: f64, expected: &str) -> String {
+    format!("{what} = {v}: expected {expected}")
+}
+
+fn check_mfr(what: &str, v: f64, lo: f64) -> Result<(), String> {
+    if v.is_finite() && (lo..=MFR_MAX).contains(&v) {
+        Ok(())
+    } else {
+        Err(bad(what, v, &format!("a finite number in [{lo}, {MFR_MAX}]")))
+    }
+}
+
+fn vx_limit(blade_speed: f64) -> f64 {
+    VX_MAX_BLADE_SPEEDS * blade_speed.abs()
+}
+
+/// Every number of a result finite and possible: 0 ≤ MFR ≤ [`MFR_MAX`] (the flux and window
+/// MFRs, net counts, within ±[`MFR_MAX`]), each v_x within [`VX_MAX_BLADE_SPEEDS`] blade speeds,
+/// the p-value in [0, 1], counts and times consistent.
+pub fn check_result(r: &RunResult) -> Result<(), String> {
+    check_mfr("mfr", r.mfr, 0.0)?;
+    check_mfr("mfr_flux", r.mfr_flux.abs(), 0.0).map_err(|_| bad("mfr_flux", r.mfr_flux, "within ±0.74"))?;
+    for (i, w) in r.mfr_windows.iter().enumerate() {
+        check_mfr(&format!("mfr_windows[{i}]"), w.abs(), 0.0)
+            .map_err(|_| bad(&format!("mfr_windows[{i}]"), *w, "within ±0.74"))?;
+    }
+    if !(r.steady_p.is_finite() && (0.0..=1.0).contains(&r.steady_p)) {
+        return Err(bad("steady_p", r.steady_p, "a p-value in [0, 1]"));
+    }
+    let speed = r.parameters.get("blade_speed").copied();
+    if let Some(s) = speed {
+        if !(s.is_finite() && s > 0.0) {
+            return Err(bad("parameters.blade_speed", s, "a positive speed"));
+        }
+    }
+    for (k, v) in r.vx.iter().enumerate() {
+        let Some(v) = *v else { continue };
+        let ok = v.is_finite() && speed.is_none_or(|s| v.abs() <= vx_limit(s));
+        if !ok {
+            let limit = speed.map_or("a finite speed".to_string(), |s| {
+                format!("|v_x| ≤ {VX_MAX_BLADE_SPEEDS} blade speeds ({} m/s)", vx_limit(s))
+            });
+            return Err(bad(&format!("v_x of layer {}", k + 1), v, &limit));
+        }
+    }
+    if let Some(se) = r.mfr_se.filter(|se| !(se.is_finite() && *se >= 0.0)) {
+        return Err(bad("mfr_se", se, "a finite standard error ≥ 0"));
+    }
+    // A held heap (steady_state) is topped up as it deposits, so its window can count more
+    // particles than the heap holds at once; a pile of its own cannot.
+    if r.steady_state.is_none() && r.mfr_particles > r.particles {
+        return Err(format!(
+            "mfr_particles = {}: more than the {} particles of the pile",
+            r.mfr_particles, r.particles
+        ));
+    }
+    for (what, v) in [("simulated_time", r.simulated_time), ("wall_time", r.wall_time)] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(bad(what, v, "a finite time ≥ 0"));
+        }
+    }
+    if let Some(c) = r.cpu_time.filter(|c| !(c.is_finite() && *c >= 0.0)) {
+        return Err(bad("cpu_time", c, "a finite time ≥ 0"));
+    }
+    Ok(())
+}
+
+/// Every particle of a dump frame possible: positions and velocities finite, masses finite and
+/// > 0, |v_x| within [`VX_MAX_BLADE_SPEEDS`] blade speeds. The error names the particle.
+pub fn check_frame(f: &Frame, blade_speed: f64) -> Result<(), String> {
+    let limit = vx_limit(blade_speed);
+    for i in 0..f.len() {
+        let at = || format!("step {}, particle {}", f.step, f.id[i]);
+        let m = f.mass[i];
+        if !(m.is_finite() && m > 0.0) {
+            return Err(format!("{}: mass = {m}: expected a finite mass > 0", at()));
+        }
+        for (what, v) in [("x", f.x[i]), ("z", f.z[i])] {
+            if !v.is_finite() {
+                return Err(format!("{}: {what} = {v}: expected a finite position", at()));
+            }
+        }
+        let v = f.vx[i];
+        if !(v.is_finite() && v.abs() <= limit) {
+            return Err(format!(
+                "{}: vx = {v}: expected |v_x| ≤ {VX_MAX_BLADE_SPEEDS} blade speeds ({limit} m/s)",
+                at()
+            ));
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame(mass: f64, vx: f64) -> Frame {
+        Frame {
+            step: 100,
+            id: vec![7],
+            x: vec![0.01],
+            y: None,
+            z: vec![0.002],
+            vx: vec![vx],
+            mass: vec![mass],
+        }
+    }
+
+    #[test]
+    fn a_frame_with_a_negative_or_zero_mass_is_refused_naming_the_particle() {
+        for m in [-4.4e-6, 0.0, f64::NAN] {
+            let e = check_frame(&frame(m, 0.5), 1.4).unwrap_err();
+            assert!(e.contains("particle 7") && e.contains("mass"), "{e}");
+        }
+        assert!(check_frame(&frame(4.4e-6, 0.5), 1.4).is_ok());
+    }
+
+    #[test]
+    fn a_frame_with_vx_beyond_the_stated_multiple_of_the_blade_speed_is_refused() {
+        assert!(check_frame(&frame(4.4e-6, 13.9), 1.4).is_ok());
+        for v in [14.1, -14.1, 1e300, f64::INFINITY] {
+            assert!(check_frame(&frame(4.4e-6, v), 1.4).unwrap_err().contains("vx"), "{v}");
+        }
+    }
+}

@@ -1,0 +1,350 @@
+//! MFR in a steady state (conveyor layout): the block series of a run, where it became steady,
+//! and the steady deposit rate with its standard error.
+//!
+//! The deck prints one line per block of substrate travel (`demsweep: block ...`): the mass
+//! that reached the delete region, the mass on the strip between the blade's rear face and it,
+//! and the heap. The deposit of block k — the mass that crossed the rear face — is the deleted
+//! mass plus the strip's change; block k's MFR is that over a full flow through the gap for the
+//! block's travel, ρ · w · h · v · Δt.
+//!
+//! - Transient: the warm-up blocks (a stated least transient, the deck's), then MSER
+//!   truncation (White 1997) of the rest: the first d blocks are dropped where
+//!   var(y_d..n) / (n − d) is least, d ≤ n/2. A series whose best d is its half is still
+//!   developing.
+//! - MFR: the mean over the steady window; its SE from batch means. Blocks are batched in twos
+//!   until the lag-1 autocorrelation of the batch means is at most [`MAX_BATCH_ACF`] (measured:
+//!   5 D blocks give −0.17 to −0.08 at 0.1–1.4 m/s, so batches of one block); the ACF is
+//!   reported with the SE.
+//! - Steady: no trend over the window (|slope / SE| ≤ [`TREND_Z`], an ordinary least-squares
+//!   fit over the blocks), the heap at the window's end within [`HEAP_TOLERANCE`] of its start,
+//!   and the MSER truncation short of the series' half.
+//! - v_x: the profile of each block's snapshot of the 6 D in front of the blade (thesis
+//!   Appendix A), in the lab frame (+v), averaged over the steady window, with the SE of each
+//!   layer over the snapshots.
+
+use serde::{Deserialize, Serialize};
+
+use crate::outcome::VX_LAYERS;
+use crate::point::metrics::{vx_profile, Frame};
+use crate::scene::Scene;
+
+/// Largest lag-1 autocorrelation of the batch means accepted as independent.
+pub const MAX_BATCH_ACF: f64 = 0.2;
+/// A window whose OLS trend is beyond this many SEs is unsteady (0.3 % two-sided false alarm
+/// on independent normal blocks).
+pub const TREND_Z: f64 = 3.0;
+/// Largest relative change of the heap's count from the window's start to its end.
+pub const HEAP_TOLERANCE: f64 = 0.1;
+
+/// One block as the deck printed it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Block {
+    pub step: u64,
+    /// Mass in the delete region at the block's end (deleted then), kg.
+    pub gone: f64,
+    /// Mass on the strip behind the blade at the block's end, kg.
+    pub strip: f64,
+    pub heap: u64,
+}
+
+/// What a conveyor run measured, beyond MFR itself (result.json `steady_state`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SteadyState {
+    /// MFR of every block, the transient included.
+    pub block_mfr: Vec<f64>,
+    /// Blocks dropped by MSER truncation.
+    pub transient_blocks: usize,
+    pub window_blocks: usize,
+    /// Substrate travel per block, in diameters.
+    pub block_diameters: f64,
+    /// Blocks per batch of the SE, and the lag-1 autocorrelation of the batch means.
+    pub batch_blocks: usize,
+    pub batch_acf1: f64,
+    /// Lag-1 autocorrelation of the window's blocks.
+    pub block_acf1: f64,
+    /// OLS slope of the block MFR over the window, over its SE.
+    pub trend_z: f64,
+    /// (last quarter − first quarter) / MFR over the window.
+    pub drift: f64,
+    /// The heap's count at the window's start and end, and its target.
+    pub heap_start: u64,
+    pub heap_end: u64,
+    pub heap_target: u64,
+    /// `"target"`: the precision target ended the run; `"cap"`: the window cap did.
+    pub stop: String,
+}
+
+/// The steady-state answers of a conveyor run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Steady {
+    pub mfr: f64,
+    pub mfr_se: f64,
+    /// Deleted mass alone over the window (without the strip's change): a second count of the
+    /// same flux, lagging it by the strip's transit.
+    pub mfr_deleted: f64,
+    pub particles: usize,
+    pub state: SteadyState,
+    pub vx: Vec<Option<f64>>,
+    pub vx_se: Vec<Option<f64>>,
+    /// Why the flow is not steady (None: steady).
+    pub unsteady: Option<String>,
+}
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum SteadyError {
+    #[error("the log has {0} block lines (demsweep: block ...); at least 4 are needed")]
+    TooFewBlocks(usize),
+    #[error("unreadable block line: {0}")]
+    Unreadable(String),
+    #[error("the log says neither `demsweep: stop target` nor `demsweep: stop cap`")]
+    NoStop,
+}
+
+/// The block lines of a conveyor log, and how the run stopped.
+pub fn parse_log(log: &str) -> Result<(Vec<Block>, String), SteadyError> {
+    let mut blocks = Vec::new();
+    let mut stop = None;
+    for line in log.lines().map(str::trim) {
+        if let Some(rest) = line.strip_prefix("demsweep: block ") {
+            let w: Vec<&str> = rest.split_whitespace().collect();
+            let field = |key: &str| w.iter().position(|t| *t == key).and_then(|i| w.get(i + 1));
+            let num = |key: &str| field(key).and_then(|v| v.parse::<f64>().ok());
+            match (num("step"), num("gone"), num("strip"), num("heap")) {
+                (Some(step), Some(gone), Some(strip), Some(heap)) => {
+                    blocks.push(Block { step: step as u64, gone, strip, heap: heap as u64 })
+                }
+                _ => return Err(SteadyError::Unreadable(line.to_string())),
+            }
+        } else if line.starts_with("demsweep: stop target") {
+            stop = Some("target");
+        } else if line.starts_with("demsweep: stop cap") {
+            stop = Some("cap");
+        }
+    }
+    let stop = stop.ok_or(SteadyError::NoStop)?;
+    if blocks.len() < 4 {
+        return Err(SteadyError::TooFewBlocks(blocks.len()));
+    }
+    Ok((blocks, stop.into()))
+}
+
+/// MSER truncation: the d ≤ n/2 that minimises var(y[d..]) / (n − d).
+pub fn mser(y: &[f64]) -> usize {
+    let n = y.len();
+    (0..=n / 2)
+        .map(|d| {
+            let t = &y[d..];
+            let k = t.len() as f64;
+            let m = mean(t);
+            (d, t.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (k * k))
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(d, _)| d)
+        .unwrap_or(0)
+}
+
+fn mean(y: &[f64]) -> f64 {
+    y.iter().sum::<f64>() / y.len() as f64
+}
+
+/// Lag-1 autocorrelation (0 for a constant or too short series).
+pub fn acf1(y: &[f64]) -> f64 {
+    if y.len() < 3 {
+        return 0.0;
+    }
+    let m = mean(y);
+    let var: f64 = y.iter().map(|v| (v - m).powi(2)).sum();
+    if var == 0.0 {
+        return 0.0;
+    }
+    y.windows(2).map(|p| (p[0] - m) * (p[1] - m)).sum::<f64>() / var
+}
+
+/// Standard error of the mean by batch means: (SE, blocks per batch, lag-1 ACF of the batches).
+/// Batches double while their means stay correlated and at least 8 batches remain.
+pub fn batch_means_se(y: &[f64]) -> (f64, usize, f64) {
+    let mut b = 1;
+    loop {
+        let means: Vec<f64> = y.chunks_exact(b).map(mean).collect();
+        let r = acf1(&means);
+        if r <= MAX_BATCH_ACF || y.len() / (2 * b) < 8 {
+            let n = means.len() as f64;
+            let m = mean(&means);
+            let var = means.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+            return ((var / n).sqrt(), b, r);
+        }
+        b *= 2;
+    }
+}
+
+/// OLS slope of y against its index, over its SE (0 when the residuals vanish).
+pub fn trend_z(y: &[f64]) -> f64 {
+    let n = y.len() as f64;
+    if n < 3.0 {
+        return 0.0;
+    }
+    let xm = (n - 1.0) / 2.0;
+    let ym = mean(y);
+    let sxx: f64 = (0..y.len()).map(|i| (i as f64 - xm).powi(2)).sum();
+    let slope = y.iter().enumerate().map(|(i, v)| (i as f64 - xm) * (v - ym)).sum::<f64>() / sxx;
+    let rss: f64 = y.iter().enumerate().map(|(i, v)| (v - ym - slope * (i as f64 - xm)).powi(2)).sum();
+    let se = (rss / (n - 2.0) / sxx).sqrt();
+    if se > 0.0 {
+        slope / se
+    } else {
+        0.0
+    }
+}
+
+/// The steady-state answers of a conveyor run from its log's blocks and its v_x snapshots.
+pub fn compute(scene: &Scene, blocks: &[Block], stop: &str, frames: &[Frame]) -> Steady {
+    let c = &scene.conveyor;
+    let ideal = c.ideal_block_mass;
+    let mut before = 0.0;
+    let y: Vec<f64> = blocks
+        .iter()
+        .map(|b| {
+            let m = (b.gone + b.strip - before) / ideal;
+            before = b.strip;
+            m
+        })
+        .collect();
+    // The warm-up is the least transient (the deck's stop rule starts after it); MSER may
+    // extend it.
+    let d0 = (c.warmup_blocks as usize).min(y.len().saturating_sub(4));
+    let d = d0 + mser(&y[d0..]);
+    let w = &y[d..];
+    let mfr = mean(w);
+    let (mfr_se, batch_blocks, batch_acf1) = batch_means_se(w);
+    let q = (w.len() / 4).max(1);
+    let drift = if mfr > 0.0 { (mean(&w[w.len() - q..]) - mean(&w[..q])) / mfr } else { 0.0 };
+    let window = &blocks[d..];
+    let gone: f64 = window.iter().map(|b| b.gone).sum();
+    let particle_mass = scene.density * std::f64::consts::PI / 6.0 * scene.diameter.powi(3);
+    // The heap at the window's start is the count at the end of the last dropped block.
+    let heap_start = if d > 0 { blocks[d - 1].heap } else { blocks[0].heap };
+    let heap_end = blocks.last().map(|b| b.heap).unwrap_or(0);
+    let state = SteadyState {
+        block_mfr: y.clone(),
+        transient_blocks: d,
+        window_blocks: w.len(),
+        block_diameters: scene.blade_speed * scene.timestep * c.block_steps as f64 / scene.diameter,
+        batch_blocks,
+        batch_acf1,
+        block_acf1: acf1(w),
+        trend_z: trend_z(w),
+        drift,
+        heap_start,
+        heap_end,
+        heap_target: c.heap_particles as u64,
+        stop: stop.into(),
+    };
+    let mut why = Vec::new();
+    if d - d0 >= (y.len() - d0) / 2 && y.len() - d0 >= 8 {
+        why.push(format!(
+            "still developing: MSER drops {} of the {} blocks after the warm-up (half of them)",
+            d - d0,
+            y.len() - d0
+        ));
+    }
+    if state.trend_z.abs() > TREND_Z {
+        why.push(format!("a trend over the window of {:.1} SE (limit {TREND_Z})", state.trend_z));
+    }
+    let heap_change = (heap_end as f64 - heap_start as f64).abs() / heap_start.max(1) as f64;
+    if heap_change > HEAP_TOLERANCE {
+        why.push(format!(
+            "the heap changed from {heap_start} to {heap_end} particles (limit {:.0} %)",
+            100.0 * HEAP_TOLERANCE
+        ));
+    }
+    if (heap_start as f64) < (1.0 - HEAP_TOLERANCE) * c.heap_particles as f64 {
+        why.push(format!("the heap holds {heap_start} of its {} particles", c.heap_particles));
+    }
+    // v_x over the steady window: each block's snapshot (taken at the block's end).
+    let first_step = window.first().map(|b| b.step).unwrap_or(0);
+    let profiles: Vec<Vec<Option<f64>>> = frames
+        .iter()
+        .filter(|f| f.step >= first_step)
+        .map(|f| vx_profile(scene, std::iter::once(f)))
+        .collect();
+    let (mut vx, mut vx_se) = (Vec::with_capacity(VX_LAYERS), Vec::with_capacity(VX_LAYERS));
+    for k in 0..VX_LAYERS {
+        // Lab frame: the blade moves at +v over a resting substrate.
+        let vals: Vec<f64> = profiles.iter().filter_map(|p| p[k]).map(|v| v + scene.blade_speed).collect();
+        if vals.is_empty() {
+            vx.push(None);
+            vx_se.push(None);
+            continue;
+        }
+        let m = mean(&vals);
+        vx.push(Some(m));
+        let n = vals.len() as f64;
+        vx_se.push(
+            (n > 1.0).then(|| (vals.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt()),
+        );
+    }
+    Steady {
+        mfr,
+        mfr_se,
+        mfr_deleted: gone / (ideal * w.len() as f64),
+        particles: (mfr * ideal * w.len() as f64 / particle_mass).round() as usize,
+        state,
+        vx,
+        vx_se,
+        unsteady: (!why.is_empty()).then(|| why.join("; ")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mser_drops_a_ramp_and_keeps_a_flat_series() {
+        let flat: Vec<f64> = (0..20).map(|i| 1.0 + if i % 2 == 0 { 0.1 } else { -0.1 }).collect();
+        assert_eq!(mser(&flat), 0);
+        let mut ramp: Vec<f64> = (0..6).map(|i| i as f64 * 0.15).collect();
+        ramp.extend(&flat);
+        let d = mser(&ramp);
+        assert!((5..=7).contains(&d), "{d}");
+    }
+
+    #[test]
+    fn batch_means_of_alternating_blocks_stay_single_and_of_runs_double() {
+        // Independent-looking (anti-correlated) blocks: one block per batch, SE = s/√n.
+        let y: Vec<f64> = (0..32).map(|i| if i % 2 == 0 { 1.0 } else { 0.0 }).collect();
+        let (se, b, _) = batch_means_se(&y);
+        assert_eq!(b, 1);
+        let s = (32.0 * 0.25 / 31.0f64).sqrt();
+        assert!((se - s / 32f64.sqrt()).abs() < 1e-12, "{se}");
+        // Runs of eight equal values are strongly correlated (lag-1 ACF of the blocks ≈ 0.75):
+        // batches grow until their means' lag-1 ACF is small (at four blocks a batch, runs of
+        // two: ACF ≈ 0). Runs of four would stop at two (period-4 means have lag-1 ACF ≈ 0).
+        let y: Vec<f64> = (0..128).map(|i| ((i / 8) % 2) as f64).collect();
+        let (_, b, r) = batch_means_se(&y);
+        assert!(b >= 4 && r <= MAX_BATCH_ACF, "b={b} r={r}");
+    }
+
+    #[test]
+    fn trend_z_sees_a_slope_and_not_noise() {
+        let noise: Vec<f64> = (0..24).map(|i| if i % 3 == 0 { 0.1 } else { -0.05 }).collect();
+        assert!(trend_z(&noise).abs() < 1.0);
+        let slope: Vec<f64> = noise.iter().enumerate().map(|(i, v)| v + 0.02 * i as f64).collect();
+        assert!(trend_z(&slope) > 5.0);
+    }
+
+    #[test]
+    fn the_log_gives_blocks_and_the_stop() {
+        let log = "demsweep: settled at step 0\n\
+                   demsweep: block 1 step 200 gone 0 strip 0.001 heap 900 heapmass 0.03\n\
+                   demsweep: block 2 step 400 gone 0.0005 strip 0.0012 heap 901 heapmass 0.03\n\
+                   demsweep: block 3 step 600 gone 0.0004 strip 0.0011 heap 899 heapmass 0.03\n\
+                   demsweep: block 4 step 800 gone 0.0006 strip 0.0010 heap 900 heapmass 0.03\n\
+                   demsweep: stop cap after 800 steps\n";
+        let (b, stop) = parse_log(log).unwrap();
+        assert_eq!(stop, "cap");
+        assert_eq!(b[1], Block { step: 400, gone: 0.0005, strip: 0.0012, heap: 901 });
+        assert_eq!(parse_log("demsweep: stop target at step 3\n").unwrap_err(), SteadyError::TooFewBlocks(0));
+        assert!(parse_log("demsweep: block 1 step x\n").is_err());
+    }
+}

@@ -1,0 +1,141 @@
+//! MFR in a steady state (the conveyor layout) through the real LIGGGHTS: a held heap, a
+//! measured transient, and every point's MFR with its standard error.
+//!
+//! Small scenes at D = 2 mm: each run is a few CPU seconds.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use serde_json::Value;
+
+/// A conveyor sweep over gap and blade speed at D = 2 mm, μ = 0.2, with `extra` in `[scene]`.
+fn space(dir: &Path, extra: &str) -> PathBuf {
+    let path = dir.join("steady.toml");
+    std::fs::write(
+        &path,
+        format!(
+            r#"name = "steady"
+[parameters]
+gap         = {{ lo = 0.5, hi = 12.0, unit = "mm" }}
+blade_speed = {{ lo = 0.05, hi = 2.0, unit = "m/s" }}
+diameter = 2.0
+friction = 0.2
+[scene]
+layout = "conveyor"
+{extra}
+"#
+        ),
+    )
+    .unwrap();
+    path
+}
+
+fn run_point(sweep: &Path, set: &str) -> (i32, Value, String) {
+    let out = common::sweep_bin().args(["run"]).arg(sweep).args(["--set", set, "--json"]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    let json = serde_json::from_slice(&out.stdout).unwrap_or(Value::Null);
+    (out.status.code().unwrap_or(-1), json, stderr)
+}
+
+fn f(r: &Value, key: &str) -> f64 {
+    r[key].as_f64().unwrap_or_else(|| panic!("{key} missing in {r}"))
+}
+
+/// Checks every steady point must pass: the heap held within 10 % of its target from the
+/// window's start to its end, a window past the warm-up, a finite SE, and the two counts of the
+/// flux (rear-face crossings, deleted mass) within 3 SE + 10 % of each other.
+fn assert_steady(r: &Value, what: &str) {
+    let st = &r["steady_state"];
+    let target = st["heap_target"].as_f64().unwrap();
+    for key in ["heap_start", "heap_end"] {
+        let h = st[key].as_f64().unwrap();
+        assert!((h - target).abs() <= 0.1 * target, "{what}: {key} {h} vs target {target}");
+    }
+    assert!(st["window_blocks"].as_u64().unwrap() >= 4, "{what}: {st}");
+    assert!(st["transient_blocks"].as_u64().unwrap() >= 2, "{what}: the warm-up is part of the transient");
+    let (mfr, se) = (f(r, "mfr"), f(r, "mfr_se"));
+    assert!(se.is_finite() && se >= 0.0, "{what}: SE {se}");
+    assert!((0.0..0.64).contains(&mfr), "{what}: MFR {mfr} beyond random close packing");
+    let deleted = f(r, "mfr_flux");
+    assert!((mfr - deleted).abs() <= 3.0 * se + 0.1 * mfr, "{what}: MFR {mfr} ± {se} vs deleted {deleted}");
+    assert_eq!(r["vx_se"].as_array().map(Vec::len), Some(12), "{what}");
+}
+
+#[test]
+fn a_thesis_speed_point_becomes_steady_holds_its_heap_and_meets_its_target() {
+    common::require_liggghts!("a_thesis_speed_point_becomes_steady_holds_its_heap_and_meets_its_target");
+    let dir = tempfile::tempdir().unwrap();
+    let (code, r, err) = run_point(&space(dir.path(), ""), "gap=5,blade_speed=1.4");
+    assert_eq!(code, 0, "{err}");
+    assert_steady(&r, "gap 2.5 D, 1.4 m/s");
+    let (mfr, se) = (f(&r, "mfr"), f(&r, "mfr_se"));
+    assert!(mfr > 0.05, "MFR {mfr}");
+    // The default target: SE ≤ 5 % of MFR, unless the window cap ended the run first.
+    if r["steady_state"]["stop"] == "target" {
+        assert!(se <= 0.05 * mfr + 1e-12, "SE {se} of MFR {mfr} with the target met");
+    }
+    // v_x in front of the blade: forward, and not faster than about the blade.
+    for v in r["vx"].as_array().unwrap().iter().filter_map(Value::as_f64) {
+        assert!(v > 0.0 && v < 1.4 * 1.5, "v_x {v}");
+    }
+    // No settle, and nothing dumped but the v_x region's columns.
+    assert_eq!(r["settle_steps"], 0);
+}
+
+#[test]
+fn a_machine_speed_point_is_steady_and_deposits_a_dense_layer() {
+    common::require_liggghts!("a_machine_speed_point_is_steady_and_deposits_a_dense_layer");
+    // 0.4 m/s (recoaters run 0.05–0.2): the held heap does not run out, and the layer is far
+    // denser than at the thesis's speed.
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = space(dir.path(), "");
+    let (code, slow, err) = run_point(&sweep, "gap=5,blade_speed=0.4");
+    assert_eq!(code, 0, "{err}");
+    assert_steady(&slow, "gap 2.5 D, 0.4 m/s");
+    let (code, fast, err) = run_point(&sweep, "gap=5,blade_speed=1.4");
+    assert_eq!(code, 0, "{err}");
+    let (a, sa, b, sb) = (f(&slow, "mfr"), f(&slow, "mfr_se"), f(&fast, "mfr"), f(&fast, "mfr_se"));
+    assert!(a - b > 3.0 * (sa * sa + sb * sb).sqrt(), "MFR at 0.4 m/s {a} ± {sa} vs 1.4 m/s {b} ± {sb}");
+}
+
+#[test]
+fn nothing_passes_where_no_sphere_fits_and_mfr_rises_with_the_gap() {
+    common::require_liggghts!("nothing_passes_where_no_sphere_fits_and_mfr_rises_with_the_gap");
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = space(dir.path(), "");
+    // gap 0.5 D: no 2 mm sphere passes under a 1 mm tip.
+    let (code, shut, err) = run_point(&sweep, "gap=1,blade_speed=1.4");
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(f(&shut, "mfr"), 0.0, "{shut}");
+    assert_eq!(f(&shut, "mfr_se"), 0.0);
+    let mut last = (0.0, 0.0);
+    for gap in [3.0, 7.0] {
+        let (code, r, err) = run_point(&sweep, &format!("gap={gap},blade_speed=1.4"));
+        assert_eq!(code, 0, "gap {gap}: {err}");
+        assert_steady(&r, &format!("gap {gap} mm"));
+        let (m, s) = (f(&r, "mfr"), f(&r, "mfr_se"));
+        assert!(
+            m - last.0 > 2.0 * (s * s + last.1 * last.1).sqrt(),
+            "gap {gap}: MFR {m} ± {s} after {last:?}"
+        );
+        last = (m, s);
+    }
+}
+
+#[test]
+fn a_cap_shorter_than_the_least_window_is_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = space(dir.path(), "window_cap_diameters = 20.0");
+    let out = common::sweep_bin()
+        .args(["render"])
+        .arg(&sweep)
+        .args(["--out"])
+        .arg(dir.path().join("d"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("scene.window_cap_diameters"), "{err}");
+    assert!(!dir.path().join("d").exists());
+}
