@@ -53,6 +53,7 @@ impl Executor for TrueExecutor {
             steady_p: 1.0,
             vx: vec![],
             particles: 0,
+            layer: None,
             settle_steps: 0,
             steps: 0,
             simulated_time: 0.0,

@@ -46,6 +46,10 @@ pub struct RunResult {
     pub vx_se: Vec<Option<f64>>,
     /// Particles in the pile.
     pub particles: usize,
+    /// The spread layer's quality behind the blade at the window's end (absent in results
+    /// written before it was measured, and from engines that give none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub layer: Option<crate::point::layer::Layer>,
     /// Timesteps of the settle (until at rest, or the fixed settle of the thesis layout).
     pub settle_steps: u64,
     /// Timesteps run in all: settle and spread.
@@ -131,6 +135,8 @@ pub struct RunFailure {
 
 /// How one attempt at a run ended.
 #[derive(Debug, Clone, PartialEq)]
+// One per run, moved once: boxing the result would buy nothing.
+#[allow(clippy::large_enum_variant)]
 pub enum RunOutcome {
     Done(RunResult),
     Failed(RunFailure),

@@ -465,3 +465,141 @@ fn predict_recovers_the_stand_in_between_its_points_and_refuses_bad_input() {
         assert!(stderr(&o).contains(want) && stderr(&o).lines().count() == 1, "{}", stderr(&o));
     }
 }
+
+/// The report's sections for a sweep whose runs all fail, one with some failures and one with
+/// screened points (the fake executor), and `sweep show` on its points.
+#[test]
+fn report_sections_for_failed_and_screened_sweeps_and_a_points_page() {
+    use demsweep::outcome::FailureClass;
+    use demsweep::run::fake::{Behaviour, FakeExecutor};
+    use demsweep::run::{self, RunOptions};
+    use std::time::Duration;
+    let tmp = tempfile::tempdir().unwrap();
+    let text = "name = \"sections\"\n[parameters]\ngap = { lo = 2.0, hi = 4.0, unit = \"mm\" }\n\
+                blade_speed = { lo = 1.2, hi = 1.6, unit = \"m/s\" }\nfriction = 0.3\n[run]\nscreen_sample = 0.0\nscreen_sample_min = 1\n";
+    let sw = demsweep::sweep::Sweep::parse(text, &tmp.path().join("s.toml")).unwrap();
+    let opts = RunOptions {
+        jobs: 2,
+        progress: demsweep::run::progress::ProgressMode::Quiet,
+        retry_failed: false,
+        force: false,
+    };
+    let criteria = demsweep::analysis::convergence::Criteria::from_settings(&sw.file.convergence);
+    let build = |name: &str, exec: &FakeExecutor| -> (PathBuf, String) {
+        let out = tmp.path().join(name);
+        let design = demsweep::store::DesignRecord::Lattice { levels: vec![3] };
+        run::start(&sw, design, &out, exec, &opts, &mut run::RunAll, &Default::default()).unwrap();
+        let a = demsweep::report::analyse(&out, &criteria, &Default::default()).unwrap();
+        demsweep::report::write(&a).unwrap();
+        demsweep::run::rewrite_results(&out).unwrap();
+        assert_self_contained(&out.join("report/report.html"));
+        let html = std::fs::read_to_string(out.join("report/report.html")).unwrap();
+        (out, html)
+    };
+    let manifest_hashes = |out: &Path| -> Vec<String> {
+        let m: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("manifest.json")).unwrap()).unwrap();
+        m["points"].as_array().unwrap().iter().map(|p| p["hash"].as_str().unwrap().to_string()).collect()
+    };
+
+    // Every run timed out: a banner, the failure table and map, and no empty plots.
+    let exec = FakeExecutor::new(|_, _| Behaviour::Fail(Duration::ZERO, FailureClass::TimedOut));
+    let (out, html) = build("all-failed", &exec);
+    assert!(html.contains("Every run failed") && html.contains("9 of 9 points"), "banner");
+    assert!(html.contains("Failures (9 of 9 points)"));
+    let hashes = manifest_hashes(&out);
+    for (i, h) in hashes.iter().enumerate() {
+        assert!(html.contains(&format!("<td>#{i}</td>")), "row of point {i}");
+        assert!(html.contains(&format!("runs/{h}")), "run dir of point {i}");
+    }
+    assert_eq!(html.matches("fake timed-out failure").count(), 9);
+    assert!(out.join("report/failures.png").exists());
+    for absent in ["statistics.png", "histogram-1.png", "scatter.png", "profiles.png"] {
+        assert!(!out.join("report").join(absent).exists(), "{absent} drawn with no MFR");
+    }
+    assert!(!html.contains("<h2>Convergence</h2>") && !html.contains("mean undefined"));
+    let s = summary(&out);
+    assert_eq!(s["failures"].as_array().unwrap().len(), 9);
+    assert_eq!(s["failures"][0]["class"], "timed-out");
+    assert!(Path::new(s["failures"][0]["run_dir"].as_str().unwrap()).join("failure.json").exists());
+    // The whole setup: the fixed friction as written, rolling friction as the default nobody wrote.
+    let fixed = s["setup"]["fixed"].as_array().unwrap();
+    let get = |n: &str| fixed.iter().find(|f| f["name"] == n).unwrap().clone();
+    assert_eq!(
+        (get("friction")["value"].as_f64(), get("friction")["written"].as_bool()),
+        (Some(0.3), Some(true))
+    );
+    assert_eq!(
+        (get("rolling_friction")["value"].as_f64(), get("rolling_friction")["written"].as_bool()),
+        (Some(0.1), Some(false))
+    );
+    assert_eq!(s["setup"]["scene"]["layout"], "gated");
+    assert!(
+        html.contains("rolling_friction")
+            && html.contains("<i>default</i>")
+            && html.contains("fidelity preset")
+    );
+
+    // Some failures (the points at the lowest blade speed): the table lists those, the rest of
+    // the report is there, and results.csv holds the fixed parameters on every row.
+    let exec = FakeExecutor::new(|v, _| {
+        if v[1] == 1.2 {
+            Behaviour::Fail(Duration::ZERO, FailureClass::Unsteady)
+        } else {
+            Behaviour::Succeed(Duration::ZERO)
+        }
+    });
+    let (out, html) = build("some-failed", &exec);
+    assert!(!html.contains("Every run failed"));
+    assert!(html.contains("Failures (3 of 9 points)"));
+    assert_eq!(html.matches("fake unsteady failure").count(), 3);
+    for f in ["failures.png", "statistics.png", "scatter.png", "map-mfr-gap-blade_speed.png"] {
+        assert!(out.join("report").join(f).exists(), "{f}");
+    }
+    assert!(html.contains("<h2>Convergence</h2>") && html.contains("Maps over pairs of parameters"));
+    assert!(html.contains("<th>gap (mm)</th>") && html.contains("<th>blade_speed (m/s)</th>"));
+    let rows = common::csv_rows(&out.join("results.csv"));
+    assert!(rows
+        .iter()
+        .all(|r| r["friction"] == "0.3" && r["rolling_friction"] == "0.1" && r["density"] == "7980"));
+    assert_eq!(rows.iter().filter(|r| r["status"] == "failed").count(), 3);
+
+    // `sweep show`: a failed point's class, reason and run directory; a done point's result.
+    let failed = rows.iter().find(|r| r["status"] == "failed").unwrap()["index"].clone();
+    let o = sweep(&["show", p(&out), &failed]);
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let hash = &rows[failed.parse::<usize>().unwrap()]["hash"];
+    assert!(text.contains("failed: unsteady — fake unsteady failure"), "{text}");
+    assert!(text.contains(&out.join("runs").join(hash).display().to_string()), "{text}");
+    assert!(text.contains("rolling_friction") && text.contains("(default)") && text.contains("--vtk"));
+    let done = rows.iter().find(|r| r["status"] == "done").unwrap();
+    let o = sweep(&["show", p(&out), &done["index"], "--json"]);
+    let page: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(page["status"], "done");
+    assert_eq!(page["result"]["mfr"].as_f64().unwrap().to_string(), done["mfr"]);
+    let o = sweep(&["show", p(&out), "9"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("no point 9") && stderr(&o).contains("9 points"), "{}", stderr(&o));
+
+    // Screened points (the closed gap-2 edge, verified by one run with MFR = 0): no failure
+    // section, the screen stated, and the zero-MFR cells drawn.
+    let closed = |v: &[f64]| v[0] < 2.5;
+    let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(Duration::ZERO))
+        .with_closed(closed)
+        .with_mfr(move |v| if closed(v) { 0.0 } else { demsweep::run::fake::fake_mfr(v) });
+    let (out, html) = build("screened", &exec);
+    let s = summary(&out);
+    assert_eq!((s["counts"]["screened"].as_u64(), s["counts"]["failed"].as_u64()), (Some(2), Some(0)));
+    assert!(!html.contains("id=\"failures\"") && !out.join("report/failures.png").exists());
+    assert!(html.to_lowercase().contains("screen"));
+    // The map's grey: the colour bar's "= 0" swatch, and here the gap-2 cells as well.
+    let grey = |out: &Path| {
+        std::fs::read_to_string(out.join("report/map-mfr-gap-blade_speed.svg"))
+            .unwrap()
+            .matches("#C8C8C8")
+            .count()
+    };
+    assert!(grey(&out) > 1, "no zero-MFR cell drawn");
+    assert_eq!(grey(&tmp.path().join("some-failed")), 1, "a zero-MFR cell where every MFR > 0");
+}

@@ -246,11 +246,9 @@ fn a_deck_that_makes_liggghts_fail_is_reported_and_the_sweep_goes_on() {
         .args(["lattice", sweep.to_str().unwrap(), "--levels", "2", "--jobs", "2", "-q", "--out"])
         .arg(&out));
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    let mut r = csv::Reader::from_path(out.join("results.csv")).unwrap();
     let mut seen = (0, 0);
-    for rec in r.records() {
-        let rec = rec.unwrap();
-        let (gap, status, failure) = (&rec[1], &rec[3], &rec[4]);
+    for rec in common::csv_rows(&out.join("results.csv")) {
+        let (gap, status, failure) = (rec["gap"].as_str(), rec["status"].as_str(), rec["failure"].as_str());
         if gap == "2" {
             assert_eq!(status, "done");
             seen.0 += 1;

@@ -533,6 +533,7 @@ mod tests {
             steady_p: 1.0,
             vx,
             particles: 10,
+            layer: None,
             settle_steps: 0,
             steps: 10,
             simulated_time: 0.0,

@@ -71,6 +71,10 @@ enum Command {
     /// PNG and a self-contained report.html in DIR/report/. The rule is DIR/sweep.toml's
     /// [convergence] unless overridden below. Prints the verdict and the path of report.html.
     Report(sweep::ReportArgs),
+    /// One point of a sweep directory: its parameters (swept and fixed), result or failure,
+    /// spreading quality, v_x profile, run directory, and the command that reruns it with
+    /// particle and blade dumps for ParaView (`sweep run ... --vtk`).
+    Show(sweep::ShowArgs),
     /// Print a design as CSV (header = swept parameter names, values in their units).
     Points(point::PointsArgs),
     /// Write the deck, blade mesh and initial pile of one point without running it.
@@ -160,6 +164,7 @@ pub fn run(cli: Cli) -> Result<i32, Error> {
         Command::Status(a) => sweep::status(a),
         Command::Unclaim(a) => sweep::unclaim(a),
         Command::Report(a) => sweep::report(a),
+        Command::Show(a) => sweep::show(a),
         Command::Render(a) => point::render(a),
         Command::Run(a) => point::run_one(a),
         Command::Stats(a) => stats::stats(a),

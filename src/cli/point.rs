@@ -73,6 +73,11 @@ pub(super) struct RunArgs {
     /// Keep the run directory here (default: a temporary directory, removed afterwards).
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Also write VTK files for ParaView in the run directory, every 0.02 s of the spread:
+    /// particles_<step>.vtk (every particle: id, type, position, velocity, radius, mass; show
+    /// with a Glyph filter scaled by radius) and blade_<step>.vtk (the blade mesh). Needs --out.
+    #[arg(long, requires = "out")]
+    vtk: bool,
     #[arg(long, help = FORCE_HELP)]
     force: bool,
 }
@@ -178,6 +183,7 @@ pub(super) fn run_one(a: RunArgs) -> Result<i32, Error> {
     let sweep = Sweep::load(&a.sweep)?;
     let (mut sweep, values, notes) = point::with_set(&sweep, &a.set)?;
     check_timestep(&mut sweep, a.force)?;
+    sweep.file.scene.vtk = a.vtk;
     if let Some(out) = a.out.as_ref().filter(|o| o.exists() && !o.is_dir()) {
         return Err(Error::input(format!("--out {}: exists and is not a directory", out.display())));
     }
@@ -227,6 +233,9 @@ pub(super) fn run_one(a: RunArgs) -> Result<i32, Error> {
                 for w in &r.warnings {
                     println!("warning    {w}");
                 }
+            }
+            if a.vtk {
+                eprintln!("ParaView: open {}/particles_*.vtk and blade_*.vtk", dir.display());
             }
             Ok(exit::SUCCESS)
         }

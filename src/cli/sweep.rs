@@ -104,6 +104,26 @@ pub(super) struct DirArgs {
     json: bool,
 }
 
+#[derive(Args)]
+pub(super) struct ShowArgs {
+    dir: PathBuf,
+    /// The point's index (results.csv's `index` column).
+    index: usize,
+    /// Print the page as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+pub(super) fn show(a: ShowArgs) -> Result<i32, Error> {
+    let page = demsweep::report::show::show(&a.dir, a.index)?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&page).map_err(|e| Error::Internal(e.to_string()))?);
+    } else {
+        print!("{}", page.to_text());
+    }
+    Ok(exit::SUCCESS)
+}
+
 pub(super) fn lattice(a: LatticeArgs) -> Result<i32, Error> {
     let mut sweep = Sweep::load(&a.sweep)?;
     check_timestep(&mut sweep, a.force)?;

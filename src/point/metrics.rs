@@ -32,7 +32,8 @@ use crate::scene::Scene;
 /// False-alarm rate of the steadiness test: the p-value below which the flow is unsteady.
 pub const STEADY_ALPHA: f64 = 0.01;
 
-/// The columns the metrics read (the deck dumps exactly these).
+/// The columns the metrics need (the deck dumps these and `y`, which the layer's coverage and
+/// roughness read when it is there).
 pub const COLUMNS: [&str; 5] = ["id", "x", "z", "vx", "mass"];
 
 /// The particle data of one snapshot that the metrics read.
@@ -41,6 +42,8 @@ pub struct Frame {
     pub step: u64,
     pub id: Vec<u64>,
     pub x: Vec<f64>,
+    /// Across the blade: read when the dump has it (the layer's coverage and roughness).
+    pub y: Option<Vec<f64>>,
     pub z: Vec<f64>,
     pub vx: Vec<f64>,
     pub mass: Vec<f64>,
@@ -54,6 +57,7 @@ impl Frame {
             step: s.timestep,
             id: s.column_values(id).map(|v| v as u64).collect(),
             x: s.column_values(x).collect(),
+            y: s.column("y").map(|c| s.column_values(c).collect()),
             z: s.column_values(z).collect(),
             vx: s.column_values(vx).collect(),
             mass: s.column_values(mass).collect(),
@@ -87,6 +91,9 @@ pub struct Metrics {
     pub steady_p: f64,
     pub vx: Vec<Option<f64>>,
     pub particles: usize,
+    /// The spread layer's quality at the window's end ([`crate::point::layer`]); `None` when
+    /// the dump has no `y` or the strip is too short.
+    pub layer: Option<crate::point::layer::Layer>,
 }
 
 /// Compute the metrics of a run from its snapshots (any order; steps as the scene planned).
@@ -125,6 +132,9 @@ pub fn compute(scene: &Scene, frames: &[Frame]) -> Result<Metrics, MetricsError>
         mfr_particles: rear.iter().map(|c| c.count).sum(),
         vx: vx_profile(scene, window.iter().copied()),
         particles: window.last().map(|f| f.len()).unwrap_or(0),
+        layer: window.last().and_then(|f| {
+            crate::point::layer::measure(scene, f, scene.blade_rear_at(t1), scene.blade_rear_at(t2))
+        }),
     })
 }
 
@@ -236,6 +246,7 @@ mod tests {
             step,
             id: (1..=n as u64).collect(),
             x: (0..n).map(|i| (i as f64 + 0.5) * x_end / n as f64).collect(),
+            y: None,
             z: vec![z; n],
             vx: vec![0.0; n],
             mass: vec![m; n],
@@ -277,6 +288,7 @@ mod tests {
             step,
             id: vec![7],
             x: vec![x],
+            y: None,
             z: vec![0.0],
             vx: vec![0.0],
             mass: vec![1.0],
@@ -302,6 +314,7 @@ mod tests {
             step: t1,
             id: vec![1, 2, 3, 4],
             x: vec![x, x, x, s.blade_front_at(t1) + 7.0 * s.diameter],
+            y: None,
             z: vec![
                 s.layer_height(1),
                 s.layer_height(1) + 0.9 * s.vx_band,

@@ -4,6 +4,7 @@
 //! run in a directory it is given. The pool calls both; `sweep render` and `sweep run` too.
 
 pub mod deck;
+pub mod layer;
 pub mod metrics;
 pub mod plausible;
 pub mod quality;
@@ -88,6 +89,44 @@ pub fn resolve(sweep: &Sweep, swept_values: &[f64]) -> BTreeMap<String, f64> {
         values.insert(p.name.clone(), *v);
     }
     values
+}
+
+/// A catalogue parameter the design does not sweep, as every point of the sweep uses it.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct FixedValue {
+    pub name: String,
+    pub value: f64,
+    pub unit: &'static str,
+    /// True when the sweep file sets it; false for the catalogue's default.
+    pub written: bool,
+    pub description: &'static str,
+}
+
+/// Every catalogue parameter the sweep does not sweep, in catalogue order: the sweep file's
+/// value where it gives one, else the default (which the user may never have written).
+pub fn fixed_values(sweep: &Sweep) -> Vec<FixedValue> {
+    params::CATALOGUE
+        .iter()
+        .filter(|p| !sweep.swept.iter().any(|s| s.name == p.name))
+        .map(|p| {
+            let written = sweep.fixed.iter().find_map(|f| match f.kind {
+                ParamKind::Fixed(v) if f.name == p.name => Some(v),
+                _ => None,
+            });
+            FixedValue {
+                name: p.name.to_string(),
+                value: written.unwrap_or(p.default),
+                unit: p.unit,
+                written: written.is_some(),
+                description: p.description,
+            }
+        })
+        .collect()
+}
+
+/// [`fixed_values`] as results.csv's columns: (name, value).
+pub fn fixed_columns(sweep: &Sweep) -> Vec<(String, f64)> {
+    fixed_values(sweep).into_iter().map(|f| (f.name, f.value)).collect()
 }
 
 /// One point of `sweep run` / `render`: `--set name=value,...` may set any catalogue parameter
@@ -253,6 +292,7 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
         steady_p: m.steady_p,
         vx: m.vx,
         particles: m.particles,
+        layer: m.layer,
         settle_steps,
         steps,
         simulated_time: steps as f64 * p.scene.timestep,
@@ -315,6 +355,8 @@ fn finish_conveyor(
         steady_p: 1.0,
         vx: st.vx,
         particles: p.scene.conveyor.heap_particles,
+        // The conveyor deletes its deposit behind the blade: the layer is not measured yet.
+        layer: None,
         settle_steps: 0,
         steps,
         simulated_time: steps as f64 * p.scene.timestep,

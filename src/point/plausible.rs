@@ -118,7 +118,15 @@ mod tests {
     use super::*;
 
     fn frame(mass: f64, vx: f64) -> Frame {
-        Frame { step: 100, id: vec![7], x: vec![0.01], z: vec![0.002], vx: vec![vx], mass: vec![mass] }
+        Frame {
+            step: 100,
+            id: vec![7],
+            x: vec![0.01],
+            y: None,
+            z: vec![0.002],
+            vx: vec![vx],
+            mass: vec![mass],
+        }
     }
 
     #[test]

@@ -34,11 +34,8 @@ fn points_table(a: &Analysis, f: &Figure) -> String {
     if f.points.is_empty() {
         return String::new();
     }
-    let mut h = String::from("<table><tr><th>point</th>");
-    for p in &a.parameters {
-        h.push_str(&format!("<th>{}</th>", esc(p)));
-    }
-    h.push_str("<th>MFR</th><th class=\"l\">quality</th></tr>\n");
+    let mut h = format!("<div class=\"wide\"><table><tr><th>point</th>{}", parameter_headers(a));
+    h.push_str("<th>MFR (–)</th><th class=\"l\">quality</th></tr>\n");
     for &i in &f.points {
         let Some(p) = a.points.iter().find(|p| p.index == i) else { continue };
         let Some((r, q)) = p.done() else { continue };
@@ -48,7 +45,7 @@ fn points_table(a: &Analysis, f: &Figure) -> String {
         }
         h.push_str(&format!("<td>{:.4}</td><td class=\"l\">{}</td></tr>\n", r.mfr, q.as_str()));
     }
-    h.push_str("</table>\n");
+    h.push_str("</table></div>\n");
     h
 }
 
@@ -62,17 +59,237 @@ fn img(f: &Figure) -> String {
     )
 }
 
-const STYLE: &str = "body{font-family:sans-serif;max-width:1240px;margin:1em auto;padding:0 1em;color:#222}
+// Readable from 800 px up: tables wrap their text cells rather than widen the page, figures
+// shrink to the column, grids fall to one column.
+const STYLE: &str = "body{font-family:sans-serif;max-width:1240px;margin:1em auto;padding:0 1em;color:#222;overflow-wrap:anywhere}
 h1{margin-bottom:0}h2{border-bottom:1px solid #ccc;margin-top:1.6em}
-table{border-collapse:collapse;margin:.5em 0;font-size:.9em}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right;white-space:nowrap}
-td small{color:#666}
+.wide{max-width:100%;overflow-x:auto}
+table{border-collapse:collapse;margin:.5em 0;font-size:.9em}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}
+th{overflow-wrap:normal}td small{color:#666}td.path{font-family:monospace;font-size:.85em;text-align:left;word-break:break-all}
 th{background:#f2f2f2}td.l,th.l{text-align:left}
 .verdict{padding:.7em 1em;border-radius:6px;font-size:1.1em;margin:1em 0}
 .converged{background:#e3f5e6;border:1px solid #3a3}.not-converged{background:#fde8e8;border:1px solid #c33}
 .unfinished{background:#fff4dc;border:1px solid #d90}
-figure{margin:1em 0}figure img{max-width:100%;border:1px solid #eee}figcaption{font-size:.9em;color:#444}
-.grid{display:flex;flex-wrap:wrap;gap:8px}.grid figure{width:560px;margin:0}.file{color:#888}
+.allfailed{background:#c33;color:#fff;padding:.8em 1em;border-radius:6px;font-size:1.15em;margin:1em 0}
+figure{margin:1em 0}figure img{max-width:100%;height:auto;border:1px solid #eee}figcaption{font-size:.9em;color:#444}
+.grid{display:grid;grid-template-columns:repeat(auto-fill,minmax(min(100%,560px),1fr));gap:8px}.grid figure{margin:0}.file{color:#888}
 .bar{display:inline-block;height:.8em;background:#1f77b4}.muted{color:#666}";
+
+/// Header cells of the swept parameters, with units.
+fn parameter_headers(a: &Analysis) -> String {
+    a.parameters.iter().zip(&a.units).map(|(p, u)| format!("<th>{} ({})</th>", esc(p), esc(u))).collect()
+}
+
+fn setup_section(a: &Analysis) -> String {
+    let st = &a.setup;
+    let mut h = String::from("<h2>Setup: what every point shares</h2>\n");
+    h.push_str(
+        "<p>Fixed parameters (the same in every run; <i>default</i>: not written in the sweep file, the scene's default):</p>\n\
+         <div class=\"wide\"><table><tr><th class=\"l\">parameter</th><th>value</th><th class=\"l\">unit</th><th class=\"l\">source</th><th class=\"l\">what it is</th></tr>\n",
+    );
+    for f in &st.fixed {
+        h.push_str(&format!(
+            "<tr><td class=\"l\">{}</td><td>{}</td><td class=\"l\">{}</td><td class=\"l\">{}</td><td class=\"l\">{}</td></tr>\n",
+            esc(&f.name),
+            fmt_short(f.value),
+            esc(f.unit),
+            if f.written { "sweep file" } else { "<i>default</i>" },
+            esc(f.description)
+        ));
+    }
+    h.push_str("</table></div>\n");
+    let sc = &st.scene;
+    let psd = serde_json::to_value(&sc.size_distribution).map(|v| v.to_string()).unwrap_or_default();
+    let rows: Vec<(&str, String)> = vec![
+        ("layout", sc.layout.clone()),
+        ("substrate", sc.substrate.clone()),
+        ("heap size (× the planned heap)", fmt_short(sc.supply_factor)),
+        ("size distribution", psd),
+        ("fidelity preset", sc.fidelity.clone()),
+        (
+            "timestep (× Rayleigh time; fixed step if > 0: s)",
+            format!("{} ({} s)", fmt_short(sc.rayleigh_fraction), sc.timestep_s),
+        ),
+        ("stiffness factor (–)", fmt_short(sc.stiffness_factor)),
+        ("blade mesh cells across the depth", sc.mesh_cells_across.to_string()),
+        ("domain depth (D)", fmt_short(sc.depth_diameters)),
+        ("window start, blade travel (D)", fmt_short(sc.window_start_diameters)),
+        ("window length, blade travel (D)", fmt_short(sc.window_diameters)),
+        ("rest speed (× √(g·D))", fmt_short(sc.rest_speed)),
+        ("neighbour skin (D)", fmt_short(sc.skin_diameters)),
+        (
+            "v_x band half-height (D)",
+            if sc.thesis_band { "±1 mm (thesis)".into() } else { fmt_short(sc.vx_band_diameters) },
+        ),
+        ("seed", sc.seed.to_string()),
+        ("engine", format!("{} ({})", st.engine_version, st.engine_path)),
+    ];
+    h.push_str("<p>Scene, preset and its knobs:</p>\n<div class=\"wide\"><table>\n");
+    for (k, v) in rows {
+        h.push_str(&format!("<tr><th class=\"l\">{}</th><td class=\"l\">{}</td></tr>\n", esc(k), esc(&v)));
+    }
+    h.push_str("</table></div>\n");
+    if let Some(c) = &st.centre {
+        let at = c
+            .parameters
+            .iter()
+            .map(|(k, v)| format!("{k} = {}", fmt_short(*v)))
+            .collect::<Vec<_>>()
+            .join(", ");
+        h.push_str(&format!(
+            "<p>At the centre of the space ({}): {} particles on {} substrate spheres; domain {:.1} × {:.1} × {:.1} mm \
+             (travel × depth × height); initial pile {:.1} mm long, {:.1} mm tall; MFR measured over {:.1} mm of blade travel; \
+             timestep {:.3e} s ({:.2} of the Rayleigh time {:.3e} s).</p>\n",
+            esc(&at),
+            c.particles,
+            c.substrate_particles,
+            c.domain_length_mm,
+            c.domain_depth_mm,
+            c.domain_height_mm,
+            c.heap_length_mm,
+            c.heap_height_mm,
+            c.window_travel_mm,
+            c.timestep_s,
+            c.timestep_s / c.rayleigh_time_s,
+            c.rayleigh_time_s
+        ));
+    }
+    h
+}
+
+fn failures_section(a: &Analysis, figures: &[Figure]) -> String {
+    if a.failures.is_empty() {
+        return String::new();
+    }
+    let mut h = format!(
+        "<h2 id=\"failures\">Failures ({} of {} points)</h2>\n<p>Failed runs are left out of every statistic, map and \
+         recommendation. Each row: the point, its class, the reason the run gave, and its run directory \
+         (log.liggghts and failure.json are there; <code>sweep show DIR INDEX</code> prints the point).</p>\n",
+        a.failures.len(),
+        a.counts.points
+    );
+    for f in figures.iter().filter(|f| f.name == "failures") {
+        h.push_str(&img(f));
+    }
+    h.push_str(&format!(
+        "<div class=\"wide\"><table><tr><th>point</th>{}<th class=\"l\">class</th><th class=\"l\">reason</th><th class=\"l\">run directory</th></tr>\n",
+        parameter_headers(a)
+    ));
+    for f in &a.failures {
+        h.push_str(&format!("<tr><td>#{}</td>", f.index));
+        for p in &a.parameters {
+            h.push_str(&format!("<td>{}</td>", fmt_short(f.parameters[p])));
+        }
+        let dir = f.run_dir.strip_prefix(&a.dir).unwrap_or(&f.run_dir);
+        h.push_str(&format!(
+            "<td class=\"l\">{}</td><td class=\"l\">{}</td><td class=\"path\">{}</td></tr>\n",
+            esc(&f.class),
+            esc(&f.reason),
+            esc(&dir.display().to_string())
+        ));
+    }
+    h.push_str("</table></div>\n");
+    h
+}
+
+fn opt(v: Option<f64>, digits: usize) -> String {
+    v.map_or("–".into(), |v| format!("{v:.digits$}"))
+}
+
+/// The layer, the v_x classes against it, the recommended settings, the thesis's conclusions.
+fn advice_section(a: &Analysis, figures: &[Figure]) -> String {
+    let ad = &a.advice;
+    let mut h = String::from(
+        "<h2>The spread layer</h2>\n<p>Measured on the deposit behind the blade at the window's end (docs/layer.md): \
+         <b>covered fraction</b>, the share of the substrate under the layer (its complement is the empty-patch area, \
+         after Nan et al. 2018); <b>CV / noise</b>, the coefficient of variation of the deposited mass in bins of 3 D \
+         along the travel over what independently placed particles would give (≈ 1: even; above: gaps and clumps); \
+         <b>roughness</b>, the RMS height of the top surface (D).</p>\n",
+    );
+    let maps: Vec<&Figure> = figures.iter().filter(|f| f.name.starts_with("map-covered-")).collect();
+    if !maps.is_empty() {
+        h.push_str("<div class=\"grid\">\n");
+        for f in maps {
+            h.push_str(&img(f));
+        }
+        h.push_str("</div>\n");
+    }
+    h.push_str(
+        "<h2>Spreading quality and recommended settings</h2>\n<p>Each done point's v_x profile in front of the blade \
+         (thesis §4.1) is <b>unstable</b> when its layers depart from their neighbours' mean by more than 3% of the \
+         blade speed (RMS), else <b>inefficient</b> when the top three layers move less than 6% of the blade speed \
+         faster than the bottom three (nearly uniform), else <b>ideal</b>. The classes against the layer they leave:</p>\n\
+         <div class=\"wide\"><table><tr><th class=\"l\">v_x class</th><th>points</th><th>mean MFR (–)</th><th>covered fraction (–)</th>\
+         <th>CV / noise (–)</th><th>roughness (D)</th></tr>\n",
+    );
+    for c in &ad.classes.by_class {
+        h.push_str(&format!(
+            "<tr><td class=\"l\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+            c.class,
+            c.points,
+            opt(c.mfr, 4),
+            opt(c.covered_fraction, 3),
+            opt(c.cv_over_noise, 2),
+            opt(c.roughness_d, 3)
+        ));
+    }
+    h.push_str(&format!("</table></div>\n<p><b>{}.</b></p>\n", esc(&ad.classes.sentence)));
+    h.push_str(&format!("<p>Recommended settings, by this criterion: {}.</p>\n", esc(&ad.criterion)));
+    if ad.recommended.is_empty() {
+        h.push_str("<p>No point meets the criterion, so none is recommended.</p>\n");
+    } else {
+        h.push_str(&format!(
+            "<div class=\"wide\"><table><tr><th>point</th>{}<th>MFR ± SE (–)</th><th>covered fraction (–)</th><th>CV / noise (–)</th><th>roughness (D)</th></tr>\n",
+            parameter_headers(a)
+        ));
+        for r in &ad.recommended {
+            h.push_str(&format!("<tr><td>#{}</td>", r.index));
+            for p in &a.parameters {
+                h.push_str(&format!("<td>{}</td>", fmt_short(r.parameters[p])));
+            }
+            let l = r.layer;
+            h.push_str(&format!(
+                "<td>{:.4} ± {:.4}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+                r.mfr,
+                r.mfr_se,
+                opt(l.map(|l| l.covered_fraction), 3),
+                opt(l.filter(|l| l.layer_cv_noise > 0.0).map(|l| l.layer_cv / l.layer_cv_noise), 2),
+                opt(l.map(|l| l.roughness_d), 3)
+            ));
+        }
+        h.push_str("</table></div>\n");
+        if let Some(d) = ad.best_is_distinct {
+            h.push_str(&format!(
+                "<p>{}</p>\n",
+                if d {
+                    "The first point's MFR is above the second's by more than twice their combined standard error."
+                } else {
+                    "The first two points' MFRs differ by less than twice their combined standard error: within noise, either will do."
+                }
+            ));
+        }
+    }
+    h.push_str(
+        "<h2>The thesis's conclusions against this sweep</h2>\n<div class=\"wide\"><table><tr><th class=\"l\">thesis</th>\
+         <th class=\"l\">claim</th><th class=\"l\">here</th><th class=\"l\">evidence</th></tr>\n",
+    );
+    for c in &ad.conclusions {
+        let mark = match c.verdict {
+            "holds" => "✓ holds",
+            "fails" => "✗ fails",
+            _ => "not enough points",
+        };
+        h.push_str(&format!(
+            "<tr><td class=\"l\">{}</td><td class=\"l\">{}</td><td class=\"l\"><b>{}</b></td><td class=\"l\">{}</td></tr>\n",
+            esc(c.section),
+            esc(c.claim),
+            mark,
+            esc(&c.evidence)
+        ));
+    }
+    h.push_str("</table></div>\n");
+    h
+}
 
 /// The page.
 pub fn render(a: &Analysis, figures: &[Figure]) -> String {
@@ -81,7 +298,7 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
     push(
         &mut h,
         &format!(
-            "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{} — sweep report</title><style>{STYLE}</style></head><body>\n",
+            "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><meta name=\"viewport\" content=\"width=device-width, initial-scale=1\"><title>{} — sweep report</title><style>{STYLE}</style></head><body>\n",
             esc(&a.name)
         ),
     );
@@ -105,22 +322,36 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
             esc(&a.tool)
         ),
     );
-    push(
-        &mut h,
-        &format!(
-            "<div class=\"verdict {}\"><b>{}</b>: {}</div>\n",
-            a.verdict.status,
-            a.verdict.status,
-            esc(&a.verdict.reason)
-        ),
-    );
-    // Counts and cost.
+    let measured = a.points.iter().any(|p| p.mfr().is_some());
     let c = &a.counts;
     let failures = if c.failures_by_class.is_empty() {
         "none".to_string()
     } else {
         c.failures_by_class.iter().map(|(k, v)| format!("{k}: {v}")).collect::<Vec<_>>().join(", ")
     };
+    if !measured && c.failed > 0 {
+        push(
+            &mut h,
+            &format!(
+                "<div class=\"allfailed\"><b>Every run failed</b> ({} of {} points; {}). No MFR was measured, so this \
+                 report has no statistics, maps or recommendations. <a href=\"#failures\" style=\"color:#fff\">The failures</a> \
+                 say where and why.</div>\n",
+                c.failed,
+                c.points,
+                esc(&failures)
+            ),
+        );
+    } else {
+        push(
+            &mut h,
+            &format!(
+                "<div class=\"verdict {}\"><b>{}</b>: {}</div>\n",
+                a.verdict.status,
+                a.verdict.status,
+                esc(&a.verdict.reason)
+            ),
+        );
+    }
     push(
         &mut h,
         &format!(
@@ -128,7 +359,7 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
              <tr><th class=\"l\">failed (left out of every statistic)</th><td>{} ({})</td></tr>\
              <tr><th class=\"l\">screened (closed gap, MFR = 0 without a run)</th><td>{}</td></tr>\
              <tr><th class=\"l\">pending</th><td>{}</td></tr><tr><th class=\"l\">spaces complete</th><td>{} of {}</td></tr>\
-             <tr><th class=\"l\">wall time (runs going)</th><td>{:.0} s</td></tr><tr><th class=\"l\">core-seconds</th><td>{:.0}</td></tr></table>\n",
+             <tr><th class=\"l\">wall time (runs going)</th><td>{:.0} s</td></tr><tr><th class=\"l\">core-seconds</th><td>{:.0} s</td></tr></table>\n",
             c.points, c.done, c.failed, esc(&failures), c.screened, c.pending, c.spaces_complete, c.spaces,
             a.timing.wall_time_s, a.timing.core_seconds
         ),
@@ -136,7 +367,21 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
     if let Some(line) = a.screen.sentence() {
         push(&mut h, &format!("<p>{}.</p>\n", esc(&line)));
     }
-    // Convergence table.
+    push(&mut h, &setup_section(a));
+    push(&mut h, &failures_section(a, figures));
+    if measured {
+        push(&mut h, &measured_sections(a, figures));
+    }
+    push(&mut h, "</body></html>\n");
+    h
+}
+
+/// Everything that needs at least one MFR: convergence, distributions, sensitivity, maps,
+/// quality and the recommendation.
+fn measured_sections(a: &Analysis, figures: &[Figure]) -> String {
+    let mut h = String::new();
+    let push = |h: &mut String, s: &str| h.push_str(s);
+    // Convergence table: one cell per statistic (value, interval, change), so it fits 800 px.
     push(&mut h, "<h2>Convergence</h2>\n");
     push(&mut h, &format!("<p>{}.", esc(&a.criteria.describe())));
     if a.criteria.min_points > 0 {
@@ -145,9 +390,13 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
             &format!(" Spaces below {} points are not judged (an extended sweep).", a.criteria.min_points),
         );
     }
-    push(&mut h, " Intervals: 95% percentile bootstrap, 1,000 resamples.</p>\n<table><tr><th class=\"l\">space</th><th>N</th><th>done</th><th>failed</th>");
+    push(
+        &mut h,
+        " Each cell: the statistic of MFR (–), its 95% percentile bootstrap interval (1,000 resamples) and its change from \
+         the previous space (✓: within the rule).</p>\n<div class=\"wide\"><table><tr><th class=\"l\">space</th><th>N</th><th>done</th><th>failed</th>",
+    );
     for s in STATISTICS {
-        push(&mut h, &format!("<th>{} <small>[95% interval]</small></th><th>change</th>", s.name()));
+        push(&mut h, &format!("<th>{} (–)</th>", s.name()));
     }
     push(&mut h, "<th>rule holds</th><th>converged</th></tr>\n");
     for s in &a.spaces {
@@ -169,7 +418,7 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
             let change = match ch {
                 None => "".to_string(),
                 Some(c) => format!(
-                    "<span title=\"{}\">{}{}</span>",
+                    "<br><span title=\"{}\">{}{}</span>",
                     esc(&c.test),
                     match (c.abs, c.scale, c.rel) {
                         (Some(d), Some(sc), _) if sc > 0.0 =>
@@ -183,7 +432,7 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
             push(
                 &mut h,
                 &format!(
-                    "<td>{} <small>[{}, {}]</small></td><td>{}</td>",
+                    "<td>{}<br><small>[{}, {}]</small>{}</td>",
                     num(st.of(&s.statistics)),
                     sig(iv.lo),
                     sig(iv.hi),
@@ -200,7 +449,7 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
             ),
         );
     }
-    push(&mut h, "</table>\n");
+    push(&mut h, "</table></div>\n");
     if let Some(s) = a.spaces.iter().find(|s| s.converged).or(a.spaces.last()) {
         if let Some(ch) = &s.changes {
             push(&mut h, &format!("<p>The tests at {} (N = {}):</p>\n<ul>\n", esc(&s.label), s.n));
@@ -240,10 +489,10 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
         &mut h,
         "<h2>Which parameter matters</h2>\n<p>First-order sensitivity indices of MFR over every done point \
          (adjusted correlation ratio: the share of MFR's variance explained by one parameter alone; no extra runs).</p>\n\
-         <table><tr><th class=\"l\">parameter</th><th>S₁</th><th>95% interval</th><th class=\"l\"></th><th>bins</th></tr>\n",
+         <table><tr><th class=\"l\">parameter</th><th>S₁ (–)</th><th>95% interval</th><th class=\"l\"></th><th>bins</th></tr>\n",
     );
     for s in &a.sensitivity {
-        let w = s.first_order.unwrap_or(0.0) * 300.0;
+        let w = s.first_order.unwrap_or(0.0) * 240.0;
         push(
             &mut h,
             &format!(
@@ -262,39 +511,20 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
         push(&mut h, &img(f));
     }
     push(&mut h, &emulator_section(a));
-    // Quality and recommendation.
-    push(
-        &mut h,
-        "<h2>Spreading quality and recommended settings</h2>\n<p>Each done point's v_x profile in front of the blade \
-         (thesis §4.1) is <b>unstable</b> when its layers depart from their neighbours' mean by more than 3% of the \
-         blade speed (RMS), else <b>inefficient</b> when the top three layers move less than 6% of the blade speed \
-         faster than the bottom three (nearly uniform), else <b>ideal</b>.</p>\n<table><tr>",
-    );
-    for k in a.quality.keys() {
-        push(&mut h, &format!("<th>{k}</th>"));
-    }
-    push(&mut h, "</tr><tr>");
-    for v in a.quality.values() {
-        push(&mut h, &format!("<td>{v}</td>"));
-    }
-    push(&mut h, "</tr></table>\n");
-    if a.best_ideal.is_empty() {
-        push(&mut h, "<p>No point has an ideal profile, so none is recommended.</p>\n");
-    } else {
-        push(&mut h, "<p>Highest MFR among the ideal points:</p>\n<table><tr><th>point</th>");
-        for p in &a.parameters {
-            push(&mut h, &format!("<th>{}</th>", esc(p)));
+    let maps: Vec<&Figure> = figures.iter().filter(|f| f.name.starts_with("map-mfr-")).collect();
+    if !maps.is_empty() {
+        push(
+            &mut h,
+            "<h2>Maps over pairs of parameters</h2>\n<p>Each cell is the mean of the points that fall in it, whatever \
+             their other parameters; grey cells passed nothing (MFR = 0 at every point in them: the zero-MFR region); \
+             empty cells have no point.</p>\n<div class=\"grid\">\n",
+        );
+        for f in maps {
+            push(&mut h, &img(f));
         }
-        push(&mut h, "<th>MFR</th></tr>\n");
-        for b in &a.best_ideal {
-            push(&mut h, &format!("<tr><td>{}</td>", b.index));
-            for p in &a.parameters {
-                push(&mut h, &format!("<td>{}</td>", fmt_short(b.parameters[p])));
-            }
-            push(&mut h, &format!("<td>{:.4}</td></tr>\n", b.mfr));
-        }
-        push(&mut h, "</table>\n");
+        push(&mut h, "</div>\n");
     }
+    push(&mut h, &advice_section(a, figures));
     for f in figures.iter().filter(|f| f.name == "profiles") {
         push(&mut h, &img(f));
         push(&mut h, &points_table(a, f));
@@ -306,7 +536,6 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
             push(&mut h, &img(f));
         }
     }
-    push(&mut h, "</body></html>\n");
     h
 }
 

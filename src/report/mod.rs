@@ -9,9 +9,12 @@
 //! Not responsible for running anything or for the statistics themselves ([`crate::analysis::stats`],
 //! [`crate::analysis::convergence`], [`crate::analysis::sensitivity`], [`crate::point::quality`]).
 
+mod advice;
 pub mod emulation;
 mod html;
+mod maps;
 mod plots;
+pub mod show;
 pub use plots::to_png;
 
 use std::collections::BTreeMap;
@@ -39,6 +42,8 @@ const BEST: usize = 5;
 pub struct PointRow {
     pub index: usize,
     pub values: Vec<f64>,
+    /// The run's hash: its directory is `DIR/runs/<hash>`.
+    pub hash: String,
     pub state: PointState,
     /// The standard error of the point's MFR, where its result.json records one (`mfr_se`).
     pub mfr_se: Option<f64>,
@@ -52,6 +57,8 @@ pub enum PointState {
     },
     Failed {
         class: String,
+        /// The failure's one-line reason (failure.json).
+        reason: String,
     },
     /// Closed by a verified screen, not run: MFR = 0 ([`crate::run::screen`]).
     Screened,
@@ -145,6 +152,85 @@ pub struct Timing {
     pub attempts: usize,
 }
 
+/// What every point of the sweep shares: the fixed parameters, the scene's settings, the scene
+/// at the centre of the space, and the engine.
+#[derive(Debug, Clone, Serialize)]
+pub struct Setup {
+    /// Every catalogue parameter the design does not sweep, written or default.
+    pub fixed: Vec<crate::point::FixedValue>,
+    /// The resolved `[scene]` settings: layout, substrate, heap size, size distribution, the
+    /// fidelity preset and every numerical knob it set.
+    pub scene: crate::sweep::SceneSettings,
+    /// The scene built at the centre of the swept ranges (the sizes scale with the point).
+    pub centre: Option<CentreScene>,
+    pub engine_version: String,
+    pub engine_path: String,
+}
+
+/// The scene at the centre of the space, in mm, s and counts: what one run looks like.
+#[derive(Debug, Clone, Serialize)]
+pub struct CentreScene {
+    pub parameters: BTreeMap<String, f64>,
+    pub particles: usize,
+    pub substrate_particles: usize,
+    pub domain_length_mm: f64,
+    pub domain_depth_mm: f64,
+    pub domain_height_mm: f64,
+    pub heap_length_mm: f64,
+    pub heap_height_mm: f64,
+    pub window_travel_mm: f64,
+    pub timestep_s: f64,
+    pub rayleigh_time_s: f64,
+}
+
+impl Setup {
+    fn of(sweep: &Sweep, manifest: &Manifest) -> Setup {
+        let mid: Vec<f64> = sweep
+            .swept
+            .iter()
+            .map(|p| match p.kind {
+                crate::sweep::ParamKind::Swept { lo, hi, .. } => 0.5 * (lo + hi),
+                crate::sweep::ParamKind::Fixed(v) => v,
+            })
+            .collect();
+        let parameters = crate::point::resolve(sweep, &mid);
+        let centre = crate::scene::Scene::new(&parameters, &sweep.file.scene).ok().map(|sc| {
+            let (t1, t2) = sc.window_steps();
+            CentreScene {
+                parameters: sweep.swept.iter().map(|p| (p.name.clone(), parameters[&p.name])).collect(),
+                particles: sc.particles,
+                substrate_particles: sc.substrate_particles,
+                domain_length_mm: sc.x_hi * 1e3,
+                domain_depth_mm: sc.depth * 1e3,
+                domain_height_mm: (sc.z_hi - sc.z_lo) * 1e3,
+                heap_length_mm: (sc.pile_x1 - sc.pile_x0) * 1e3,
+                heap_height_mm: sc.pile_z1 * 1e3,
+                window_travel_mm: (sc.blade_rear_at(t2) - sc.blade_rear_at(t1)) * 1e3,
+                timestep_s: sc.timestep,
+                rayleigh_time_s: sc.rayleigh_time,
+            }
+        });
+        let id = |k: &str| manifest.identity.get(k).and_then(|v| v.as_str()).unwrap_or("").to_string();
+        Setup {
+            fixed: crate::point::fixed_values(sweep),
+            scene: sweep.file.scene.clone(),
+            centre,
+            engine_version: id("engine_version"),
+            engine_path: id("engine_path"),
+        }
+    }
+}
+
+/// A failed point: where it is, why it failed, where its files are.
+#[derive(Debug, Clone, Serialize)]
+pub struct FailedPoint {
+    pub index: usize,
+    pub parameters: BTreeMap<String, f64>,
+    pub class: String,
+    pub reason: String,
+    pub run_dir: PathBuf,
+}
+
 /// A point worth recommending.
 #[derive(Debug, Clone, Serialize)]
 pub struct BestPoint {
@@ -168,6 +254,7 @@ pub struct Analysis {
     /// Units of the parameters, in the same order.
     pub units: Vec<String>,
     pub engine: String,
+    pub setup: Setup,
     pub criteria: Criteria,
     pub verdict: Verdict,
     /// What the screen did: closed points, its verification sample, verified or refuted.
@@ -189,6 +276,10 @@ pub struct Analysis {
     pub quality: BTreeMap<&'static str, usize>,
     /// Highest MFR among the ideal points.
     pub best_ideal: Vec<BestPoint>,
+    /// Every failed point, by index.
+    pub failures: Vec<FailedPoint>,
+    /// The v_x classes against the layer, the recommended settings, the thesis's conclusions.
+    pub advice: advice::Advice,
     #[serde(skip)]
     pub points: Vec<PointRow>,
 }
@@ -217,13 +308,16 @@ pub fn read_points(dir: &Path) -> Result<(Manifest, Sweep, Vec<PointRow>, Screen
         .map(|(p, s)| PointRow {
             index: p.index,
             values: p.values.clone(),
+            hash: p.hash.clone(),
             mfr_se: matches!(s, PointStatus::Done(_)).then(|| mfr_se(dir, &p.hash)).flatten(),
             state: match s {
                 PointStatus::Done(r) => {
                     let quality = quality::of_result(&r);
                     PointState::Done { result: r, quality }
                 }
-                PointStatus::Failed(f) => PointState::Failed { class: f.class.as_str().to_string() },
+                PointStatus::Failed(f) => {
+                    PointState::Failed { class: f.class.as_str().to_string(), reason: f.reason.clone() }
+                }
                 PointStatus::Screened => PointState::Screened,
                 PointStatus::Pending => PointState::Pending,
             },
@@ -266,6 +360,21 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
         })
         .collect();
     let units = sweep.swept.iter().map(|p| p.unit.to_string()).collect();
+    let failures = points
+        .iter()
+        .filter_map(|p| match &p.state {
+            PointState::Failed { class, reason } => Some(FailedPoint {
+                index: p.index,
+                parameters: manifest.parameters.iter().cloned().zip(p.values.iter().copied()).collect(),
+                class: class.clone(),
+                reason: reason.clone(),
+                run_dir: crate::store::Store::open(dir).run_dir(&p.hash),
+            }),
+            _ => None,
+        })
+        .collect();
+    let setup = Setup::of(&sweep, &manifest);
+    let advice = advice::advise(&manifest.parameters, &points, &sensitivity);
     let engine = manifest
         .identity
         .get("engine")
@@ -282,6 +391,7 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
         parameters: manifest.parameters.clone(),
         units,
         engine,
+        setup,
         criteria: *criteria,
         verdict,
         screen,
@@ -295,6 +405,8 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
         emulator,
         quality,
         best_ideal,
+        failures,
+        advice,
         points,
     })
 }
@@ -366,7 +478,7 @@ fn count(manifest: &Manifest, points: &[PointRow], complete: usize) -> SummaryCo
     for p in points {
         match &p.state {
             PointState::Done { .. } => c.done += 1,
-            PointState::Failed { class } => {
+            PointState::Failed { class, .. } => {
                 c.failed += 1;
                 *c.failures_by_class.entry(class.clone()).or_default() += 1;
             }

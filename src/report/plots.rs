@@ -19,12 +19,16 @@ use crate::analysis::stats::STATISTICS;
 use crate::outcome::VX_LAYERS;
 use crate::point::quality::Quality;
 
-use crate::error::Res;
-type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+pub(super) use crate::error::Res;
+pub(super) type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
 /// N, the statistic, and its interval's bounds.
 type StatPoint = (f64, Option<f64>, Option<f64>, Option<f64>);
 
-const FONT: &str = "sans-serif";
+pub(super) const FONT: &str = "sans-serif";
+/// Font sizes (px): a figure is at most ~1,000 px wide, so at 800 px shown it keeps ≥ 12 px.
+pub(super) const TICK_FONT: u32 = 15;
+pub(super) const AXIS_FONT: u32 = 16;
+pub(super) const TITLE_FONT: u32 = 19;
 static FONT_DATA: &[u8] = include_bytes!("DejaVuSans.ttf");
 
 /// One figure, in both formats.
@@ -65,7 +69,7 @@ fn series_colour(i: usize) -> RGBColor {
 }
 
 /// Draw into an SVG string of `size`, then render it to PNG.
-fn figure(
+pub(super) fn figure(
     name: String,
     caption: String,
     size: (u32, u32),
@@ -108,7 +112,7 @@ fn integer(v: &f64) -> String {
 }
 
 /// A padded range around values, never empty.
-fn range(vals: impl IntoIterator<Item = f64>) -> (f64, f64) {
+pub(super) fn range(vals: impl IntoIterator<Item = f64>) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for v in vals.into_iter().filter(|v| v.is_finite()) {
         lo = lo.min(v);
@@ -121,16 +125,42 @@ fn range(vals: impl IntoIterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
+/// Every figure of the report. With no MFR measured (every run failed) only the failure map:
+/// empty plots say nothing.
 pub fn draw_all(a: &Analysis) -> Res<Vec<Figure>> {
     let mut out = Vec::new();
+    out.extend(super::maps::failure_map(a)?);
+    if !a.points.iter().any(|p| p.mfr().is_some()) {
+        return Ok(out);
+    }
     for (k, s) in a.spaces.iter().enumerate() {
         out.push(histogram(a, k, &s.members)?);
     }
     if !a.spaces.is_empty() {
         out.push(statistics(a)?);
     }
+    out.push(scatter(a)?);
+    let mfr = |p: &PointRow| p.mfr();
+    out.extend(super::maps::pair_maps(
+        a,
+        &super::maps::MapSpec {
+            stem: "mfr",
+            label: "MFR (–)",
+            value: &mfr,
+            cells: super::maps::CellValue::Points,
+        },
+    )?);
+    let covered = |p: &PointRow| p.done().and_then(|(r, _)| r.layer.map(|l| l.covered_fraction));
+    out.extend(super::maps::pair_maps(
+        a,
+        &super::maps::MapSpec {
+            stem: "covered",
+            label: "covered fraction (–)",
+            value: &covered,
+            cells: super::maps::CellValue::Points,
+        },
+    )?);
     if a.points.iter().any(|p| p.done().is_some()) {
-        out.push(scatter(a)?);
         out.push(profiles(a)?);
     }
     out.extend(lattice_panels(a)?);
@@ -148,17 +178,19 @@ fn histogram(a: &Analysis, k: usize, members: &[usize]) -> Res<Figure> {
         counts[((v / width) as usize).min(bins - 1)] += 1;
     }
     let ymax = counts.iter().copied().max().unwrap_or(1).max(1) as f64 * 1.1;
-    let caption = format!("MFR distribution of {} (N = {}, {} done)", s.label, s.n, s.done);
-    figure(format!("histogram-{}", k + 1), caption.clone(), (560, 360), |root| {
+    let caption = format!("MFR distribution of {} (N = {}, {} with an MFR)", s.label, s.n, s.done);
+    figure(format!("histogram-{}", k + 1), caption.clone(), (560, 380), |root| {
         let mut c = ChartBuilder::on(root)
-            .caption(&caption, (FONT, 16))
+            .caption(&caption, (FONT, AXIS_FONT))
             .margin(10)
-            .x_label_area_size(40)
-            .y_label_area_size(50)
+            .x_label_area_size(46)
+            .y_label_area_size(56)
             .build_cartesian_2d(0.0..top * 1.0001, 0.0..ymax)?;
         c.configure_mesh()
             .max_light_lines(0)
-            .x_desc("MFR")
+            .label_style((FONT, TICK_FONT))
+            .axis_desc_style((FONT, AXIS_FONT))
+            .x_desc("MFR (–)")
             .y_desc("runs")
             .y_label_formatter(&integer)
             .draw()?;
@@ -176,7 +208,9 @@ fn statistics(a: &Analysis) -> Res<Figure> {
         a.criteria.tolerance * 100.0
     );
     let conv_n = a.verdict.n;
-    figure("statistics".into(), caption, (1000, 700), |root| {
+    let title = caption.clone();
+    figure("statistics".into(), caption, (1000, 720), |root| {
+        let root = root.titled(&title, (FONT, AXIS_FONT))?;
         let panels = root.split_evenly((2, 2));
         let (nlo, nhi) = range(a.spaces.iter().map(|s| s.n as f64));
         for (panel, st) in panels.iter().zip(STATISTICS) {
@@ -196,14 +230,18 @@ fn statistics(a: &Analysis) -> Res<Figure> {
                     .flatten()
                     .chain(band.into_iter().flat_map(|(l, h)| [l, h])),
             );
+            let unit = if st.name() == "std" || st.name() == "mean" { "MFR (–)" } else { "(–)" };
             let mut c = ChartBuilder::on(panel)
-                .caption(st.name(), (FONT, 16))
+                .caption(format!("{} of MFR", st.name()), (FONT, AXIS_FONT))
                 .margin(10)
-                .x_label_area_size(35)
-                .y_label_area_size(60)
+                .x_label_area_size(44)
+                .y_label_area_size(72)
                 .build_cartesian_2d(nlo..nhi, ylo..yhi)?;
             c.configure_mesh()
                 .max_light_lines(0)
+                .label_style((FONT, TICK_FONT))
+                .axis_desc_style((FONT, AXIS_FONT))
+                .y_desc(format!("{} {unit}", st.name()))
                 .x_desc("N (runs in the space)")
                 .x_label_formatter(&integer)
                 .draw()?;
@@ -242,22 +280,34 @@ fn scatter(a: &Analysis) -> Res<Figure> {
         .collect();
     let (mlo, mhi) = range(done.iter().map(|p| p.1));
     let caption = "MFR against each parameter; colour: spreading quality (green ideal, orange \
-                   inefficient, red unstable, grey unknown)"
+                   inefficient, red unstable, grey unknown or screened)"
         .to_string();
     let radius = if done.len() > 2000 { 2 } else { 3 };
-    figure("scatter".into(), caption, (500 * cols as u32, 330 * rows as u32), |root| {
-        let panels = root.split_evenly((rows, cols));
+    let classes = [Quality::Ideal, Quality::Inefficient, Quality::Unstable, Quality::Unknown];
+    figure("scatter".into(), caption, (480 * cols as u32, 330 * rows as u32 + 70), |root| {
+        let root = root.titled("MFR against each swept parameter", (FONT, TITLE_FONT))?;
+        let h = root.dim_in_pixel().1;
+        let (grid, legend) = root.split_vertically(h - 36);
+        let style = (FONT, AXIS_FONT).into_font().color(&BLACK);
+        for (n, q) in classes.iter().enumerate() {
+            let x = 20 + 180 * n as i32;
+            legend.draw(&Circle::new((x + 6, 12), 5, quality_colour(*q).filled()))?;
+            legend.draw(&Text::new(q.as_str(), (x + 16, 2), style.clone()))?;
+        }
+        let panels = grid.split_evenly((rows, cols));
         for (j, panel) in panels.iter().enumerate().take(d) {
             let (xlo, xhi) = range(done.iter().map(|p| p.0.values[j]));
             let mut c = ChartBuilder::on(panel)
                 .margin(10)
-                .x_label_area_size(40)
-                .y_label_area_size(55)
+                .x_label_area_size(46)
+                .y_label_area_size(62)
                 .build_cartesian_2d(xlo..xhi, mlo..mhi)?;
             c.configure_mesh()
                 .max_light_lines(0)
+                .label_style((FONT, TICK_FONT))
+                .axis_desc_style((FONT, AXIS_FONT))
                 .x_desc(format!("{} ({})", a.parameters[j], a.units[j]))
-                .y_desc("MFR")
+                .y_desc("MFR (–)")
                 .draw()?;
             c.draw_series(
                 done.iter().map(|p| {
@@ -274,37 +324,42 @@ fn layer_height(k: usize) -> f64 {
     (k + 1) as f64 / 2.0
 }
 
-/// One panel of v_x profiles: v_x / blade speed against layer height, one curve per point.
+/// Lines of legend below a profile panel.
+const PROFILE_LEGEND_LINES: u32 = 4;
+
+/// One panel of v_x profiles: v_x / blade speed against layer height, one curve per point,
+/// and its legend below the axes (never over the curves).
 fn profile_panel(panel: &Area, title: &str, curves: &[(String, RGBColor, Vec<Option<f64>>, f64)]) -> Res<()> {
+    let h = panel.dim_in_pixel().1;
+    let (plot, legend) = panel.split_vertically(h - 22 * PROFILE_LEGEND_LINES - 8);
     let (xlo, xhi) =
         range(curves.iter().flat_map(|c| c.2.iter().flatten().map(move |v| v / c.3)).chain([0.8, 1.0]));
-    let mut ch = ChartBuilder::on(panel)
-        .caption(title, (FONT, 14))
+    let mut ch = ChartBuilder::on(&plot)
+        .caption(title, (FONT, AXIS_FONT))
         .margin(8)
-        .x_label_area_size(35)
-        .y_label_area_size(45)
+        .x_label_area_size(44)
+        .y_label_area_size(56)
         .build_cartesian_2d(xlo..xhi, 0.0..layer_height(VX_LAYERS - 1) + 0.5)?;
     ch.configure_mesh()
         .max_light_lines(0)
-        .x_desc("v_x / blade speed")
+        .x_labels(5)
+        .label_style((FONT, TICK_FONT))
+        .axis_desc_style((FONT, AXIS_FONT))
+        .x_desc("v_x / blade speed (–)")
         .y_desc("height above gap (D)")
         .draw()?;
-    for (label, colour, vx, v) in curves {
+    let style = (FONT, TICK_FONT).into_font().color(&BLACK);
+    for (n, (label, colour, vx, v)) in curves.iter().enumerate() {
         let pts: Vec<(f64, f64)> =
             vx.iter().enumerate().filter_map(|(k, x)| x.map(|x| (x / v, layer_height(k)))).collect();
         let col = *colour;
-        ch.draw_series(LineSeries::new(pts.clone(), col.stroke_width(2)))?
-            .label(label.as_str())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], col.stroke_width(2)));
+        ch.draw_series(LineSeries::new(pts.clone(), col.stroke_width(2)))?;
         ch.draw_series(pts.iter().map(|p| Circle::new(*p, 3, col.filled())))?;
-    }
-    if !curves.is_empty() {
-        ch.configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.3))
-            .label_font((FONT, 11))
-            .draw()?;
+        if (n as u32) < PROFILE_LEGEND_LINES {
+            let y = 4 + 22 * n as i32;
+            legend.draw(&PathElement::new(vec![(12, y + 8), (34, y + 8)], col.stroke_width(3)))?;
+            legend.draw(&Text::new(label.clone(), (40, y), style.clone()))?;
+        }
     }
     Ok(())
 }
@@ -343,7 +398,8 @@ fn profiles(a: &Analysis) -> Res<Figure> {
     let caption = "v_x profiles in front of the blade (thesis Fig. 4.2): per class, up to four \
                    points spread over its MFR range (ideal: the best by MFR)"
         .to_string();
-    figure("profiles".into(), caption, (1200, 460), |root| {
+    figure("profiles".into(), caption, (1000, 560), |root| {
+        let root = root.titled("v_x profiles in front of the blade, per class", (FONT, TITLE_FONT))?;
         let panels = root.split_evenly((1, 3));
         for (panel, q) in panels.iter().zip(classes) {
             let (count, chosen) = chosen_profiles(a, q);
@@ -354,7 +410,7 @@ fn profiles(a: &Analysis) -> Res<Figure> {
                     let (r, _) = p.done()?;
                     let mfr = r.mfr;
                     let v = r.parameters.get("blade_speed").copied().unwrap_or(1.0);
-                    Some((format!("#{}  MFR {:.3}", p.index, mfr), series_colour(i), r.vx.clone(), v))
+                    Some((format!("#{} MFR {:.3}", p.index, mfr), series_colour(i), r.vx.clone(), v))
                 })
                 .collect();
             profile_panel(panel, &format!("{} ({count} points)", q.as_str()), &curves)?;
@@ -410,7 +466,9 @@ fn lattice_panels(a: &Analysis) -> Res<Vec<Figure>> {
                 space.label,
                 if others.is_empty() { "no other parameters".into() } else { others.join(", ") }
             );
-            out.push(figure(format!("lattice-{na}-by-{nb}"), caption, (1200, 460), |root| {
+            let title = format!("v_x profiles as {na} varies, at three levels of {nb}");
+            out.push(figure(format!("lattice-{na}-by-{nb}"), caption, (1000, 560), |root| {
+                let root = root.titled(&title, (FONT, TITLE_FONT))?;
                 let panels = root.split_evenly((1, 3));
                 for (panel, &ib) in panels.iter().zip(&b_levels) {
                     let curves: Vec<_> = (0..levels[va].len())
@@ -422,12 +480,7 @@ fn lattice_panels(a: &Analysis) -> Res<Vec<Figure>> {
                             let (r, q) = p.done()?;
                             let v = r.parameters.get("blade_speed").copied().unwrap_or(1.0);
                             Some((
-                                format!(
-                                    "{na} {} ({}, MFR {:.3})",
-                                    fmt_short(levels[va][ia]),
-                                    q.as_str(),
-                                    r.mfr
-                                ),
+                                format!("{} {}: MFR {:.3}", fmt_short(levels[va][ia]), q.as_str(), r.mfr),
                                 series_colour(ia),
                                 r.vx.clone(),
                                 v,

@@ -207,6 +207,7 @@ impl Executor for FakeExecutor {
                     steady_p: 1.0,
                     vx: vec![Some(0.5); VX_LAYERS],
                     particles: 1,
+                    layer: None,
                     settle_steps: 0,
                     steps: 1,
                     simulated_time: 0.0,

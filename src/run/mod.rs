@@ -334,8 +334,9 @@ fn execute<E: Executor>(
     }
     // Closed points about to run (again): their present status is no evidence.
     let awaiting: BTreeSet<usize> = queued.keys().copied().filter(|&i| manifest.points[i].closed).collect();
+    let fixed = crate::point::fixed_columns(sweep);
     let mut rep =
-        Reporter::new(store, manifest, status, opts.progress, hook, screen, sample.clone(), awaiting)?;
+        Reporter::new(store, manifest, status, opts.progress, hook, screen, sample.clone(), awaiting, fixed)?;
     if rep.verdict == Verdict::Refuted {
         queued.append(&mut held);
     }

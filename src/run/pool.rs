@@ -68,6 +68,8 @@ pub struct PoolOptions {
 
 /// What the pool reports, in the order it happens for each job.
 #[derive(Debug, Clone)]
+// One per run, moved once: boxing the result would buy nothing.
+#[allow(clippy::large_enum_variant)]
 pub enum Event {
     /// A slot started running the job.
     Started { hash: String },

@@ -60,6 +60,8 @@ pub(super) struct Reporter<'a> {
     /// Closed points queued to run (again) and not finished yet.
     awaiting: BTreeSet<usize>,
     pub(super) verdict: Verdict,
+    /// The fixed parameters' columns of results.csv.
+    fixed: Vec<(String, f64)>,
 }
 
 impl<'a> Reporter<'a> {
@@ -103,6 +105,7 @@ impl<'a> Reporter<'a> {
         screen: Screen,
         sample: BTreeSet<usize>,
         awaiting: BTreeSet<usize>,
+        fixed: Vec<(String, f64)>,
     ) -> Result<Reporter<'a>> {
         let mut member_of = vec![Vec::new(); manifest.points.len()];
         for (k, s) in manifest.spaces.iter().enumerate() {
@@ -137,12 +140,20 @@ impl<'a> Reporter<'a> {
             sample,
             awaiting,
             verdict: Verdict::Pending,
+            fixed,
         };
         rep.judge_screen();
         for (k, s) in manifest.spaces.iter().enumerate() {
             rep.unfinished[k] = s.points.iter().filter(|&&i| !rep.status[i].is_finished()).count();
         }
-        store::write_results(store.dir(), &manifest.parameters, &manifest.points, &rep.status, &rep.sample)?;
+        store::write_results(
+            store.dir(),
+            &manifest.parameters,
+            &rep.fixed,
+            &manifest.points,
+            &rep.status,
+            &rep.sample,
+        )?;
         Ok(rep)
     }
 
@@ -279,6 +290,7 @@ impl<'a> Reporter<'a> {
         match store::write_results(
             self.store.dir(),
             &self.manifest.parameters,
+            &self.fixed,
             &self.manifest.points,
             &self.status,
             &self.sample,

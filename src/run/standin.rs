@@ -105,6 +105,7 @@ impl Executor for StandIn {
             steady_p: 1.0,
             vx: vx.into_iter().map(Some).collect(),
             particles: 0,
+            layer: None,
             settle_steps: 0,
             steps: 0,
             simulated_time: 0.0,

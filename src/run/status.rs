@@ -209,5 +209,6 @@ pub fn rewrite_results(dir: &Path) -> Result<()> {
     let (m, toml) = Store::read_manifest(dir)?;
     let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
     let (status, sample, _) = Screen::of(&sweep).statuses(&Store::open(dir), &m);
-    Ok(crate::store::write_results(dir, &m.parameters, &m.points, &status, &sample)?)
+    let fixed = crate::point::fixed_columns(&sweep);
+    Ok(crate::store::write_results(dir, &m.parameters, &fixed, &m.points, &status, &sample)?)
 }

@@ -31,6 +31,8 @@ use serde::Serialize;
 use crate::scene::settings::SceneSettings;
 use psd::SizeDistribution;
 
+/// Simulated time between the VTK files of `sweep run --vtk`, s.
+pub const VTK_EVERY_S: f64 = 0.02;
 /// Standard gravity, m/s².
 pub const GRAVITY: f64 = 9.81;
 /// Number of equal sub-windows of the measurement window (steadiness check, dump cadence).
@@ -177,6 +179,8 @@ pub struct Scene {
     pub traverse_steps: u64,
     /// Steps between dumps of every column over the whole run (0: none).
     pub full_dump_every: u64,
+    /// Steps between the VTK files of the particles and the blade over the spread (0: none).
+    pub vtk_every: u64,
     /// Largest cell of the blade mesh, m.
     pub mesh_cell: f64,
     pub thermo_every: u64,
@@ -399,6 +403,9 @@ impl Scene {
             0
         };
 
+        // ParaView files every 0.02 s of the spread (the thesis's output cadence, Appendix A).
+        let vtk_every = if settings.vtk { (VTK_EVERY_S / timestep).round().max(1.0) as u64 } else { 0 };
+
         let profile_diameter = if psd.is_mono() { d } else { psd.quantile(0.85) };
         let vx_band =
             if settings.thesis_band { THESIS_BAND } else { settings.vx_band_diameters * profile_diameter };
@@ -462,6 +469,7 @@ impl Scene {
             window_length_steps,
             traverse_steps,
             full_dump_every,
+            vtk_every,
             mesh_cell: depth / settings.mesh_cells_across as f64,
             // Frequent enough for the engine's watcher to stop an exploding run early.
             thermo_every: (total_steps / 40).clamp(1, 200),

@@ -93,6 +93,10 @@ pub struct SceneSettings {
     /// bounds of [`crate::scene::plausible`] (`--force`; never read from a sweep file).
     #[serde(skip)]
     pub force_bounds: bool,
+    /// Write particle (`custom/vtk`) and blade (`mesh/vtk`) VTK files over the spread for
+    /// ParaView (`sweep run --vtk`; never read from a sweep file).
+    #[serde(skip)]
+    pub vtk: bool,
 }
 
 /// The scene layouts (docs/scene.md): the gated dose, the thesis's free pile, and the blade's
@@ -270,6 +274,7 @@ impl Default for SceneSettings {
             thesis_band: false,
             seed: 12345,
             force_bounds: false,
+            vtk: false,
         }
     }
 }

@@ -5,6 +5,9 @@ use std::path::Path;
 use super::{io, PointRecord, StoreError};
 use crate::outcome::{RunFailure, RunResult, VX_LAYERS};
 
+/// results.csv's columns of the spread layer's quality.
+pub const LAYER_COLUMNS: [&str; 4] = ["layer_cv", "layer_cv_noise", "covered_fraction", "roughness_d"];
+
 /// The state of one design point in results.csv.
 #[derive(Debug, Clone, PartialEq)]
 pub enum PointStatus {
@@ -23,15 +26,19 @@ impl PointStatus {
 
 /// Write `DIR/results.csv`: one row per design point, in index order, atomically.
 ///
-/// Columns: index, the swept parameters, status (`done`, `failed`, `pending`, `screened`),
+/// Columns: index, the swept parameters, the fixed ones (every other catalogue parameter, the
+/// same on every row, so a row says the whole point), status (`done`, `failed`, `pending`, `screened`),
 /// failure (class), mfr (0 when screened), mfr_flux, mfr_particles, steady, vx_1..vx_12 (m/s,
 /// empty for an empty layer), runtime_s, hash, quality (of the v_x profile, [`crate::point::quality`];
 /// empty unless done), screen (`closed` for a point the screen closes, `verification` for one of
 /// its verification sample, empty for an open point), mfr_se (the standard error of MFR, from
-/// batch means over the steady window), stop (`target` or `cap`: what ended the window).
+/// batch means over the steady window), stop (`target` or `cap`: what ended the window), and
+/// the spread layer's quality where the run measured it ([`crate::point::layer`]): layer_cv and
+/// layer_cv_noise (–), covered_fraction (–), roughness_d (top-surface RMS height, in D).
 pub fn write_results(
     dir: &Path,
     parameters: &[String],
+    fixed: &[(String, f64)],
     points: &[PointRecord],
     status: &[PointStatus],
     sample: &std::collections::BTreeSet<usize>,
@@ -40,13 +47,16 @@ pub fn write_results(
     let mut w = csv::Writer::from_writer(Vec::new());
     let mut header: Vec<String> = vec!["index".into()];
     header.extend(parameters.iter().cloned());
+    header.extend(fixed.iter().map(|f| f.0.clone()));
     header.extend(["status", "failure", "mfr", "mfr_flux", "mfr_particles", "steady"].map(String::from));
     header.extend((1..=VX_LAYERS).map(|k| format!("vx_{k}")));
     header.extend(["runtime_s", "hash", "quality", "screen", "mfr_se", "stop"].map(String::from));
+    header.extend(LAYER_COLUMNS.map(String::from));
     w.write_record(&header).expect("in-memory csv");
     for (p, s) in points.iter().zip(status) {
         let mut row: Vec<String> = vec![p.index.to_string()];
         row.extend(p.values.iter().map(|v| v.to_string()));
+        row.extend(fixed.iter().map(|f| f.1.to_string()));
         match s {
             PointStatus::Pending => {
                 row.push("pending".into());
@@ -101,6 +111,16 @@ pub fn write_results(
             _ => (String::new(), String::new()),
         };
         row.extend([se, stop]);
+        let layer = match s {
+            PointStatus::Done(r) => r.layer,
+            _ => None,
+        };
+        row.extend(match layer {
+            Some(l) => {
+                [l.layer_cv, l.layer_cv_noise, l.covered_fraction, l.roughness_d].map(|v| v.to_string())
+            }
+            None => std::array::from_fn(|_| String::new()),
+        });
         w.write_record(&row).expect("in-memory csv");
     }
     let bytes = w.into_inner().expect("in-memory csv");

@@ -1,0 +1,208 @@
+//! Quality of the spread layer itself, from the deposit behind the blade at the window's end
+//! (docs/layer.md gives the definitions for users):
+//!
+//! The deposit is every powder particle whose centre is below the tip (z < gap) on the strip
+//! the blade's rear face swept during the window, [x_r(t1), x_r(t2) − [`SETTLE_MARGIN`]·D]: the
+//! last few diameters right behind the blade are still being laid down and are left out.
+//!
+//! - **uniformity** (`layer_cv`): the coefficient of variation of the deposited mass in bins of
+//!   [`BIN_DIAMETERS`]·D along the travel (full depth each). Its counting noise
+//!   (`layer_cv_noise`) is what a layer of independently placed particles of the same masses
+//!   would show: √(mean over bins of Σm²) / mean bin mass. A layer is even along the travel
+//!   when `layer_cv` is near its noise; gaps and clumps push it above.
+//! - **covered fraction** (`covered_fraction`): the share of the strip's area (x along the
+//!   travel, y across, periodic) under at least one deposited particle's projected disc,
+//!   sampled on a grid of D/[`GRID_PER_D`]. Its complement is the empty-patch area fraction,
+//!   the uncovered substrate that Nan et al. (2018) count as empty patches.
+//! - **roughness** (`roughness_d`): the RMS of the layer's top-surface height about its mean,
+//!   in D, on the same grid; the height of a cell is the top of the highest sphere over it
+//!   (z + √(r² − d²)), or the substrate's top (z = 0) where nothing covers it.
+//!
+//! Reads only id-free columns x, y, z and mass (radius from mass and the solid density).
+
+use serde::{Deserialize, Serialize};
+
+use crate::point::metrics::Frame;
+use crate::scene::Scene;
+
+/// Bin length along the travel for the uniformity, in D.
+pub const BIN_DIAMETERS: f64 = 3.0;
+/// Grid cells per D for coverage and roughness.
+pub const GRID_PER_D: f64 = 4.0;
+/// Length right behind the blade left out of the deposit, in D (still being laid down).
+pub const SETTLE_MARGIN: f64 = 2.0;
+
+/// The layer measures of one run.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Layer {
+    /// Coefficient of variation of the deposited mass per bin (–).
+    pub layer_cv: f64,
+    /// The same for independently placed particles: its counting noise (–).
+    pub layer_cv_noise: f64,
+    /// Share of the strip's area under the deposit (–).
+    pub covered_fraction: f64,
+    /// RMS of the top surface's height about its mean, in D.
+    pub roughness_d: f64,
+    /// Mean top-surface height over the strip, in D.
+    pub height_d: f64,
+    /// Particles in the deposit.
+    pub particles: usize,
+}
+
+/// The layer at `frame` (the window's last snapshot) over the strip from `x0` to `x1`.
+pub fn measure(scene: &Scene, frame: &Frame, x0: f64, x1: f64) -> Option<Layer> {
+    let d = scene.diameter;
+    let x1 = x1 - SETTLE_MARGIN * d;
+    let y = frame.y.as_ref()?;
+    if x1 - x0 < 2.0 * BIN_DIAMETERS * d {
+        return None;
+    }
+    let radius = |m: f64| (3.0 * m / (4.0 * std::f64::consts::PI * scene.density)).cbrt();
+    let deposit: Vec<usize> =
+        (0..frame.len()).filter(|&i| frame.x[i] >= x0 && frame.x[i] < x1 && frame.z[i] < scene.gap).collect();
+
+    // Uniformity along the travel.
+    // Whole bins over the strip (the small epsilon keeps an exact multiple from rounding down).
+    let nb = ((x1 - x0) / (BIN_DIAMETERS * d) + 1e-9).floor() as usize;
+    let bin = (x1 - x0) / nb as f64;
+    let (mut mass, mut mass_sq) = (vec![0.0; nb], vec![0.0; nb]);
+    for &i in &deposit {
+        let b = (((frame.x[i] - x0) / bin) as usize).min(nb - 1);
+        mass[b] += frame.mass[i];
+        mass_sq[b] += frame.mass[i] * frame.mass[i];
+    }
+    let mean = mass.iter().sum::<f64>() / nb as f64;
+    let (cv, noise) = if mean > 0.0 {
+        let var = mass.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / nb as f64;
+        (var.sqrt() / mean, (mass_sq.iter().sum::<f64>() / nb as f64).sqrt() / mean)
+    } else {
+        (0.0, 0.0)
+    };
+
+    // Coverage and the top surface on a grid over the strip (y periodic over the depth).
+    let h = d / GRID_PER_D;
+    let (nx, ny) = (((x1 - x0) / h).round() as usize, (scene.depth / h).round().max(1.0) as usize);
+    let (hx, hy) = ((x1 - x0) / nx as f64, scene.depth / ny as f64);
+    let mut top: Vec<Option<f64>> = vec![None; nx * ny];
+    for &i in &deposit {
+        let r = radius(frame.mass[i]);
+        let (xi, yi, zi) = (frame.x[i], y[i].rem_euclid(scene.depth), frame.z[i]);
+        let (cx0, cx1) = (((xi - r - x0) / hx).floor() as i64, ((xi + r - x0) / hx).ceil() as i64);
+        let (cy0, cy1) = (((yi - r) / hy).floor() as i64, ((yi + r) / hy).ceil() as i64);
+        for cx in cx0.max(0)..cx1.min(nx as i64) {
+            let gx = x0 + (cx as f64 + 0.5) * hx;
+            for cy in cy0..cy1 {
+                let gy = (cy as f64 + 0.5) * hy;
+                let d2 = (gx - xi).powi(2) + (gy - yi).powi(2);
+                if d2 < r * r {
+                    let cell = &mut top[cx as usize * ny + cy.rem_euclid(ny as i64) as usize];
+                    let z = zi + (r * r - d2).sqrt();
+                    *cell = Some(cell.map_or(z, |t: f64| t.max(z)));
+                }
+            }
+        }
+    }
+    let covered = top.iter().filter(|t| t.is_some()).count() as f64 / top.len() as f64;
+    let heights: Vec<f64> = top.iter().map(|t| t.unwrap_or(0.0).max(0.0)).collect();
+    let hmean = heights.iter().sum::<f64>() / heights.len() as f64;
+    let rms = (heights.iter().map(|z| (z - hmean).powi(2)).sum::<f64>() / heights.len() as f64).sqrt();
+    Some(Layer {
+        layer_cv: cv,
+        layer_cv_noise: noise,
+        covered_fraction: covered,
+        roughness_d: rms / d,
+        height_d: hmean / d,
+        particles: deposit.len(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::settings::SceneSettings;
+    use std::collections::BTreeMap;
+
+    /// A scene whose depth is exactly 6 D, so a square lattice of pitch D tiles it.
+    fn scene() -> Scene {
+        let values: BTreeMap<String, f64> =
+            [("diameter", 2.0), ("gap", 4.0)].iter().map(|(k, v)| (k.to_string(), *v)).collect();
+        let mut s = Scene::new(&values, &SceneSettings::default()).unwrap();
+        s.depth = 6.0 * s.diameter;
+        s
+    }
+
+    /// Spheres of diameter D resting on z = 0 at the given (x, y) centres.
+    fn frame(s: &Scene, xy: &[(f64, f64)]) -> Frame {
+        let m = s.density * std::f64::consts::PI / 6.0 * s.diameter.powi(3);
+        Frame {
+            step: 0,
+            id: (1..=xy.len() as u64).collect(),
+            x: xy.iter().map(|p| p.0).collect(),
+            y: Some(xy.iter().map(|p| p.1).collect()),
+            z: vec![0.5 * s.diameter; xy.len()],
+            vx: vec![0.0; xy.len()],
+            mass: vec![m; xy.len()],
+        }
+    }
+
+    #[test]
+    fn a_square_monolayer_is_even_covers_pi_over_four_and_has_the_cap_roughness() {
+        let s = scene();
+        let d = s.diameter;
+        // A strip of 38 D: 36 D measured (the last 2 D behind the blade left out), 12 bins of 3 D.
+        let (x0, x1) = (0.0, 38.0 * d);
+        let ny = (s.depth / d).round() as usize;
+        // Touching spheres on a square lattice of pitch D over the measured 36 D.
+        let xy: Vec<(f64, f64)> = (0..36)
+            .flat_map(|i| (0..ny).map(move |j| ((i as f64 + 0.5) * d, (j as f64 + 0.5) * d)))
+            .collect();
+        let l = measure(&s, &frame(&s, &xy), x0, x1).unwrap();
+        // Every bin holds 3·ny spheres: no variation at all.
+        assert!(l.layer_cv < 1e-9, "{l:?}");
+        assert_eq!(l.particles, 36 * ny);
+        // Counting noise of n equal masses per bin: √(n m²)/(n m) = 1/√n, n = 3·ny.
+        assert!((l.layer_cv_noise - 1.0 / (3.0 * ny as f64).sqrt()).abs() < 1e-12, "{l:?}");
+        // Discs of diameter D on a pitch of D cover π/4 of the plane; on a D/4 grid the sampled
+        // share is 12 of the 16 cell centres per D² (those within D/2 of the disc's centre).
+        assert!((l.covered_fraction - 12.0 / 16.0).abs() < 1e-9, "{l:?}");
+        // Heights: D/2 + √(r² − d²) at the 12 covered cell centres (d² = (k²+l²)(D/8)², k,l odd
+        // in ±1, ±3), 0 at the 4 uncovered: the RMS about the mean, in D, worked out here.
+        let r = 0.5;
+        let hs: Vec<f64> = [1.0f64, 3.0]
+            .iter()
+            .flat_map(|&a| [1.0f64, 3.0].map(move |b| (a, b)))
+            .map(|(a, b)| {
+                let d2 = (a * a + b * b) / 64.0;
+                if d2 < r * r {
+                    0.5 + (r * r - d2).sqrt()
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let mean = hs.iter().sum::<f64>() / 4.0;
+        let rms = (hs.iter().map(|h| (h - mean).powi(2)).sum::<f64>() / 4.0).sqrt();
+        assert!((l.roughness_d - rms).abs() < 1e-9 && (l.height_d - mean).abs() < 1e-9, "{l:?} {rms} {mean}");
+    }
+
+    #[test]
+    fn an_empty_half_shows_in_coverage_and_uniformity() {
+        let s = scene();
+        let d = s.diameter;
+        let ny = (s.depth / d).round() as usize;
+        // Spheres over the first half of a 38 D strip only (38 D measured of 40 D).
+        let xy: Vec<(f64, f64)> = (0..19)
+            .flat_map(|i| (0..ny).map(move |j| ((i as f64 + 0.5) * d, (j as f64 + 0.5) * d)))
+            .collect();
+        let l = measure(&s, &frame(&s, &xy), 0.0, 40.0 * d).unwrap();
+        assert!((l.covered_fraction - 0.5 * 0.75).abs() < 0.02, "{l:?}");
+        // Half the bins full and half empty: CV ≈ 1, far above the counting noise.
+        assert!(l.layer_cv > 0.9 && l.layer_cv > 3.0 * l.layer_cv_noise, "{l:?}");
+        // Nothing behind the blade: no layer, all zeros; a dump without y: no measure.
+        let empty = measure(&s, &frame(&s, &[]), 0.0, 40.0 * d).unwrap();
+        assert_eq!((empty.covered_fraction, empty.roughness_d, empty.particles), (0.0, 0.0, 0));
+        let mut no_y = frame(&s, &xy);
+        no_y.y = None;
+        assert!(measure(&s, &no_y, 0.0, 40.0 * d).is_none());
+    }
+}

@@ -1,0 +1,381 @@
+//! What the sweep advises: whether the v_x classes go with a better layer, the recommended
+//! settings by a stated criterion with their uncertainty, and the thesis's conclusions (Wu 2020,
+//! §4.2–4.6 and §5.4) checked one by one against this sweep.
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+
+use super::{PointRow, PointState};
+use crate::analysis::sensitivity::Index;
+use crate::point::layer::Layer;
+use crate::point::quality::Quality;
+
+/// Points a conclusion needs before it is judged.
+pub const MIN_POINTS: usize = 20;
+/// An even layer: its CV along the travel within this multiple of its counting noise.
+pub const EVEN_FACTOR: f64 = 2.0;
+/// Recommended settings listed.
+const LISTED: usize = 5;
+
+/// The layer measures of one v_x class.
+#[derive(Debug, Clone, Serialize)]
+pub struct ClassLayer {
+    pub class: &'static str,
+    pub points: usize,
+    pub mfr: Option<f64>,
+    pub covered_fraction: Option<f64>,
+    /// Mean of layer_cv / layer_cv_noise.
+    pub cv_over_noise: Option<f64>,
+    pub roughness_d: Option<f64>,
+}
+
+/// Whether the v_x classes go with the layer they leave.
+#[derive(Debug, Clone, Serialize)]
+pub struct ClassCheck {
+    pub by_class: Vec<ClassLayer>,
+    /// True when ideal and inefficient points both number ≥ 3 and the ideal ones' mean covered
+    /// fraction exceeds the inefficient ones' by more than twice its standard error.
+    pub discriminate: bool,
+    pub sentence: String,
+}
+
+/// A recommended point.
+#[derive(Debug, Clone, Serialize)]
+pub struct Recommended {
+    pub index: usize,
+    pub parameters: BTreeMap<String, f64>,
+    pub mfr: f64,
+    /// Counting noise of the MFR: MFR/√n over the n particles counted.
+    pub mfr_se: f64,
+    pub layer: Option<Layer>,
+}
+
+/// One of the thesis's conclusions against this sweep.
+#[derive(Debug, Clone, Serialize)]
+pub struct Conclusion {
+    pub section: &'static str,
+    pub claim: &'static str,
+    /// `holds`, `fails` or `not enough points`.
+    pub verdict: &'static str,
+    pub evidence: String,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Advice {
+    pub classes: ClassCheck,
+    pub criterion: String,
+    pub recommended: Vec<Recommended>,
+    /// Whether the best point's MFR is above the next one's by more than twice their combined SE.
+    pub best_is_distinct: Option<bool>,
+    pub conclusions: Vec<Conclusion>,
+}
+
+fn mean(v: &[f64]) -> Option<f64> {
+    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+}
+
+fn se(v: &[f64]) -> Option<f64> {
+    let m = mean(v)?;
+    (v.len() > 1).then(|| {
+        (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64 / v.len() as f64).sqrt()
+    })
+}
+
+/// Ranks (1-based, ties averaged).
+fn ranks(v: &[f64]) -> Vec<f64> {
+    let mut idx: Vec<usize> = (0..v.len()).collect();
+    idx.sort_by(|&a, &b| v[a].total_cmp(&v[b]));
+    let mut r = vec![0.0; v.len()];
+    let mut i = 0;
+    while i < idx.len() {
+        let mut j = i;
+        while j + 1 < idx.len() && v[idx[j + 1]] == v[idx[i]] {
+            j += 1;
+        }
+        for &k in &idx[i..=j] {
+            r[k] = (i + j) as f64 / 2.0 + 1.0;
+        }
+        i = j + 1;
+    }
+    r
+}
+
+/// Spearman's rank correlation; `None` when either variable is constant.
+pub fn spearman(x: &[f64], y: &[f64]) -> Option<f64> {
+    let (rx, ry) = (ranks(x), ranks(y));
+    let (mx, my) = (mean(&rx)?, mean(&ry)?);
+    let sxy: f64 = rx.iter().zip(&ry).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let sxx: f64 = rx.iter().map(|a| (a - mx).powi(2)).sum();
+    let syy: f64 = ry.iter().map(|b| (b - my).powi(2)).sum();
+    (sxx > 0.0 && syy > 0.0).then(|| sxy / (sxx * syy).sqrt())
+}
+
+pub fn advise(parameters: &[String], points: &[PointRow], sensitivity: &[Index]) -> Advice {
+    let done: Vec<(&PointRow, &crate::outcome::RunResult, Quality)> =
+        points.iter().filter_map(|p| p.done().map(|(r, q)| (p, r, q))).collect();
+    let classes = class_check(&done);
+    let criterion = format!(
+        "highest MFR (the layer's packing over the gap) among the points whose layer is even along the travel \
+         (CV of the deposited mass in bins of 3 D within {EVEN_FACTOR}× its counting noise); points without layer \
+         measures are ranked by MFR alone. Uncertainty: the MFR's counting noise, MFR/√n over the n particles counted"
+    );
+    let even =
+        |r: &crate::outcome::RunResult| r.layer.is_none_or(|l| l.layer_cv <= EVEN_FACTOR * l.layer_cv_noise);
+    let mut ranked: Vec<&(&PointRow, &crate::outcome::RunResult, Quality)> =
+        done.iter().filter(|(_, r, _)| even(r) && r.mfr.is_finite() && r.mfr > 0.0).collect();
+    ranked.sort_by(|a, b| b.1.mfr.total_cmp(&a.1.mfr));
+    let recommended: Vec<Recommended> = ranked
+        .iter()
+        .take(LISTED)
+        .map(|(p, r, _)| Recommended {
+            index: p.index,
+            parameters: parameters.iter().cloned().zip(p.values.iter().copied()).collect(),
+            mfr: r.mfr,
+            mfr_se: r.mfr / (r.mfr_particles.max(1) as f64).sqrt(),
+            layer: r.layer,
+        })
+        .collect();
+    let best_is_distinct = (recommended.len() >= 2).then(|| {
+        let (a, b) = (&recommended[0], &recommended[1]);
+        a.mfr - b.mfr > 2.0 * (a.mfr_se.powi(2) + b.mfr_se.powi(2)).sqrt()
+    });
+    let conclusions = conclusions(parameters, points, sensitivity, recommended.first());
+    Advice { classes, criterion, recommended, best_is_distinct, conclusions }
+}
+
+fn class_check(done: &[(&PointRow, &crate::outcome::RunResult, Quality)]) -> ClassCheck {
+    let by_class: Vec<ClassLayer> = [Quality::Ideal, Quality::Inefficient, Quality::Unstable]
+        .iter()
+        .map(|&q| {
+            let members: Vec<_> = done.iter().filter(|d| d.2 == q).collect();
+            let layers: Vec<Layer> = members.iter().filter_map(|d| d.1.layer).collect();
+            ClassLayer {
+                class: q.as_str(),
+                points: members.len(),
+                mfr: mean(&members.iter().map(|d| d.1.mfr).collect::<Vec<_>>()),
+                covered_fraction: mean(&layers.iter().map(|l| l.covered_fraction).collect::<Vec<_>>()),
+                cv_over_noise: mean(
+                    &layers
+                        .iter()
+                        .filter(|l| l.layer_cv_noise > 0.0)
+                        .map(|l| l.layer_cv / l.layer_cv_noise)
+                        .collect::<Vec<_>>(),
+                ),
+                roughness_d: mean(&layers.iter().map(|l| l.roughness_d).collect::<Vec<_>>()),
+            }
+        })
+        .collect();
+    let covered = |q: Quality| -> Vec<f64> {
+        done.iter().filter(|d| d.2 == q).filter_map(|d| d.1.layer.map(|l| l.covered_fraction)).collect()
+    };
+    let (ideal, ineff) = (covered(Quality::Ideal), covered(Quality::Inefficient));
+    let counts: BTreeMap<&str, usize> = by_class.iter().map(|c| (c.class, c.points)).collect();
+    let (discriminate, sentence) = if ideal.len() < 3 || ineff.len() < 3 {
+        (
+            false,
+            format!(
+                "The v_x classes do not separate this sweep: {} ideal, {} inefficient and {} unstable points with layer \
+                 measures ({} and {} needed in the first two), so they cannot be checked against the layer; the \
+                 recommendation below uses the layer measures instead",
+                counts["ideal"], counts["inefficient"], counts["unstable"], 3, 3
+            ),
+        )
+    } else {
+        let (mi, mn) = (mean(&ideal).unwrap_or(0.0), mean(&ineff).unwrap_or(0.0));
+        let s = (se(&ideal).unwrap_or(0.0).powi(2) + se(&ineff).unwrap_or(0.0).powi(2)).sqrt();
+        let d = mi - mn > 2.0 * s;
+        (
+            d,
+            format!(
+                "Ideal points cover {:.3} of the substrate on average against {:.3} for inefficient ones (difference {:+.3}, \
+                 SE {:.3}): the classes {} with a better layer on this sweep{}",
+                mi,
+                mn,
+                mi - mn,
+                s,
+                if d { "go" } else { "do not go" },
+                if d { "" } else { "; the recommendation below uses the layer measures instead" }
+            ),
+        )
+    };
+    ClassCheck { by_class, discriminate, sentence }
+}
+
+fn conclusions(
+    parameters: &[String],
+    points: &[PointRow],
+    sensitivity: &[Index],
+    best: Option<&Recommended>,
+) -> Vec<Conclusion> {
+    let measured: Vec<(&PointRow, f64)> = points
+        .iter()
+        .filter(|p| !matches!(p.state, PointState::Failed { .. } | PointState::Pending))
+        .filter_map(|p| p.mfr().map(|m| (p, m)))
+        .collect();
+    let n = measured.len();
+    let col = |name: &str| parameters.iter().position(|p| p == name);
+    let s1 = |name: &str| sensitivity.iter().find(|s| s.parameter == name).and_then(|s| s.first_order);
+    let few = |need: &[&str]| -> Option<String> {
+        let missing: Vec<&str> = need.iter().copied().filter(|p| col(p).is_none()).collect();
+        if !missing.is_empty() {
+            Some(format!("{} not swept", missing.join(", ")))
+        } else if n < MIN_POINTS {
+            Some(format!("{n} measured points, {MIN_POINTS} needed"))
+        } else {
+            None
+        }
+    };
+    let judged = |section, claim, need: &[&str], f: &dyn Fn() -> (bool, String)| -> Conclusion {
+        match few(need) {
+            Some(why) => Conclusion { section, claim, verdict: "not enough points", evidence: why },
+            None => {
+                let (ok, evidence) = f();
+                Conclusion { section, claim, verdict: if ok { "holds" } else { "fails" }, evidence }
+            }
+        }
+    };
+    let fmt = |v: Option<f64>| v.map_or("undefined".into(), |v| format!("{v:.2}"));
+    // Rank correlation of MFR with one parameter, significant beyond ±2/√(n−1).
+    let trend = |name: &str| -> (Option<f64>, f64) {
+        let j = col(name).unwrap_or(0);
+        let x: Vec<f64> = measured.iter().map(|m| m.0.values[j]).collect();
+        let y: Vec<f64> = measured.iter().map(|m| m.1).collect();
+        (spearman(&x, &y), 2.0 / ((n.max(2) - 1) as f64).sqrt())
+    };
+    let mut out = Vec::new();
+    out.push(judged(
+        "§5.4 (1), §4.2",
+        "particle diameter is the most dominant factor",
+        &["diameter"],
+        &|| {
+            let top = sensitivity.first().map(|s| s.parameter.clone()).unwrap_or_default();
+            (
+                top == "diameter",
+                format!(
+                    "first-order index of MFR: diameter {}; the largest is {top} ({})",
+                    fmt(s1("diameter")),
+                    fmt(sensitivity.first().and_then(|s| s.first_order))
+                ),
+            )
+        },
+    ));
+    out.push(judged(
+        "§5.4 (1), §4.3",
+        "a gap of about twice the diameter spreads best",
+        &["diameter", "gap"],
+        &|| match best {
+            Some(b) => {
+                let r = b.parameters["gap"] / b.parameters["diameter"];
+                (
+                    (1.5..=2.5).contains(&r),
+                    format!(
+                        "the recommended point #{} has gap/D = {r:.2} (1.5–2.5 counts as about 2)",
+                        b.index
+                    ),
+                )
+            }
+            None => (false, "no point is recommended".into()),
+        },
+    ));
+    out.push(judged(
+        "§5.4 (2)",
+        "blade speed and friction matter less than diameter and gap",
+        &["diameter", "gap", "blade_speed", "friction"],
+        &|| {
+            let lo = s1("diameter").unwrap_or(0.0).min(s1("gap").unwrap_or(0.0));
+            let hi = s1("blade_speed").unwrap_or(0.0).max(s1("friction").unwrap_or(0.0));
+            (
+                hi < lo,
+                format!(
+                    "first-order indices: diameter {}, gap {}, blade_speed {}, friction {}",
+                    fmt(s1("diameter")),
+                    fmt(s1("gap")),
+                    fmt(s1("blade_speed")),
+                    fmt(s1("friction"))
+                ),
+            )
+        },
+    ));
+    out.push(judged(
+        "§5.4 (2)",
+        "blade speed matters more than friction",
+        &["blade_speed", "friction"],
+        &|| {
+            (
+                s1("blade_speed").unwrap_or(0.0) > s1("friction").unwrap_or(0.0),
+                format!(
+                    "first-order indices: blade_speed {}, friction {}",
+                    fmt(s1("blade_speed")),
+                    fmt(s1("friction"))
+                ),
+            )
+        },
+    ));
+    out.push(judged(
+        "§4.4, §5.4 (2)",
+        "a lower blade speed spreads better (higher MFR)",
+        &["blade_speed"],
+        &|| {
+            let (rho, band) = trend("blade_speed");
+            (
+                rho.is_some_and(|r| r < -band),
+                format!(
+                    "rank correlation of MFR with blade speed {} (significant beyond ±{band:.2})",
+                    fmt(rho)
+                ),
+            )
+        },
+    ));
+    out.push(judged(
+        "§4.5, §5.4 (3)",
+        "higher friction deteriorates spreading (lower MFR)",
+        &["friction"],
+        &|| {
+            let (rho, band) = trend("friction");
+            (
+                rho.is_some_and(|r| r < -band),
+                format!("rank correlation of MFR with friction {} (significant beyond ±{band:.2})", fmt(rho)),
+            )
+        },
+    ));
+    out.push(judged("§4.2", "smaller particles spread better (higher MFR)", &["diameter"], &|| {
+        let (rho, band) = trend("diameter");
+        (
+            rho.is_some_and(|r| r < -band),
+            format!("rank correlation of MFR with diameter {} (significant beyond ±{band:.2})", fmt(rho)),
+        )
+    }));
+    out.push(judged(
+        "§4.6, §5.4 (4)",
+        "a narrower size distribution spreads better (higher MFR with a larger Weibull shape)",
+        &["weibull_shape"],
+        &|| {
+            let (rho, band) = trend("weibull_shape");
+            (
+                rho.is_some_and(|r| r > band),
+                format!(
+                    "rank correlation of MFR with the Weibull shape {} (significant beyond ±{band:.2})",
+                    fmt(rho)
+                ),
+            )
+        },
+    ));
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spearman_by_hand() {
+        // Monotone: ±1 whatever the spacing; a tie shares its ranks.
+        assert_eq!(spearman(&[1.0, 2.0, 10.0], &[3.0, 4.0, 100.0]), Some(1.0));
+        assert_eq!(spearman(&[1.0, 2.0, 10.0], &[3.0, 2.0, 1.0]), Some(-1.0));
+        assert_eq!(ranks(&[5.0, 1.0, 5.0]), vec![2.5, 1.0, 2.5]);
+        // x ranks 1 2 3 4, y ranks 2 1 4 3: Σd² = 4, ρ = 1 − 6·4/(4·15) = 0.6.
+        assert!((spearman(&[1.0, 2.0, 3.0, 4.0], &[2.0, 1.0, 4.0, 3.0]).unwrap() - 0.6).abs() < 1e-12);
+        assert_eq!(spearman(&[1.0, 1.0], &[1.0, 2.0]), None);
+    }
+}
