@@ -199,13 +199,13 @@ pub(super) fn run_one(a: RunArgs) -> Result<i32, Error> {
         }
     };
     if !a.json {
-        eprintln!(
-            "running {} particles, settle + {} steps (dt = {:.3e} s) in {}",
-            prepared.scene.particles,
-            prepared.scene.spread_steps(),
-            prepared.scene.timestep,
-            dir.display()
-        );
+        let sc = &prepared.scene;
+        let what = if sc.is_conveyor() {
+            format!("a heap held at {} particles, at most {} steps", sc.conveyor.heap_particles, sc.spread_steps())
+        } else {
+            format!("{} particles, settle + {} steps", sc.particles, sc.spread_steps())
+        };
+        eprintln!("running {what} (dt = {:.3e} s) in {}", sc.timestep, dir.display());
         if prepared.scene.nothing_passes() {
             eprintln!("the screen closes this point: nothing can pass under the blade (a sweep counts it as MFR = 0)");
         }

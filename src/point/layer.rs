@@ -116,6 +116,20 @@ pub fn measure(scene: &Scene, frame: &Frame, x0: f64, x1: f64) -> Option<Layer> 
     })
 }
 
+/// The conveyor's uniformity along the travel: the coefficient of variation of the mass each
+/// block deposits over the steady window (`block_mass`, bins of one block's travel), and its
+/// counting noise √(m_w / M̄), where m_w is the feed's mass-weighted mean particle mass (a
+/// block's Σm² is about its mass times m_w when it deposits the feed's size mix).
+pub fn along_travel(block_mass: &[f64], weighted_particle_mass: f64) -> (f64, f64) {
+    let n = block_mass.len() as f64;
+    let mean = block_mass.iter().sum::<f64>() / n;
+    if block_mass.len() < 2 || mean <= 0.0 {
+        return (0.0, 0.0);
+    }
+    let var = block_mass.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / n;
+    (var.sqrt() / mean, (weighted_particle_mass / mean).sqrt())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -204,5 +218,35 @@ mod tests {
         let mut no_y = frame(&s, &xy);
         no_y.y = None;
         assert!(measure(&s, &no_y, 0.0, 40.0 * d).is_none());
+    }
+
+    #[test]
+    fn independent_blocks_of_a_size_mix_scatter_by_the_compound_poisson_noise() {
+        use rand::{Rng, SeedableRng};
+        // Blocks of Poisson(40) particles, a third of them twice the mass of the rest: the CV of
+        // the block mass is √(E[m²] / (λ E[m]²)), which is what the noise gives from m_w.
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let (lambda, masses) = (40.0_f64, [1.0, 1.0, 2.0]);
+        let blocks: Vec<f64> = (0..4000)
+            .map(|_| {
+                // Poisson by counting unit-rate exponential gaps within λ.
+                let (mut t, mut m) = (0.0, 0.0);
+                loop {
+                    t -= (1.0 - rng.gen::<f64>()).ln();
+                    if t > lambda {
+                        break m;
+                    }
+                    m += masses[rng.gen_range(0..3)];
+                }
+            })
+            .collect();
+        let weighted = (1.0 + 1.0 + 4.0) / (1.0 + 1.0 + 2.0); // Σ m² / Σ m over the mix
+        let (cv, noise) = along_travel(&blocks, weighted);
+        let exact = (2.0_f64 / (lambda * (4.0_f64 / 3.0).powi(2))).sqrt();
+        assert!((noise - exact).abs() < 0.02 * exact, "noise {noise} vs {exact}");
+        assert!((cv - exact).abs() < 0.05 * exact, "cv {cv} vs {exact}");
+        // An empty or single block has no spread.
+        assert_eq!(along_travel(&[0.0, 0.0], 1.0), (0.0, 0.0));
+        assert_eq!(along_travel(&[3.0], 1.0), (0.0, 0.0));
     }
 }

@@ -28,6 +28,8 @@ use crate::sys::process::CancelToken;
 pub const RESULT: &str = "result.json";
 pub const FAILURE: &str = "failure.json";
 pub const DUMP: &str = "dump.spread";
+/// The conveyor's one snapshot of the deposit behind the blade at the end.
+pub const STRIP_DUMP: &str = "dump.strip";
 
 /// What every point of a sweep shares: the sweep, the engine, the template.
 pub struct PointContext {
@@ -319,6 +321,23 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
     RunOutcome::Done(result)
 }
 
+/// The conveyor's spread layer: coverage and roughness from the strip behind the blade at the
+/// end (`dump.strip`), uniformity from the mass each block of the steady window deposited.
+/// `None` when the strip's dump is missing or unreadable (an older deck).
+fn conveyor_layer(scene: &crate::scene::Scene, run_dir: &Path, st: &steady::SteadyState) -> Option<layer::Layer> {
+    let snap = crate::engine::dump::read_dump(run_dir.join(STRIP_DUMP), &metrics::COLUMNS).ok()?;
+    let frame = Frame::from_snapshot(snap.last()?).ok()?;
+    let c = &scene.conveyor;
+    let mut l = layer::measure(scene, &frame, c.delete_x1, scene.blade_x0)?;
+    let particle_mass = |d: f64| scene.density * std::f64::consts::PI / 6.0 * d.powi(3);
+    let weighted: f64 = c.feed.iter().map(|f| f.mass_fraction * particle_mass(f.diameter)).sum::<f64>()
+        / c.feed.iter().map(|f| f.mass_fraction).sum::<f64>();
+    let block_mass: Vec<f64> =
+        st.block_mfr[st.transient_blocks..].iter().map(|y| y * c.ideal_block_mass).collect();
+    (l.layer_cv, l.layer_cv_noise) = layer::along_travel(&block_mass, weighted);
+    Some(l)
+}
+
 /// The conveyor layout's result: the block series from the log, the steady window, MFR with its
 /// SE; a run that did not become steady fails as `unsteady` with its numbers kept.
 fn finish_conveyor(
@@ -340,6 +359,7 @@ fn finish_conveyor(
     let quarter = w.len().div_ceil(4).max(1);
     let mfr_windows = w.chunks(quarter).map(|c| c.iter().sum::<f64>() / c.len() as f64).collect();
     let steps = blocks.last().map(|b| b.step).unwrap_or(0);
+    let layer = conveyor_layer(&p.scene, run_dir, &st.state);
     let result = RunResult {
         format: RESULT_FORMAT,
         hash: p.hash.clone(),
@@ -355,8 +375,7 @@ fn finish_conveyor(
         steady_p: 1.0,
         vx: st.vx,
         particles: p.scene.conveyor.heap_particles,
-        // The conveyor deletes its deposit behind the blade: the layer is not measured yet.
-        layer: None,
+        layer,
         settle_steps: 0,
         steps,
         simulated_time: steps as f64 * p.scene.timestep,

@@ -117,8 +117,9 @@ pub fn advise(parameters: &[String], points: &[PointRow], sensitivity: &[Index])
     let classes = class_check(&done);
     let criterion = format!(
         "highest MFR (the layer's packing over the gap) among the points whose layer is even along the travel \
-         (CV of the deposited mass in bins of 3 D within {EVEN_FACTOR}× its counting noise); points without layer \
-         measures are ranked by MFR alone. Uncertainty: the MFR's counting noise, MFR/√n over the n particles counted"
+         (CV of the deposited mass along the travel within {EVEN_FACTOR}× its counting noise); points without layer \
+         measures are ranked by MFR alone. Uncertainty: the MFR's standard error where the run measured one (batch \
+         means over the steady window), else its counting noise, MFR/√n over the n particles counted"
     );
     let even =
         |r: &crate::outcome::RunResult| r.layer.is_none_or(|l| l.layer_cv <= EVEN_FACTOR * l.layer_cv_noise);
@@ -132,7 +133,7 @@ pub fn advise(parameters: &[String], points: &[PointRow], sensitivity: &[Index])
             index: p.index,
             parameters: parameters.iter().cloned().zip(p.values.iter().copied()).collect(),
             mfr: r.mfr,
-            mfr_se: r.mfr / (r.mfr_particles.max(1) as f64).sqrt(),
+            mfr_se: r.mfr_se.unwrap_or(r.mfr / (r.mfr_particles.max(1) as f64).sqrt()),
             layer: r.layer,
         })
         .collect();
