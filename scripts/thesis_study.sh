@@ -53,7 +53,13 @@ run_sweep() { # name, then the sweep command's arguments
   ( while sleep "$sync_s"; do slim_copy "$dir" "$record/$name"; done ) &
   local syncer=$!
   local start=$SECONDS rc=0
-  "$bin" "$@" --out "$dir" --jobs "$jobs" || rc=$?
+  # FORCE=1: continue a directory whose templates changed (runs whose decks did not change keep
+  # their results; the others run again under their new hashes).
+  if [ -n "${FORCE:-}" ] && [ -f "$dir/manifest.json" ]; then
+    "$bin" resume "$dir" --jobs "$jobs" --force || rc=$?
+  else
+    "$bin" "$@" --out "$dir" --jobs "$jobs" || rc=$?
+  fi
   kill "$syncer" 2>/dev/null || true
   "$bin" report "$dir" >/dev/null 2>&1 || true
   slim_copy "$dir" "$record/$name"

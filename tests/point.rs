@@ -19,6 +19,8 @@ diameter = { lo = 1.0, hi = 3.0, unit = "mm" }
 gap      = { lo = 1.0, hi = 6.0, unit = "mm" }
 friction = 0.3
 blade_speed = 1.6
+[scene]
+layout = "gated"   # the lab-frame scene these tests check (tests/steady.rs: the conveyor)
 "#,
     )
 }
@@ -136,7 +138,7 @@ fn sweep_with_template(dir: &Path, template: &str, extra: &str) -> PathBuf {
     std::fs::write(dir.join("t.tera"), template).unwrap();
     let sweep = dir.join("s.toml");
     let text = format!(
-        "name = \"t\"\n[parameters]\ngap = {{ lo = 1.0, hi = 2.0 }}\n{extra}[scene]\ntemplate = \"t.tera\"\n"
+        "name = \"t\"\n[parameters]\ngap = {{ lo = 1.0, hi = 2.0 }}\n{extra}[scene]\nlayout = \"gated\"\ntemplate = \"t.tera\"\n"
     );
     std::fs::write(&sweep, text).unwrap();
     sweep
@@ -245,7 +247,7 @@ fn a_pile_still_moving_at_the_settle_cap_fails_as_not_settled() {
     std::fs::write(
         &sweep,
         "name = \"s\"\n[parameters]\ngap = { lo = 1.0, hi = 5.0 }\ndiameter = 3.0\n\
-         [scene]\nrest_speed = 1e-9\nsettle_max_s = 0.01\n",
+         [scene]\nlayout = \"gated\"\nrest_speed = 1e-9\nsettle_max_s = 0.01\n",
     )
     .unwrap();
     let (code, r, err) = run_point(&sweep, "gap=4");

@@ -533,7 +533,7 @@ fn report_sections_for_failed_and_screened_sweeps_and_a_points_page() {
         (get("rolling_friction")["value"].as_f64(), get("rolling_friction")["written"].as_bool()),
         (Some(0.1), Some(false))
     );
-    assert_eq!(s["setup"]["scene"]["layout"], "gated");
+    assert_eq!(s["setup"]["scene"]["layout"], "conveyor");
     assert!(
         html.contains("rolling_friction")
             && html.contains("<i>default</i>")

@@ -230,7 +230,7 @@ fn a_deck_that_makes_liggghts_fail_is_reported_and_the_sweep_goes_on() {
     let tmp = tempfile::tempdir().unwrap();
     // The built-in deck with an unknown command for gaps above 2.5 mm.
     let builtin = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("templates/spreading.liggghts.tera"),
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("templates/conveyor.liggghts.tera"),
     )
     .unwrap();
     let template = tmp.path().join("broken.liggghts.tera");

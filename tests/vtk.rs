@@ -102,7 +102,13 @@ fn run_with_vtk_writes_particle_and_blade_files_paraview_reads() {
     common::require_liggghts!("run_with_vtk_writes_particle_and_blade_files_paraview_reads");
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("point");
-    let quick = Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps/quick.toml");
+    // The gated layout: a fixed set of atoms and a moving blade, so each file can be checked
+    // against the data file's atom count and the blade's travel.
+    let quick = tmp.path().join("quick-gated.toml");
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps/quick.toml")).unwrap();
+    let gated = text.replacen("layout = \"conveyor\"", "layout = \"gated\"", 1);
+    assert_ne!(gated, text, "sweeps/quick.toml names its layout");
+    std::fs::write(&quick, gated).unwrap();
     let o = Command::new(env!("CARGO_BIN_EXE_sweep"))
         .args(["run", quick.to_str().unwrap(), "--vtk", "--json", "--out", out.to_str().unwrap()])
         .stdin(Stdio::null())
@@ -157,4 +163,27 @@ fn vtk_needs_a_kept_run_directory() {
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--out"));
+}
+
+#[test]
+fn the_conveyor_writes_vtk_files_too() {
+    common::require_liggghts!("the_conveyor_writes_vtk_files_too");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("point");
+    let quick = Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps/quick.toml");
+    let o = Command::new(env!("CARGO_BIN_EXE_sweep"))
+        .args(["run", quick.to_str().unwrap(), "--vtk", "--json", "--out", out.to_str().unwrap()])
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let particles = series(&out, "particles_");
+    assert!(particles.len() >= 3, "{particles:?}");
+    assert_eq!(series(&out, "blade_").len(), particles.len());
+    for path in particles.values() {
+        let v = parse_vtk(&std::fs::read_to_string(path).unwrap()).unwrap_or_else(|e| panic!("{path:?}: {e}"));
+        // The held heap and the substrate: never empty, one radius per point.
+        assert!(!v.points.is_empty());
+        assert_eq!(v.arrays["radius"].1.len(), v.points.len());
+    }
 }

@@ -149,7 +149,7 @@ mod tests {
     #[test]
     fn switched_off_features_leave_no_lines() {
         let t = Template::load(None).unwrap();
-        let thesis = SceneSettings { layout: "thesis".into(), ..SceneSettings::default() };
+        let thesis = SceneSettings { layout: "thesis".into(), ..SceneSettings::gated() };
         let deck = t.render(&scene(&thesis, &[("rolling_friction", 0.0)])).unwrap();
         assert!(!deck.contains("rolling"), "{deck}");
         assert!(!deck.contains("vtk"));
@@ -161,7 +161,7 @@ mod tests {
         );
         // The default: rolling friction on every contact (pair, plate, two end walls, blade,
         // gate), a gate, a substrate, a settle until at rest.
-        let rolled = t.render(&scene(&SceneSettings::default(), &[("rolling_friction", 0.1)])).unwrap();
+        let rolled = t.render(&scene(&SceneSettings::gated(), &[("rolling_friction", 0.1)])).unwrap();
         assert!(rolled.contains("coefficientRollingFriction"));
         assert_eq!(rolled.matches("rolling_friction epsd2").count(), 6);
         assert!(rolled.contains("unfix gate") && rolled.contains("group           substrate type 3"));
@@ -172,7 +172,7 @@ mod tests {
     fn a_size_distribution_puts_every_class_in_the_pile() {
         let settings = SceneSettings {
             size_distribution: SizeDistributionSpec::Weibull { bins: 5 },
-            ..SceneSettings::default()
+            ..SceneSettings::gated()
         };
         let s = scene(&settings, &[]);
         let pile = pile::pile_data(&s);
@@ -184,7 +184,7 @@ mod tests {
     #[test]
     fn an_undefined_variable_is_an_error_naming_it() {
         let t = Template::from_source("t", "run {{ scene.no_such_thing }}").unwrap();
-        let err = t.render(&scene(&SceneSettings::default(), &[])).unwrap_err().to_string();
+        let err = t.render(&scene(&SceneSettings::gated(), &[])).unwrap_err().to_string();
         assert!(err.contains("scene.no_such_thing"), "{err}");
         assert!(!err.contains('\n'));
     }
@@ -192,11 +192,11 @@ mod tests {
     #[test]
     fn the_hash_changes_with_deck_mesh_and_engine() {
         let t = Template::load(None).unwrap();
-        let s = scene(&SceneSettings::default(), &[]);
+        let s = scene(&SceneSettings::gated(), &[]);
         let a = Deck::new(&t, &s, "liggghts 3.8").unwrap();
         assert_eq!(a.hash, Deck::new(&t, &s, "liggghts 3.8").unwrap().hash);
         assert_ne!(a.hash, Deck::new(&t, &s, "liggghts 3.9").unwrap().hash);
-        let s2 = scene(&SceneSettings::default(), &[("gap", 3.5)]);
+        let s2 = scene(&SceneSettings::gated(), &[("gap", 3.5)]);
         assert_ne!(a.hash, Deck::new(&t, &s2, "liggghts 3.8").unwrap().hash);
     }
 }

@@ -229,7 +229,7 @@ mod tests {
             .iter()
             .map(|(k, v)| (k.to_string(), *v))
             .collect();
-        Scene::new(&values, &SceneSettings::default()).unwrap()
+        Scene::new(&values, &SceneSettings::gated()).unwrap()
     }
 
     fn window_steps(s: &Scene) -> Vec<u64> {

@@ -312,6 +312,9 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
         );
         return fail_measured(FailureClass::Unsteady, reason, String::new(), wall, Some(Box::new(result)));
     }
+    if let Err(e) = plausible::check_squeezed(&p.scene, result.mfr) {
+        return fail_measured(FailureClass::Implausible, e, String::new(), wall, Some(Box::new(result)));
+    }
     if let Err(e) = plausible::check_result(&result) {
         return fail(FailureClass::Implausible, e, String::new(), wall);
     }
@@ -323,12 +326,9 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
 
 /// The conveyor's spread layer: coverage and roughness from the strip behind the blade at the
 /// end (`dump.strip`), uniformity from the mass each block of the steady window deposited.
-/// `None` when the strip's dump is missing or unreadable (an older deck).
-fn conveyor_layer(scene: &crate::scene::Scene, run_dir: &Path, st: &steady::SteadyState) -> Option<layer::Layer> {
-    let snap = crate::engine::dump::read_dump(run_dir.join(STRIP_DUMP), &metrics::COLUMNS).ok()?;
-    let frame = Frame::from_snapshot(snap.last()?).ok()?;
+fn conveyor_layer(scene: &crate::scene::Scene, frame: &Frame, st: &steady::SteadyState) -> Option<layer::Layer> {
     let c = &scene.conveyor;
-    let mut l = layer::measure(scene, &frame, c.delete_x1, scene.blade_x0)?;
+    let mut l = layer::measure(scene, frame, c.delete_x1, scene.blade_x0)?;
     let particle_mass = |d: f64| scene.density * std::f64::consts::PI / 6.0 * d.powi(3);
     let weighted: f64 = c.feed.iter().map(|f| f.mass_fraction * particle_mass(f.diameter)).sum::<f64>()
         / c.feed.iter().map(|f| f.mass_fraction).sum::<f64>();
@@ -359,7 +359,10 @@ fn finish_conveyor(
     let quarter = w.len().div_ceil(4).max(1);
     let mfr_windows = w.chunks(quarter).map(|c| c.iter().sum::<f64>() / c.len() as f64).collect();
     let steps = blocks.last().map(|b| b.step).unwrap_or(0);
-    let layer = conveyor_layer(&p.scene, run_dir, &st.state);
+    let strip = crate::engine::dump::read_dump(run_dir.join(STRIP_DUMP), &metrics::COLUMNS)
+        .ok()
+        .and_then(|snaps| snaps.last().and_then(|s| Frame::from_snapshot(s).ok()));
+    let layer = strip.as_ref().and_then(|f| conveyor_layer(&p.scene, f, &st.state));
     let result = RunResult {
         format: RESULT_FORMAT,
         hash: p.hash.clone(),
@@ -387,6 +390,9 @@ fn finish_conveyor(
     if let Some(why) = st.unsteady {
         let reason = format!("MFR not steady: {why}");
         return fail(FailureClass::Unsteady, reason, String::new(), wall, Some(Box::new(result)));
+    }
+    if let Err(e) = plausible::check_squeezed(&p.scene, result.mfr) {
+        return fail(FailureClass::Implausible, e, String::new(), wall, Some(Box::new(result)));
     }
     if let Err(e) = plausible::check_result(&result) {
         return fail(FailureClass::Implausible, e, String::new(), wall, None);

@@ -206,7 +206,13 @@ pub fn compute(scene: &Scene, blocks: &[Block], stop: &str, frames: &[Frame]) ->
         .map(|b| {
             let m = (b.gone + b.strip - before) / ideal;
             before = b.strip;
-            m
+            // A block that deposited nothing is exactly zero, not rounding residue of the
+            // subtraction, so MSER's ties break as the deck's do.
+            if m.abs() < 1e-9 {
+                0.0
+            } else {
+                m
+            }
         })
         .collect();
     // The warm-up is the least transient (the deck's stop rule starts after it); MSER may
@@ -246,6 +252,17 @@ pub fn compute(scene: &Scene, blocks: &[Block], stop: &str, frames: &[Frame]) ->
             d - d0,
             y.len() - d0
         ));
+    }
+    // A flow that stopped: nothing deposited over the kept window after deposits past the
+    // warm-up. A jam under the blade is not a steady MFR of zero.
+    if mfr == 0.0 {
+        if let Some(last) = (d0..d).rev().find(|&k| y[k] > 0.0) {
+            why.push(format!(
+                "the flow stopped after block {} of {}: nothing passed under the blade since (a jam)",
+                last + 1,
+                y.len()
+            ));
+        }
     }
     if state.trend_z.abs() > TREND_Z {
         why.push(format!("a trend over the window of {:.1} SE (limit {TREND_Z})", state.trend_z));
@@ -298,6 +315,8 @@ pub fn compute(scene: &Scene, blocks: &[Block], stop: &str, frames: &[Frame]) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::settings::SceneSettings;
+    use std::collections::BTreeMap;
 
     #[test]
     fn mser_drops_a_ramp_and_keeps_a_flat_series() {
@@ -346,5 +365,30 @@ mod tests {
         assert_eq!(b[1], Block { step: 400, gone: 0.0005, strip: 0.0012, heap: 901 });
         assert_eq!(parse_log("demsweep: stop target at step 3\n").unwrap_err(), SteadyError::TooFewBlocks(0));
         assert!(parse_log("demsweep: block 1 step x\n").is_err());
+    }
+
+    #[test]
+    fn a_flow_that_stops_is_a_jam_not_a_steady_zero() {
+        let values: BTreeMap<String, f64> =
+            [("diameter", 2.0), ("gap", 1.7)].iter().map(|(k, v)| (k.to_string(), *v)).collect();
+        let settings = SceneSettings { layout: "conveyor".into(), ..SceneSettings::default() };
+        let scene = Scene::new(&values, &settings).unwrap();
+        let (c, m) = (&scene.conveyor, scene.conveyor.ideal_block_mass);
+        let warm = c.warmup_blocks as usize;
+        // Blocks of deposit (gone mass only, the strip empty): flowing at 0.08 for the warm-up
+        // and 12 blocks after it, then nothing for 14 blocks.
+        let mfr: Vec<f64> = (0..warm + 26).map(|k| if k < warm + 12 { 0.08 } else { 0.0 }).collect();
+        let blocks: Vec<Block> = mfr
+            .iter()
+            .enumerate()
+            .map(|(k, y)| Block { step: 100 * (k as u64 + 1), gone: y * m, strip: 0.0, heap: c.heap_particles as u64 })
+            .collect();
+        let st = compute(&scene, &blocks, "target", &[]);
+        assert_eq!(st.mfr, 0.0);
+        assert!(st.unsteady.as_deref().is_some_and(|w| w.contains("the flow stopped")), "{:?}", st.unsteady);
+        // A point where nothing ever passes is a steady zero.
+        let none: Vec<Block> = blocks.iter().map(|b| Block { gone: 0.0, ..*b }).collect();
+        let st = compute(&scene, &none, "target", &[]);
+        assert_eq!((st.mfr, st.unsteady), (0.0, None));
     }
 }

@@ -100,10 +100,24 @@ fn setup_section(a: &Analysis) -> String {
     h.push_str("</table></div>\n");
     let sc = &st.scene;
     let psd = serde_json::to_value(&sc.size_distribution).map(|v| v.to_string()).unwrap_or_default();
-    let rows: Vec<(&str, String)> = vec![
-        ("layout", sc.layout.clone()),
-        ("substrate", sc.substrate.clone()),
-        ("heap size (× the planned heap)", fmt_short(sc.supply_factor)),
+    let conveyor = sc.layout == "conveyor";
+    let mut rows: Vec<(&str, String)> = vec![("layout", sc.layout.clone()), ("substrate", sc.substrate.clone())];
+    if conveyor {
+        rows.extend([
+            ("held heap, height above the gap (D)", fmt_short(sc.heap_diameters)),
+            ("block of the deposit series, travel (D)", fmt_short(sc.block_diameters)),
+            ("warm-up (s)", fmt_short(sc.warmup_s)),
+            (
+                "precision target: SE of MFR at most",
+                format!("{} × MFR or {}", fmt_short(sc.mfr_rel_se), fmt_short(sc.mfr_abs_se)),
+            ),
+            ("least window (blocks)", sc.min_window_blocks.to_string()),
+            ("window cap, travel (D)", fmt_short(sc.window_cap_diameters)),
+        ]);
+    } else {
+        rows.push(("heap size (× the planned heap)", fmt_short(sc.supply_factor)));
+    }
+    rows.extend([
         ("size distribution", psd),
         ("fidelity preset", sc.fidelity.clone()),
         (
@@ -113,9 +127,15 @@ fn setup_section(a: &Analysis) -> String {
         ("stiffness factor (–)", fmt_short(sc.stiffness_factor)),
         ("blade mesh cells across the depth", sc.mesh_cells_across.to_string()),
         ("domain depth (D)", fmt_short(sc.depth_diameters)),
-        ("window start, blade travel (D)", fmt_short(sc.window_start_diameters)),
-        ("window length, blade travel (D)", fmt_short(sc.window_diameters)),
-        ("rest speed (× √(g·D))", fmt_short(sc.rest_speed)),
+    ]);
+    if !conveyor {
+        rows.extend([
+            ("window start, blade travel (D)", fmt_short(sc.window_start_diameters)),
+            ("window length, blade travel (D)", fmt_short(sc.window_diameters)),
+            ("rest speed (× √(g·D))", fmt_short(sc.rest_speed)),
+        ]);
+    }
+    rows.extend([
         ("neighbour skin (D)", fmt_short(sc.skin_diameters)),
         (
             "v_x band half-height (D)",
@@ -123,7 +143,7 @@ fn setup_section(a: &Analysis) -> String {
         ),
         ("seed", sc.seed.to_string()),
         ("engine", format!("{} ({})", st.engine_version, st.engine_path)),
-    ];
+    ]);
     h.push_str("<p>Scene, preset and its knobs:</p>\n<div class=\"wide\"><table>\n");
     for (k, v) in rows {
         h.push_str(&format!("<tr><th class=\"l\">{}</th><td class=\"l\">{}</td></tr>\n", esc(k), esc(&v)));
@@ -136,6 +156,29 @@ fn setup_section(a: &Analysis) -> String {
             .map(|(k, v)| format!("{k} = {}", fmt_short(*v)))
             .collect::<Vec<_>>()
             .join(", ");
+        if let Some(cv) = &c.conveyor {
+            h.push_str(&format!(
+                "<p>At the centre of the space ({}): a heap of {} particles, {:.1} mm tall, held in front of the blade \
+                 on {} substrate spheres; domain {:.1} × {:.1} × {:.1} mm (travel × depth × height); blocks of {:.1} mm \
+                 of substrate travel, {} of warm-up, then at least {} before the target can stop the run, at most \
+                 {:.0} mm in all; timestep {:.3e} s ({:.2} of the Rayleigh time {:.3e} s).</p>\n",
+                esc(&at),
+                cv.heap_particles,
+                cv.heap_height_mm,
+                c.substrate_particles,
+                c.domain_length_mm,
+                c.domain_depth_mm,
+                c.domain_height_mm,
+                cv.block_travel_mm,
+                cv.warmup_blocks,
+                cv.min_window_blocks,
+                cv.cap_travel_mm,
+                c.timestep_s,
+                c.timestep_s / c.rayleigh_time_s,
+                c.rayleigh_time_s
+            ));
+            return h;
+        }
         h.push_str(&format!(
             "<p>At the centre of the space ({}): {} particles on {} substrate spheres; domain {:.1} × {:.1} × {:.1} mm \
              (travel × depth × height); initial pile {:.1} mm long, {:.1} mm tall; MFR measured over {:.1} mm of blade travel; \

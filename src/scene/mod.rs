@@ -111,7 +111,7 @@ pub struct Scene {
     pub rolling_friction: f64,
     /// LIGGGHTS rolling-friction model (used when `rolling_friction` > 0).
     pub rolling_model: &'static str,
-    /// `"gated"` or `"thesis"` (see [`crate::scene::settings::SceneSettings::layout`]).
+    /// `"conveyor"`, `"gated"` or `"thesis"` (see [`crate::scene::settings::SceneSettings::layout`]).
     pub layout: String,
     // Particles.
     pub size_classes: Vec<psd::SizeClass>,
@@ -629,7 +629,7 @@ mod tests {
 
     fn scene(pairs: &[(&str, f64)]) -> Scene {
         let values = pairs.iter().map(|(k, v)| (k.to_string(), *v)).collect();
-        Scene::new(&values, &SceneSettings::default()).unwrap()
+        Scene::new(&values, &SceneSettings::gated()).unwrap()
     }
 
     #[test]
@@ -643,7 +643,7 @@ mod tests {
     #[test]
     fn timestep_is_the_rayleigh_fraction_or_the_thesis_step() {
         let s = scene(&[("diameter", 1.0)]);
-        let fraction = SceneSettings::default().rayleigh_fraction;
+        let fraction = SceneSettings::gated().rayleigh_fraction;
         assert!((s.timestep - fraction * s.rayleigh_time).abs() < 1e-18);
         let settings = SceneSettings::preset("thesis").unwrap();
         let t = Scene::new(&BTreeMap::new(), &settings).unwrap();
@@ -654,13 +654,13 @@ mod tests {
     fn the_stiffness_reduction_lengthens_the_rayleigh_time_and_stops_at_the_floor() {
         // T_R ∝ 1/√E: a quarter of the modulus doubles it.
         let values: BTreeMap<String, f64> = [("youngs_modulus".to_string(), 21.0)].into_iter().collect();
-        let full = Scene::new(&values, &SceneSettings { stiffness_factor: 1.0, ..SceneSettings::default() })
+        let full = Scene::new(&values, &SceneSettings { stiffness_factor: 1.0, ..SceneSettings::gated() })
             .unwrap();
-        let soft = Scene::new(&values, &SceneSettings { stiffness_factor: 0.25, ..SceneSettings::default() })
+        let soft = Scene::new(&values, &SceneSettings { stiffness_factor: 0.25, ..SceneSettings::gated() })
             .unwrap();
         assert!((soft.youngs_modulus - 5.25e6).abs() < 1e-6);
         assert!((soft.rayleigh_time / full.rayleigh_time - 2.0).abs() < 1e-12);
-        let floor = Scene::new(&values, &SceneSettings { stiffness_factor: 0.1, ..SceneSettings::default() })
+        let floor = Scene::new(&values, &SceneSettings { stiffness_factor: 0.1, ..SceneSettings::gated() })
             .unwrap();
         assert_eq!(floor.youngs_modulus, MIN_YOUNGS_MPA * 1e6);
     }
@@ -675,7 +675,7 @@ mod tests {
             // Window length is window_diameters·D (rounded up to whole snapshot intervals), at
             // full speed.
             let len = s.blade_rear_at(t2) - s.blade_rear_at(t1);
-            let w = SceneSettings::default().window_diameters * s.diameter;
+            let w = SceneSettings::gated().window_diameters * s.diameter;
             assert!(len >= w && len < w + s.diameter, "{len}");
             // The blade is at full speed when the window opens.
             assert!(t1 >= s.blade_start_step() + s.ramp_steps);
@@ -715,7 +715,7 @@ mod tests {
         assert!((s.rest_ke / (0.5 * mass * v * v) - 1.0).abs() < 1e-9);
         // The thesis layout has no rest criterion, gate or substrate.
         let values = [("diameter".to_string(), 2.0)].into_iter().collect();
-        let thesis = SceneSettings { layout: "thesis".into(), ..SceneSettings::default() };
+        let thesis = SceneSettings { layout: "thesis".into(), ..SceneSettings::gated() };
         let t = Scene::new(&values, &thesis).unwrap();
         assert_eq!((t.rest_ke, t.gate_x, t.substrate_particles, t.z_lo), (0.0, 0.0, 0, 0.0));
         assert!(s.gate_x > 0.0 && s.substrate_particles > 0 && s.z_lo == -s.diameter);
@@ -724,7 +724,7 @@ mod tests {
     #[test]
     fn out_of_domain_values_name_the_parameter() {
         let values = [("restitution".to_string(), 0.0)].into_iter().collect();
-        let err = Scene::new(&values, &SceneSettings::default()).unwrap_err();
+        let err = Scene::new(&values, &SceneSettings::gated()).unwrap_err();
         assert!(err.to_string().contains("restitution"), "{err}");
     }
 }
@@ -735,7 +735,7 @@ mod ramp_tests {
 
     #[test]
     fn blade_position_is_continuous_through_the_ramp_and_linear_after() {
-        let s = Scene::new(&BTreeMap::new(), &SceneSettings::default()).unwrap();
+        let s = Scene::new(&BTreeMap::new(), &SceneSettings::gated()).unwrap();
         let s0 = s.blade_start_step();
         let r = s.ramp_steps;
         assert_eq!(s.blade_rear_at(s0), s.blade_x0);

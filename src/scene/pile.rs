@@ -127,7 +127,7 @@ mod tests {
     fn the_pile_has_the_planned_count_no_overlaps_and_lies_inside_the_box() {
         let settings = SceneSettings {
             size_distribution: SizeDistributionSpec::Weibull { bins: 5 },
-            ..SceneSettings::default()
+            ..SceneSettings::gated()
         };
         let s = Scene::new(&BTreeMap::new(), &settings).unwrap();
         let a = atoms(&pile_data(&s));
@@ -162,10 +162,10 @@ mod tests {
 
     #[test]
     fn the_pile_is_reproducible_and_changes_with_the_seed() {
-        let s = Scene::new(&BTreeMap::new(), &SceneSettings::default()).unwrap();
+        let s = Scene::new(&BTreeMap::new(), &SceneSettings::gated()).unwrap();
         assert_eq!(pile_data(&s), pile_data(&s));
         let other =
-            Scene::new(&BTreeMap::new(), &SceneSettings { seed: 7, ..SceneSettings::default() }).unwrap();
+            Scene::new(&BTreeMap::new(), &SceneSettings { seed: 7, ..SceneSettings::gated() }).unwrap();
         assert_ne!(pile_data(&s), pile_data(&other));
     }
 }

@@ -65,11 +65,13 @@ pub fn check(scene: &Scene, values: &BTreeMap<String, f64>, settings: &SceneSett
             show(gap * 1e3)
         ));
     }
-    if scene.particles > MAX_PARTICLES {
+    // The conveyor holds its heap at a count instead of placing a dose.
+    let particles = if scene.is_conveyor() { scene.conveyor.heap_particles } else { scene.particles };
+    if particles > MAX_PARTICLES {
         return Err(format!(
             "{} particles at gap {} mm and {d_name} {} mm (gap = {} D): more than the {} the scene \
              is built for; values are in mm — lower the gap or raise the diameter {FORCE}",
-            scene.particles,
+            particles,
             show(gap),
             show(d_value),
             show(gap / d),

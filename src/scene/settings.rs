@@ -63,7 +63,8 @@ pub struct SceneSettings {
     /// the run.
     pub min_window_blocks: usize,
     // What the point is.
-    /// The scene's layout: `"gated"` (default: the dose settles at rest in a closed region on a
+    /// The scene's layout: `"conveyor"` (default: the blade's frame, a held heap, MFR in a
+    /// steady state with its SE), `"gated"` (the dose settles at rest in a closed region on a
     /// rough substrate and is released when the blade starts) or `"thesis"` (the thesis's pile
     /// on a smooth plate, settled for a fixed time).
     pub layout: String,
@@ -232,6 +233,14 @@ pub(crate) fn quoted(names: &[&str]) -> String {
     names.iter().map(|n| format!("\"{n}\"")).collect::<Vec<_>>().join(", ")
 }
 
+impl SceneSettings {
+    /// The defaults on the gated layout (the unit tests of that scene).
+    #[cfg(test)]
+    pub(crate) fn gated() -> SceneSettings {
+        SceneSettings { layout: "gated".into(), ..SceneSettings::default() }
+    }
+}
+
 impl Default for SceneSettings {
     fn default() -> Self {
         SceneSettings {
@@ -263,7 +272,7 @@ impl Default for SceneSettings {
             mfr_rel_se: 0.05,
             mfr_abs_se: 0.005,
             min_window_blocks: 8,
-            layout: "gated".into(),
+            layout: "conveyor".into(),
             substrate: "rough".into(),
             settle_max_s: 1.0,
             window_start_diameters: 30.0,

@@ -222,10 +222,14 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>,
                 return Err(bad(k, format!("{v}: expected a number ≥ 0")));
             }
         }
-        if s.min_window_blocks < 3 {
+        // MSER may drop up to half the window, and the trend over what is left needs 3 blocks.
+        if s.min_window_blocks < 5 {
             return Err(bad(
                 "scene.min_window_blocks",
-                format!("{}: expected at least 3", s.min_window_blocks),
+                format!(
+                    "{}: expected at least 5 (MSER may drop half of the blocks; the trend needs 3 left)",
+                    s.min_window_blocks
+                ),
             ));
         }
         if (s.min_window_blocks as f64 + 1.0) * s.block_diameters > s.window_cap_diameters {
