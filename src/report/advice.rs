@@ -227,22 +227,59 @@ fn conclusions(
             None
         }
     };
-    let judged = |section, claim, need: &[&str], f: &dyn Fn() -> (bool, String)| -> Conclusion {
+    // `Some(true)`: holds, `Some(false)`: fails, `None`: the data cannot tell (overlapping
+    // intervals, or no significant trend).
+    let judged = |section, claim, need: &[&str], f: &dyn Fn() -> (Option<bool>, String)| -> Conclusion {
         match few(need) {
             Some(why) => Conclusion { section, claim, verdict: "not enough points", evidence: why },
             None => {
                 let (ok, evidence) = f();
-                Conclusion { section, claim, verdict: if ok { "holds" } else { "fails" }, evidence }
+                let verdict = match ok {
+                    Some(true) => "holds",
+                    Some(false) => "fails",
+                    None => "cannot tell",
+                };
+                Conclusion { section, claim, verdict, evidence }
             }
         }
     };
     let fmt = |v: Option<f64>| v.map_or("undefined".into(), |v| format!("{v:.2}"));
-    // Rank correlation of MFR with one parameter, significant beyond ±2/√(n−1).
-    let trend = |name: &str| -> (Option<f64>, f64) {
+    let index = |name: &str| sensitivity.iter().find(|s| s.parameter == name);
+    let shown = |name: &str| match index(name) {
+        Some(Index { first_order: Some(v), lo: Some(lo), hi: Some(hi), .. }) => {
+            format!("{name} {v:.2} [{lo:.2}, {hi:.2}]")
+        }
+        _ => format!("{name} {}", fmt(s1(name))),
+    };
+    // Whether every index of `big` exceeds every index of `small`, by their 95 % intervals.
+    let exceeds = |big: &[&str], small: &[&str]| -> Option<bool> {
+        let bound = |n: &str, upper: bool| {
+            index(n).and_then(|s| if upper { s.hi.or(s.first_order) } else { s.lo.or(s.first_order) })
+        };
+        let min_lo = big.iter().map(|n| bound(n, false)).collect::<Option<Vec<f64>>>()?.into_iter().fold(f64::MAX, f64::min);
+        let max_hi = small.iter().map(|n| bound(n, true)).collect::<Option<Vec<f64>>>()?.into_iter().fold(f64::MIN, f64::max);
+        let max_lo = small.iter().map(|n| bound(n, false)).collect::<Option<Vec<f64>>>()?.into_iter().fold(f64::MIN, f64::max);
+        let min_hi = big.iter().map(|n| bound(n, true)).collect::<Option<Vec<f64>>>()?.into_iter().fold(f64::MAX, f64::min);
+        if min_lo > max_hi {
+            Some(true)
+        } else if max_lo > min_hi {
+            Some(false)
+        } else {
+            None
+        }
+    };
+    // Rank correlation of MFR with one parameter, significant beyond ±2/√(n−1): the sign the
+    // claim expects (holds), the other (fails), or neither (cannot tell).
+    let trend = |name: &str, expect_negative: bool| -> (Option<bool>, String) {
         let j = col(name).unwrap_or(0);
         let x: Vec<f64> = measured.iter().map(|m| m.0.values[j]).collect();
         let y: Vec<f64> = measured.iter().map(|m| m.1).collect();
-        (spearman(&x, &y), 2.0 / ((n.max(2) - 1) as f64).sqrt())
+        let (rho, band) = (spearman(&x, &y), 2.0 / ((n.max(2) - 1) as f64).sqrt());
+        let verdict = rho.and_then(|r| {
+            let r = if expect_negative { -r } else { r };
+            (r.abs() > band).then_some(r > 0.0)
+        });
+        (verdict, format!("rank correlation of MFR with {name} {} (significant beyond ±{band:.2})", fmt(rho)))
     };
     let mut out = Vec::new();
     out.push(judged(
@@ -250,15 +287,15 @@ fn conclusions(
         "particle diameter is the most dominant factor",
         &["diameter"],
         &|| {
+            let others: Vec<&str> =
+                parameters.iter().map(String::as_str).filter(|p| *p != "diameter").collect();
             let top = sensitivity.first().map(|s| s.parameter.clone()).unwrap_or_default();
-            (
-                top == "diameter",
-                format!(
-                    "first-order index of MFR: diameter {}; the largest is {top} ({})",
-                    fmt(s1("diameter")),
-                    fmt(sensitivity.first().and_then(|s| s.first_order))
-                ),
-            )
+            let verdict = if top == "diameter" {
+                exceeds(&["diameter"], &others)
+            } else {
+                exceeds(&["diameter"], &[top.as_str()])
+            };
+            (verdict, format!("first-order indices [95 %]: {}; the largest is {top}", shown("diameter")))
         },
     ));
     out.push(judged(
@@ -269,14 +306,14 @@ fn conclusions(
             Some(b) => {
                 let r = b.parameters["gap"] / b.parameters["diameter"];
                 (
-                    (1.5..=2.5).contains(&r),
+                    Some((1.5..=2.5).contains(&r)),
                     format!(
                         "the recommended point #{} has gap/D = {r:.2} (1.5–2.5 counts as about 2)",
                         b.index
                     ),
                 )
             }
-            None => (false, "no point is recommended".into()),
+            None => (None, "no point is recommended".into()),
         },
     ));
     out.push(judged(
@@ -284,16 +321,14 @@ fn conclusions(
         "blade speed and friction matter less than diameter and gap",
         &["diameter", "gap", "blade_speed", "friction"],
         &|| {
-            let lo = s1("diameter").unwrap_or(0.0).min(s1("gap").unwrap_or(0.0));
-            let hi = s1("blade_speed").unwrap_or(0.0).max(s1("friction").unwrap_or(0.0));
             (
-                hi < lo,
+                exceeds(&["diameter", "gap"], &["blade_speed", "friction"]),
                 format!(
-                    "first-order indices: diameter {}, gap {}, blade_speed {}, friction {}",
-                    fmt(s1("diameter")),
-                    fmt(s1("gap")),
-                    fmt(s1("blade_speed")),
-                    fmt(s1("friction"))
+                    "first-order indices [95 %]: {}, {}, {}, {}",
+                    shown("diameter"),
+                    shown("gap"),
+                    shown("blade_speed"),
+                    shown("friction")
                 ),
             )
         },
@@ -304,12 +339,8 @@ fn conclusions(
         &["blade_speed", "friction"],
         &|| {
             (
-                s1("blade_speed").unwrap_or(0.0) > s1("friction").unwrap_or(0.0),
-                format!(
-                    "first-order indices: blade_speed {}, friction {}",
-                    fmt(s1("blade_speed")),
-                    fmt(s1("friction"))
-                ),
+                exceeds(&["blade_speed"], &["friction"]),
+                format!("first-order indices [95 %]: {}, {}", shown("blade_speed"), shown("friction")),
             )
         },
     ));
@@ -317,50 +348,20 @@ fn conclusions(
         "§4.4, §5.4 (2)",
         "a lower blade speed spreads better (higher MFR)",
         &["blade_speed"],
-        &|| {
-            let (rho, band) = trend("blade_speed");
-            (
-                rho.is_some_and(|r| r < -band),
-                format!(
-                    "rank correlation of MFR with blade speed {} (significant beyond ±{band:.2})",
-                    fmt(rho)
-                ),
-            )
-        },
+        &|| trend("blade_speed", true),
     ));
     out.push(judged(
         "§4.5, §5.4 (3)",
         "higher friction deteriorates spreading (lower MFR)",
         &["friction"],
-        &|| {
-            let (rho, band) = trend("friction");
-            (
-                rho.is_some_and(|r| r < -band),
-                format!("rank correlation of MFR with friction {} (significant beyond ±{band:.2})", fmt(rho)),
-            )
-        },
+        &|| trend("friction", true),
     ));
-    out.push(judged("§4.2", "smaller particles spread better (higher MFR)", &["diameter"], &|| {
-        let (rho, band) = trend("diameter");
-        (
-            rho.is_some_and(|r| r < -band),
-            format!("rank correlation of MFR with diameter {} (significant beyond ±{band:.2})", fmt(rho)),
-        )
-    }));
+    out.push(judged("§4.2", "smaller particles spread better (higher MFR)", &["diameter"], &|| trend("diameter", true)));
     out.push(judged(
         "§4.6, §5.4 (4)",
         "a narrower size distribution spreads better (higher MFR with a larger Weibull shape)",
         &["weibull_shape"],
-        &|| {
-            let (rho, band) = trend("weibull_shape");
-            (
-                rho.is_some_and(|r| r > band),
-                format!(
-                    "rank correlation of MFR with the Weibull shape {} (significant beyond ±{band:.2})",
-                    fmt(rho)
-                ),
-            )
-        },
+        &|| trend("weibull_shape", false),
     ));
     out
 }
@@ -368,6 +369,43 @@ fn conclusions(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_comparison_of_indices_holds_only_where_their_intervals_part() {
+        let parameters: Vec<String> =
+            ["diameter", "gap", "blade_speed", "friction"].iter().map(|s| s.to_string()).collect();
+        let points: Vec<PointRow> = (0..30)
+            .map(|i| PointRow {
+                index: i,
+                values: vec![1.0 + i as f64 / 30.0, 2.0, 1.4, 0.2],
+                hash: String::new(),
+                state: PointState::Screened,
+                mfr_se: None,
+            })
+            .collect();
+        let index = |p: &str, v: f64, lo: f64, hi: f64| Index {
+            parameter: p.into(),
+            first_order: Some(v),
+            bins: 10,
+            lo: Some(lo),
+            hi: Some(hi),
+        };
+        let sensitivity = vec![
+            index("diameter", 0.6, 0.5, 0.7),
+            index("gap", 0.2, 0.1, 0.3),
+            index("friction", 0.04, 0.02, 0.06),
+            index("blade_speed", 0.02, 0.0, 0.05),
+        ];
+        let c = conclusions(&parameters, &points, &sensitivity, None);
+        let verdict = |claim: &str| c.iter().find(|c| c.claim.starts_with(claim)).unwrap().verdict;
+        assert_eq!(verdict("particle diameter is the most dominant"), "holds");
+        assert_eq!(verdict("blade speed and friction matter less"), "holds");
+        // 0.02 [0, 0.05] against 0.04 [0.02, 0.06]: the intervals overlap.
+        assert_eq!(verdict("blade speed matters more than friction"), "cannot tell");
+        // Every MFR is 0: no rank correlation to read.
+        assert_eq!(verdict("smaller particles"), "cannot tell");
+        assert_eq!(verdict("a narrower size distribution"), "not enough points");
+    }
 
     #[test]
     fn spearman_by_hand() {

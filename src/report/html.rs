@@ -245,8 +245,8 @@ fn advice_section(a: &Analysis, figures: &[Figure]) -> String {
     let mut h = String::from(
         "<h2>The spread layer</h2>\n<p>Measured on the deposit behind the blade at the window's end (docs/layer.md): \
          <b>covered fraction</b>, the share of the substrate under the layer (its complement is the empty-patch area, \
-         after Nan et al. 2018); <b>CV / noise</b>, the coefficient of variation of the deposited mass in bins of 3 D \
-         along the travel over what independently placed particles would give (≈ 1: even; above: gaps and clumps); \
+         after Nan et al. 2018); <b>CV / noise</b>, the coefficient of variation of the deposited mass along the travel \
+         (in bins of 3 D; on the conveyor, per block of travel) over what independently placed particles would give (≈ 1: even; above: gaps and clumps); \
          <b>roughness</b>, the RMS height of the top surface (D).</p>\n",
     );
     let maps: Vec<&Figure> = figures.iter().filter(|f| f.name.starts_with("map-covered-")).collect();
@@ -320,6 +320,7 @@ fn advice_section(a: &Analysis, figures: &[Figure]) -> String {
         let mark = match c.verdict {
             "holds" => "✓ holds",
             "fails" => "✗ fails",
+            "cannot tell" => "cannot tell",
             _ => "not enough points",
         };
         h.push_str(&format!(
