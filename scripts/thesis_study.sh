@@ -10,7 +10,8 @@
 # docs/study/thesis/<name>/: sweep.toml, manifest.json, joblog.tsv, results.csv, convergence.csv,
 # summary.json and each run's result.json or failure.json (no decks, logs or dumps). On a fresh
 # clone the record is copied back into WORK/<name> first, so `sweep` reuses every finished run.
-# Commit docs/study/thesis/ to carry the study across machines.
+# Commit docs/study/thesis/ to carry the study across machines; a finished sweep's runs/ may be
+# packed as runs.tar.gz (`tar czf runs.tar.gz runs` in its record), which a restore unpacks.
 #
 # The LDS sweeps run with --hold 1000 so that they go on to their --max whatever the verdict (the
 # thesis's figures need the whole space); `sweep report` then judges them with the default rule
@@ -49,6 +50,8 @@ run_sweep() { # name, then the sweep command's arguments
   if [ ! -d "$dir" ] && [ -f "$record/$name/manifest.json" ]; then
     echo "study: restoring $name from $record/$name" >&2
     slim_copy "$record/$name" "$dir"
+    # A finished sweep's runs are kept packed (runs.tar.gz: each run's result.json or failure.json).
+    [ -f "$record/$name/runs.tar.gz" ] && tar xzf "$record/$name/runs.tar.gz" -C "$dir"
   fi
   ( while sleep "$sync_s"; do slim_copy "$dir" "$record/$name"; done ) &
   local syncer=$!
