@@ -104,8 +104,9 @@ fn lds_on_the_stand_in_stops_by_itself_and_its_statistics_are_the_prefixes() {
     let rows = common::csv_rows(&out.join("results.csv"));
     let done: Vec<&BTreeMap<String, String>> = rows.iter().filter(|r| r["status"] == "done").collect();
     // The stand-in's runs take microseconds, so a few hundred more start while the rule
-    // bootstraps the space (1,000 resamples; more on a loaded machine); real runs take seconds.
-    assert!(done.len() >= n && done.len() < n + 400 && done.len() < 4000, "done {} n {n}", done.len());
+    // bootstraps the space (1,000 resamples), over a thousand on a loaded machine; real runs
+    // take seconds. What matters: it stopped short of --max.
+    assert!(done.len() >= n && done.len() < 4000, "done {} n {n}", done.len());
     assert_eq!(joblog_lines(&out), done.len());
     let conv = common::csv_rows(&out.join("convergence.csv"));
     assert_eq!(conv.last().unwrap()["space"], format!("lds {n}"));
