@@ -216,3 +216,53 @@ fn screen_settings_that_make_no_sense_are_named() {
     rejects(&run("screen = \"yes\""), &["--lds", "2"], &["bad-sweep.toml:5", "run.screen"]);
     rejects(&run("scren = true"), &["--lds", "2"], &["run.scren", "did you mean `screen`"]);
 }
+
+#[test]
+fn a_bad_flag_or_a_control_character_is_one_line_and_changes_nothing() {
+    // A flag's value clap cannot parse, and a missing argument: one line, exit 2.
+    let o = Command::new(SWEEP).args(["points", "x.toml", "--lds", "many"]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("--lds") && err.contains("many"), "{err}");
+    let o = Command::new(SWEEP).args(["render", "x.toml"]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!((o.status.code(), err.lines().count()), (Some(2), 1), "{err}");
+    assert!(err.contains("--out"), "{err}");
+    // A control character in the sweep's name (it becomes a directory and a report line).
+    rejects(
+        "name = \"a\\u0007b\"\n[parameters]\nfriction = { lo = 0.1, hi = 0.3 }\n",
+        &[],
+        &["name", "control characters"],
+    );
+    // A newline inside --set.
+    let dir = tempfile::tempdir().unwrap();
+    let o = Command::new(SWEEP)
+        .current_dir(dir.path())
+        .args([
+            "render",
+            repo("sweeps/quick.toml").to_str().unwrap(),
+            "--set",
+            "gap=3\nfriction=0.1",
+            "--out",
+            "deck",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!((o.status.code(), err.lines().count()), (Some(2), 1), "{err}");
+    assert!(err.contains("--set") && err.contains("control characters"), "{err}");
+    assert!(!dir.path().join("deck").exists());
+}
+
+#[test]
+fn an_out_directory_that_cannot_be_made_is_bad_input() {
+    // /proc takes no new directories, whatever access(2) tells root.
+    let o = Command::new(SWEEP)
+        .args(["lds", repo("sweeps/quick.toml").to_str().unwrap(), "--out", "/proc/sweep-out", "--plan"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!((o.status.code(), err.lines().count()), (Some(2), 1), "{err}");
+    assert!(err.contains("/proc/sweep-out") && err.contains("cannot create it"), "{err}");
+}

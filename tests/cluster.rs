@@ -478,6 +478,11 @@ fn bad_submit_input_is_refused_and_writes_nothing() {
         (&["--scheduler", "slurm", "--dry-run"][..], "--tasks: required"),
         (&["--scheduler", "slurm", "--tasks", "0", "--dry-run"][..], "--tasks 0"),
         (&["--scheduler", "slurm", "--tasks", "2", "--walltime", "2h", "--dry-run"][..], "--walltime \"2h\""),
+        (&["--scheduler", "slurm", "--tasks", "2", "--walltime", "0", "--dry-run"][..], "--walltime \"0\""),
+        (
+            &["--scheduler", "slurm", "--tasks", "2", "--walltime", "99:99:99", "--dry-run"][..],
+            "--walltime \"99:99:99\"",
+        ),
         (&["--scheduler", "pbs", "--tasks", "2", "--queue", "a b", "--dry-run"][..], "--queue \"a b\""),
         (&["--scheduler", "pbs", "--tasks", "2", "--ranks", "0", "--dry-run"][..], "--ranks 0"),
     ] {

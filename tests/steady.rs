@@ -166,7 +166,8 @@ fn a_flow_that_overshoots_runs_on_until_the_transient_is_behind_it() {
     assert_steady(&r, "the overshooting point");
     let st = &r["steady_state"];
     assert_eq!(st["stop"], "target", "{st}");
-    let (transient, window) = (st["transient_blocks"].as_u64().unwrap(), st["window_blocks"].as_u64().unwrap());
+    let (transient, window) =
+        (st["transient_blocks"].as_u64().unwrap(), st["window_blocks"].as_u64().unwrap());
     let blocks = st["block_mfr"].as_array().unwrap().len() as u64;
     assert_eq!(transient + window, blocks);
     // The window left after the transient is at least the least window, and flat.

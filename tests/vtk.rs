@@ -105,7 +105,8 @@ fn run_with_vtk_writes_particle_and_blade_files_paraview_reads() {
     // The gated layout: a fixed set of atoms and a moving blade, so each file can be checked
     // against the data file's atom count and the blade's travel.
     let quick = tmp.path().join("quick-gated.toml");
-    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps/quick.toml")).unwrap();
+    let text =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps/quick.toml")).unwrap();
     let gated = text.replacen("layout = \"conveyor\"", "layout = \"gated\"", 1);
     assert_ne!(gated, text, "sweeps/quick.toml names its layout");
     std::fs::write(&quick, gated).unwrap();
@@ -181,7 +182,8 @@ fn the_conveyor_writes_vtk_files_too() {
     assert!(particles.len() >= 3, "{particles:?}");
     assert_eq!(series(&out, "blade_").len(), particles.len());
     for path in particles.values() {
-        let v = parse_vtk(&std::fs::read_to_string(path).unwrap()).unwrap_or_else(|e| panic!("{path:?}: {e}"));
+        let v =
+            parse_vtk(&std::fs::read_to_string(path).unwrap()).unwrap_or_else(|e| panic!("{path:?}: {e}"));
         // The held heap and the substrate: never empty, one radius per point.
         assert!(!v.points.is_empty());
         assert_eq!(v.arrays["radius"].1.len(), v.points.len());

@@ -168,7 +168,11 @@ pub(super) fn render(a: RenderArgs) -> Result<i32, Error> {
 /// What a point's run simulates, in a few words.
 fn what_runs(sc: &demsweep::scene::Scene) -> String {
     if sc.is_conveyor() {
-        format!("a heap held at {} particles, at most {} steps", sc.conveyor.heap_particles, sc.spread_steps())
+        format!(
+            "a heap held at {} particles, at most {} steps",
+            sc.conveyor.heap_particles,
+            sc.spread_steps()
+        )
     } else {
         format!("{} particles, settle + {} steps", sc.particles, sc.spread_steps())
     }

@@ -140,6 +140,11 @@ pub fn with_set(sweep: &Sweep, sets: &[String]) -> Result<(Sweep, Vec<f64>, Vec<
     let mut seen: Vec<(String, String)> = Vec::new();
     let mut notes = Vec::new();
     for item in sets.iter().filter(|s| !s.trim().is_empty()) {
+        if item.chars().any(char::is_control) {
+            return Err(Error::input(format!(
+                "--set {item:?}: expected name=value without control characters (newline, tab)"
+            )));
+        }
         let (name, value) =
             item.split_once('=').ok_or_else(|| Error::input(format!("--set {item}: expected name=value")))?;
         let (name, value) = (name.trim(), value.trim());
@@ -326,7 +331,11 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
 
 /// The conveyor's spread layer: coverage and roughness from the strip behind the blade at the
 /// end (`dump.strip`), uniformity from the mass each block of the steady window deposited.
-fn conveyor_layer(scene: &crate::scene::Scene, frame: &Frame, st: &steady::SteadyState) -> Option<layer::Layer> {
+fn conveyor_layer(
+    scene: &crate::scene::Scene,
+    frame: &Frame,
+    st: &steady::SteadyState,
+) -> Option<layer::Layer> {
     let c = &scene.conveyor;
     let mut l = layer::measure(scene, frame, c.delete_x1, scene.blade_x0)?;
     let particle_mass = |d: f64| scene.density * std::f64::consts::PI / 6.0 * d.powi(3);

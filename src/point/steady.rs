@@ -381,7 +381,12 @@ mod tests {
         let blocks: Vec<Block> = mfr
             .iter()
             .enumerate()
-            .map(|(k, y)| Block { step: 100 * (k as u64 + 1), gone: y * m, strip: 0.0, heap: c.heap_particles as u64 })
+            .map(|(k, y)| Block {
+                step: 100 * (k as u64 + 1),
+                gone: y * m,
+                strip: 0.0,
+                heap: c.heap_particles as u64,
+            })
             .collect();
         let st = compute(&scene, &blocks, "target", &[]);
         assert_eq!(st.mfr, 0.0);

@@ -256,10 +256,30 @@ fn conclusions(
         let bound = |n: &str, upper: bool| {
             index(n).and_then(|s| if upper { s.hi.or(s.first_order) } else { s.lo.or(s.first_order) })
         };
-        let min_lo = big.iter().map(|n| bound(n, false)).collect::<Option<Vec<f64>>>()?.into_iter().fold(f64::MAX, f64::min);
-        let max_hi = small.iter().map(|n| bound(n, true)).collect::<Option<Vec<f64>>>()?.into_iter().fold(f64::MIN, f64::max);
-        let max_lo = small.iter().map(|n| bound(n, false)).collect::<Option<Vec<f64>>>()?.into_iter().fold(f64::MIN, f64::max);
-        let min_hi = big.iter().map(|n| bound(n, true)).collect::<Option<Vec<f64>>>()?.into_iter().fold(f64::MAX, f64::min);
+        let min_lo = big
+            .iter()
+            .map(|n| bound(n, false))
+            .collect::<Option<Vec<f64>>>()?
+            .into_iter()
+            .fold(f64::MAX, f64::min);
+        let max_hi = small
+            .iter()
+            .map(|n| bound(n, true))
+            .collect::<Option<Vec<f64>>>()?
+            .into_iter()
+            .fold(f64::MIN, f64::max);
+        let max_lo = small
+            .iter()
+            .map(|n| bound(n, false))
+            .collect::<Option<Vec<f64>>>()?
+            .into_iter()
+            .fold(f64::MIN, f64::max);
+        let min_hi = big
+            .iter()
+            .map(|n| bound(n, true))
+            .collect::<Option<Vec<f64>>>()?
+            .into_iter()
+            .fold(f64::MAX, f64::min);
         if min_lo > max_hi {
             Some(true)
         } else if max_lo > min_hi {
@@ -356,7 +376,9 @@ fn conclusions(
         &["friction"],
         &|| trend("friction", true),
     ));
-    out.push(judged("§4.2", "smaller particles spread better (higher MFR)", &["diameter"], &|| trend("diameter", true)));
+    out.push(judged("§4.2", "smaller particles spread better (higher MFR)", &["diameter"], &|| {
+        trend("diameter", true)
+    }));
     out.push(judged(
         "§4.6, §5.4 (4)",
         "a narrower size distribution spreads better (higher MFR with a larger Weibull shape)",

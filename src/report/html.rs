@@ -101,7 +101,8 @@ fn setup_section(a: &Analysis) -> String {
     let sc = &st.scene;
     let psd = serde_json::to_value(&sc.size_distribution).map(|v| v.to_string()).unwrap_or_default();
     let conveyor = sc.layout == "conveyor";
-    let mut rows: Vec<(&str, String)> = vec![("layout", sc.layout.clone()), ("substrate", sc.substrate.clone())];
+    let mut rows: Vec<(&str, String)> =
+        vec![("layout", sc.layout.clone()), ("substrate", sc.substrate.clone())];
     if conveyor {
         rows.extend([
             ("held heap, height above the gap (D)", fmt_short(sc.heap_diameters)),

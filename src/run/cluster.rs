@@ -421,11 +421,18 @@ fn check_walltime(w: &str) -> Result<()> {
     let (days, rest) = w.split_once('-').unwrap_or(("0", w));
     let parts: Vec<&str> = rest.split(':').collect();
     let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
-    if digits(days) && parts.len() <= 3 && parts.iter().all(|p| digits(p)) {
-        Ok(())
-    } else {
-        Err(Error::input(format!("--walltime {w:?}: expected HH:MM:SS (or D-HH:MM:SS, or minutes)")))
+    let bad = || {
+        Err(Error::input(format!("--walltime {w:?}: expected HH:MM:SS (or D-HH:MM:SS, or minutes), longer than zero, with minutes and seconds below 60")))
+    };
+    if !(digits(days) && parts.len() <= 3 && parts.iter().all(|p| digits(p))) {
+        return bad();
     }
+    let n: Vec<u64> = parts.iter().map(|p| p.parse().unwrap_or(u64::MAX)).collect();
+    // Below the leading field (hours, or minutes in MM:SS), minutes and seconds stop at 59.
+    if n[1..].iter().any(|&v| v >= 60) || n.iter().all(|&v| v == 0) && days.bytes().all(|b| b == b'0') {
+        return bad();
+    }
+    Ok(())
 }
 
 fn tera_chain(e: &tera::Error) -> String {

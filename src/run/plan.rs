@@ -222,14 +222,18 @@ pub fn check_out_dir(out: &Path) -> Result<()> {
             while let Some(p) = up {
                 match std::fs::metadata(p) {
                     Ok(m) if m.is_dir() => {
-                        return match writable(p) {
+                        // A real probe: access(2) says yes to root in /proc and on read-only mounts.
+                        let probe = writable(p).and_then(|_| {
+                            tempfile::Builder::new().prefix(".sweep-probe-").tempdir_in(p).map(drop)
+                        });
+                        return match probe {
                             Ok(()) => Ok(()),
                             Err(e) => bad(format!(
-                                "cannot create it: {} is not writable ({})",
+                                "cannot create it: {} does not take new directories ({})",
                                 p.display(),
                                 plain_io(&e)
                             )),
-                        }
+                        };
                     }
                     Ok(_) => return bad(format!("cannot create it: {} is not a directory", p.display())),
                     Err(e) if e.kind() == std::io::ErrorKind::NotFound => up = p.parent(),

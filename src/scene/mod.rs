@@ -654,14 +654,14 @@ mod tests {
     fn the_stiffness_reduction_lengthens_the_rayleigh_time_and_stops_at_the_floor() {
         // T_R ∝ 1/√E: a quarter of the modulus doubles it.
         let values: BTreeMap<String, f64> = [("youngs_modulus".to_string(), 21.0)].into_iter().collect();
-        let full = Scene::new(&values, &SceneSettings { stiffness_factor: 1.0, ..SceneSettings::gated() })
-            .unwrap();
-        let soft = Scene::new(&values, &SceneSettings { stiffness_factor: 0.25, ..SceneSettings::gated() })
-            .unwrap();
+        let full =
+            Scene::new(&values, &SceneSettings { stiffness_factor: 1.0, ..SceneSettings::gated() }).unwrap();
+        let soft =
+            Scene::new(&values, &SceneSettings { stiffness_factor: 0.25, ..SceneSettings::gated() }).unwrap();
         assert!((soft.youngs_modulus - 5.25e6).abs() < 1e-6);
         assert!((soft.rayleigh_time / full.rayleigh_time - 2.0).abs() < 1e-12);
-        let floor = Scene::new(&values, &SceneSettings { stiffness_factor: 0.1, ..SceneSettings::gated() })
-            .unwrap();
+        let floor =
+            Scene::new(&values, &SceneSettings { stiffness_factor: 0.1, ..SceneSettings::gated() }).unwrap();
         assert_eq!(floor.youngs_modulus, MIN_YOUNGS_MPA * 1e6);
     }
 

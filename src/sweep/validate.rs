@@ -69,6 +69,13 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>,
     if file.name.trim().is_empty() || file.name.contains(['/', '\\']) || file.name.starts_with('.') {
         return Err(bad("name", "expected a non-empty name without slashes".into()));
     }
+    // The name becomes a directory and a line of the report: no newlines, tabs or escapes.
+    if file.name.chars().any(char::is_control) {
+        return Err(bad(
+            "name",
+            format!("{:?}: expected no control characters (newline, tab, escape)", file.name),
+        ));
+    }
     let mut swept = Vec::new();
     let mut fixed = Vec::new();
     for (name, value) in &file.parameters {
