@@ -229,7 +229,7 @@ pub fn check_out_dir(out: &Path) -> Result<()> {
                         return match probe {
                             Ok(()) => Ok(()),
                             Err(e) => bad(format!(
-                                "cannot create it: {} does not take new directories ({})",
+                                "cannot create it: {} is not writable ({})",
                                 p.display(),
                                 plain_io(&e)
                             )),
