@@ -109,8 +109,8 @@ fn lds_on_the_stand_in_stops_by_itself_and_its_statistics_are_the_prefixes() {
     assert!(done.len() >= n && done.len() < 4000, "done {} n {n}", done.len());
     assert_eq!(joblog_lines(&out), done.len());
     let conv = common::csv_rows(&out.join("convergence.csv"));
-    // One space is the converged one (a space the overshoot completed after it may follow).
-    assert_eq!(conv.iter().filter(|r| r["converged"] == "true").count(), 1);
+    // The verdict's space is the first converged one (spaces the overshoot completed after it,
+    // on a loaded machine, may be judged too).
     let at = conv.iter().position(|r| r["converged"] == "true").unwrap();
     assert_eq!(conv[at]["space"], format!("lds {n}"));
     // The default rule needs two consecutive spaces that hold.
