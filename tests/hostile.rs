@@ -195,7 +195,6 @@ fn sigkill_during_the_engine_check_leaves_no_orphan_and_the_next_start_removes_i
 }
 
 #[test]
-#[ignore = "open: a wrapper's children outlive a SIGKILL of sweep (only the direct child has PR_SET_PDEATHSIG)"]
 fn a_wrapper_engine_that_does_not_exec_leaves_no_process_behind_when_sweep_is_killed() {
     let tmp = tempfile::tempdir().unwrap();
     let pids = tmp.path().join("pids");

@@ -52,8 +52,9 @@ pub enum ProcessOutcome {
     SpawnFailed(String),
 }
 
-/// Start `cmd` in its own process group with PR_SET_PDEATHSIG = SIGKILL, so that the whole job
-/// dies with us even when we are SIGKILLed, and wait for it with a timeout and cancellation.
+/// Start `cmd` as its own process group under a guard bound to us (see [`guard_the_job`]), so
+/// that the whole job dies with us even when we are SIGKILLed, and wait for it with a timeout and
+/// cancellation.
 ///
 /// PR_SET_PDEATHSIG fires when the *thread* that forked the child exits, so call this from a
 /// thread that outlives the child (a pool worker, the main thread).
@@ -84,24 +85,9 @@ pub fn run_watched(
     watch: &mut dyn FnMut() -> Option<String>,
 ) -> Finished {
     let start = Instant::now();
-    // SAFETY: only async-signal-safe calls (setpgid, prctl, getppid) between fork and exec.
+    // SAFETY: between fork and exec only async-signal-safe calls are made (see `guard_the_job`).
     unsafe {
-        cmd.pre_exec(|| {
-            if libc::setpgid(0, 0) != 0 {
-                return Err(std::io::Error::last_os_error());
-            }
-            #[cfg(target_os = "linux")]
-            {
-                if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL) != 0 {
-                    return Err(std::io::Error::last_os_error());
-                }
-                // The parent may have died between fork and prctl.
-                if libc::getppid() == 1 {
-                    return Err(std::io::Error::other("parent exited before the job started"));
-                }
-            }
-            Ok(())
-        });
+        cmd.pre_exec(guard_the_job);
     }
     let mut child = match cmd.spawn() {
         Ok(c) => c,
@@ -151,6 +137,96 @@ pub fn run_watched(
         poll = (poll * 2).min(POLL);
     };
     Finished { outcome, wall: start.elapsed(), cpu }
+}
+
+/// Runs in the forked child before exec. The child becomes the job's *guard*: the leader of a new
+/// process group, bound to us by PR_SET_PDEATHSIG. It forks once more; that grandchild execs the
+/// job, and the guard stays behind to mirror the job's exit status. When we die by any signal,
+/// SIGKILL included, the guard gets SIGTERM and SIGKILLs its whole group, so a wrapper engine's
+/// own children (an `mpirun`, a script that does not `exec`) die with us instead of only the
+/// process we started. A SIGTERM from our own [`kill_group`] leaves the job its grace period.
+///
+/// Only async-signal-safe calls: the parent may be multi-threaded.
+fn guard_the_job() -> std::io::Result<()> {
+    // SAFETY: sigset, sigprocmask, setpgid, prctl, getppid, fork, close and waitpid are all
+    // async-signal-safe; every pointer is to a local.
+    unsafe {
+        let parent = libc::getppid();
+        let mut stop: libc::sigset_t = std::mem::zeroed();
+        libc::sigemptyset(&mut stop);
+        for sig in [libc::SIGTERM, libc::SIGINT, libc::SIGHUP, libc::SIGCHLD] {
+            libc::sigaddset(&mut stop, sig);
+        }
+        // Blocked before PR_SET_PDEATHSIG so that our death is noticed, not obeyed.
+        libc::sigprocmask(libc::SIG_BLOCK, &stop, std::ptr::null_mut());
+        libc::signal(libc::SIGCHLD, libc::SIG_DFL);
+        if libc::setpgid(0, 0) != 0 {
+            return Err(std::io::Error::last_os_error());
+        }
+        #[cfg(target_os = "linux")]
+        if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM) != 0 {
+            return Err(std::io::Error::last_os_error());
+        }
+        // We may have died between fork and prctl.
+        if libc::getppid() != parent {
+            return Err(std::io::Error::other("sweep exited before the job started"));
+        }
+        let guard = libc::getpid();
+        let job = libc::fork();
+        if job < 0 {
+            return Err(std::io::Error::last_os_error());
+        }
+        if job == 0 {
+            // The job: dies if its guard does; signals as the job expects them.
+            #[cfg(target_os = "linux")]
+            libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
+            if libc::getppid() != guard {
+                libc::_exit(128 + libc::SIGKILL);
+            }
+            libc::sigprocmask(libc::SIG_UNBLOCK, &stop, std::ptr::null_mut());
+            return Ok(());
+        }
+        // The guard holds no file of ours: the spawn's exec-error pipe must close on the job's exec.
+        close_from(3);
+        let mut status: libc::c_int = 0;
+        let second = libc::timespec { tv_sec: 1, tv_nsec: 0 };
+        loop {
+            let sig = libc::sigtimedwait(&stop, std::ptr::null_mut(), &second);
+            // Our parent is gone (its SIGTERM, or a missed one seen by polling): end the group.
+            if libc::getppid() != parent {
+                libc::kill(0, libc::SIGKILL);
+            }
+            if sig == libc::SIGCHLD || sig < 0 {
+                let r = libc::waitpid(job, &mut status, libc::WNOHANG);
+                if r == job {
+                    break;
+                }
+            }
+        }
+        if libc::WIFSIGNALED(status) {
+            let sig = libc::WTERMSIG(status);
+            libc::signal(sig, libc::SIG_DFL);
+            libc::sigprocmask(libc::SIG_UNBLOCK, &stop, std::ptr::null_mut());
+            libc::kill(guard, sig);
+            libc::_exit(128 + sig);
+        }
+        libc::_exit(if libc::WIFEXITED(status) { libc::WEXITSTATUS(status) } else { 1 });
+    }
+}
+
+/// Close every file descriptor from `first` on (async-signal-safe).
+unsafe fn close_from(first: libc::c_int) {
+    #[cfg(target_os = "linux")]
+    if libc::syscall(libc::SYS_close_range, first as libc::c_uint, libc::c_uint::MAX, 0) == 0 {
+        return;
+    }
+    let max = match libc::sysconf(libc::_SC_OPEN_MAX) {
+        n if n > 0 => n.min(65_536) as libc::c_int,
+        _ => 1024,
+    };
+    for fd in first..max {
+        libc::close(fd);
+    }
 }
 
 /// `try_wait` that also returns the child's CPU time (wait4(2)'s rusage: the child and every
@@ -233,6 +309,14 @@ mod tests {
     fn exit_codes_are_reported() {
         let (o, _) = run(sh("exit 3"), Duration::from_secs(5), &CancelToken::new());
         assert_eq!(o, ProcessOutcome::Exited(3));
+    }
+
+    #[test]
+    fn a_job_killed_by_a_signal_is_reported_as_signalled_through_its_guard() {
+        let (o, _) = run(sh("kill -KILL $$"), Duration::from_secs(5), &CancelToken::new());
+        assert_eq!(o, ProcessOutcome::Signalled(libc::SIGKILL));
+        let (o, _) = run(sh("kill -USR1 $$"), Duration::from_secs(5), &CancelToken::new());
+        assert_eq!(o, ProcessOutcome::Signalled(libc::SIGUSR1));
     }
 
     #[test]
