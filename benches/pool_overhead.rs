@@ -83,17 +83,12 @@ fn ours(tmp: &Path, round: usize, jobs: usize, count: usize) -> Duration {
     let store = Store::open(&dir);
     let exec = TrueExecutor;
     let work: Vec<String> = (0..count).map(|i| exec.prepare(&[i as f64]).unwrap()).collect();
-    let mut log = store.joblog().unwrap();
     let opts = PoolOptions { slots: jobs, retries: 0, retry_failed_before: None };
     let t = Instant::now();
     let mut done = 0;
-    pool::run(&exec, &store, work, &opts, &CancelToken::new(), |e| {
-        match e {
-            pool::Event::Attempt { record, .. } => {
-                log.append(record).unwrap();
-            }
-            pool::Event::Finished { .. } => done += 1,
-            _ => {}
+    pool::run(&exec, &store, store.joblog().unwrap(), work, &opts, &CancelToken::new(), |e| {
+        if let pool::Event::Finished { .. } = e {
+            done += 1;
         }
         Flow::Continue
     });

@@ -291,6 +291,52 @@ fn a_result_without_its_joblog_line_gets_one_and_its_dead_claim_is_removed() {
     }
 }
 
+/// `d`'s joblog without the lines of `hash`.
+fn drop_joblog_lines(d: &Path, hash: &str) {
+    let text: String = std::fs::read_to_string(d.join("joblog.tsv"))
+        .unwrap()
+        .lines()
+        .filter(|l| !l.contains(hash))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(d.join("joblog.tsv"), text).unwrap();
+}
+
+#[test]
+fn a_result_with_neither_its_joblog_line_nor_a_claim_gets_its_line() {
+    // A kill after the claim was given back and before the line (as the chaos storms found):
+    // the result alone.
+    let tmp = tempfile::tempdir().unwrap();
+    let toml = standin(tmp.path(), 4);
+    let d = tmp.path().join("d");
+    assert_eq!(sweep(&["lds", p(&toml), "--out", p(&d), "-q"]).status.code(), Some(0));
+    let h = hashes(&d);
+    drop_joblog_lines(&d, &h[1]);
+    let o = sweep(&["resume", p(&d), "-q"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let lines = joblog(&d);
+    let for_h1: Vec<_> = lines.iter().filter(|l| l["hash"] == h[1]).collect();
+    assert_eq!(for_h1.len(), 1, "{lines:?}");
+    assert_eq!(for_h1[0]["status"], "done", "{for_h1:?}");
+    assert_eq!(lines.len(), h.len(), "a run ran again: {lines:?}");
+}
+
+#[test]
+fn a_claim_torn_by_a_kill_in_a_finished_run_is_removed_on_resume() {
+    // A kill between creating the claim file and writing it leaves it empty.
+    let tmp = tempfile::tempdir().unwrap();
+    let toml = standin(tmp.path(), 4);
+    let d = tmp.path().join("d");
+    assert_eq!(sweep(&["lds", p(&toml), "--out", p(&d), "-q"]).status.code(), Some(0));
+    let h = hashes(&d);
+    let claim = d.join("runs").join(&h[3]).join("claim");
+    std::fs::write(&claim, "").unwrap();
+    let o = sweep(&["resume", p(&d), "-q"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(!claim.exists(), "the torn claim stays");
+    assert_eq!(joblog(&d).len(), h.len(), "a run ran again");
+}
+
 #[test]
 fn status_names_the_holder_of_a_foreign_claim_and_unclaim_releases_it() {
     let tmp = tempfile::tempdir().unwrap();

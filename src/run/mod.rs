@@ -299,7 +299,7 @@ fn execute<E: Executor>(
     let screen = Screen::of(sweep);
     let sample = screen.sample(&manifest.points);
     let mut status = Vec::with_capacity(manifest.points.len());
-    let mut recovered: Vec<(String, store::ClaimInfo)> = Vec::new();
+    let mut recovered: Vec<(String, f64)> = Vec::new();
     let mut queued: BTreeMap<usize, E::Job> = BTreeMap::new();
     let mut held: BTreeMap<usize, E::Job> = BTreeMap::new();
     for (p, job) in manifest.points.iter().zip(jobs) {
@@ -308,9 +308,10 @@ fn execute<E: Executor>(
             eprintln!("warning: {}: {reason}; point {} runs again", file.display(), p.index);
         }
         if matches!(state, RunState::Done(_) | RunState::Failed(_)) {
-            // Killed between its outcome and its joblog line: the claim is still there.
-            if let Some(c) = store.remove_dead_claim_of_finished(&p.hash)? {
-                recovered.push((p.hash.clone(), c));
+            // A process killed between its outcome and its joblog line left its claim, or
+            // none: if no live process holds the run, the line it owed is written below.
+            if let Some(claimed_at) = store.free_finished(&p.hash)? {
+                recovered.push((p.hash.clone(), claimed_at));
             }
         }
         let s = match state {
@@ -361,12 +362,15 @@ fn execute<E: Executor>(
         retries: sweep.file.run.retries,
         retry_failed_before: if opts.retry_failed { Some(store.retry_round()?) } else { None },
     };
-    pool::run(exec, store, queue, &popts, cancel, |e| rep.event(e));
+    let joblog = || -> Result<store::Joblog> {
+        Ok(store.joblog()?.with_indices(manifest.points.iter().map(|p| (p.hash.clone(), p.index)).collect()))
+    };
+    pool::run(exec, store, joblog()?, queue, &popts, cancel, |e| rep.event(e));
     // Refuted while the pool ran: the held-back closed points run now, for real.
     let go_on = !cancel.is_cancelled() && rep.stopped_after.is_none() && rep.errors.is_empty();
     if go_on && rep.verdict == Verdict::Refuted && !held.is_empty() {
         let queue = pick(&mut held, false);
-        pool::run(exec, store, queue, &popts, cancel, |e| rep.event(e));
+        pool::run(exec, store, joblog()?, queue, &popts, cancel, |e| rep.event(e));
     }
     rep.finish(cancel.is_cancelled())
 }

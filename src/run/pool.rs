@@ -24,7 +24,7 @@ use std::sync::Mutex;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use crate::outcome::{FailureClass, RunOutcome};
-use crate::store::{AttemptRecord, ClaimAttempt, ClaimInfo, RunState, Store, StoreError};
+use crate::store::{AttemptRecord, ClaimAttempt, ClaimInfo, Joblog, RunState, Store, StoreError};
 use crate::sys::process::CancelToken;
 
 /// How often the caller's thread wakes up without events (progress lines, results.csv).
@@ -73,7 +73,7 @@ pub struct PoolOptions {
 pub enum Event {
     /// A slot started running the job.
     Started { hash: String },
-    /// One attempt ended (one joblog line). `retrying` when another attempt follows.
+    /// One attempt ended; its joblog line is written. `retrying` when another attempt follows.
     Attempt { record: AttemptRecord, retrying: bool },
     /// The job is over: run here (`ran`), or found finished by another process.
     Finished { hash: String, outcome: RunOutcome, ran: bool },
@@ -93,10 +93,12 @@ pub enum Flow {
     Drain,
 }
 
-/// Run `jobs` on the pool. `consume` sees every event on the calling thread.
+/// Run `jobs` on the pool, writing each attempt's line to `joblog`. `consume` sees every event
+/// on the calling thread.
 pub fn run<E: Executor>(
     exec: &E,
     store: &Store,
+    joblog: Joblog,
     jobs: Vec<E::Job>,
     opts: &PoolOptions,
     cancel: &CancelToken,
@@ -107,11 +109,22 @@ pub fn run<E: Executor>(
     let queue = Mutex::new(jobs.into_iter().collect::<VecDeque<_>>());
     let busy: Mutex<VecDeque<(E::Job, Instant)>> = Mutex::new(VecDeque::new());
     let drain = AtomicBool::new(false);
+    let joblog = Mutex::new(joblog);
     let (tx, rx) = mpsc::channel::<Event>();
     std::thread::scope(|scope| {
         for _ in 0..opts.slots.max(1) {
             let tx = tx.clone();
-            let w = Worker { exec, store, opts, cancel, queue: &queue, busy: &busy, drain: &drain, tx };
+            let w = Worker {
+                exec,
+                store,
+                joblog: &joblog,
+                opts,
+                cancel,
+                queue: &queue,
+                busy: &busy,
+                drain: &drain,
+                tx,
+            };
             scope.spawn(move || w.run());
         }
         drop(tx);
@@ -131,6 +144,7 @@ pub fn run<E: Executor>(
 struct Worker<'a, E: Executor> {
     exec: &'a E,
     store: &'a Store,
+    joblog: &'a Mutex<Joblog>,
     opts: &'a PoolOptions,
     cancel: &'a CancelToken,
     queue: &'a Mutex<VecDeque<E::Job>>,
@@ -177,6 +191,14 @@ impl<E: Executor> Worker<'_, E> {
         let _ = self.tx.send(e);
     }
 
+    /// Write an attempt's joblog line, then tell the consumer. Written here, under the run's
+    /// claim, so that a kill can never leave a finished run with neither its line nor its claim.
+    fn log(&self, record: AttemptRecord, retrying: bool) -> Result<(), StoreError> {
+        self.joblog.lock().unwrap().append(&record)?;
+        self.send(Event::Attempt { record, retrying });
+        Ok(())
+    }
+
     fn one(&self, job: E::Job, hash: &str) -> Result<(), StoreError> {
         let hash = hash.to_string();
         let (claim, stale) = match self.store.claim(&hash)? {
@@ -219,6 +241,15 @@ impl<E: Executor> Worker<'_, E> {
             _ => None,
         };
         if let Some(outcome) = found {
+            // Finished by a process killed before its joblog line: write the line it owed.
+            if let Some(old) = stale {
+                let unlogged = crate::store::read_joblog(self.store.dir())?
+                    .iter()
+                    .all(|l| l.hash != hash || !(l.status == "done" || l.status == "failed"));
+                if unlogged {
+                    self.log(AttemptRecord::finished(&hash, &outcome, old.claimed_at), false)?;
+                }
+            }
             return Ok(Some((outcome, false)));
         }
         if let Some(old) = stale {
@@ -231,7 +262,7 @@ impl<E: Executor> Worker<'_, E> {
                 status: "interrupted",
                 class: None,
             };
-            self.send(Event::Attempt { record, retrying: false });
+            self.log(record, false)?;
         }
         if self.cancel.is_cancelled() {
             return Ok(None);
@@ -265,7 +296,8 @@ impl<E: Executor> Worker<'_, E> {
                     status: "store-error",
                     class: None,
                 };
-                self.send(Event::Attempt { record, retrying: false });
+                // Best effort: the store is failing.
+                let _ = self.log(record, false);
                 self.send(Event::Finished { hash: hash.clone(), outcome: RunOutcome::Cancelled, ran: true });
                 return Err(e);
             }
@@ -277,16 +309,14 @@ impl<E: Executor> Worker<'_, E> {
             let retrying = class.is_some_and(FailureClass::is_transient)
                 && attempt < self.opts.retries
                 && !self.cancel.is_cancelled();
-            self.send(Event::Attempt {
-                record: AttemptRecord {
-                    hash: hash.clone(),
-                    start,
-                    runtime_s: t.elapsed().as_secs_f64(),
-                    status,
-                    class: class.map(FailureClass::as_str),
-                },
-                retrying,
-            });
+            let record = AttemptRecord {
+                hash: hash.clone(),
+                start,
+                runtime_s: t.elapsed().as_secs_f64(),
+                status,
+                class: class.map(FailureClass::as_str),
+            };
+            self.log(record, retrying)?;
             if !retrying {
                 break outcome;
             }

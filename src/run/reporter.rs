@@ -65,32 +65,22 @@ pub(super) struct Reporter<'a> {
 }
 
 impl<'a> Reporter<'a> {
-    /// Write the joblog line of each finished run whose process was killed before writing it
-    /// (its dead claim was still in the run directory), unless a line is there.
-    pub(super) fn log_recovered(
-        &mut self,
-        store: &Store,
-        recovered: &[(String, store::ClaimInfo)],
-    ) -> Result<()> {
+    /// Write the joblog line of each finished run whose process was killed before writing it,
+    /// unless a line is there (`recovered`: finished runs no live process holds, with the time
+    /// their last attempt claimed them).
+    pub(super) fn log_recovered(&mut self, store: &Store, recovered: &[(String, f64)]) -> Result<()> {
         let logged: BTreeSet<String> = store::read_joblog(store.dir())?
             .into_iter()
             .filter(|l| l.status == "done" || l.status == "failed")
             .map(|l| l.hash)
             .collect();
-        for (hash, claim) in recovered.iter().filter(|(h, _)| !logged.contains(h)) {
-            let (status, class, runtime_s) = match store.finished(hash) {
-                Some(store::RunState::Done(r)) => ("done", None, r.wall_time),
-                Some(store::RunState::Failed(f)) => ("failed", Some(f.class.as_str()), f.wall_time),
+        for (hash, claimed_at) in recovered.iter().filter(|(h, _)| !logged.contains(h)) {
+            let outcome = match store.finished(hash) {
+                Some(store::RunState::Done(r)) => RunOutcome::Done(*r),
+                Some(store::RunState::Failed(f)) => RunOutcome::Failed(*f),
                 _ => continue,
             };
-            let start = std::time::UNIX_EPOCH + std::time::Duration::from_secs_f64(claim.claimed_at.max(0.0));
-            self.joblog.append(&store::AttemptRecord {
-                hash: hash.clone(),
-                start,
-                runtime_s,
-                status,
-                class,
-            })?;
+            self.joblog.append(&store::AttemptRecord::finished(hash, &outcome, *claimed_at))?;
         }
         Ok(())
     }
@@ -225,11 +215,8 @@ impl<'a> Reporter<'a> {
                 self.counts.running += 1;
                 self.ran += 1;
             }
-            Event::Attempt { record, .. } => {
-                if let Err(err) = self.joblog.append(record) {
-                    self.errors.push(err.to_string());
-                }
-            }
+            // The pool wrote its joblog line.
+            Event::Attempt { .. } => {}
             Event::Finished { hash, outcome, ran } => {
                 if *ran {
                     self.counts.running -= 1;

@@ -3,7 +3,8 @@
 //! A claim from another host stands while its lease runs (and for good if it has no lease, as
 //! older versions wrote them); `sweep unclaim DIR` releases such claims once the user knows
 //! their owner is gone. A claim left in a finished run directory by a process killed between
-//! its result and its joblog line is removed on resume, which writes the missing line.
+//! its result and its joblog line, or torn by a kill as it was written, is removed on resume,
+//! which writes any missing line.
 
 use std::fs;
 
@@ -66,21 +67,34 @@ impl Store {
         Ok((released, kept))
     }
 
-    /// The claim left in the finished run `hash` by a process that is gone, removed; `None`
-    /// when there is none (or its holder lives).
-    pub fn remove_dead_claim_of_finished(&self, hash: &str) -> Result<Option<ClaimInfo>, StoreError> {
-        let path = self.run_dir(hash).join("claim");
+    /// Clear the finished run `hash` of a claim that stands for nobody: one left by a process
+    /// that is gone, or one cut off while it was being written (its writer held the lock, so it
+    /// died). `None` while a live process holds the run; otherwise when the last attempt
+    /// claimed it (Unix seconds), from its claim or else from its outcome file's time.
+    pub fn free_finished(&self, hash: &str) -> Result<Option<f64>, StoreError> {
+        let dir = self.run_dir(hash);
+        let path = dir.join("claim");
+        let outcome_time = || {
+            ["result.json", "failure.json"]
+                .iter()
+                .find_map(|f| fs::metadata(dir.join(f)).and_then(|m| m.modified()).ok())
+                .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+                .map_or(0.0, |d| d.as_secs_f64())
+        };
         if !path.exists() {
-            return Ok(None);
+            return Ok(Some(outcome_time()));
         }
         let _lock = DirLock::take(&self.dir.join(LOCK))?;
-        let Some(c) = read_claim(&path) else { return Ok(None) };
-        if self.owner_alive(&c)
-            || !matches!(self.finished(hash), Some(RunState::Done(_) | RunState::Failed(_)))
-        {
+        let claimed_at = match read_claim(&path) {
+            Some(c) if self.owner_alive(&c) => return Ok(None),
+            Some(c) => c.claimed_at,
+            None if !path.exists() => return Ok(Some(outcome_time())),
+            None => outcome_time(),
+        };
+        if !matches!(self.finished(hash), Some(RunState::Done(_) | RunState::Failed(_))) {
             return Ok(None);
         }
         fs::remove_file(&path).map_err(super::io(&path))?;
-        Ok(Some(c))
+        Ok(Some(claimed_at))
     }
 }

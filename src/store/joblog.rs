@@ -78,6 +78,21 @@ pub struct AttemptRecord {
     pub class: Option<&'static str>,
 }
 
+impl AttemptRecord {
+    /// The line of a finished run written for an attempt that was cut off before it wrote its
+    /// own (`claimed_at`: when that attempt claimed the run, Unix seconds).
+    pub fn finished(hash: &str, outcome: &crate::outcome::RunOutcome, claimed_at: f64) -> AttemptRecord {
+        use crate::outcome::RunOutcome;
+        let (status, class, runtime_s) = match outcome {
+            RunOutcome::Done(r) => ("done", None, r.wall_time),
+            RunOutcome::Failed(f) => ("failed", Some(f.class.as_str()), f.wall_time),
+            RunOutcome::Cancelled => ("cancelled", None, f64::NAN),
+        };
+        let start = UNIX_EPOCH + std::time::Duration::from_secs_f64(claimed_at.max(0.0));
+        AttemptRecord { hash: hash.to_string(), start, runtime_s, status, class }
+    }
+}
+
 /// `joblog.tsv`, opened for appending. Each line is appended under the directory's lock with
 /// the next sequence number after the file's last line, so that two processes sharing the
 /// directory never write the same `seq`.
