@@ -63,20 +63,23 @@ finished() {
   if [ "${ENGINE:-}" = stand-in ]; then
     [ -f "$out/joblog.tsv" ] && wc -l <"$out/joblog.tsv" || echo 0
   else
-    compgen -G "$out/runs/*/result.json" | wc -l
+    { compgen -G "$out/runs/*/result.json" || true; } | wc -l
   fi
 }
-# LIGGGHTS processes working in the chaos directory with no live worker among their ancestors.
+# LIGGGHTS processes working in the chaos directory with no live worker among their ancestors
+# (a process that ends while it is looked at is not counted).
 orphans_now() {
-  local n=0 p pid a live
+  local n=0 p pid a live ppid
   for p in /proc/[0-9]*; do
     case "$(readlink "$p/cwd" 2>/dev/null)" in "$out"/*) ;; *) continue ;; esac
     pid=${p#/proc/}; live=0; a=$pid
-    while [ -n "$a" ] && [ "$a" -gt 1 ]; do
+    while [ "$a" -gt 1 ]; do
       for w in "${pid_of[@]}"; do [ "$a" = "$w" ] && live=1; done
-      a=$(awk '{ print $4 }' "/proc/$a/stat" 2>/dev/null || true)
+      ppid=$(awk '{ print $4 }' "/proc/$a/stat" 2>/dev/null || true)
+      [ -n "$ppid" ] || { live=gone; break; }
+      a=$ppid
     done
-    [ "$live" = 0 ] && n=$((n + 1))
+    [ "$live" = 0 ] && [ -d "$p" ] && n=$((n + 1))
   done
   echo "$n"
 }

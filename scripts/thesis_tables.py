@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The tables of docs/study/thesis.md from a sweep directory of the thesis study.
 
-    python3 scripts/thesis_tables.py DIR [--reference DIR2]
+    python3 scripts/thesis_tables.py DIR [--reference DIR2] [--weights equal|trapezoid]
 
 Works on a copy of DIR (the report rewrites files). Prints, as Markdown:
 - the four MFR statistics of each complete space with their 95 % bootstrap intervals;
@@ -11,8 +11,10 @@ Works on a copy of DIR (the report rewrites files). Prints, as Markdown:
   of DIR, or of --reference), the scale being the scaled rule's (mean: max(|mean|, std); std;
   skewness: max(|skewness|, 1); kurtosis);
 - the MFR = 0 share, failures by class, cost (core-hours, wall, mean CPU per run).
+--weights sets a lattice's statistics' weights (the thesis's equal ones or the default trapezoid
+rule) in the copy's sweep.toml; the figures are copied only with the sweep's own weights.
 """
-import csv, json, os, shutil, subprocess, sys, tempfile
+import csv, json, os, re, shutil, subprocess, sys, tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.environ.get("SWEEP_BIN", os.path.join(ROOT, "target/release/sweep"))
@@ -38,6 +40,11 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         d = os.path.join(tmp, "sweep")
         shutil.copytree(src, d, ignore=shutil.ignore_patterns("*.liggghts", "dump.*", "*.stl", "*.data", "screen.txt"))
+        weights = sys.argv[sys.argv.index("--weights") + 1] if "--weights" in sys.argv else None
+        if weights:
+            toml = open(os.path.join(d, "sweep.toml")).read()
+            toml = re.sub(r'lattice_weights = "\w+"', f'lattice_weights = "{weights}"', toml)
+            open(os.path.join(d, "sweep.toml"), "w").write(toml)
         rows, summary = report(d, "--rule", "scaled", "--tolerance", str(TOL), "--hold", "2")
         default_at = next((r["n"] for r in rows if r["converged"] == "true"), None)
         any_rows, _ = report(d, "--rule", "any", "--tolerance", str(TOL))
@@ -87,6 +94,8 @@ def main():
         if stats:
             print(f"- statistics of the last space: mean {stats['mean']:.4f}, std {stats['std']:.4f}, "
                   f"skewness {stats['skewness']:.3f}, kurtosis {stats['kurtosis']:.3f}, median {stats['median']:.4f}")
+        if weights:
+            return
         figs = os.path.join(d, "report")
         out = os.path.join(ROOT, "docs/study/thesis", summary["name"] + "-figures")
         os.makedirs(out, exist_ok=True)
