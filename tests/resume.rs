@@ -152,7 +152,7 @@ fn killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results() {
     assert_eq!(want.len(), 3);
     assert!(want.iter().all(|r| r.1 == "done"), "{want:?}");
 
-    // SIGKILL: no chance to clean up; PDEATHSIG takes the LIGGGHTS processes down with us.
+    // SIGKILL: no chance to clean up; each run's guard takes its LIGGGHTS down with us.
     let killed = tmp.path().join("killed");
     let (status, groups) = interrupt(&sweep, &killed, libc::SIGKILL);
     assert_eq!(std::os::unix::process::ExitStatusExt::signal(&status), Some(libc::SIGKILL));

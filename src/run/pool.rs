@@ -10,9 +10,11 @@
 //! - The [`CancelToken`] (Ctrl-C, SIGTERM) stops new starts; the running children are killed by
 //!   [`crate::sys::process`], their claims released, and their run dirs left incomplete for a resume.
 //!   Every child is spawned from its worker thread, which lives until the pool ends, so
-//!   PR_SET_PDEATHSIG binds the child to this process even when it is SIGKILLed.
-//! - Workers only send [`Event`]s; the caller's thread consumes them (joblog, results.csv,
-//!   progress), so there is one writer of each file.
+//!   its guard, bound by PR_SET_PDEATHSIG, takes the job's whole process group down with this
+//!   process even when it is SIGKILLed ([`crate::sys::process`]).
+//! - Each worker writes its attempt's joblog line (under the directory lock) before it gives the
+//!   claim back, so a finished run always has its line or its claim; otherwise workers only send
+//!   [`Event`]s, which the caller's thread consumes (results.csv, progress).
 //!
 //! Not responsible for what a job is (the [`Executor`]) or for what to run (the driver).
 
