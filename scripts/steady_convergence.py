@@ -32,6 +32,12 @@ VARIANTS = {
     # The step is bounded at 0.5 Rayleigh times (BENCHMARKS "Stability edge"): 0.33 x 1.5 instead of x 2.
     "dt/2": "rayleigh_fraction = 0.165", "dt*1.5": "rayleigh_fraction = 0.5",
     "heap 5 D": "heap_diameters = 5.0", "heap 20 D": "heap_diameters = 20.0",
+    # The gated scene at the same points and planned heap (gap + 10 D), three pile seeds each:
+    # it has no per-point SE, so its SE is the seeds' scatter (see gated_table).
+    "gated seed 1": 'layout = "gated"\nseed = 1', "gated seed 2": 'layout = "gated"\nseed = 2',
+    "gated seed 3": 'layout = "gated"\nseed = 3',
+    # Why the gated scene reads lower: its window at four times the default start (30 D).
+    "gated start 120 D": 'layout = "gated"\nwindow_start_diameters = 120.0',
 }
 FIELDS = ["variant", "point", "friction", "diameter", "gap", "blade_speed", "status", "mfr", "mfr_se",
           "transient_blocks", "window_blocks", "stop", "heap_start", "heap_end", "cpu_s", "reason"]
@@ -53,7 +59,8 @@ def run(variant, i, p, work):
         fh.write('name = "steady-convergence"\n[parameters]\n'
                  'friction = { lo = 0.1, hi = 0.3 }\ndiameter = { lo = 1.0, hi = 3.0, unit = "mm" }\n'
                  'gap = { lo = 1.0, hi = 5.0, unit = "mm" }\nblade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }\n'
-                 'restitution = 0.5\n[scene]\nlayout = "conveyor"\n' + VARIANTS[variant] + "\n")
+                 'restitution = 0.5\n[scene]\n' + ("" if "layout" in VARIANTS[variant] else 'layout = "conveyor"\n')
+                 + VARIANTS[variant] + "\n")
     sets = ",".join(f"{k}={p[k]!r}" for k in ["friction", "diameter", "gap", "blade_speed"])
     r = subprocess.run([BIN, "run", toml, "--set", sets, "--json"], capture_output=True, text=True)
     row = dict(variant=variant, point=i, **p)
@@ -79,6 +86,8 @@ def table(path):
     print("| variant | points | mean MFR | Δ vs base | SE of Δ | limit max(5 %, 2 SE) | passes | CPU s / point |")
     print("|---|---|---|---|---|---|---|---|")
     for v in by:  # in the order the file has them
+        if v.startswith("gated"):
+            continue
         got = by.get(v, {})
         both = [i for i in got if i in base and got[i]["status"] == "done" and base[i]["status"] == "done"]
         if not both:
@@ -93,6 +102,52 @@ def table(path):
         note = f" ({failed} failed)" if failed else ""
         passes = "base" if v == "base" else ("yes" if abs(d) < lim else "**no**")
         print(f"| {v} | {len(both)}{note} | {m:.4f} | {d:+.4f} ({100 * d / mb:+.1f} %) | {se:.4f} | {lim:.4f} | {passes} | {cpu:.1f} |")
+
+
+def gated_table(path):
+    """The gated scene against the conveyor's base at the same points: per point the mean of the
+    gated seeds with its SE (their scatter / sqrt(k)), and the mean difference over the points."""
+    rows = list(csv.DictReader(open(path), delimiter="\t"))
+    base = {int(r["point"]): r for r in rows if r["variant"] == "base" and r["status"] == "done"}
+    gated = {}
+    for r in rows:
+        if r["variant"].startswith("gated seed"):
+            gated.setdefault(int(r["point"]), []).append(r)
+    if not gated:
+        return
+    print("\n| point | D mm | gap mm | v m/s | conveyor MFR ± SE | gated MFR ± SE (seeds) | gated failed | Δ ± SE |")
+    print("|---|---|---|---|---|---|---|---|")
+    ds, ses = [], []
+    for i in sorted(gated):
+        ok = [float(r["mfr"]) for r in gated[i] if r["status"] == "done"]
+        bad = [r["status"] for r in gated[i] if r["status"] != "done"]
+        b = base.get(i)
+        p = gated[i][0]
+        if len(ok) < 2 or b is None:
+            print(f"| {i} | {p['diameter']} | {p['gap']} | {p['blade_speed']:.4} | {b['mfr'] if b else '-'} | {ok} | {', '.join(bad) or '-'} | - |")
+            continue
+        m = sum(ok) / len(ok)
+        se = math.sqrt(sum((x - m) ** 2 for x in ok) / (len(ok) - 1) / len(ok))
+        bm, bse = float(b["mfr"]), float(b["mfr_se"] or 0)
+        d, dse = m - bm, math.hypot(se, bse)
+        ds.append(d)
+        ses.append(dse)
+        print(f"| {i} | {float(p['diameter']):.2f} | {float(p['gap']):.2f} | {float(p['blade_speed']):.2f} | {bm:.4f} ± {bse:.4f} | "
+              f"{m:.4f} ± {se:.4f} ({len(ok)}) | {', '.join(bad) or '-'} | {d:+.4f} ± {dse:.4f} |")
+    if ds:
+        mb = sum(float(base[i]["mfr"]) for i in sorted(gated) if i in base) / len(base)
+        md = sum(ds) / len(ds)
+        mse = math.sqrt(sum(x * x for x in ses)) / len(ds)
+        print(f"\nmean gated − conveyor over {len(ds)} points: {md:+.4f} ± {mse:.4f} ({100 * md / mb:+.1f} % of the conveyor's mean {mb:.4f})")
+    late = {int(r["point"]): r for r in rows if r["variant"] == "gated start 120 D"}
+    pairs = [(float(late[i]["mfr"]), sum(float(r["mfr"]) for r in gated[i] if r["status"] == "done")
+              / max(1, sum(r["status"] == "done" for r in gated[i])), float(base[i]["mfr"]))
+             for i in sorted(late) if late[i]["status"] == "done" and i in base and i in gated]
+    if pairs:
+        n = len(pairs)
+        print(f"gated with its window at 120 D instead of 30 D, {n} points: mean {sum(p[0] for p in pairs) / n:.4f} "
+              f"against {sum(p[1] for p in pairs) / n:.4f} at 30 D and the conveyor's {sum(p[2] for p in pairs) / n:.4f}; "
+              f"failed: {sum(r['status'] != 'done' for r in late.values())}")
 
 
 def main():
@@ -115,6 +170,7 @@ def main():
                         fh.write("\t".join(str(row.get(k, "")) for k in FIELDS) + "\n")
                     print(f"{v} point {i}: {row['status']} {row.get('mfr', '')}", file=sys.stderr)
     table(out)
+    gated_table(out)
 
 
 if __name__ == "__main__":
