@@ -188,6 +188,9 @@ fn guard_the_job() -> std::io::Result<()> {
         }
         // The guard holds no file of ours: the spawn's exec-error pipe must close on the job's exec.
         close_from(3);
+        // So that `ps` says what it is.
+        #[cfg(target_os = "linux")]
+        libc::prctl(libc::PR_SET_NAME, c"sweep-guard".as_ptr());
         let mut status: libc::c_int = 0;
         let second = libc::timespec { tv_sec: 1, tv_nsec: 0 };
         loop {
