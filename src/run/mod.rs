@@ -149,7 +149,9 @@ fn create<E: Executor>(
 ) -> Result<(Store, Manifest, Vec<E::Job>)> {
     check_out_dir(out)?;
     if !Store::manifest_path(out).exists() {
-        if let Some(stranger) = store::foreign_entry(out) {
+        // Another `sweep` may write the manifest while we look: only a stranger with no
+        // manifest after it is one.
+        if let Some(stranger) = store::foreign_entry(out).filter(|_| !Store::manifest_path(out).exists()) {
             return Err(Error::input(format!(
                 "{}: exists and is not a sweep directory (no manifest.json, and it holds {stranger:?}); \
                  choose another --out",
