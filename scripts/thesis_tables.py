@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The tables of docs/study/thesis.md from a sweep directory of the thesis study.
 
-    python3 scripts/thesis_tables.py DIR [--reference DIR2] [--weights equal|trapezoid]
+    python3 scripts/thesis_tables.py DIR [--reference DIR2] [--weights equal|trapezoid] [--save OUT.csv]
 
 Works on a copy of DIR (the report rewrites files). Prints, as Markdown:
 - the four MFR statistics of each complete space with their 95 % bootstrap intervals;
@@ -13,6 +13,7 @@ Works on a copy of DIR (the report rewrites files). Prints, as Markdown:
 - the MFR = 0 share, failures by class, cost (core-hours, wall, mean CPU per run).
 --weights sets a lattice's statistics' weights (the thesis's equal ones or the default trapezoid
 rule) in the copy's sweep.toml; the figures are copied only with the sweep's own weights.
+--save keeps the convergence.csv of the default rule (for scripts/thesis_compare.py).
 """
 import csv, json, os, re, shutil, subprocess, sys, tempfile
 
@@ -46,6 +47,8 @@ def main():
             toml = re.sub(r'lattice_weights = "\w+"', f'lattice_weights = "{weights}"', toml)
             open(os.path.join(d, "sweep.toml"), "w").write(toml)
         rows, summary = report(d, "--rule", "scaled", "--tolerance", str(TOL), "--hold", "2")
+        if "--save" in sys.argv:
+            shutil.copy(os.path.join(d, "convergence.csv"), sys.argv[sys.argv.index("--save") + 1])
         default_at = next((r["n"] for r in rows if r["converged"] == "true"), None)
         any_rows, _ = report(d, "--rule", "any", "--tolerance", str(TOL))
         any_at = next((r["n"] for r in any_rows if r["converged"] == "true"), None)
