@@ -3,8 +3,9 @@
 //! `cargo bench --bench pool_overhead -- [--jobs N] [--count N] [--rounds N]` (defaults: the
 //! machine's cores, 1000 jobs, 3 rounds alternating pool and parallel; the median ratio counts).
 //! Each job runs `true`. The pool path is the one a sweep takes: claim the run dir, run the child
-//! under its guard and the timeout, write result.json, append a joblog line, release the claim; GNU parallel runs the same `true` with `--joblog`. Prints both wall times, the
-//! per-job cost and the ratio.
+//! under its guard and the timeout, write result.json, append a joblog line, release the claim;
+//! GNU parallel runs the same `true` with `--joblog`. Prints both wall times, the per-job cost
+//! and the ratio.
 
 use std::path::Path;
 use std::process::Command;

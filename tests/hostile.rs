@@ -255,6 +255,17 @@ fn now() -> f64 {
     std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_secs_f64()
 }
 
+/// `d`'s joblog without the lines of `hash`.
+fn drop_joblog_lines(d: &Path, hash: &str) {
+    let text: String = std::fs::read_to_string(d.join("joblog.tsv"))
+        .unwrap()
+        .lines()
+        .filter(|l| !l.contains(hash))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(d.join("joblog.tsv"), text).unwrap();
+}
+
 #[test]
 fn a_result_without_its_joblog_line_gets_one_and_its_dead_claim_is_removed() {
     let tmp = tempfile::tempdir().unwrap();
@@ -264,13 +275,7 @@ fn a_result_without_its_joblog_line_gets_one_and_its_dead_claim_is_removed() {
     let h = hashes(&d);
     // What a kill between result.json and the joblog line leaves: the result, the dead
     // process's claim, and no line.
-    let text: String = std::fs::read_to_string(d.join("joblog.tsv"))
-        .unwrap()
-        .lines()
-        .filter(|l| !l.contains(h[2].as_str()))
-        .map(|l| format!("{l}\n"))
-        .collect();
-    std::fs::write(d.join("joblog.tsv"), text).unwrap();
+    drop_joblog_lines(&d, &h[2]);
     let host = std::fs::read_to_string("/proc/sys/kernel/hostname").unwrap();
     plant_claim(&d, &h[2], host.trim(), 999_999, now() - 5.0, Some((120.0, now() - 5.0)));
 
@@ -289,17 +294,6 @@ fn a_result_without_its_joblog_line_gets_one_and_its_dead_claim_is_removed() {
             "{lines:?}"
         );
     }
-}
-
-/// `d`'s joblog without the lines of `hash`.
-fn drop_joblog_lines(d: &Path, hash: &str) {
-    let text: String = std::fs::read_to_string(d.join("joblog.tsv"))
-        .unwrap()
-        .lines()
-        .filter(|l| !l.contains(hash))
-        .map(|l| format!("{l}\n"))
-        .collect();
-    std::fs::write(d.join("joblog.tsv"), text).unwrap();
 }
 
 #[test]

@@ -301,7 +301,7 @@ fn execute<E: Executor>(
     let screen = Screen::of(sweep);
     let sample = screen.sample(&manifest.points);
     let mut status = Vec::with_capacity(manifest.points.len());
-    let mut recovered: Vec<(String, f64)> = Vec::new();
+    let mut recovered: Vec<(String, Option<f64>)> = Vec::new();
     let mut queued: BTreeMap<usize, E::Job> = BTreeMap::new();
     let mut held: BTreeMap<usize, E::Job> = BTreeMap::new();
     for (p, job) in manifest.points.iter().zip(jobs) {
@@ -312,7 +312,7 @@ fn execute<E: Executor>(
         if matches!(state, RunState::Done(_) | RunState::Failed(_)) {
             // A process killed between its outcome and its joblog line left its claim, or
             // none: if no live process holds the run, the line it owed is written below.
-            if let Some(claimed_at) = store.free_finished(&p.hash)? {
+            if let store::holders::FinishedHolder::Nobody { claimed_at } = store.free_finished(&p.hash)? {
                 recovered.push((p.hash.clone(), claimed_at));
             }
         }

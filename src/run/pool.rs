@@ -245,10 +245,7 @@ impl<E: Executor> Worker<'_, E> {
         if let Some(outcome) = found {
             // Finished by a process killed before its joblog line: write the line it owed.
             if let Some(old) = stale {
-                let unlogged = crate::store::read_joblog(self.store.dir())?
-                    .iter()
-                    .all(|l| l.hash != hash || !(l.status == "done" || l.status == "failed"));
-                if unlogged {
+                if !crate::store::logged_outcomes(self.store.dir())?.contains(&hash) {
                     self.log(AttemptRecord::finished(&hash, &outcome, old.claimed_at), false)?;
                 }
             }

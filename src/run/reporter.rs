@@ -67,20 +67,20 @@ pub(super) struct Reporter<'a> {
 impl<'a> Reporter<'a> {
     /// Write the joblog line of each finished run whose process was killed before writing it,
     /// unless a line is there (`recovered`: finished runs no live process holds, with the time
-    /// their last attempt claimed them).
-    pub(super) fn log_recovered(&mut self, store: &Store, recovered: &[(String, f64)]) -> Result<()> {
-        let logged: BTreeSet<String> = store::read_joblog(store.dir())?
-            .into_iter()
-            .filter(|l| l.status == "done" || l.status == "failed")
-            .map(|l| l.hash)
-            .collect();
+    /// their last attempt claimed them if its claim said; else the outcome file's time).
+    pub(super) fn log_recovered(&mut self, store: &Store, recovered: &[(String, Option<f64>)]) -> Result<()> {
+        let logged = store::logged_outcomes(store.dir())?;
         for (hash, claimed_at) in recovered.iter().filter(|(h, _)| !logged.contains(h)) {
             let outcome = match store.finished(hash) {
                 Some(store::RunState::Done(r)) => RunOutcome::Done(*r),
                 Some(store::RunState::Failed(f)) => RunOutcome::Failed(*f),
                 _ => continue,
             };
-            self.joblog.append(&store::AttemptRecord::finished(hash, &outcome, *claimed_at))?;
+            let claimed_at = claimed_at.unwrap_or_else(|| {
+                let t = store.outcome_time(hash).and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok());
+                t.map_or(0.0, |d| d.as_secs_f64())
+            });
+            self.joblog.append(&store::AttemptRecord::finished(hash, &outcome, claimed_at))?;
         }
         Ok(())
     }

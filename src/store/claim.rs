@@ -61,6 +61,14 @@ impl Store {
         finished_state(&self.run_dir(hash))
     }
 
+    /// When the run's outcome (`result.json` or `failure.json`) was written, if it has one.
+    pub fn outcome_time(&self, hash: &str) -> Option<SystemTime> {
+        let dir = self.run_dir(hash);
+        ["result.json", "failure.json"]
+            .iter()
+            .find_map(|f| fs::metadata(dir.join(f)).and_then(|m| m.modified()).ok())
+    }
+
     /// Modification time of the run's `failure.json`, if it has one.
     pub fn failure_time(&self, hash: &str) -> Option<SystemTime> {
         fs::metadata(self.run_dir(hash).join("failure.json")).and_then(|m| m.modified()).ok()

@@ -12,6 +12,15 @@ use super::claim::read_claim;
 use super::{lease_alive, ClaimInfo, DirLock, RunState, Store, StoreError, LOCK};
 use crate::sys::host::unix_now;
 
+/// Who holds a finished run ([`Store::free_finished`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FinishedHolder {
+    /// A live process: it writes the run's joblog line itself.
+    Live,
+    /// Nobody; `claimed_at` (Unix seconds) is when the last attempt claimed it, if its claim said.
+    Nobody { claimed_at: Option<f64> },
+}
+
 /// One line about a claim's holder: host, pid, age, and its lease.
 pub fn describe(c: &ClaimInfo) -> String {
     let now = unix_now();
@@ -69,32 +78,23 @@ impl Store {
 
     /// Clear the finished run `hash` of a claim that stands for nobody: one left by a process
     /// that is gone, or one cut off while it was being written (its writer held the lock, so it
-    /// died). `None` while a live process holds the run; otherwise when the last attempt
-    /// claimed it (Unix seconds), from its claim or else from its outcome file's time.
-    pub fn free_finished(&self, hash: &str) -> Result<Option<f64>, StoreError> {
-        let dir = self.run_dir(hash);
-        let path = dir.join("claim");
-        let outcome_time = || {
-            ["result.json", "failure.json"]
-                .iter()
-                .find_map(|f| fs::metadata(dir.join(f)).and_then(|m| m.modified()).ok())
-                .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
-                .map_or(0.0, |d| d.as_secs_f64())
-        };
+    /// died). Says whether a live process still holds the run.
+    pub fn free_finished(&self, hash: &str) -> Result<FinishedHolder, StoreError> {
+        let path = self.run_dir(hash).join("claim");
         if !path.exists() {
-            return Ok(Some(outcome_time()));
+            return Ok(FinishedHolder::Nobody { claimed_at: None });
         }
         let _lock = DirLock::take(&self.dir.join(LOCK))?;
         let claimed_at = match read_claim(&path) {
-            Some(c) if self.owner_alive(&c) => return Ok(None),
-            Some(c) => c.claimed_at,
-            None if !path.exists() => return Ok(Some(outcome_time())),
-            None => outcome_time(),
+            Some(c) if self.owner_alive(&c) => return Ok(FinishedHolder::Live),
+            Some(c) => Some(c.claimed_at),
+            None if !path.exists() => return Ok(FinishedHolder::Nobody { claimed_at: None }),
+            None => None,
         };
         if !matches!(self.finished(hash), Some(RunState::Done(_) | RunState::Failed(_))) {
-            return Ok(None);
+            return Ok(FinishedHolder::Live);
         }
         fs::remove_file(&path).map_err(super::io(&path))?;
-        Ok(Some(claimed_at))
+        Ok(FinishedHolder::Nobody { claimed_at })
     }
 }

@@ -177,6 +177,15 @@ pub struct JoblogLine {
     pub hash: String,
 }
 
+/// The runs that have a `done` or `failed` line in `DIR/joblog.tsv`.
+pub fn logged_outcomes(dir: &Path) -> Result<std::collections::BTreeSet<String>, StoreError> {
+    Ok(read_joblog(dir)?
+        .into_iter()
+        .filter(|l| l.status == "done" || l.status == "failed")
+        .map(|l| l.hash)
+        .collect())
+}
+
 /// Read `DIR/joblog.tsv`.
 pub fn read_joblog(dir: &Path) -> Result<Vec<JoblogLine>, StoreError> {
     let path = dir.join(JOBLOG);

@@ -41,7 +41,7 @@ pub use claim::{
     foreign_entry, lease_alive, set_default_lease, Claim, ClaimAttempt, ClaimInfo, Heartbeat, RunState,
     DEFAULT_LEASE,
 };
-pub use joblog::{read_joblog, AttemptRecord, Joblog, JoblogLine, JOBLOG_HEADER};
+pub use joblog::{logged_outcomes, read_joblog, AttemptRecord, Joblog, JoblogLine, JOBLOG_HEADER};
 pub use manifest::{DesignRecord, Manifest, PointRecord, SpaceRecord, MANIFEST_FORMAT};
 pub use results::{write_results, PointStatus};
 
