@@ -9,8 +9,9 @@
 //! so the index reported is the adjusted ε² = 1 − [SS_within/(N − M)] / [SS_total/(N − 1)],
 //! clamped to [0, 1].
 //!
-//! `scripts/bench_sensitivity.py` checks it against SALib's RBD-FAST and delta estimators on the
-//! same data and on the Ishigami function (BENCHMARKS.md "Sensitivity indices").
+//! `docs/study/statistics/bench_sensitivity.py` checks it against SALib's RBD-FAST and delta
+//! estimators on the same data and on the Ishigami function (BENCHMARKS.md "Sensitivity
+//! indices").
 
 use serde::Serialize;
 

@@ -2,8 +2,8 @@
 //!
 //! Returns the **squared** centred discrepancy CD², the convention of
 //! `scipy.stats.qmc.discrepancy(x, method="CD")`, so figures here and from scipy compare
-//! directly (the two agree to rounding on the same points: `scripts/bench_discrepancy.py`
-//! checks it). Points must lie in [0, 1]^d; nothing here scales or checks them.
+//! directly (the two agree to rounding on the same points:
+//! `docs/study/statistics/bench_discrepancy.py` checks it). Points must lie in [0, 1]^d; nothing here scales or checks them.
 //!
 //! For n points x_i in d dimensions, with a = |x − ½| per coordinate (Hickernell 1998, "A generalized
 //! discrepancy and quadrature error bound", Math. Comp. 67, the centred case):

@@ -75,8 +75,8 @@ pub struct LdsSettings {
     pub max: usize,
     pub scrambling: Scrambling,
     /// Seed for `scrambling = "random"`. The default, 14, was chosen by measurement
-    /// (`scripts/bench_discrepancy.py`, BENCHMARKS.md "Design discrepancy"): of seeds 0–39 it
-    /// has the smallest worst-case ratio of its centred discrepancy to the average of
+    /// (`docs/study/statistics/bench_discrepancy.py`, BENCHMARKS.md "Design discrepancy"): of
+    /// seeds 0–39 it has the smallest worst-case ratio of its centred discrepancy to the average of
     /// scipy's scrambled Halton in 4-D and 6-D (N = 400, 800, 2400) and 8-D (N = 100), and is
     /// below that average in every case.
     pub seed: u64,

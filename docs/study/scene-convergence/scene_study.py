@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
-"""Tables of the scene's convergence study (scripts/scene_study.sh writes the TSV).
+"""Tables of the scene's convergence study (docs/study/scene-convergence/scene_study.sh writes the TSV).
 
-   python3 scripts/scene_study.py scene_study.tsv > tables.md
+   python3 docs/study/scene-convergence/scene_study.py scene_study.tsv > tables.md
 
 For each variant (one numerical choice halved or doubled) and each point: the change of the
 mean MFR over the pile seeds against the baseline, and the bound max(5 %, 2 × the standard error

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Summarise the steady-state measurement over a sweep directory (conveyor layout).
 
-    python3 scripts/steady_study.py DIR [--csv OUT.csv]
+    python3 docs/study/steady/steady_study.py DIR [--csv OUT.csv]
 
 Per point: parameters, MFR ± SE, transient and window (blocks), trend z, drift (last quarter −
 first quarter over MFR), heap start/end/target, stop, CPU s. Then the checks of the shared

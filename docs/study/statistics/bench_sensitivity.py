@@ -3,7 +3,7 @@
 "Sensitivity indices").
 
     pip install SALib numpy
-    python3 scripts/bench_sensitivity.py [--sweep target/release/sweep]
+    python3 docs/study/statistics/bench_sensitivity.py [--sweep target/release/sweep]
 
 1. Ishigami (a = 7, b = 0.1) on [-pi, pi]^3, known S1 = 0.3139, 0.4424, 0 (Saltelli 2008), on a
    random sample of N points (several seeds): `sweep stats --by` against SALib's RBD-FAST
@@ -27,7 +27,7 @@ import tempfile
 import numpy as np
 from SALib.analyze import delta, rbd_fast
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 ISHIGAMI_S1 = [0.3139, 0.4424, 0.0]
 
 

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# The thesis's study on real LIGGGHTS (docs/study/thesis.md): the 4-D LDS sweep to 2,400 points,
+# The thesis's study on real LIGGGHTS (docs/study/thesis/README.md): the 4-D LDS sweep to 2,400 points,
 # the 4-D lattice at levels 5, 6, 7, and an LDS over the blade speeds real machines use.
 #
-#   bash scripts/thesis_study.sh [lds|lattice|slow|lds-0.3 ...]   (default: lds lattice slow)
+#   bash docs/study/thesis/thesis_study.sh [lds|lattice|slow|lds-0.3 ...]   (default: lds lattice slow)
 #
 # It takes hours on two cores and is meant to be cut off and started again: each sweep runs in
 # WORK/<name> (default WORK=/tmp/thesis-study) with `sweep lds|lattice`, which continues a
@@ -17,7 +17,7 @@
 # thesis's figures need the whole space); `sweep report` then judges them with the default rule
 # and with the thesis's (README "Reading the verdict").
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/../../.."
 bin=${SWEEP_BIN:-$PWD/target/release/sweep}
 work=${WORK:-/tmp/thesis-study}
 jobs=${JOBS:-2}

@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """Share of a run's engine time spent settling the pile, per variant of a fidelity bench: what
-sharing one settled pile between points (LIGGGHTS restart files) could save at most (issue 10,
-BENCHMARKS.md "Fidelity").
+sharing one settled pile between points (LIGGGHTS restart files) could save at most (BENCHMARKS.md
+"Fidelity").
 
-    python3 scripts/settle_share.py BENCH_DIR      # the --out of `sweep bench fidelity`
+    python3 docs/study/fidelity/settle_share.py BENCH_DIR      # the --out of `sweep bench fidelity`
 
 A run's settle is every `Loop time` of its log before the line `demsweep: settled at step N`,
 its spread every one after.

@@ -2,9 +2,9 @@
 # Seed-to-seed spread of one point's MFR against its cost, for scene sizes: the same point
 # (default D = 3 mm, gap = 5 mm, μ = 0.3, v = 1.6 m/s) run with several pile seeds for each
 # (window, depth) in diameters. Prints a Markdown table (BENCHMARKS.md "MFR noise").
-#   SIZES="20 6,40 6" bash scripts/mfr_noise.sh [D_mm] [gap_mm] [seeds]   (SIZES: "window depth,...")
+#   SIZES="20 6,40 6" bash docs/study/point-cost/mfr_noise.sh [D_mm] [gap_mm] [seeds]   (SIZES: "window depth,...")
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/../../.."
 d=${1:-3}; gap=${2:-5}; seeds=${3:-6}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # What one point costs at the corners of the thesis space (D 1–3 mm × gap 1–5 mm, μ = 0.3,
 # v = 1.6 m/s): particles, steps, wall and CPU seconds of `sweep run`, one at a time.
-# Prints a Markdown table (the one in README.md). Needs target/release/sweep (scripts/setup.sh).
+# Prints a Markdown table (BENCHMARKS.md "One point"). Needs target/release/sweep (scripts/setup.sh).
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/../../.."
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 cat > "$tmp/space.toml" <<'TOML'

@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """Numerical convergence of the steady-state MFR (conveyor layout), docs/study/steady/README.md.
 
-    python3 scripts/steady_convergence.py [OUT.tsv]          # run what is missing, then the table
+    python3 docs/study/steady/steady_convergence.py [OUT.tsv]          # run what is missing, then the table
                                                              # (docs/study/steady/convergence.tsv)
-    python3 scripts/steady_convergence.py OUT.tsv --table    # the table only
+    python3 docs/study/steady/steady_convergence.py OUT.tsv --table    # the table only
 
 Every numerical choice of the conveyor measurement halved and doubled, one at a time, on the 8
 points of the scene study (the first 6 LDS points of sweeps/thesis-lds.toml and the corners
@@ -16,7 +16,7 @@ the base, SE from the points' own mfr_se (paired: the same points, independent r
 """
 import csv, json, math, os, subprocess, sys, tempfile
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 BIN = os.environ.get("SWEEP_BIN", os.path.join(ROOT, "target/release/sweep"))
 
 # variant -> [scene] lines (TOML)

@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
-# The scene's convergence study (issue "MFR must be a property of the point", BENCHMARKS.md
-# "Scene convergence"): every numerical choice of the scene halved and doubled, one at a time,
+# The scene's convergence study (BENCHMARKS.md "Scene convergence"): every numerical choice
+# of the scene halved and doubled, one at a time,
 # on 8 points of the thesis 4-D space (a seeded LDS draw of 6, plus the corners D 1 mm / gap 5 mm
 # and D 3 mm / gap 4 mm) with 3 pile seeds each; then a 24-point LDS draw on the new scene and on
 # the first one (layout "thesis", no rolling friction) for the steadiness and cost comparison.
 # One row per run is appended to OUT (TSV), so an interrupted study resumes where it stopped;
-# scripts/scene_study.py turns it into the tables.
-#   bash scripts/scene_study.sh [OUT.tsv] [VARIANTS...]      (default: every variant)
+# docs/study/scene-convergence/scene_study.py turns it into the tables.
+#   bash docs/study/scene-convergence/scene_study.sh [OUT.tsv] [VARIANTS...]      (default: every variant)
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/../../.."
 out=${1:-scene_study.tsv}; shift || true
 bin=${SWEEP_BIN:-$PWD/target/release/sweep}
 work=$(mktemp -d)

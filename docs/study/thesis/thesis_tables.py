@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
-"""The tables of docs/study/thesis.md from a sweep directory of the thesis study.
+"""The tables of docs/study/thesis/README.md from a sweep directory of the thesis study.
 
-    python3 scripts/thesis_tables.py DIR [--reference DIR2] [--weights equal|trapezoid] [--save OUT.csv]
+    python3 docs/study/thesis/thesis_tables.py DIR [--reference DIR2] [--weights equal|trapezoid] [--save OUT.csv]
 
 Works on a copy of DIR (the report rewrites files). Prints, as Markdown:
 - the four MFR statistics of each complete space with their 95 % bootstrap intervals;
@@ -13,11 +13,11 @@ Works on a copy of DIR (the report rewrites files). Prints, as Markdown:
 - the MFR = 0 share, failures by class, cost (core-hours, wall, mean CPU per run).
 --weights sets a lattice's statistics' weights (the thesis's equal ones or the default trapezoid
 rule) in the copy's sweep.toml; the figures are copied only with the sweep's own weights.
---save keeps the convergence.csv of the default rule (for scripts/thesis_compare.py).
+--save keeps the convergence.csv of the default rule (for docs/study/thesis/thesis_compare.py).
 """
 import csv, json, os, re, shutil, subprocess, sys, tempfile
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 BIN = os.environ.get("SWEEP_BIN", os.path.join(ROOT, "target/release/sweep"))
 STATS = ["mean", "std", "skewness", "kurtosis"]
 TOL = 0.05

@@ -13,7 +13,7 @@ scipy is not a dependency of the tool; install it for this script only:
 
     cargo build --release
     python3 -m venv /tmp/scipyenv && /tmp/scipyenv/bin/pip install scipy
-    /tmp/scipyenv/bin/python scripts/bench_discrepancy.py [--seeds 20]
+    /tmp/scipyenv/bin/python docs/study/statistics/bench_discrepancy.py [--seeds 20]
 """
 
 import argparse

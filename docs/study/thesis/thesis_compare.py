@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
-"""LDS against lattice (thesis Fig. 4.20 and 4.22 on one picture), docs/study/thesis.md.
+"""LDS against lattice (thesis Fig. 4.20 and 4.22 on one picture), docs/study/thesis/README.md.
 
-    python3 scripts/thesis_compare.py OUT.png REF.csv LABEL=convergence.csv ...
+    python3 docs/study/thesis/thesis_compare.py OUT.png REF.csv LABEL=convergence.csv ...
 
 Each LABEL=convergence.csv is one design's convergence.csv (from `sweep report`, or saved by
-`scripts/thesis_tables.py --save`). REF.csv's last space is the reference (the best estimate of
+`docs/study/thesis/thesis_tables.py --save`). REF.csv's last space is the reference (the best estimate of
 the truth); the band around it is ±5 % of each statistic's scale, the scaled rule's tolerance
 (mean: max(|mean|, std); std; skewness: max(|skewness|, 1); kurtosis). Needs matplotlib.
 """

@@ -3,7 +3,7 @@
 default, on the stand-in engine over the thesis's 4-D space (BENCHMARKS.md "Convergence: LDS
 against lattice").
 
-    python3 scripts/bench_convergence.py [--sweep target/release/sweep]
+    python3 docs/study/statistics/bench_convergence.py [--sweep target/release/sweep]
 
 Runs sweeps/thesis-lattice.toml (levels 5, 6, 7, 9, 10) and sweeps/thesis-lds.toml (steps of 400
 up to 2,400) with `[run] engine = "stand-in"`, each under `--rule any` (the thesis: any one
@@ -18,7 +18,7 @@ import subprocess
 import tempfile
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 STATS = ["mean", "std", "skewness", "kurtosis"]
 
 
