@@ -7,11 +7,11 @@
 # It takes hours on two cores and is meant to be cut off and started again: each sweep runs in
 # WORK/<name> (default WORK=/tmp/thesis-study) with `sweep lds|lattice`, which continues a
 # directory it finds; every SYNC_S seconds, and at the end, the sweep's slim record is copied to
-# docs/study/thesis/<name>/: sweep.toml, manifest.json, joblog.tsv, results.csv, convergence.csv,
-# summary.json and each run's result.json or failure.json (no decks, logs or dumps). On a fresh
-# clone the record is copied back into WORK/<name> first, so `sweep` reuses every finished run.
-# Commit docs/study/thesis/ to carry the study across machines; a finished sweep's runs/ may be
-# packed as runs.tar.gz (`tar czf runs.tar.gz runs` in its record), which a restore unpacks.
+# docs/study/thesis/<name>/: sweep.toml, summary.json and convergence.csv as they are,
+# manifest.json, joblog.tsv and results.csv gzipped, and each run's result.json or failure.json
+# (no decks, logs or dumps), loose while the sweep runs and packed in runs.tar.gz at its end. On a
+# fresh clone the record is unpacked into WORK/<name> first, so `sweep` reuses every finished run.
+# Commit docs/study/thesis/ to carry the study across machines.
 #
 # The LDS sweeps run with --hold 1000 so that they go on to their --max whatever the verdict (the
 # thesis's figures need the whole space); `sweep report` then judges them with the default rule
@@ -25,15 +25,22 @@ sync_s=${SYNC_S:-300}
 record=docs/study/thesis
 mkdir -p "$work" "$record"
 
-# Copy the slim record of sweep directory $1 to $2 (either way round).
-slim_copy() {
-  local from=$1 to=$2
+# The sweep's files kept as they are, and the bulky ones kept gzipped.
+plain=(sweep.toml summary.json convergence.csv)
+packed=(manifest.json joblog.tsv results.csv)
+
+# Copy the slim record of sweep directory $1 into its record $2. Runs not in the record yet are
+# copied loose into $2/runs (cheap to repeat while the sweep runs); pack_runs packs them.
+record() {
+  local from=$1 to=$2 f d h
   [ -f "$from/manifest.json" ] || return 0
   mkdir -p "$to/runs"
-  for f in sweep.toml manifest.json joblog.tsv results.csv convergence.csv summary.json; do
+  for f in "${plain[@]}"; do
     [ -f "$from/$f" ] && cp "$from/$f" "$to/$f.tmp" && mv "$to/$f.tmp" "$to/$f"
   done
-  local d h
+  for f in "${packed[@]}"; do
+    [ -f "$from/$f" ] && gzip -9c "$from/$f" > "$to/$f.gz.tmp" && mv "$to/$f.gz.tmp" "$to/$f.gz"
+  done
   for d in "$from"/runs/*/; do
     h=$(basename "$d")
     for f in result.json failure.json; do
@@ -44,16 +51,37 @@ slim_copy() {
   done
 }
 
+# Pack every run of sweep directory $1 (each result.json or failure.json) into $2/runs.tar.gz,
+# in place of the loose copies.
+pack_runs() {
+  local from=$1 to
+  [ -f "$from/manifest.json" ] || return 0
+  to=$(cd "$2" && pwd)
+  (cd "$from" && find runs \( -name result.json -o -name failure.json \) -print0 | sort -z |
+    tar czf "$to/runs.tar.gz.tmp" --null -T -)
+  mv "$to/runs.tar.gz.tmp" "$to/runs.tar.gz" && rm -rf "$to/runs"
+}
+
+# Unpack the record $1 into a new sweep directory $2.
+restore() {
+  local from=$1 to=$2 f
+  mkdir -p "$to"
+  for f in "${plain[@]}"; do [ -f "$from/$f" ] && cp "$from/$f" "$to/$f"; done
+  for f in "${packed[@]}"; do [ -f "$from/$f.gz" ] && gunzip -c "$from/$f.gz" > "$to/$f"; done
+  [ -f "$from/runs.tar.gz" ] && tar xzf "$from/runs.tar.gz" -C "$to"
+  # Runs copied loose by a session that did not reach its end.
+  [ -d "$from/runs" ] && cp -r "$from/runs" "$to/"
+  return 0
+}
+
 run_sweep() { # name, then the sweep command's arguments
   local name=$1; shift
   local dir=$work/$name
-  if [ ! -d "$dir" ] && [ -f "$record/$name/manifest.json" ]; then
+  if [ ! -d "$dir" ] && [ -f "$record/$name/manifest.json.gz" ]; then
     echo "study: restoring $name from $record/$name" >&2
-    slim_copy "$record/$name" "$dir"
-    # A finished sweep's runs are kept packed (runs.tar.gz: each run's result.json or failure.json).
-    [ -f "$record/$name/runs.tar.gz" ] && tar xzf "$record/$name/runs.tar.gz" -C "$dir"
+    restore "$record/$name" "$dir"
   fi
-  ( while sleep "$sync_s"; do slim_copy "$dir" "$record/$name"; done ) &
+  ( while sleep "$sync_s"; do record "$dir" "$record/$name"; done ) &
   local syncer=$!
   local start=$SECONDS rc=0
   # FORCE=1: continue a directory whose templates changed (runs whose decks did not change keep
@@ -65,7 +93,8 @@ run_sweep() { # name, then the sweep command's arguments
   fi
   kill "$syncer" 2>/dev/null || true
   "$bin" report "$dir" >/dev/null 2>&1 || true
-  slim_copy "$dir" "$record/$name"
+  record "$dir" "$record/$name"
+  pack_runs "$dir" "$record/$name"
   echo "study: $name exited $rc after $((SECONDS - start)) s" >&2
   printf '%s\t%s\t%s\t%s\t%s\n' "$(date -u +%FT%TZ)" "$name" "$rc" "$((SECONDS - start))" \
     "$("$bin" --version)" >> "$record/sessions.tsv"

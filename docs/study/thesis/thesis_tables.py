@@ -3,7 +3,8 @@
 
     python3 docs/study/thesis/thesis_tables.py DIR [--reference DIR2] [--weights equal|trapezoid] [--save OUT.csv]
 
-Works on a copy of DIR (the report rewrites files). Prints, as Markdown:
+DIR is a sweep directory or a record in docs/study/thesis/ (its packed files are unpacked). Works
+on a copy of DIR (the report rewrites files). Prints, as Markdown:
 - the four MFR statistics of each complete space with their 95 % bootstrap intervals;
 - at which N each rule calls the sweep converged: the default ("scaled", 5 %, hold 2) and the
   thesis's ("any", 5 %), as `sweep report --rule ...` judges the same runs;
@@ -14,8 +15,10 @@ Works on a copy of DIR (the report rewrites files). Prints, as Markdown:
 --weights sets a lattice's statistics' weights (the thesis's equal ones or the default trapezoid
 rule) in the copy's sweep.toml; the figures are copied only with the sweep's own weights.
 --save keeps the convergence.csv of the default rule (for docs/study/thesis/thesis_compare.py).
+Without --weights it copies the report's figures to docs/study/thesis/<name>-figures/; the study's
+page keeps the ones it shows.
 """
-import csv, json, os, re, shutil, subprocess, sys, tempfile
+import csv, gzip, json, os, re, shutil, subprocess, sys, tarfile, tempfile
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 BIN = os.environ.get("SWEEP_BIN", os.path.join(ROOT, "target/release/sweep"))
@@ -30,6 +33,19 @@ def report(d, *args):
     return rows, summary
 
 
+def copy_sweep(src, d):
+    """Copy sweep directory or record `src` to `d`, unpacking a record's packed files
+    (docs/study/thesis/thesis_study.sh packs manifest.json, joblog.tsv, results.csv and runs/)."""
+    shutil.copytree(src, d, ignore=shutil.ignore_patterns("*.liggghts", "dump.*", "*.stl", "*.data", "screen.txt"))
+    for f in os.listdir(d):
+        if f.endswith(".gz") and not f.endswith(".tar.gz"):
+            with gzip.open(os.path.join(d, f)) as z, open(os.path.join(d, f[:-3]), "wb") as out:
+                shutil.copyfileobj(z, out)
+    if os.path.exists(os.path.join(d, "runs.tar.gz")):
+        with tarfile.open(os.path.join(d, "runs.tar.gz")) as t:
+            t.extractall(d)
+
+
 def scale(stat, ref):
     m, s, k, ku = (float(ref[x]) for x in STATS)
     return {"mean": max(abs(m), s), "std": s, "skewness": max(abs(k), 1.0), "kurtosis": ku}[stat]
@@ -40,7 +56,7 @@ def main():
     ref_dir = sys.argv[sys.argv.index("--reference") + 1] if "--reference" in sys.argv else None
     with tempfile.TemporaryDirectory() as tmp:
         d = os.path.join(tmp, "sweep")
-        shutil.copytree(src, d, ignore=shutil.ignore_patterns("*.liggghts", "dump.*", "*.stl", "*.data", "screen.txt"))
+        copy_sweep(src, d)
         weights = sys.argv[sys.argv.index("--weights") + 1] if "--weights" in sys.argv else None
         if weights:
             toml = open(os.path.join(d, "sweep.toml")).read()
@@ -55,7 +71,7 @@ def main():
         ref_rows = rows
         if ref_dir:
             r2 = os.path.join(tmp, "ref")
-            shutil.copytree(ref_dir, r2, ignore=shutil.ignore_patterns("*.liggghts", "dump.*", "*.stl", "*.data"))
+            copy_sweep(ref_dir, r2)
             ref_rows, _ = report(r2)
         ref = ref_rows[-1]
         print(f"Spaces of {summary['name']} (reference: {ref['space']}, N = {ref['n']}):\n")
