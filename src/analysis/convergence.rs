@@ -44,9 +44,6 @@ pub enum Rule {
     Scaled,
 }
 
-/// The rule names a sweep file and `--rule` accept.
-pub const RULES: [&str; 3] = ["scaled", "any", "all"];
-
 impl Rule {
     pub fn parse(s: &str) -> Option<Rule> {
         match s {

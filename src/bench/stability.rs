@@ -20,8 +20,6 @@ use crate::point::{self, PointContext};
 use crate::sweep::{ParamKind, Parameter, Sweep};
 use crate::sys::process::CancelToken;
 
-/// Default timestep ladder, fractions of the Rayleigh time.
-pub const DEFAULT_FRACTIONS: [f64; 7] = [0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0];
 /// Floor of the MFR drift bound, relative to the first level's mean MFR.
 pub const DRIFT_FLOOR: f64 = 0.10;
 /// Median seed-to-seed spread of MFR at one point (sd / mean; BENCHMARKS.md "Scene

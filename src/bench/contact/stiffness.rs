@@ -58,11 +58,6 @@ pub fn closed_form_youngs(e_p: f64, q: f64, nu: f64) -> f64 {
     e_p * share / (1.0 - nu * nu)
 }
 
-/// The Y* at and below which the elastic Hertz overlap reaches the radius, Pa: (5π/4) ρ vn².
-pub fn crossing_youngs(density: f64, vn: f64) -> f64 {
-    1.25 * std::f64::consts::PI * density * vn * vn
-}
-
 /// One particle modulus and wall ratio.
 #[derive(Debug, Clone, Serialize)]
 pub struct StiffnessRow {
