@@ -467,11 +467,11 @@ mod tests {
         assert_eq!(ch[2].scale, Some(1.0));
         assert!(ch[2].rel.unwrap() > 2.9, "the thesis's relative change would read 300 %");
         assert!(ch[0].test.starts_with("passed: |Δ| 0.0010 ≤ 0.0030"), "{}", ch[0].test);
-        // The old floor of 0.01 would let the std move by half itself; here 0.0020 → fails.
+        // Rule `all`'s floor of 0.01 would let the std move by half itself; here 0.0020 → fails.
         let s = spaces(&[m(0.06, 0.0220, 0.0, 2.5), m(0.06, 0.0200, 0.0, 2.5)]);
         let ch = judge(&s, &scaled(0.05, 1))[1].changes.clone().unwrap();
         assert!(!ch[1].within && ch[1].test.starts_with("failed (moved)"), "{}", ch[1].test);
-        assert!(judge(&s, &all(0.05, 0.01, 1))[1].holds, "the old default passed it by the floor");
+        assert!(judge(&s, &all(0.05, 0.01, 1))[1].holds, "rule `all` passes it by the floor");
     }
 
     #[test]

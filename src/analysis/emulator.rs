@@ -1,5 +1,5 @@
 //! An emulator of MFR over the space: a Gaussian-process (kriging) surrogate fitted to the done
-//! points (DESIGN §6).
+//! points (docs/statistics.md "The emulator").
 //!
 //! The model: MFR(u) = μ + f(u) + e, u the point in unit coordinates, f a zero-mean GP with an
 //! anisotropic Matérn-5/2 covariance σ²·k(r), r² = Σ((u_j − u'_j)/θ_j)², and e independent

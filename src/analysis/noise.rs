@@ -1,4 +1,5 @@
-//! The noise in each point, apart from the parameters' spread (DESIGN §6).
+//! The noise in each point, apart from the parameters' spread (docs/statistics.md "The noise in
+//! each point").
 //!
 //! One run per point measures MFR(x) + e with e the point's own noise (standard error `mfr_se`).
 //! Over the space, Var(measured) = Var(MFR(x)) + E[se²] when the noise is independent of x's

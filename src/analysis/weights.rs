@@ -1,5 +1,5 @@
 //! Weighted statistics of a space: lattice points as a quadrature rule, and the bootstrap of
-//! weighted statistics (DESIGN §6).
+//! weighted statistics (docs/statistics.md "The statistics of a space").
 //!
 //! A lattice with its endpoints is not a uniform sample of the box: every face carries full
 //! weight. The statistics the sweep asks for are integrals over the box, so a lattice point is

@@ -20,8 +20,8 @@ use crate::analysis::stats::Bootstrap;
 const RESULTS_EVERY: std::time::Duration = std::time::Duration::from_secs(1);
 
 /// Called after each nested space has all its points finished, in space order, with that
-/// space's points. Convergence checking (a later issue) implements it; `Flow::Drain` stops
-/// starting new runs.
+/// space's points. [`Watch`] (the convergence rule) and [`RunAll`] implement it; `Flow::Drain`
+/// stops starting new runs.
 pub trait SpaceHook {
     fn space_complete(&mut self, space: &SpaceRecord, points: &[(&PointRecord, &PointStatus)]) -> Flow;
 }
