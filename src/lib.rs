@@ -14,6 +14,7 @@ pub mod contact;
 pub mod design;
 pub mod engine;
 pub mod error;
+pub mod measure;
 pub mod outcome;
 pub mod point;
 pub mod report;

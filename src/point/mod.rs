@@ -4,11 +4,6 @@
 //! run in a directory it is given. The pool calls both; `sweep render` and `sweep run` too.
 
 pub mod deck;
-pub mod layer;
-pub mod metrics;
-pub mod plausible;
-pub mod quality;
-pub mod steady;
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -16,9 +11,10 @@ use std::time::Duration;
 
 use crate::engine::{Engine, LogLimits, RunStatus};
 use crate::error::{hint, Error, Result};
+use crate::measure::metrics::Frame;
+use crate::measure::{layer, metrics, plausible, steady};
 use crate::outcome::{FailureClass, RunFailure, RunOutcome, RunResult, RESULT_FORMAT};
 use crate::point::deck::{Deck, Template};
-use crate::point::metrics::Frame;
 use crate::scene::{mesh, params, Scene};
 use crate::sweep::{ParamKind, Parameter, Sweep};
 use crate::sys::atomic::write_json;
@@ -334,8 +330,8 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
 fn conveyor_layer(
     scene: &crate::scene::Scene,
     frame: &Frame,
-    st: &steady::SteadyState,
-) -> Option<layer::Layer> {
+    st: &crate::outcome::steady::SteadyState,
+) -> Option<crate::outcome::layer::Layer> {
     let c = &scene.conveyor;
     let mut l = layer::measure(scene, frame, c.delete_x1, scene.blade_x0)?;
     let particle_mass = |d: f64| scene.density * std::f64::consts::PI / 6.0 * d.powi(3);

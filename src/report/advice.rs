@@ -8,8 +8,8 @@ use serde::Serialize;
 
 use super::{PointRow, PointState};
 use crate::analysis::sensitivity::Index;
-use crate::point::layer::Layer;
-use crate::point::quality::Quality;
+use crate::measure::quality::Quality;
+use crate::outcome::layer::Layer;
 
 /// Points a conclusion needs before it is judged.
 pub const MIN_POINTS: usize = 20;

@@ -10,7 +10,7 @@ use super::{PointRow, SpaceRow};
 use crate::analysis::convergence::{self, Change, Criteria, SpaceStats};
 use crate::analysis::emulator::{CrossValidation, EmulatedStatistics, Emulator};
 use crate::analysis::stats::STATISTICS;
-use crate::point::quality::Quality;
+use crate::measure::quality::Quality;
 use crate::sweep::Sweep;
 
 /// Most points the report's emulator conditions on (its factorisation costs N³/3; past this

@@ -7,7 +7,7 @@
 //! files. Reading fails before anything is written, so a bad directory changes nothing.
 //!
 //! Not responsible for running anything or for the statistics themselves ([`crate::analysis::stats`],
-//! [`crate::analysis::convergence`], [`crate::analysis::sensitivity`], [`crate::point::quality`]).
+//! [`crate::analysis::convergence`], [`crate::analysis::sensitivity`], [`crate::measure::quality`]).
 
 mod advice;
 pub mod emulation;
@@ -26,8 +26,8 @@ use crate::analysis::convergence::{self, Change, Criteria, Judgement, SpaceStats
 use crate::analysis::sensitivity;
 use crate::analysis::stats::{self, Bootstrap, Interval, Moments, STATISTICS};
 use crate::error::{Error, Result};
+use crate::measure::quality::{self, Quality};
 use crate::outcome::RunResult;
-use crate::point::quality::{self, Quality};
 use crate::run::screen::{Screen, ScreenReport};
 use crate::store::{DesignRecord, Manifest, PointStatus, RunState, Store};
 use crate::sweep::Sweep;

@@ -16,8 +16,8 @@ use plotters::prelude::*;
 
 use super::{Analysis, PointRow};
 use crate::analysis::stats::STATISTICS;
+use crate::measure::quality::Quality;
 use crate::outcome::VX_LAYERS;
-use crate::point::quality::Quality;
 
 pub(super) use crate::error::Res;
 pub(super) type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;

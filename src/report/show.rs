@@ -9,8 +9,8 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use crate::error::{Error, Result};
+use crate::measure::quality::{self, Profile, Quality};
 use crate::outcome::{RunFailure, RunResult};
-use crate::point::quality::{self, Profile, Quality};
 use crate::run::screen::Screen;
 use crate::store::{PointStatus, Store};
 use crate::sweep::Sweep;

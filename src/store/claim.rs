@@ -226,7 +226,7 @@ pub(super) fn finished_state(dir: &Path) -> Option<RunState> {
                 super::short(&r.hash)
             ));
         }
-        crate::point::plausible::check_result(r)
+        crate::measure::plausible::check_result(r)
     };
     match read::<RunResult>(&result).map(|r| r.and_then(|r| own(&r).map(|()| r))) {
         Some(Ok(r)) => return Some(RunState::Done(Box::new(r))),

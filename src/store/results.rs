@@ -29,11 +29,11 @@ impl PointStatus {
 /// Columns: index, the swept parameters, the fixed ones (every other catalogue parameter, the
 /// same on every row, so a row says the whole point), status (`done`, `failed`, `pending`, `screened`),
 /// failure (class), mfr (0 when screened), mfr_flux, mfr_particles, steady, vx_1..vx_12 (m/s,
-/// empty for an empty layer), runtime_s, hash, quality (of the v_x profile, [`crate::point::quality`];
+/// empty for an empty layer), runtime_s, hash, quality (of the v_x profile, [`crate::measure::quality`];
 /// empty unless done), screen (`closed` for a point the screen closes, `verification` for one of
 /// its verification sample, empty for an open point), mfr_se (the standard error of MFR, from
 /// batch means over the steady window), stop (`target` or `cap`: what ended the window), and
-/// the spread layer's quality where the run measured it ([`crate::point::layer`]): layer_cv and
+/// the spread layer's quality where the run measured it ([`crate::measure::layer`]): layer_cv and
 /// layer_cv_noise (–), covered_fraction (–), roughness_d (top-surface RMS height, in D).
 pub fn write_results(
     dir: &Path,
@@ -89,7 +89,7 @@ pub fn write_results(
         }
         row.push(p.hash.clone());
         row.push(match s {
-            PointStatus::Done(r) => crate::point::quality::of_result(r).as_str().into(),
+            PointStatus::Done(r) => crate::measure::quality::of_result(r).as_str().into(),
             _ => String::new(),
         });
         row.push(match (p.closed, sample.contains(&p.index)) {

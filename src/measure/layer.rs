@@ -20,9 +20,8 @@
 //!
 //! Reads only id-free columns x, y, z and mass (radius from mass and the solid density).
 
-use serde::{Deserialize, Serialize};
-
-use crate::point::metrics::Frame;
+use crate::measure::metrics::Frame;
+use crate::outcome::layer::Layer;
 use crate::scene::Scene;
 
 /// Bin length along the travel for the uniformity, in D.
@@ -31,23 +30,6 @@ pub const BIN_DIAMETERS: f64 = 3.0;
 pub const GRID_PER_D: f64 = 4.0;
 /// Length right behind the blade left out of the deposit, in D (still being laid down).
 pub const SETTLE_MARGIN: f64 = 2.0;
-
-/// The layer measures of one run.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Layer {
-    /// Coefficient of variation of the deposited mass per bin (–).
-    pub layer_cv: f64,
-    /// The same for independently placed particles: its counting noise (–).
-    pub layer_cv_noise: f64,
-    /// Share of the strip's area under the deposit (–).
-    pub covered_fraction: f64,
-    /// RMS of the top surface's height about its mean, in D.
-    pub roughness_d: f64,
-    /// Mean top-surface height over the strip, in D.
-    pub height_d: f64,
-    /// Particles in the deposit.
-    pub particles: usize,
-}
 
 /// The layer at `frame` (the window's last snapshot) over the strip from `x0` to `x1`.
 pub fn measure(scene: &Scene, frame: &Frame, x0: f64, x1: f64) -> Option<Layer> {

@@ -6,8 +6,8 @@
 //! responsible for whether a result belongs to its run directory or point (the store checks
 //! that).
 
+use crate::measure::metrics::Frame;
 use crate::outcome::RunResult;
-use crate::point::metrics::Frame;
 
 /// Highest possible MFR. MFR is the packing fraction of the spread layer over the gap height
 /// (DESIGN §5), so it cannot exceed the densest packing of equal spheres, π/√18 ≈ 0.7405

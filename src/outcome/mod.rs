@@ -3,6 +3,9 @@
 //! These are the records the pool, the store and the reports exchange. A failure is never turned
 //! into a number: it carries its class (which decides the retry policy) and a one-line reason.
 
+pub mod layer;
+pub mod steady;
+
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
@@ -32,7 +35,7 @@ pub struct RunResult {
     pub mfr_se: Option<f64>,
     /// The steady-state measurement: block series, transient, batches, trend, heap, stop.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub steady_state: Option<Box<crate::point::steady::SteadyState>>,
+    pub steady_state: Option<Box<crate::outcome::steady::SteadyState>>,
     /// MFR over consecutive sub-windows of the measurement window.
     pub mfr_windows: Vec<f64>,
     /// False when the sub-window MFRs show the flow had not reached a steady state.
@@ -49,7 +52,7 @@ pub struct RunResult {
     /// The spread layer's quality behind the blade at the window's end (absent in results
     /// written before it was measured, and from engines that give none).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub layer: Option<crate::point::layer::Layer>,
+    pub layer: Option<crate::outcome::layer::Layer>,
     /// Timesteps of the settle (until at rest, or the fixed settle of the thesis layout).
     pub settle_steps: u64,
     /// Timesteps run in all: settle and spread.

@@ -91,9 +91,9 @@ pub struct Metrics {
     pub steady_p: f64,
     pub vx: Vec<Option<f64>>,
     pub particles: usize,
-    /// The spread layer's quality at the window's end ([`crate::point::layer`]); `None` when
+    /// The spread layer's quality at the window's end ([`crate::measure::layer`]); `None` when
     /// the dump has no `y` or the strip is too short.
-    pub layer: Option<crate::point::layer::Layer>,
+    pub layer: Option<crate::outcome::layer::Layer>,
 }
 
 /// Compute the metrics of a run from its snapshots (any order; steps as the scene planned).
@@ -133,7 +133,7 @@ pub fn compute(scene: &Scene, frames: &[Frame]) -> Result<Metrics, MetricsError>
         vx: vx_profile(scene, window.iter().copied()),
         particles: window.last().map(|f| f.len()).unwrap_or(0),
         layer: window.last().and_then(|f| {
-            crate::point::layer::measure(scene, f, scene.blade_rear_at(t1), scene.blade_rear_at(t2))
+            crate::measure::layer::measure(scene, f, scene.blade_rear_at(t1), scene.blade_rear_at(t2))
         }),
     })
 }

@@ -1,0 +1,31 @@
+//! The steady-state record of a held-heap run as result.json stores it (`steady_state`;
+//! [`crate::measure::steady`] computes it).
+
+use serde::{Deserialize, Serialize};
+
+/// What a conveyor run measured, beyond MFR itself (result.json `steady_state`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SteadyState {
+    /// MFR of every block, the transient included.
+    pub block_mfr: Vec<f64>,
+    /// Blocks dropped by MSER truncation.
+    pub transient_blocks: usize,
+    pub window_blocks: usize,
+    /// Substrate travel per block, in diameters.
+    pub block_diameters: f64,
+    /// Blocks per batch of the SE, and the lag-1 autocorrelation of the batch means.
+    pub batch_blocks: usize,
+    pub batch_acf1: f64,
+    /// Lag-1 autocorrelation of the window's blocks.
+    pub block_acf1: f64,
+    /// OLS slope of the block MFR over the window, over its SE.
+    pub trend_z: f64,
+    /// (last quarter − first quarter) / MFR over the window.
+    pub drift: f64,
+    /// The heap's count at the window's start and end, and its target.
+    pub heap_start: u64,
+    pub heap_end: u64,
+    pub heap_target: u64,
+    /// `"target"`: the precision target ended the run; `"cap"`: the window cap did.
+    pub stop: String,
+}
