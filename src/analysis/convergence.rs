@@ -26,11 +26,46 @@
 //! ([`crate::analysis::stats`], [`crate::analysis::weights`]) or for running the sweep
 //! ([`crate::run`]).
 
-use serde::Serialize;
-
 use crate::analysis::stats::{Bootstrap, Moments, Statistic, STATISTICS};
 use crate::analysis::weights::LatticeWeights;
-use crate::sweep::ConvergenceSettings;
+use serde::{Deserialize, Serialize};
+
+/// The sweep file's `[convergence]` section: which rule judges the statistics, and how strictly.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct ConvergenceSettings {
+    /// `"scaled"` (default: every statistic moved and known within the tolerance on its own
+    /// scale, held for `hold` spaces), `"any"` (the thesis's rule: any one statistic within
+    /// tolerance relatively; floor and hold do not apply) or `"all"` (every statistic within
+    /// tolerance relatively or by the floor). See [`crate::analysis::convergence`].
+    pub rule: String,
+    /// Relative change of a statistic between consecutive spaces that counts as converged.
+    pub tolerance: f64,
+    /// Absolute change below which a statistic counts as converged whatever its relative change
+    /// (rule "all" only).
+    pub floor: f64,
+    /// Consecutive spaces the rule must hold for.
+    pub hold: usize,
+    /// No space with fewer points counts as converged. `sweep lds --max M` on a converged
+    /// directory sets it to the old extent, so that the extension is judged on its own.
+    pub min_points: usize,
+    /// `"trapezoid"` (default: a complete lattice's points weighted by the trapezoid rule) or
+    /// `"equal"` (the thesis). See [`crate::analysis::weights`].
+    pub lattice_weights: String,
+}
+
+impl Default for ConvergenceSettings {
+    fn default() -> Self {
+        ConvergenceSettings {
+            rule: "scaled".into(),
+            tolerance: 0.05,
+            floor: 0.01,
+            hold: 2,
+            min_points: 0,
+            lattice_weights: "trapezoid".into(),
+        }
+    }
+}
 
 /// Which statistics must be within tolerance, and how.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]

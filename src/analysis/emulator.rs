@@ -364,7 +364,7 @@ impl Emulator {
     /// uncertainty puts on each statistic).
     pub fn space_statistics(&self, draws: usize, paths: usize, seed: u64) -> EmulatedStatistics {
         let d = self.x[0].len();
-        let pts = crate::design::halton::halton(d, draws, crate::sweep::Scrambling::Random, seed);
+        let pts = crate::design::halton::halton(d, draws, crate::design::halton::Scrambling::Random, seed);
         let surface: Vec<f64> = pts.iter().map(|u| self.predict(u).0.max(0.0)).collect();
         let statistics = crate::analysis::stats::moments(&surface);
         let m = pts.len().min(256);
@@ -490,7 +490,7 @@ mod tests {
     }
 
     fn design(n: usize) -> Vec<Vec<f64>> {
-        crate::design::halton::halton(2, n, crate::sweep::Scrambling::Random, 3)
+        crate::design::halton::halton(2, n, crate::design::halton::Scrambling::Random, 3)
     }
 
     #[test]
@@ -512,7 +512,7 @@ mod tests {
         let x = design(60);
         let y: Vec<f64> = x.iter().map(|u| smooth(u)).collect();
         let e = Emulator::fit(&x, &y, &vec![None; 60]).unwrap();
-        let test = crate::design::halton::halton(2, 200, crate::sweep::Scrambling::Random, 99);
+        let test = crate::design::halton::halton(2, 200, crate::design::halton::Scrambling::Random, 99);
         let err: f64 = test.iter().map(|u| (e.predict(u).0 - smooth(u)).powi(2)).sum::<f64>() / 200.0;
         assert!(err.sqrt() < 0.01, "rmse {}", err.sqrt());
         let cv = e.loo(&y, &vec![None; 60]);
@@ -535,7 +535,7 @@ mod tests {
         assert!(cv.rmse > 0.04 && cv.rmse < 0.08, "{cv:?}");
         assert!(cv.coverage95 > 0.88, "{cv:?}");
         // The prediction averages the noise out: closer to the truth than the data are.
-        let test = crate::design::halton::halton(2, 200, crate::sweep::Scrambling::Random, 98);
+        let test = crate::design::halton::halton(2, 200, crate::design::halton::Scrambling::Random, 98);
         let err = (test.iter().map(|u| (e.predict(u).0 - smooth(u)).powi(2)).sum::<f64>() / 200.0).sqrt();
         assert!(err < 0.035, "{err}");
     }
@@ -559,7 +559,7 @@ mod tests {
         assert!((sd / tm.std.unwrap() - 1.0).abs() < 0.03, "{sd} vs {:?}", tm.std);
         let iv = s.intervals[0];
         assert!(iv.lo.unwrap() <= m && m <= iv.hi.unwrap());
-        let pts = crate::design::halton::halton(2, 2000, crate::sweep::Scrambling::Random, 7);
+        let pts = crate::design::halton::halton(2, 2000, crate::design::halton::Scrambling::Random, 7);
         let (likely, sure) = e.zero_fraction(&pts, 0.01);
         assert!((likely - zero_share).abs() < 0.05, "{likely} vs {zero_share}");
         assert!(sure > 0.5 * zero_share && sure <= likely, "{sure} vs {zero_share}");

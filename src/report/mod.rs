@@ -11,6 +11,7 @@
 
 mod advice;
 pub mod emulation;
+mod gallery;
 mod html;
 mod maps;
 mod plots;
@@ -663,7 +664,7 @@ pub fn write(a: &Analysis) -> Result<PathBuf> {
     crate::sys::atomic::write_json(&json_path, a).map_err(|e| io(&json_path, e))?;
     let out = a.dir.join("report");
     std::fs::create_dir_all(&out).map_err(|e| io(&out, e))?;
-    let figures = plots::draw_all(a).map_err(|e| Error::Internal(format!("cannot draw the plots: {e}")))?;
+    let figures = gallery::draw_all(a).map_err(|e| Error::Internal(format!("cannot draw the plots: {e}")))?;
     for f in &figures {
         for (ext, bytes) in [("svg", f.svg.as_bytes()), ("png", f.png.as_slice())] {
             let p = out.join(format!("{}.{ext}", f.name));

@@ -125,49 +125,7 @@ pub(super) fn range(vals: impl IntoIterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
-/// Every figure of the report. With no MFR measured (every run failed) only the failure map:
-/// empty plots say nothing.
-pub fn draw_all(a: &Analysis) -> Res<Vec<Figure>> {
-    let mut out = Vec::new();
-    out.extend(super::maps::failure_map(a)?);
-    if !a.points.iter().any(|p| p.mfr().is_some()) {
-        return Ok(out);
-    }
-    for (k, s) in a.spaces.iter().enumerate() {
-        out.push(histogram(a, k, &s.members)?);
-    }
-    if !a.spaces.is_empty() {
-        out.push(statistics(a)?);
-    }
-    out.push(scatter(a)?);
-    let mfr = |p: &PointRow| p.mfr();
-    out.extend(super::maps::pair_maps(
-        a,
-        &super::maps::MapSpec {
-            stem: "mfr",
-            label: "MFR (–)",
-            value: &mfr,
-            cells: super::maps::CellValue::Points,
-        },
-    )?);
-    let covered = |p: &PointRow| p.done().and_then(|(r, _)| r.layer.map(|l| l.covered_fraction));
-    out.extend(super::maps::pair_maps(
-        a,
-        &super::maps::MapSpec {
-            stem: "covered",
-            label: "covered fraction (–)",
-            value: &covered,
-            cells: super::maps::CellValue::Points,
-        },
-    )?);
-    if a.points.iter().any(|p| p.done().is_some()) {
-        out.push(profiles(a)?);
-    }
-    out.extend(lattice_panels(a)?);
-    Ok(out)
-}
-
-fn histogram(a: &Analysis, k: usize, members: &[usize]) -> Res<Figure> {
+pub(super) fn histogram(a: &Analysis, k: usize, members: &[usize]) -> Res<Figure> {
     let s = &a.spaces[k];
     let mfr: Vec<f64> = members.iter().filter_map(|&i| a.points[i].mfr()).collect();
     let top = a.points.iter().filter_map(|p| p.mfr()).fold(0.0f64, f64::max).max(1e-3);
@@ -202,7 +160,7 @@ fn histogram(a: &Analysis, k: usize, members: &[usize]) -> Res<Figure> {
     })
 }
 
-fn statistics(a: &Analysis) -> Res<Figure> {
+pub(super) fn statistics(a: &Analysis) -> Res<Figure> {
     let caption = format!(
         "MFR statistics against N, with 95% bootstrap intervals; band: ±{}% of the last value",
         a.criteria.tolerance * 100.0
@@ -268,7 +226,7 @@ fn statistics(a: &Analysis) -> Res<Figure> {
     })
 }
 
-fn scatter(a: &Analysis) -> Res<Figure> {
+pub(super) fn scatter(a: &Analysis) -> Res<Figure> {
     let d = a.parameters.len();
     let cols = if d == 1 { 1 } else { 2 };
     let rows = d.div_ceil(cols);
@@ -391,7 +349,7 @@ fn chosen_profiles(a: &Analysis, q: Quality) -> (usize, Vec<&PointRow>) {
     (pts.len(), chosen)
 }
 
-fn profiles(a: &Analysis) -> Res<Figure> {
+pub(super) fn profiles(a: &Analysis) -> Res<Figure> {
     let classes = [Quality::Ideal, Quality::Inefficient, Quality::Unstable];
     let shown: Vec<usize> =
         classes.iter().flat_map(|&q| chosen_profiles(a, q).1.into_iter().map(|p| p.index)).collect();
@@ -423,7 +381,7 @@ fn profiles(a: &Analysis) -> Res<Figure> {
 /// The one-factor panels of the last complete lattice level with at least 3 values per
 /// dimension: for each ordered pair (A, B), v_x profiles as A varies, in panels at the lowest,
 /// middle and highest level of B, the other parameters at their middle level.
-fn lattice_panels(a: &Analysis) -> Res<Vec<Figure>> {
+pub(super) fn lattice_panels(a: &Analysis) -> Res<Vec<Figure>> {
     let d = a.parameters.len();
     if d < 2 || !matches!(a.design, crate::store::DesignRecord::Lattice { .. }) {
         return Ok(Vec::new());

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
+use crate::analysis::convergence::ConvergenceSettings;
 use crate::design::halton::Scrambling;
 use crate::scene::settings::SceneSettings;
 
@@ -90,42 +91,6 @@ impl Default for LdsSettings {
 
 /// The default `design.lds.seed` (see [`LdsSettings::seed`]).
 pub const DEFAULT_SEED: u64 = 14;
-
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default)]
-pub struct ConvergenceSettings {
-    /// `"scaled"` (default: every statistic moved and known within the tolerance on its own
-    /// scale, held for `hold` spaces), `"any"` (the thesis's rule: any one statistic within
-    /// tolerance relatively; floor and hold do not apply) or `"all"` (every statistic within
-    /// tolerance relatively or by the floor). See [`crate::analysis::convergence`].
-    pub rule: String,
-    /// Relative change of a statistic between consecutive spaces that counts as converged.
-    pub tolerance: f64,
-    /// Absolute change below which a statistic counts as converged whatever its relative change
-    /// (rule "all" only).
-    pub floor: f64,
-    /// Consecutive spaces the rule must hold for.
-    pub hold: usize,
-    /// No space with fewer points counts as converged. `sweep lds --max M` on a converged
-    /// directory sets it to the old extent, so that the extension is judged on its own.
-    pub min_points: usize,
-    /// `"trapezoid"` (default: a complete lattice's points weighted by the trapezoid rule) or
-    /// `"equal"` (the thesis). See [`crate::analysis::weights`].
-    pub lattice_weights: String,
-}
-
-impl Default for ConvergenceSettings {
-    fn default() -> Self {
-        ConvergenceSettings {
-            rule: "scaled".into(),
-            tolerance: 0.05,
-            floor: 0.01,
-            hold: 2,
-            min_points: 0,
-            lattice_weights: "trapezoid".into(),
-        }
-    }
-}
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]

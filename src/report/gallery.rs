@@ -1,0 +1,43 @@
+//! The report's figures, in the order the page shows them: the failure map, then per space
+//! the MFR histogram, the statistics against N, the scatter, the pair maps, the v_x profiles and
+//! the lattice panels.
+
+use super::plots::{self, Figure, Res};
+use super::{maps, Analysis, PointRow};
+
+/// Every figure of the report. With no MFR measured (every run failed) only the failure map:
+/// empty plots say nothing.
+pub fn draw_all(a: &Analysis) -> Res<Vec<Figure>> {
+    let mut out = Vec::new();
+    out.extend(maps::failure_map(a)?);
+    if !a.points.iter().any(|p| p.mfr().is_some()) {
+        return Ok(out);
+    }
+    for (k, s) in a.spaces.iter().enumerate() {
+        out.push(plots::histogram(a, k, &s.members)?);
+    }
+    if !a.spaces.is_empty() {
+        out.push(plots::statistics(a)?);
+    }
+    out.push(plots::scatter(a)?);
+    let mfr = |p: &PointRow| p.mfr();
+    out.extend(maps::pair_maps(
+        a,
+        &maps::MapSpec { stem: "mfr", label: "MFR (–)", value: &mfr, cells: maps::CellValue::Points },
+    )?);
+    let covered = |p: &PointRow| p.done().and_then(|(r, _)| r.layer.map(|l| l.covered_fraction));
+    out.extend(maps::pair_maps(
+        a,
+        &maps::MapSpec {
+            stem: "covered",
+            label: "covered fraction (–)",
+            value: &covered,
+            cells: maps::CellValue::Points,
+        },
+    )?);
+    if a.points.iter().any(|p| p.done().is_some()) {
+        out.push(plots::profiles(a)?);
+    }
+    out.extend(plots::lattice_panels(a)?);
+    Ok(out)
+}
