@@ -20,6 +20,7 @@ pub mod point;
 pub mod report;
 pub mod run;
 pub mod scene;
+pub mod scenes;
 pub mod store;
 pub mod sweep;
 pub mod sys;

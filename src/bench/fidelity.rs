@@ -129,12 +129,7 @@ pub fn run(
     let mut prepared = Vec::with_capacity(jobs.len());
     for &(p, v, k) in &jobs {
         let ctx = &contexts[v];
-        let mut c = PointContext {
-            sweep: ctx.sweep.clone(),
-            engine: ctx.engine.clone(),
-            template: ctx.template.clone(),
-            timeout: ctx.timeout,
-        };
+        let mut c = ctx.with_sweep(ctx.sweep.clone());
         c.sweep.file.scene.seed = ctx.sweep.file.scene.seed + k;
         let prep = point::prepare(&c, &plan.points[p])?;
         prepared.push((c, prep));

@@ -179,12 +179,7 @@ pub fn check(ctx: &PointContext, plan: &StabilityPlan) -> Result<()> {
     for (_, ls) in levels(ctx, plan) {
         for level in ls {
             let (sweep, values) = level_sweep(&ctx.sweep, &plan.corner, level);
-            let c = PointContext {
-                sweep,
-                engine: ctx.engine.clone(),
-                template: ctx.template.clone(),
-                timeout: ctx.timeout,
-            };
+            let c = ctx.with_sweep(sweep);
             point::prepare(&c, &values)?;
         }
     }
@@ -213,12 +208,7 @@ fn run_level(
                     let values = values.clone();
                     let dir = plan.out.join("runs").join(format!("{name}-s{seed}"));
                     s.spawn(move || -> Result<Run> {
-                        let c = PointContext {
-                            sweep: sw,
-                            engine: ctx.engine.clone(),
-                            template: ctx.template.clone(),
-                            timeout: ctx.timeout,
-                        };
+                        let c = ctx.with_sweep(sw);
                         let mut prepared = point::prepare(&c, &values)?;
                         let timestep = prepared.scene.timestep;
                         prepared.parameters.insert("rayleigh_fraction".into(), level.fraction);

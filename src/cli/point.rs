@@ -157,25 +157,12 @@ pub(super) fn render(a: RenderArgs) -> Result<i32, Error> {
     eprintln!(
         "wrote {}/{{in.liggghts,blade.stl,pile.data}}: {} on {} substrate spheres, dt = {:.3e} s, hash {}",
         a.out.display(),
-        what_runs(s),
+        ctx.layout.what_runs(s),
         s.substrate_particles,
         s.timestep,
         &prepared.hash[..16]
     );
     Ok(exit::SUCCESS)
-}
-
-/// What a point's run simulates, in a few words.
-fn what_runs(sc: &demsweep::scene::Scene) -> String {
-    if sc.is_conveyor() {
-        format!(
-            "a heap held at {} particles, at most {} steps",
-            sc.conveyor.heap_particles,
-            sc.spread_steps()
-        )
-    } else {
-        format!("{} particles, settle + {} steps", sc.particles, sc.spread_steps())
-    }
 }
 
 /// [`point::prepare`], with a refusal that names the `--set` it came with.
@@ -212,7 +199,7 @@ pub(super) fn run_one(a: RunArgs) -> Result<i32, Error> {
     };
     if !a.json {
         let sc = &prepared.scene;
-        eprintln!("running {} (dt = {:.3e} s) in {}", what_runs(sc), sc.timestep, dir.display());
+        eprintln!("running {} (dt = {:.3e} s) in {}", ctx.layout.what_runs(sc), sc.timestep, dir.display());
         if prepared.scene.nothing_passes() {
             eprintln!("the screen closes this point: nothing can pass under the blade (a sweep counts it as MFR = 0)");
         }

@@ -20,7 +20,7 @@
 //!
 //! Reads only id-free columns x, y, z and mass (radius from mass and the solid density).
 
-use crate::measure::metrics::Frame;
+use crate::measure::frame::Frame;
 use crate::outcome::layer::Layer;
 use crate::scene::Scene;
 
@@ -122,7 +122,7 @@ mod tests {
     fn scene() -> Scene {
         let values: BTreeMap<String, f64> =
             [("diameter", 2.0), ("gap", 4.0)].iter().map(|(k, v)| (k.to_string(), *v)).collect();
-        let mut s = Scene::new(&values, &SceneSettings::default()).unwrap();
+        let mut s = crate::scenes::build(&values, &SceneSettings::default()).unwrap();
         s.depth = 6.0 * s.diameter;
         s
     }

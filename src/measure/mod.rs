@@ -2,6 +2,7 @@
 //! the steady state of a held heap, the spread layer's quality, the v_x profile's quality class,
 //! and the plausibility checks of what the engine wrote. Building blocks the scenes use.
 
+pub mod frame;
 pub mod layer;
 pub mod metrics;
 pub mod plausible;

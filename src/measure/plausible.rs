@@ -6,11 +6,11 @@
 //! responsible for whether a result belongs to its run directory or point (the store checks
 //! that).
 
-use crate::measure::metrics::Frame;
+use crate::measure::frame::Frame;
 use crate::outcome::RunResult;
 
-/// Highest possible MFR. MFR is the packing fraction of the spread layer over the gap height
-/// (DESIGN §5), so it cannot exceed the densest packing of equal spheres, π/√18 ≈ 0.7405
+/// Highest possible MFR. MFR is the packing fraction of the spread layer over the gap height,
+/// so it cannot exceed the densest packing of equal spheres, π/√18 ≈ 0.7405
 /// (Kepler; random close packing is ≈ 0.64).
 pub const MFR_MAX: f64 = 0.74;
 
@@ -170,7 +170,7 @@ mod tests {
         let scene_at = |gap: f64| {
             let values: std::collections::BTreeMap<String, f64> =
                 [("diameter", 2.0), ("gap", gap)].iter().map(|(k, v)| (k.to_string(), *v)).collect();
-            crate::scene::Scene::new(&values, &Default::default()).unwrap()
+            crate::scenes::build(&values, &Default::default()).unwrap()
         };
         // D 2 mm on the rough substrate: a sphere in a pocket stands 0.67 D = 1.34 mm tall.
         let closed = scene_at(1.2);

@@ -22,7 +22,8 @@
 //!   Appendix A), in the lab frame (+v), averaged over the steady window, with the SE of each
 //!   layer over the snapshots.
 
-use crate::measure::metrics::{vx_profile, Frame};
+use crate::measure::frame::Frame;
+use crate::measure::metrics::vx_profile;
 use crate::outcome::steady::SteadyState;
 use crate::outcome::VX_LAYERS;
 use crate::scene::Scene;
@@ -344,7 +345,7 @@ mod tests {
         let values: BTreeMap<String, f64> =
             [("diameter", 2.0), ("gap", 1.7)].iter().map(|(k, v)| (k.to_string(), *v)).collect();
         let settings = SceneSettings { layout: "conveyor".into(), ..SceneSettings::default() };
-        let scene = Scene::new(&values, &settings).unwrap();
+        let scene = crate::scenes::build(&values, &settings).unwrap();
         let (c, m) = (&scene.conveyor, scene.conveyor.ideal_block_mass);
         let warm = c.warmup_blocks as usize;
         // Blocks of deposit (gone mass only, the strip empty): flowing at 0.08 for the warm-up

@@ -8,12 +8,8 @@ use std::path::Path;
 use sha2::{Digest, Sha256};
 
 use crate::scene::{mesh, pile, Scene};
+use crate::scenes::Layout;
 use crate::sys::hex;
-
-/// The built-in spreading deck.
-pub const SPREADING_TEMPLATE: &str = include_str!("../../templates/spreading.liggghts.tera");
-/// The built-in deck of the conveyor layout (the blade's frame, a held heap).
-pub const CONVEYOR_TEMPLATE: &str = include_str!("../../templates/conveyor.liggghts.tera");
 
 #[derive(Debug, thiserror::Error)]
 pub enum DeckError {
@@ -31,24 +27,15 @@ pub struct Template {
     name: String,
     source: String,
     tera: tera::Tera,
-    /// The built-in templates only: the conveyor layout's own deck (a user's template renders
-    /// every layout itself).
-    conveyor: Option<String>,
 }
 
 impl Template {
-    /// The built-in template, or the file at `path`.
-    pub fn load(path: Option<&Path>) -> Result<Template, DeckError> {
+    /// The layout's built-in template, or the file at `path` (which renders any layout).
+    pub fn load(path: Option<&Path>, layout: &dyn Layout) -> Result<Template, DeckError> {
         match path {
             None => {
-                let mut t = Template::from_source("spreading.liggghts.tera", SPREADING_TEMPLATE)?;
-                let name = "conveyor.liggghts.tera";
-                t.tera
-                    .add_raw_template(name, CONVEYOR_TEMPLATE)
-                    .map_err(|e| DeckError::Syntax { name: name.into(), reason: chain(&e) })?;
-                t.conveyor = Some(name.into());
-                t.source.push_str(CONVEYOR_TEMPLATE);
-                Ok(t)
+                let builtin = layout.template();
+                Template::from_source(builtin.name, builtin.source)
             }
             Some(p) => {
                 let source = std::fs::read_to_string(p)
@@ -63,7 +50,7 @@ impl Template {
         tera.autoescape_on(vec![]);
         tera.add_raw_template(name, source)
             .map_err(|e| DeckError::Syntax { name: name.into(), reason: chain(&e) })?;
-        Ok(Template { name: name.into(), source: source.into(), tera, conveyor: None })
+        Ok(Template { name: name.into(), source: source.into(), tera })
     }
 
     /// sha256 of the template source, for the manifest.
@@ -75,13 +62,9 @@ impl Template {
     pub fn render(&self, scene: &Scene) -> Result<String, DeckError> {
         let mut context = tera::Context::new();
         context.insert("scene", scene);
-        let name = match &self.conveyor {
-            Some(c) if scene.is_conveyor() => c,
-            _ => &self.name,
-        };
         self.tera
-            .render(name, &context)
-            .map_err(|e| DeckError::Render { name: name.clone(), reason: chain(&e) })
+            .render(&self.name, &context)
+            .map_err(|e| DeckError::Render { name: self.name.clone(), reason: chain(&e) })
     }
 }
 
@@ -143,12 +126,12 @@ mod tests {
 
     fn scene(settings: &SceneSettings, pairs: &[(&str, f64)]) -> Scene {
         let values: BTreeMap<String, f64> = pairs.iter().map(|(k, v)| (k.to_string(), *v)).collect();
-        Scene::new(&values, settings).unwrap()
+        crate::scenes::build(&values, settings).unwrap()
     }
 
     #[test]
     fn switched_off_features_leave_no_lines() {
-        let t = Template::load(None).unwrap();
+        let t = Template::load(None, &crate::scenes::moving_blade::GATED).unwrap();
         let thesis = SceneSettings { layout: "thesis".into(), ..SceneSettings::gated() };
         let deck = t.render(&scene(&thesis, &[("rolling_friction", 0.0)])).unwrap();
         assert!(!deck.contains("rolling"), "{deck}");
@@ -191,7 +174,7 @@ mod tests {
 
     #[test]
     fn the_hash_changes_with_deck_mesh_and_engine() {
-        let t = Template::load(None).unwrap();
+        let t = Template::load(None, &crate::scenes::moving_blade::GATED).unwrap();
         let s = scene(&SceneSettings::gated(), &[]);
         let a = Deck::new(&t, &s, "liggghts 3.8").unwrap();
         assert_eq!(a.hash, Deck::new(&t, &s, "liggghts 3.8").unwrap().hash);

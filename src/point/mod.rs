@@ -11,11 +11,10 @@ use std::time::Duration;
 
 use crate::engine::{Engine, LogLimits, RunStatus};
 use crate::error::{hint, Error, Result};
-use crate::measure::metrics::Frame;
-use crate::measure::{layer, metrics, plausible, steady};
-use crate::outcome::{FailureClass, RunFailure, RunOutcome, RunResult, RESULT_FORMAT};
+use crate::outcome::{FailureClass, RunFailure, RunOutcome, RESULT_FORMAT};
 use crate::point::deck::{Deck, Template};
 use crate::scene::{mesh, params, Scene};
+use crate::scenes::{Finished, Layout};
 use crate::sweep::{ParamKind, Parameter, Sweep};
 use crate::sys::atomic::write_json;
 use crate::sys::process::CancelToken;
@@ -23,13 +22,13 @@ use crate::sys::process::CancelToken;
 /// File names in a run directory.
 pub const RESULT: &str = "result.json";
 pub const FAILURE: &str = "failure.json";
-pub const DUMP: &str = "dump.spread";
-/// The conveyor's one snapshot of the deposit behind the blade at the end.
-pub const STRIP_DUMP: &str = "dump.strip";
+pub const DUMP: &str = crate::scenes::moving_blade::DUMP;
 
 /// What every point of a sweep shares: the sweep, the engine, the template.
 pub struct PointContext {
     pub sweep: Sweep,
+    /// The scene layout the sweep file names.
+    pub layout: &'static dyn Layout,
     pub engine: Engine,
     pub template: Template,
     pub timeout: Duration,
@@ -38,8 +37,9 @@ pub struct PointContext {
 impl PointContext {
     pub fn new(sweep: Sweep) -> Result<PointContext> {
         // The template first: a bad one is bad input, found before the engine is run.
-        let template =
-            Template::load(sweep.template_path().as_deref()).map_err(|e| Error::input(e.to_string()))?;
+        let layout = crate::scenes::of(&sweep.file.scene).map_err(|e| Error::input(e.to_string()))?;
+        let template = Template::load(sweep.template_path().as_deref(), layout)
+            .map_err(|e| Error::input(e.to_string()))?;
         // Under the process's interrupt flag (Ctrl-C, SIGTERM), like every run.
         let engine =
             Engine::locate(sweep.file.run.engine.as_deref(), &CancelToken::new()).map_err(|e| match e {
@@ -47,7 +47,19 @@ impl PointContext {
                 e => Error::Engine(e.to_string()),
             })?;
         let timeout = Duration::from_secs_f64(sweep.file.run.timeout_s);
-        Ok(PointContext { sweep, engine, template, timeout })
+        Ok(PointContext { sweep, layout, engine, template, timeout })
+    }
+
+    /// The same engine, template and layout for another version of the sweep (a seed, a
+    /// numerical level).
+    pub fn with_sweep(&self, sweep: Sweep) -> PointContext {
+        PointContext {
+            sweep,
+            layout: self.layout,
+            engine: self.engine.clone(),
+            template: self.template.clone(),
+            timeout: self.timeout,
+        }
     }
 
     /// What a run's outcome depends on besides its parameters: for the manifest, and for
@@ -194,7 +206,7 @@ pub fn with_set(sweep: &Sweep, sets: &[String]) -> Result<(Sweep, Vec<f64>, Vec<
 /// Build the scene and deck of one point and hash it. Pure: touches no file.
 pub fn prepare(ctx: &PointContext, swept_values: &[f64]) -> Result<Prepared> {
     let parameters = resolve(&ctx.sweep, swept_values);
-    let scene = Scene::new(&parameters, &ctx.sweep.file.scene)
+    let scene = crate::scenes::build(&parameters, &ctx.sweep.file.scene)
         .map_err(|e| Error::input(format!("{}: {e}", ctx.sweep.path.display())))?;
     let mut deck =
         Deck::new(&ctx.template, &scene, &ctx.engine.identity()).map_err(|e| Error::input(e.to_string()))?;
@@ -248,8 +260,7 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
             0.0,
         );
     }
-    let atoms = (!p.scene.is_conveyor()).then_some(p.scene.atoms() as u64);
-    let limits = LogLimits { ke_limit: p.scene.ke_limit, atoms };
+    let limits = LogLimits { ke_limit: p.scene.ke_limit, atoms: ctx.layout.atoms_kept(&p.scene) };
     let run = ctx.engine.run(run_dir, Deck::INPUT, &limits, ctx.timeout, cancel);
     let wall = run.wall_time;
     match run.status {
@@ -257,159 +268,20 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
         RunStatus::Failed { class, reason, log_tail } => return fail(class, reason, log_tail, wall),
         RunStatus::Ok => {}
     }
-    let settle_steps = match crate::engine::settled_at(&run.log) {
-        Ok(steps) => steps,
-        Err((class, reason)) => return fail(class, reason, String::new(), wall),
+    let finished = Finished {
+        scene: &p.scene,
+        parameters: &p.parameters,
+        hash: &p.hash,
+        run_dir,
+        run: &run,
+        engine_version: &ctx.engine.version,
     };
-    let frames: Vec<Frame> = match crate::engine::dump::read_dump(run_dir.join(DUMP), &metrics::COLUMNS)
-        .and_then(|snaps| snaps.iter().map(Frame::from_snapshot).collect())
-    {
-        Ok(f) => f,
-        Err(e) => return fail(FailureClass::Unparsable, e.to_string(), String::new(), wall),
+    let result = match ctx.layout.measure(&finished) {
+        Ok(result) => result,
+        Err(r) => return fail_measured(r.class, r.reason, String::new(), wall, r.measured),
     };
-    // What the engine wrote must be possible before the metrics read it.
-    let blade_speed = p.parameters.get("blade_speed").copied().unwrap_or(f64::NAN);
-    if let Some(e) = frames.iter().find_map(|f| plausible::check_frame(f, blade_speed).err()) {
-        return fail(FailureClass::Implausible, format!("{DUMP}: {e}"), String::new(), wall);
-    }
-    if p.scene.is_conveyor() {
-        return finish_conveyor(ctx, p, run_dir, &run, &frames, fail_measured);
-    }
-    let m = match metrics::compute(&p.scene, &frames) {
-        Ok(m) => m,
-        Err(e) => return fail(FailureClass::Unparsable, e.to_string(), String::new(), wall),
-    };
-    let steps = settle_steps + p.scene.spread_steps();
-    let result = RunResult {
-        format: RESULT_FORMAT,
-        hash: p.hash.clone(),
-        parameters: p.parameters.clone(),
-        mfr: m.mfr,
-        mfr_flux: m.mfr_flux,
-        mfr_particles: m.mfr_particles,
-        mfr_se: None,
-        steady_state: None,
-        vx_se: Vec::new(),
-        mfr_windows: m.mfr_windows,
-        steady: m.steady,
-        steady_p: m.steady_p,
-        vx: m.vx,
-        particles: m.particles,
-        layer: m.layer,
-        settle_steps,
-        steps,
-        simulated_time: steps as f64 * p.scene.timestep,
-        wall_time: wall,
-        cpu_time: run.cpu_time,
-        engine_version: ctx.engine.version.clone(),
-        warnings: run.warnings,
-    };
-    if !result.steady {
-        let reason = format!(
-            "MFR not steady over the window: halves differ beyond counting noise (p = {:.2e} < {}), sub-window MFR {:?}",
-            result.steady_p,
-            metrics::STEADY_ALPHA,
-            result.mfr_windows.iter().map(|v| (v * 1e3).round() / 1e3).collect::<Vec<_>>()
-        );
-        return fail_measured(FailureClass::Unsteady, reason, String::new(), wall, Some(Box::new(result)));
-    }
-    if let Err(e) = plausible::check_squeezed(&p.scene, result.mfr) {
-        return fail_measured(FailureClass::Implausible, e, String::new(), wall, Some(Box::new(result)));
-    }
-    if let Err(e) = plausible::check_result(&result) {
-        return fail(FailureClass::Implausible, e, String::new(), wall);
-    }
     if let Err(e) = write_json(&run_dir.join(RESULT), &result) {
         return fail(FailureClass::Unparsable, format!("cannot write {RESULT}: {e}"), String::new(), wall);
-    }
-    RunOutcome::Done(result)
-}
-
-/// The conveyor's spread layer: coverage and roughness from the strip behind the blade at the
-/// end (`dump.strip`), uniformity from the mass each block of the steady window deposited.
-fn conveyor_layer(
-    scene: &crate::scene::Scene,
-    frame: &Frame,
-    st: &crate::outcome::steady::SteadyState,
-) -> Option<crate::outcome::layer::Layer> {
-    let c = &scene.conveyor;
-    let mut l = layer::measure(scene, frame, c.delete_x1, scene.blade_x0)?;
-    let particle_mass = |d: f64| scene.density * std::f64::consts::PI / 6.0 * d.powi(3);
-    let weighted: f64 = c.feed.iter().map(|f| f.mass_fraction * particle_mass(f.diameter)).sum::<f64>()
-        / c.feed.iter().map(|f| f.mass_fraction).sum::<f64>();
-    let block_mass: Vec<f64> =
-        st.block_mfr[st.transient_blocks..].iter().map(|y| y * c.ideal_block_mass).collect();
-    (l.layer_cv, l.layer_cv_noise) = layer::along_travel(&block_mass, weighted);
-    Some(l)
-}
-
-/// The conveyor layout's result: the block series from the log, the steady window, MFR with its
-/// SE; a run that did not become steady fails as `unsteady` with its numbers kept.
-fn finish_conveyor(
-    ctx: &PointContext,
-    p: &Prepared,
-    run_dir: &Path,
-    run: &crate::engine::EngineRun,
-    frames: &[Frame],
-    fail: impl Fn(FailureClass, String, String, f64, Option<Box<RunResult>>) -> RunOutcome,
-) -> RunOutcome {
-    let wall = run.wall_time;
-    let (blocks, stop) = match steady::parse_log(&run.log) {
-        Ok(b) => b,
-        Err(e) => return fail(FailureClass::Unparsable, e.to_string(), String::new(), wall, None),
-    };
-    let st = steady::compute(&p.scene, &blocks, &stop, frames);
-    // The steady window in quarters (the gated scene's sub-windows, for the same readers).
-    let w = &st.state.block_mfr[st.state.transient_blocks..];
-    let quarter = w.len().div_ceil(4).max(1);
-    let mfr_windows = w.chunks(quarter).map(|c| c.iter().sum::<f64>() / c.len() as f64).collect();
-    let steps = blocks.last().map(|b| b.step).unwrap_or(0);
-    let strip = crate::engine::dump::read_dump(run_dir.join(STRIP_DUMP), &metrics::COLUMNS)
-        .ok()
-        .and_then(|snaps| snaps.last().and_then(|s| Frame::from_snapshot(s).ok()));
-    let layer = strip.as_ref().and_then(|f| conveyor_layer(&p.scene, f, &st.state));
-    let result = RunResult {
-        format: RESULT_FORMAT,
-        hash: p.hash.clone(),
-        parameters: p.parameters.clone(),
-        mfr: st.mfr,
-        mfr_flux: st.mfr_deleted,
-        mfr_particles: st.particles,
-        mfr_se: Some(st.mfr_se),
-        steady_state: Some(Box::new(st.state)),
-        vx_se: st.vx_se,
-        mfr_windows,
-        steady: st.unsteady.is_none(),
-        steady_p: 1.0,
-        vx: st.vx,
-        particles: p.scene.conveyor.heap_particles,
-        layer,
-        settle_steps: 0,
-        steps,
-        simulated_time: steps as f64 * p.scene.timestep,
-        wall_time: wall,
-        cpu_time: run.cpu_time,
-        engine_version: ctx.engine.version.clone(),
-        warnings: run.warnings.clone(),
-    };
-    if let Some(why) = st.unsteady {
-        let reason = format!("MFR not steady: {why}");
-        return fail(FailureClass::Unsteady, reason, String::new(), wall, Some(Box::new(result)));
-    }
-    if let Err(e) = plausible::check_squeezed(&p.scene, result.mfr) {
-        return fail(FailureClass::Implausible, e, String::new(), wall, Some(Box::new(result)));
-    }
-    if let Err(e) = plausible::check_result(&result) {
-        return fail(FailureClass::Implausible, e, String::new(), wall, None);
-    }
-    if let Err(e) = write_json(&run_dir.join(RESULT), &result) {
-        return fail(
-            FailureClass::Unparsable,
-            format!("cannot write {RESULT}: {e}"),
-            String::new(),
-            wall,
-            None,
-        );
     }
     RunOutcome::Done(result)
 }

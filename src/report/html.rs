@@ -100,24 +100,10 @@ fn setup_section(a: &Analysis) -> String {
     h.push_str("</table></div>\n");
     let sc = &st.scene;
     let psd = serde_json::to_value(&sc.size_distribution).map(|v| v.to_string()).unwrap_or_default();
-    let conveyor = sc.layout == "conveyor";
+    let layout_rows = crate::scenes::lookup(&sc.layout).map(|l| l.setup_rows(sc)).unwrap_or_default();
     let mut rows: Vec<(&str, String)> =
         vec![("layout", sc.layout.clone()), ("substrate", sc.substrate.clone())];
-    if conveyor {
-        rows.extend([
-            ("held heap, height above the gap (D)", fmt_short(sc.heap_diameters)),
-            ("block of the deposit series, travel (D)", fmt_short(sc.block_diameters)),
-            ("warm-up (s)", fmt_short(sc.warmup_s)),
-            (
-                "precision target: SE of MFR at most",
-                format!("{} × MFR or {}", fmt_short(sc.mfr_rel_se), fmt_short(sc.mfr_abs_se)),
-            ),
-            ("least window (blocks)", sc.min_window_blocks.to_string()),
-            ("window cap, travel (D)", fmt_short(sc.window_cap_diameters)),
-        ]);
-    } else {
-        rows.push(("heap size (× the planned heap)", fmt_short(sc.supply_factor)));
-    }
+    rows.extend(layout_rows.head);
     rows.extend([
         ("size distribution", psd),
         ("fidelity preset", sc.fidelity.clone()),
@@ -129,13 +115,7 @@ fn setup_section(a: &Analysis) -> String {
         ("blade mesh cells across the depth", sc.mesh_cells_across.to_string()),
         ("domain depth (D)", fmt_short(sc.depth_diameters)),
     ]);
-    if !conveyor {
-        rows.extend([
-            ("window start, blade travel (D)", fmt_short(sc.window_start_diameters)),
-            ("window length, blade travel (D)", fmt_short(sc.window_diameters)),
-            ("rest speed (× √(g·D))", fmt_short(sc.rest_speed)),
-        ]);
-    }
+    rows.extend(layout_rows.tail);
     rows.extend([
         ("neighbour skin (D)", fmt_short(sc.skin_diameters)),
         (

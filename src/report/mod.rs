@@ -183,18 +183,7 @@ pub struct CentreScene {
     pub timestep_s: f64,
     pub rayleigh_time_s: f64,
     /// The conveyor layout's held heap and window (absent for the other layouts).
-    pub conveyor: Option<CentreConveyor>,
-}
-
-/// The conveyor at the centre of the space: the held heap and the bounds of its window.
-#[derive(Debug, Clone, Serialize)]
-pub struct CentreConveyor {
-    pub heap_particles: usize,
-    pub heap_height_mm: f64,
-    pub block_travel_mm: f64,
-    pub warmup_blocks: u64,
-    pub min_window_blocks: u64,
-    pub cap_travel_mm: f64,
+    pub conveyor: Option<crate::scenes::HeldHeap>,
 }
 
 impl Setup {
@@ -208,7 +197,8 @@ impl Setup {
             })
             .collect();
         let parameters = crate::point::resolve(sweep, &mid);
-        let centre = crate::scene::Scene::new(&parameters, &sweep.file.scene).ok().map(|sc| {
+        let layout = crate::scenes::of(&sweep.file.scene).ok();
+        let centre = crate::scenes::build(&parameters, &sweep.file.scene).ok().map(|sc| {
             let (t1, t2) = sc.window_steps();
             CentreScene {
                 parameters: sweep.swept.iter().map(|p| (p.name.clone(), parameters[&p.name])).collect(),
@@ -222,18 +212,7 @@ impl Setup {
                 window_travel_mm: (sc.blade_rear_at(t2) - sc.blade_rear_at(t1)) * 1e3,
                 timestep_s: sc.timestep,
                 rayleigh_time_s: sc.rayleigh_time,
-                conveyor: sc.is_conveyor().then(|| {
-                    let c = &sc.conveyor;
-                    let block_mm = sc.blade_speed * sc.timestep * c.block_steps as f64 * 1e3;
-                    CentreConveyor {
-                        heap_particles: c.heap_particles,
-                        heap_height_mm: c.heap_height * 1e3,
-                        block_travel_mm: block_mm,
-                        warmup_blocks: c.warmup_blocks,
-                        min_window_blocks: c.min_window_blocks,
-                        cap_travel_mm: block_mm * c.max_blocks as f64,
-                    }
-                }),
+                conveyor: layout.and_then(|l| l.held_heap(&sc)),
             }
         });
         let id = |k: &str| manifest.identity.get(k).and_then(|v| v.as_str()).unwrap_or("").to_string();

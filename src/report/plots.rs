@@ -18,6 +18,7 @@ use super::{Analysis, PointRow};
 use crate::analysis::stats::STATISTICS;
 use crate::measure::quality::Quality;
 use crate::outcome::VX_LAYERS;
+pub use crate::scene::plausible::short as fmt_short;
 
 pub(super) use crate::error::Res;
 pub(super) type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
@@ -320,16 +321,6 @@ fn profile_panel(panel: &Area, title: &str, curves: &[(String, RGBColor, Vec<Opt
         }
     }
     Ok(())
-}
-
-pub fn fmt_short(v: f64) -> String {
-    let s = format!("{v:.3}");
-    let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s.is_empty() || s == "-" {
-        "0".into()
-    } else {
-        s.to_string()
-    }
 }
 
 /// Per class, the points the profile figure shows: the best four ideal ones by MFR; for the

@@ -250,7 +250,7 @@ pub fn preview(sweep: &Sweep, values: &[Vec<f64>]) -> crate::Result<Vec<&'static
         .map(|(index, v)| {
             let closed = closes && {
                 let parameters = crate::point::resolve(sweep, v);
-                crate::scene::Scene::new(&parameters, &sweep.file.scene)
+                crate::scenes::build(&parameters, &sweep.file.scene)
                     .map_err(|e| crate::Error::input(format!("{}: {e}", sweep.path.display())))?
                     .nothing_passes()
             };

@@ -102,7 +102,7 @@ mod tests {
 
     fn scene(pairs: &[(&str, f64)], settings: &SceneSettings) -> Scene {
         let values: BTreeMap<String, f64> = pairs.iter().map(|(k, v)| (k.to_string(), *v)).collect();
-        Scene::new(&values, settings).unwrap()
+        crate::scenes::build(&values, settings).unwrap()
     }
 
     fn close(a: f64, b: f64) -> bool {

@@ -129,7 +129,7 @@ mod tests {
             size_distribution: SizeDistributionSpec::Weibull { bins: 5 },
             ..SceneSettings::gated()
         };
-        let s = Scene::new(&BTreeMap::new(), &settings).unwrap();
+        let s = crate::scenes::build(&BTreeMap::new(), &settings).unwrap();
         let a = atoms(&pile_data(&s));
         assert_eq!(a.len(), s.atoms());
         assert!(s.substrate_particles > 0);
@@ -162,10 +162,11 @@ mod tests {
 
     #[test]
     fn the_pile_is_reproducible_and_changes_with_the_seed() {
-        let s = Scene::new(&BTreeMap::new(), &SceneSettings::gated()).unwrap();
+        let s = crate::scenes::build(&BTreeMap::new(), &SceneSettings::gated()).unwrap();
         assert_eq!(pile_data(&s), pile_data(&s));
         let other =
-            Scene::new(&BTreeMap::new(), &SceneSettings { seed: 7, ..SceneSettings::gated() }).unwrap();
+            crate::scenes::build(&BTreeMap::new(), &SceneSettings { seed: 7, ..SceneSettings::gated() })
+                .unwrap();
         assert_ne!(pile_data(&s), pile_data(&other));
     }
 }

@@ -66,7 +66,7 @@ pub fn check(scene: &Scene, values: &BTreeMap<String, f64>, settings: &SceneSett
         ));
     }
     // The conveyor holds its heap at a count instead of placing a dose.
-    let particles = if scene.is_conveyor() { scene.conveyor.heap_particles } else { scene.particles };
+    let particles = scene.powder_particles();
     if particles > MAX_PARTICLES {
         return Err(format!(
             "{} particles at gap {} mm and {d_name} {} mm (gap = {} D): more than the {} the scene \
@@ -97,6 +97,17 @@ pub fn check(scene: &Scene, values: &BTreeMap<String, f64>, settings: &SceneSett
 /// (0.30000000000000004 → 0.3). Files keep full precision.
 pub fn show(v: f64) -> String {
     round_to(v, 6)
+}
+
+/// `v` to three decimals without trailing zeros: the report's tables and axes.
+pub fn short(v: f64) -> String {
+    let s = format!("{v:.3}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s.is_empty() || s == "-" {
+        "0".into()
+    } else {
+        s.to_string()
+    }
 }
 
 /// `v` with at most `digits` significant digits, printed without trailing zeros.

@@ -101,10 +101,6 @@ pub struct SceneSettings {
     pub vtk: bool,
 }
 
-/// The scene layouts (docs/scene.md): the gated dose, the thesis's free pile, and the blade's
-/// frame with a held heap.
-pub const LAYOUTS: [&str; 3] = ["gated", "thesis", "conveyor"];
-
 /// The fidelity presets, fastest first.
 pub const FIDELITIES: [&str; 3] = ["fast", "reference", "thesis"];
 

@@ -7,7 +7,7 @@ use super::file::*;
 use super::{ParamKind, Parameter};
 use crate::error::{hint, Error, Result};
 use crate::scene::params::{self, ParamInfo};
-use crate::scene::settings::{quoted, SizeDistributionSpec, FIDELITIES, LAYOUTS};
+use crate::scene::settings::{quoted, SizeDistributionSpec, FIDELITIES};
 
 pub(super) fn io_reason(e: &std::io::Error) -> String {
     match e.kind() {
@@ -207,48 +207,14 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>,
             format!("\"{}\": expected one of {}", s.fidelity, quoted(&FIDELITIES)),
         ));
     }
-    if !LAYOUTS.contains(&s.layout.as_str()) {
-        return Err(bad("scene.layout", format!("\"{}\": expected one of {}", s.layout, quoted(&LAYOUTS))));
-    }
-    if s.layout == "conveyor" {
-        for (k, v) in [
-            ("scene.block_diameters", s.block_diameters),
-            ("scene.window_cap_diameters", s.window_cap_diameters),
-            ("scene.heap_diameters", s.heap_diameters),
-        ] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(bad(k, format!("{v}: expected a positive number")));
-            }
-        }
-        for (k, v) in [
-            ("scene.warmup_s", s.warmup_s),
-            ("scene.mfr_rel_se", s.mfr_rel_se),
-            ("scene.mfr_abs_se", s.mfr_abs_se),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(bad(k, format!("{v}: expected a number ≥ 0")));
-            }
-        }
-        // MSER may drop up to half the window, and the trend over what is left needs 3 blocks.
-        if s.min_window_blocks < 5 {
-            return Err(bad(
-                "scene.min_window_blocks",
-                format!(
-                    "{}: expected at least 5 (MSER may drop half of the blocks; the trend needs 3 left)",
-                    s.min_window_blocks
-                ),
-            ));
-        }
-        if (s.min_window_blocks as f64 + 1.0) * s.block_diameters > s.window_cap_diameters {
-            return Err(bad(
-                "scene.window_cap_diameters",
-                format!(
-                    "{}: expected more than min_window_blocks × block_diameters = {}",
-                    s.window_cap_diameters,
-                    s.min_window_blocks as f64 * s.block_diameters
-                ),
-            ));
-        }
+    let Some(layout) = crate::scenes::lookup(&s.layout) else {
+        return Err(bad(
+            "scene.layout",
+            format!("\"{}\": expected one of {}", s.layout, quoted(&crate::scenes::names())),
+        ));
+    };
+    if let Err(e) = layout.check_settings(s) {
+        return Err(bad(e.key, e.why));
     }
     if s.substrate != "rough" && s.substrate != "smooth" {
         return Err(bad("scene.substrate", format!("\"{}\": expected \"rough\" or \"smooth\"", s.substrate)));

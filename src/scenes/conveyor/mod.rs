@@ -1,0 +1,274 @@
+//! The conveyor layout: the blade's frame. The blade stands still with its rear face at
+//! `blade_x0`, the rough substrate moves under it at −v (x periodic), a heap is held in front of
+//! it (topped up to its count every fifth of a block), and the deposit is deleted downstream.
+//! MFR is measured in a steady state with its standard error ([`crate::measure::steady`]).
+
+use crate::measure::frame::{Frame, COLUMNS};
+use crate::measure::{layer, steady};
+use crate::outcome::layer::Layer;
+use crate::outcome::steady::SteadyState;
+use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT};
+use crate::scene::plausible::short;
+use crate::scene::settings::SceneSettings;
+use crate::scene::{
+    prime_seed, Base, Conveyor as Held, FeedClass, Scene, GRAVITY, LAYER_FRACTION_MAX, REPOSE_DEG,
+};
+use crate::scenes::moving_blade::{self, Dose};
+use crate::scenes::{BadSetting, BuiltinTemplate, Finished, HeldHeap, Layout, Rejected, SetupRows};
+
+/// The conveyor layout (registered in [`crate::scenes::LAYOUTS`]).
+pub struct Conveyor;
+
+/// The conveyor's one snapshot of the deposit behind the blade at the end.
+pub const STRIP_DUMP: &str = "dump.strip";
+
+impl Layout for Conveyor {
+    fn name(&self) -> &'static str {
+        "conveyor"
+    }
+
+    fn template(&self) -> BuiltinTemplate {
+        BuiltinTemplate {
+            name: "conveyor.liggghts.tera",
+            source: include_str!("../../../templates/conveyor.liggghts.tera"),
+        }
+    }
+
+    fn check_settings(&self, s: &SceneSettings) -> Result<(), BadSetting> {
+        let bad = |key, why| Err(BadSetting { key, why });
+        for (k, v) in [
+            ("scene.block_diameters", s.block_diameters),
+            ("scene.window_cap_diameters", s.window_cap_diameters),
+            ("scene.heap_diameters", s.heap_diameters),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(k, format!("{v}: expected a positive number"));
+            }
+        }
+        for (k, v) in [
+            ("scene.warmup_s", s.warmup_s),
+            ("scene.mfr_rel_se", s.mfr_rel_se),
+            ("scene.mfr_abs_se", s.mfr_abs_se),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return bad(k, format!("{v}: expected a number ≥ 0"));
+            }
+        }
+        // MSER may drop up to half the window, and the trend over what is left needs 3 blocks.
+        if s.min_window_blocks < 5 {
+            return bad(
+                "scene.min_window_blocks",
+                format!(
+                    "{}: expected at least 5 (MSER may drop half of the blocks; the trend needs 3 left)",
+                    s.min_window_blocks
+                ),
+            );
+        }
+        if (s.min_window_blocks as f64 + 1.0) * s.block_diameters > s.window_cap_diameters {
+            return bad(
+                "scene.window_cap_diameters",
+                format!(
+                    "{}: expected more than min_window_blocks × block_diameters = {}",
+                    s.window_cap_diameters,
+                    s.min_window_blocks as f64 * s.block_diameters
+                ),
+            );
+        }
+        Ok(())
+    }
+
+    fn derive(&self, base: Base, settings: &SceneSettings) -> Scene {
+        derive(base, settings)
+    }
+
+    fn atoms_kept(&self, _scene: &Scene) -> Option<u64> {
+        // The feed inserts and the delete region removes atoms by design.
+        None
+    }
+
+    fn measure(&self, run: &Finished) -> Result<RunResult, Rejected> {
+        measure(run)
+    }
+
+    fn what_runs(&self, sc: &Scene) -> String {
+        format!(
+            "a heap held at {} particles, at most {} steps",
+            sc.conveyor.heap_particles,
+            sc.spread_steps()
+        )
+    }
+
+    fn setup_rows(&self, sc: &SceneSettings) -> SetupRows {
+        SetupRows {
+            head: vec![
+                ("held heap, height above the gap (D)", short(sc.heap_diameters)),
+                ("block of the deposit series, travel (D)", short(sc.block_diameters)),
+                ("warm-up (s)", short(sc.warmup_s)),
+                (
+                    "precision target: SE of MFR at most",
+                    format!("{} × MFR or {}", short(sc.mfr_rel_se), short(sc.mfr_abs_se)),
+                ),
+                ("least window (blocks)", sc.min_window_blocks.to_string()),
+                ("window cap, travel (D)", short(sc.window_cap_diameters)),
+            ],
+            tail: Vec::new(),
+        }
+    }
+
+    fn held_heap(&self, sc: &Scene) -> Option<HeldHeap> {
+        let c = &sc.conveyor;
+        let block_mm = sc.blade_speed * sc.timestep * c.block_steps as f64 * 1e3;
+        Some(HeldHeap {
+            heap_particles: c.heap_particles,
+            heap_height_mm: c.heap_height * 1e3,
+            block_travel_mm: block_mm,
+            warmup_blocks: c.warmup_blocks,
+            min_window_blocks: c.min_window_blocks,
+            cap_travel_mm: block_mm * c.max_blocks as f64,
+        })
+    }
+}
+
+/// The held heap's scene (see [`crate::scene::Conveyor`]): the free pile's scene with the
+/// blade held still, the substrate moving and the heap topped up.
+fn derive(base: Base, settings: &SceneSettings) -> Scene {
+    let psd = base.psd.clone();
+    let mut s = moving_blade::derive(base, settings, Dose::Free);
+    let d = s.diameter;
+    let (gap, v, dt) = (s.gap, s.blade_speed, s.timestep);
+    let heap_height = gap + settings.heap_diameters * d;
+    let heap_base = heap_height / REPOSE_DEG.to_radians().tan();
+    let heap_particles =
+        (LAYER_FRACTION_MAX * 0.5 * heap_height * heap_base * s.depth / psd.mean_volume()).ceil() as usize;
+    // Behind the blade: 10 D of deposit strip, then the delete region (6 D).
+    let blade_x0 = 16.0 * d;
+    let front0 = blade_x0 + s.blade_thickness;
+    let heap_x1 = front0 + heap_base + 3.0 * d;
+    // The substrate's lattice fills the periodic length exactly.
+    let n_y = ((s.depth / d).floor() as usize).max(1);
+    let spacing = s.depth / n_y as f64;
+    let n_x = ((heap_x1 + 2.0 * d) / spacing).ceil() as usize;
+    let x_hi = n_x as f64 * spacing;
+    let block_steps = ((settings.block_diameters * d / (v * dt)).ceil() as u64).max(1);
+    let blocks = |travel: f64| (travel / settings.block_diameters).ceil() as u64;
+    let max_blocks = blocks(settings.window_cap_diameters);
+    let blade_top = 2.0 * heap_height + 2.0 * d;
+    let mean_volume = psd.mean_volume();
+    let mass = heap_particles as f64 * s.density * mean_volume;
+    let feed_total: f64 = psd.classes.iter().map(|c| c.fraction * c.diameter.powi(3)).sum();
+    let feed = psd
+        .classes
+        .iter()
+        .enumerate()
+        .map(|(i, c)| FeedClass {
+            diameter: c.diameter,
+            mass_fraction: c.fraction * c.diameter.powi(3) / feed_total,
+            seed: prime_seed(s.seed, i + 2),
+        })
+        .collect();
+    s.conveyor = Held {
+        heap_height,
+        heap_particles,
+        heap_x1,
+        heap_z1: 1.6 * heap_height,
+        delete_x1: blade_x0 - 10.0 * d,
+        block_steps,
+        insert_every: (block_steps / 5).max(1),
+        // Never more than the cap leaves room for: the cap wins, and the point says so.
+        warmup_blocks: blocks((settings.warmup_s * v).max(10.0 * d) / d)
+            .min(max_blocks.saturating_sub(settings.min_window_blocks as u64)),
+        min_window_blocks: settings.min_window_blocks as u64,
+        max_blocks,
+        ideal_block_mass: s.density * s.depth * gap * v * dt * block_steps as f64,
+        mfr_rel_se: settings.mfr_rel_se,
+        mfr_abs_se: settings.mfr_abs_se,
+        feed,
+        distribution_seed: prime_seed(s.seed, 0),
+        insert_seed: prime_seed(s.seed, 1),
+    };
+    s.blade_fixed = true;
+    s.particles = 0;
+    s.pile_n = [0, 0, 0];
+    s.blade_x0 = blade_x0;
+    s.blade_top = blade_top;
+    s.x_hi = x_hi;
+    s.z_hi = blade_top + 2.0 * d + v * v / GRAVITY;
+    s.z_lo = -d;
+    s.substrate_n = [n_x, n_y];
+    s.substrate_spacing = spacing;
+    s.substrate_diameter = d;
+    s.substrate_particles = n_x * n_y;
+    s.gate_x = 0.0;
+    s.rest_ke = 0.0;
+    s.settle_steps = 0;
+    s.approach_steps = 0;
+    s.ramp_steps = 1;
+    s.dump_every = block_steps;
+    s.window_length_steps = max_blocks * block_steps;
+    s.traverse_steps = 0;
+    s.thermo_every = block_steps.min(1000);
+    let v_ref = v.max((2.0 * GRAVITY * blade_top).sqrt());
+    s.ke_limit = 0.5 * mass * (10.0 * v_ref).powi(2);
+    s
+}
+
+/// The spread layer: coverage and roughness from the strip behind the blade at the end
+/// (`dump.strip`), uniformity from the mass each block of the steady window deposited.
+fn conveyor_layer(scene: &Scene, frame: &Frame, st: &SteadyState) -> Option<Layer> {
+    let c = &scene.conveyor;
+    let mut l = layer::measure(scene, frame, c.delete_x1, scene.blade_x0)?;
+    let particle_mass = |d: f64| scene.density * std::f64::consts::PI / 6.0 * d.powi(3);
+    let weighted: f64 = c.feed.iter().map(|f| f.mass_fraction * particle_mass(f.diameter)).sum::<f64>()
+        / c.feed.iter().map(|f| f.mass_fraction).sum::<f64>();
+    let block_mass: Vec<f64> =
+        st.block_mfr[st.transient_blocks..].iter().map(|y| y * c.ideal_block_mass).collect();
+    (l.layer_cv, l.layer_cv_noise) = layer::along_travel(&block_mass, weighted);
+    Some(l)
+}
+
+/// The block series from the log, the steady window, MFR with its SE; a run that did not
+/// become steady fails as `unsteady` with its numbers kept.
+fn measure(run: &Finished) -> Result<RunResult, Rejected> {
+    let (_, frames) = moving_blade::read_frames(run, moving_blade::DUMP)?;
+    let scene = run.scene;
+    let (blocks, stop) = steady::parse_log(&run.run.log)
+        .map_err(|e| Rejected::new(FailureClass::Unparsable, e.to_string()))?;
+    let st = steady::compute(scene, &blocks, &stop, &frames);
+    // The steady window in quarters (the moving-blade scenes' sub-windows, for the same readers).
+    let w = &st.state.block_mfr[st.state.transient_blocks..];
+    let quarter = w.len().div_ceil(4).max(1);
+    let mfr_windows = w.chunks(quarter).map(|c| c.iter().sum::<f64>() / c.len() as f64).collect();
+    let steps = blocks.last().map(|b| b.step).unwrap_or(0);
+    let strip = crate::engine::dump::read_dump(run.run_dir.join(STRIP_DUMP), &COLUMNS)
+        .ok()
+        .and_then(|snaps| snaps.last().and_then(|s| Frame::from_snapshot(s).ok()));
+    let layer = strip.as_ref().and_then(|f| conveyor_layer(scene, f, &st.state));
+    let result = RunResult {
+        format: RESULT_FORMAT,
+        hash: run.hash.to_string(),
+        parameters: run.parameters.clone(),
+        mfr: st.mfr,
+        mfr_flux: st.mfr_deleted,
+        mfr_particles: st.particles,
+        mfr_se: Some(st.mfr_se),
+        steady_state: Some(Box::new(st.state)),
+        vx_se: st.vx_se,
+        mfr_windows,
+        steady: st.unsteady.is_none(),
+        steady_p: 1.0,
+        vx: st.vx,
+        particles: scene.conveyor.heap_particles,
+        layer,
+        settle_steps: 0,
+        steps,
+        simulated_time: steps as f64 * scene.timestep,
+        wall_time: run.run.wall_time,
+        cpu_time: run.run.cpu_time,
+        engine_version: run.engine_version.to_string(),
+        warnings: run.run.warnings.clone(),
+    };
+    if let Some(why) = st.unsteady {
+        return Err(Rejected::measured(FailureClass::Unsteady, format!("MFR not steady: {why}"), result));
+    }
+    moving_blade::check_result(scene, result)
+}

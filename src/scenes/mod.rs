@@ -1,0 +1,148 @@
+//! The scenes a point can be: each layout is one folder implementing [`Layout`], registered
+//! once in [`LAYOUTS`]. Nothing outside this folder asks which layout a point is: the sweep file
+//! names it (`[scene] layout`), [`lookup`] finds it, and the point, the report and the CLI ask
+//! the layout itself for its template, geometry, measurement and what to show.
+//!
+//! A trait rather than an enum: a new scene is a new folder and one line in [`LAYOUTS`], with no
+//! `match` to extend elsewhere.
+
+pub mod conveyor;
+pub mod moving_blade;
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use crate::engine::EngineRun;
+use crate::outcome::{FailureClass, RunResult};
+use crate::scene::settings::SceneSettings;
+use crate::scene::{plausible, Base, Scene, SceneError};
+
+/// Every layout, in the order `scene.layout`'s error lists them.
+pub const LAYOUTS: &[&dyn Layout] = &[&moving_blade::GATED, &moving_blade::THESIS, &conveyor::Conveyor];
+
+/// The layout named `name`.
+pub fn lookup(name: &str) -> Option<&'static dyn Layout> {
+    LAYOUTS.iter().copied().find(|l| l.name() == name)
+}
+
+/// The layouts' names, in registration order.
+pub fn names() -> Vec<&'static str> {
+    LAYOUTS.iter().map(|l| l.name()).collect()
+}
+
+/// A built-in deck template.
+#[derive(Debug, Clone, Copy)]
+pub struct BuiltinTemplate {
+    pub name: &'static str,
+    pub source: &'static str,
+}
+
+/// A `[scene]` setting a layout refuses: the key (`scene.…`) and what was expected.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BadSetting {
+    pub key: &'static str,
+    pub why: String,
+}
+
+/// What a finished engine run left, for the layout to measure.
+pub struct Finished<'a> {
+    pub scene: &'a Scene,
+    /// Every catalogue parameter of the point, in catalogue units.
+    pub parameters: &'a BTreeMap<String, f64>,
+    pub hash: &'a str,
+    pub run_dir: &'a Path,
+    pub run: &'a EngineRun,
+    pub engine_version: &'a str,
+}
+
+/// Why a finished run gives no result; `measured` keeps its numbers where they were measured
+/// (an unsteady or implausible flow), for the record, never for the statistics.
+#[derive(Debug)]
+pub struct Rejected {
+    pub class: FailureClass,
+    pub reason: String,
+    pub measured: Option<Box<RunResult>>,
+}
+
+impl Rejected {
+    pub fn new(class: FailureClass, reason: impl Into<String>) -> Rejected {
+        Rejected { class, reason: reason.into(), measured: None }
+    }
+
+    pub fn measured(class: FailureClass, reason: impl Into<String>, result: RunResult) -> Rejected {
+        Rejected { class, reason: reason.into(), measured: Some(Box::new(result)) }
+    }
+}
+
+/// The held heap of a layout that keeps one in front of the blade, at the centre of a sweep's
+/// space (for the report's setup and summary.json).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct HeldHeap {
+    pub heap_particles: usize,
+    pub heap_height_mm: f64,
+    pub block_travel_mm: f64,
+    pub warmup_blocks: u64,
+    pub min_window_blocks: u64,
+    pub cap_travel_mm: f64,
+}
+
+/// A layout's rows of the report's setup table: `head` after the layout and substrate, `tail`
+/// after the common numerical knobs.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SetupRows {
+    pub head: Vec<(&'static str, String)>,
+    pub tail: Vec<(&'static str, String)>,
+}
+
+/// One scene layout: everything that differs from one scene to another.
+pub trait Layout: Sync {
+    /// Its name in `[scene] layout`.
+    fn name(&self) -> &'static str;
+
+    /// The deck it renders unless the sweep file names its own template.
+    fn template(&self) -> BuiltinTemplate;
+
+    /// Refuse the `[scene]` settings this layout cannot run with.
+    fn check_settings(&self, settings: &SceneSettings) -> Result<(), BadSetting>;
+
+    /// Every number the deck and the measurement need, from the point's common part.
+    fn derive(&self, base: Base, settings: &SceneSettings) -> Scene;
+
+    /// The atoms the engine's log must keep to the end (None: the count varies by design).
+    fn atoms_kept(&self, scene: &Scene) -> Option<u64>;
+
+    /// The run's result from what the engine left.
+    fn measure(&self, run: &Finished) -> Result<RunResult, Rejected>;
+
+    /// A few words on what a run of `scene` simulates (`sweep run`, `sweep render`).
+    fn what_runs(&self, scene: &Scene) -> String;
+
+    /// The report's setup rows of this layout's own settings.
+    fn setup_rows(&self, settings: &SceneSettings) -> SetupRows;
+
+    /// The heap it holds in front of the blade, if it holds one.
+    fn held_heap(&self, _scene: &Scene) -> Option<HeldHeap> {
+        None
+    }
+}
+
+/// The layout `settings` names; an unknown name is refused when the sweep file is read, so here
+/// it is an internal error.
+pub fn of(settings: &SceneSettings) -> Result<&'static dyn Layout, SceneError> {
+    lookup(&settings.layout).ok_or_else(|| SceneError::Invalid {
+        name: "layout".into(),
+        value: f64::NAN,
+        why: format!("\"{}\" is not one of {}", settings.layout, names().join(", ")),
+    })
+}
+
+/// Build the scene of one point from every catalogue parameter (in catalogue units) and the
+/// settings: the common part, the layout's geometry, then the plausibility bounds.
+pub fn build(values: &BTreeMap<String, f64>, settings: &SceneSettings) -> Result<Scene, SceneError> {
+    let layout = of(settings)?;
+    let scene = layout.derive(Base::new(values, settings)?, settings);
+    if !settings.force_bounds {
+        plausible::check(&scene, values, settings).map_err(SceneError::Implausible)?;
+    }
+    Ok(scene)
+}
