@@ -1,11 +1,11 @@
 //! `sweep run --vtk` on real LIGGGHTS: the particle and blade files parse as legacy VTK (the
 //! format ParaView opens), hold every atom of the deck, and the blade moves between them.
 
-mod common;
-
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::{Command, Stdio};
+
+use crate::support;
 
 /// A legacy VTK POLYDATA file, read token by token as the format defines it (points, the
 /// VERTICES/POLYGONS offset and connectivity arrays of format 5.1, FIELD arrays with their
@@ -99,7 +99,7 @@ fn series(dir: &Path, prefix: &str) -> BTreeMap<u64, std::path::PathBuf> {
 
 #[test]
 fn run_with_vtk_writes_particle_and_blade_files_paraview_reads() {
-    common::require_liggghts!("run_with_vtk_writes_particle_and_blade_files_paraview_reads");
+    support::require_liggghts!("run_with_vtk_writes_particle_and_blade_files_paraview_reads");
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("point");
     // The gated layout: a fixed set of atoms and a moving blade, so each file can be checked
@@ -168,7 +168,7 @@ fn vtk_needs_a_kept_run_directory() {
 
 #[test]
 fn the_conveyor_writes_vtk_files_too() {
-    common::require_liggghts!("the_conveyor_writes_vtk_files_too");
+    support::require_liggghts!("the_conveyor_writes_vtk_files_too");
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("point");
     let quick = Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps/quick.toml");

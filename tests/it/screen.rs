@@ -1,18 +1,14 @@
-//! The screen (issue 10, "skip what a point doesn't need"): points where nothing can pass under
-//! the blade are skipped as MFR = 0, but only once a seeded verification sample of them has run
-//! and given MFR = 0; a closed point whose run gives MFR > 0 refutes the screen and every closed
-//! point runs for real.
+//! The screen: points where nothing can pass under the blade are skipped as MFR = 0, but only
+//! once a seeded verification sample of them has run and given MFR = 0; a closed point whose run
+//! gives MFR > 0 refutes the screen and every closed point runs for real.
 //!
 //! The pipeline on the fake executor (its "screen" closes the points below a gap, and each test
 //! sets what those points give), then a tiny sweep on real LIGGGHTS whose space holds two closed
 //! points: the verification run must give MFR = 0 on the engine, the other must be skipped.
 
-mod common;
-
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
-use std::process::{Output, Stdio};
-use std::time::Duration;
+use std::process::Output;
 
 use demsweep::analysis::stats::Bootstrap;
 use demsweep::run::fake::{fake_mfr, Behaviour, FakeExecutor};
@@ -25,7 +21,7 @@ use demsweep::store::{
 use demsweep::sweep::Sweep;
 use demsweep::sys::process::CancelToken;
 
-const MS: Duration = Duration::from_millis(1);
+use crate::support::{self, stderr, sweep, MS};
 
 /// Gap and blade speed swept; the fake closes the points at gap 2 (below 2.5). Equal lattice
 /// weights: the screen's zeros are under test here, not the weights.
@@ -81,7 +77,7 @@ fn a_verified_screen_skips_the_closed_points_and_counts_them_as_zero() {
     });
     let mut seen = Seen::default();
     let sum =
-        run::start(&s, lattice3(), &out, &exec, &common::quiet(2), &mut seen, &CancelToken::new()).unwrap();
+        run::start(&s, lattice3(), &out, &exec, &support::quiet(2), &mut seen, &CancelToken::new()).unwrap();
     assert_eq!((sum.done, sum.screened, sum.failed, sum.pending, sum.exit_code()), (7, 2, 0, 0, 0));
     assert_eq!(sum.screen.verdict, Verdict::Verified);
     assert_eq!((sum.screen.closed, sum.screen.sample, sum.screen.ran, sum.screen.skipped), (3, 1, 1, 2));
@@ -89,7 +85,7 @@ fn a_verified_screen_skips_the_closed_points_and_counts_them_as_zero() {
     let (manifest, _) = Store::read_manifest(&out).unwrap();
     assert_eq!(manifest.points.iter().filter(|p| p.closed).count(), 3);
     let attempts = exec.attempts();
-    let rows = common::csv_rows(&out.join("results.csv"));
+    let rows = support::csv_rows(&out.join("results.csv"));
     for (p, row) in manifest.points.iter().zip(&rows) {
         let run_dir = out.join("runs").join(&p.hash);
         match row["status"].as_str() {
@@ -128,7 +124,7 @@ fn a_verified_screen_skips_the_closed_points_and_counts_them_as_zero() {
 
     // A resume decides the same and runs nothing.
     let again =
-        run::resume(&out, &exec, &common::quiet(2), &mut Seen::default(), &CancelToken::new()).unwrap();
+        run::resume(&out, &exec, &support::quiet(2), &mut Seen::default(), &CancelToken::new()).unwrap();
     assert_eq!((again.ran, again.done, again.screened), (0, 7, 2));
     assert_eq!(exec.attempts(), attempts);
 }
@@ -142,7 +138,7 @@ fn a_verification_run_with_mfr_above_zero_refutes_the_screen_and_every_closed_po
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(20 * MS)).with_closed(closed);
     let mut seen = Seen::default();
     let sum =
-        run::start(&s, lattice3(), &out, &exec, &common::quiet(2), &mut seen, &CancelToken::new()).unwrap();
+        run::start(&s, lattice3(), &out, &exec, &support::quiet(2), &mut seen, &CancelToken::new()).unwrap();
     assert_eq!((sum.done, sum.screened, sum.pending), (9, 0, 0));
     assert_eq!(sum.screen.verdict, Verdict::Refuted);
     assert_eq!((sum.screen.closed, sum.screen.ran, sum.screen.skipped), (3, 3, 0));
@@ -151,7 +147,7 @@ fn a_verification_run_with_mfr_above_zero_refutes_the_screen_and_every_closed_po
     // Every point ran once, with its real MFR in results.csv; none is screened.
     let (manifest, _) = Store::read_manifest(&out).unwrap();
     assert!(exec.attempts().values().all(|&n| n == 1) && exec.attempts().len() == 9);
-    for (p, row) in manifest.points.iter().zip(common::csv_rows(&out.join("results.csv"))) {
+    for (p, row) in manifest.points.iter().zip(support::csv_rows(&out.join("results.csv"))) {
         assert_eq!(row["status"], "done");
         assert!((row["mfr"].parse::<f64>().unwrap() - fake_mfr(&p.values)).abs() < 1e-12);
     }
@@ -200,7 +196,7 @@ fn an_array_task_runs_the_verification_sample_before_it_skips_its_own_closed_poi
     let sum = run::resume_share(
         &out,
         &exec,
-        &common::quiet(1),
+        &support::quiet(1),
         Some(&order),
         &mut Seen::default(),
         &CancelToken::new(),
@@ -216,14 +212,6 @@ fn an_array_task_runs_the_verification_sample_before_it_skips_its_own_closed_poi
 
 // ---- real LIGGGHTS ----
 
-fn sweep_bin(args: &[&str]) -> Output {
-    common::sweep_bin().args(args).stdin(Stdio::null()).output().unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
 fn json(o: &Output) -> serde_json::Value {
     serde_json::from_slice(&o.stdout)
         .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&o.stdout)))
@@ -231,7 +219,7 @@ fn json(o: &Output) -> serde_json::Value {
 
 #[test]
 fn on_liggghts_the_verification_run_gives_mfr_zero_and_the_other_closed_point_is_skipped() {
-    common::require_liggghts!(
+    support::require_liggghts!(
         "on_liggghts_the_verification_run_gives_mfr_zero_and_the_other_closed_point_is_skipped"
     );
     // D = 2.5 mm on the rough substrate at 1.4 m/s: the screen closes gaps below 0.538 D
@@ -259,12 +247,12 @@ screen_sample_min = 1
     .unwrap();
     let out = tmp.path().join("out");
     let (f, o) = (file.to_str().unwrap(), out.to_str().unwrap());
-    let run = sweep_bin(&["lattice", f, "--levels", "4", "--jobs", "2", "-q", "--out", o]);
+    let run = sweep(&["lattice", f, "--levels", "4", "--jobs", "2", "-q", "--out", o]);
     let err = stderr(&run);
     assert_eq!(run.status.code(), Some(0), "{err}");
     assert!(err.contains("screen verified: 1 of 2 closed point(s) ran and gave MFR = 0; 1 skipped"), "{err}");
 
-    let table = common::csv_rows(&out.join("results.csv"));
+    let table = support::csv_rows(&out.join("results.csv"));
     let gaps: Vec<f64> = table.iter().map(|r| r["gap"].parse().unwrap()).collect();
     assert_eq!(gaps, [0.5, 1.25, 2.0, 2.75]);
     let joblog = std::fs::read_to_string(out.join("joblog.tsv")).unwrap();
@@ -314,27 +302,27 @@ screen_sample_min = 1
     let got = summary["statistics"]["mean"].as_f64().unwrap();
     assert!((got - mean).abs() < 1e-12, "{got} vs {mean}");
     let stats =
-        json(&sweep_bin(&["stats", out.join("results.csv").to_str().unwrap(), "--column", "mfr", "--json"]));
+        json(&sweep(&["stats", out.join("results.csv").to_str().unwrap(), "--column", "mfr", "--json"]));
     assert_eq!(stats["n"], 4);
 
     // `sweep status` shows it; a resume keeps the decision and runs nothing.
-    let st = json(&sweep_bin(&["status", o, "--json"]));
+    let st = json(&sweep(&["status", o, "--json"]));
     assert_eq!((st["screened"].as_u64(), st["pending"].as_u64()), (Some(1), Some(0)));
-    let text = String::from_utf8_lossy(&sweep_bin(&["status", o]).stdout).into_owned();
+    let text = String::from_utf8_lossy(&sweep(&["status", o]).stdout).into_owned();
     assert!(text.contains("screened 1"), "{text}");
-    let resumed = sweep_bin(&["resume", o, "-q"]);
+    let resumed = sweep(&["resume", o, "-q"]);
     assert_eq!(resumed.status.code(), Some(0), "{}", stderr(&resumed));
     assert_eq!(std::fs::read_to_string(out.join("joblog.tsv")).unwrap(), joblog);
-    assert_eq!(common::csv_rows(&out.join("results.csv")), table);
+    assert_eq!(support::csv_rows(&out.join("results.csv")), table);
 }
 
 #[test]
 fn the_points_preview_marks_the_closed_points_of_the_thesis_space() {
-    common::require_liggghts!("the_points_preview_marks_the_closed_points_of_the_thesis_space");
+    support::require_liggghts!("the_points_preview_marks_the_closed_points_of_the_thesis_space");
     // `sweep points --screen`: closed exactly where gap/D is below 0.670 D less the margin,
     // 0.1472 D × (v / 1.6 m/s)^0.8 (v 1.2–1.6 m/s: the bound is 0.523–0.553 D).
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps/thesis-lds.toml");
-    let o = sweep_bin(&["points", file.to_str().unwrap(), "--lds", "400", "--screen"]);
+    let o = sweep(&["points", file.to_str().unwrap(), "--lds", "400", "--screen"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let text = String::from_utf8(o.stdout.clone()).unwrap();
     let mut lines = text.lines();
@@ -358,7 +346,7 @@ fn the_points_preview_marks_the_closed_points_of_the_thesis_space() {
 
 #[test]
 fn on_liggghts_a_failed_verification_run_refutes_the_screen_loudly() {
-    common::require_liggghts!("on_liggghts_a_failed_verification_run_refutes_the_screen_loudly");
+    support::require_liggghts!("on_liggghts_a_failed_verification_run_refutes_the_screen_loudly");
     // Every run is cut off at 0.3 s (LIGGGHTS takes seconds), so the verification run fails:
     // the screen is refuted, said so on stderr and in summary.json, and the other closed point
     // runs too (here, failing the same way) instead of being counted as MFR = 0.
@@ -382,8 +370,7 @@ retries = 0
     .unwrap();
     let out = tmp.path().join("out");
     let o = out.to_str().unwrap();
-    let run =
-        sweep_bin(&["lattice", file.to_str().unwrap(), "--levels", "4", "--jobs", "2", "-q", "--out", o]);
+    let run = sweep(&["lattice", file.to_str().unwrap(), "--levels", "4", "--jobs", "2", "-q", "--out", o]);
     let err = stderr(&run);
     assert_eq!(run.status.code(), Some(1), "{err}");
     assert!(err.contains("warning: SCREEN REFUTED: point ") && err.contains("failed (timed-out)"), "{err}");
@@ -394,7 +381,7 @@ retries = 0
         (summary["screen"]["ran"].as_u64(), summary["counts"]["screened"].as_u64()),
         (Some(2), Some(0))
     );
-    let table = common::csv_rows(&out.join("results.csv"));
+    let table = support::csv_rows(&out.join("results.csv"));
     assert!(table.iter().all(|r| r["status"] == "failed"), "{table:?}");
     let joblog = std::fs::read_to_string(out.join("joblog.tsv")).unwrap();
     assert!(table.iter().all(|r| joblog.contains(&r["hash"])), "every point was attempted");

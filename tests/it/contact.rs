@@ -1,14 +1,14 @@
 //! The contact solver against closed-form Hertz theory, rigid-body impulse–momentum theory and
 //! the installed LIGGGHTS (`sweep contact-check`).
 
-mod common;
-
 use std::path::Path;
 
 use demsweep::bench::contact::timestep::{self, ClosedForm};
 use demsweep::contact::{self, bounce, check, solver, Case, ContactError, Material, Outcome, Regime, Target};
 
-/// Glass (LIGGGHTS-NOTES closed-form check).
+use crate::support::{self, sweep};
+
+/// Glass (the closed-form check of docs/contact.md).
 const GLASS: Material = Material { youngs: 48e9, poisson: 0.2 };
 /// The spreading scene's reduced-modulus steel (thesis Table 3.1).
 const SPREAD: Material = Material { youngs: 21e6, poisson: 0.3 };
@@ -107,8 +107,8 @@ fn elastic_normal_impact_matches_hertz_theory() {
 }
 
 #[test]
-fn glass_pair_matches_the_liggghts_notes_figures() {
-    // LIGGGHTS-NOTES: two glass spheres, 20 m/s, e = 1: 274.1 µm, 40.3 µs.
+fn glass_pair_matches_the_closed_form_figures() {
+    // Two 10 mm glass spheres, 20 m/s, e = 1: 274.1 µm, 40.3 µs (docs/contact.md).
     let (_, c, ..) = elastic_cases().remove(0);
     let o = run(&c);
     assert!((o.max_overlap * 1e6 - 274.1).abs() < 0.1, "{o:?}");
@@ -254,7 +254,7 @@ fn damped_sliding_impact_transfers_more_than_mu_times_the_normal_impulse() {
 
 #[test]
 fn contact_check_passes_against_liggghts() {
-    common::require_liggghts!("contact_check_passes_against_liggghts");
+    support::require_liggghts!("contact_check_passes_against_liggghts");
     let cases = check::default_cases();
     let report = check::run_cases(&cases, Path::new("liggghts"), None).expect("LIGGGHTS runs");
     println!("{}", report.table());
@@ -389,7 +389,7 @@ fn a_centre_that_would_cross_the_wall_is_refused_at_the_closed_form_modulus() {
 
 #[test]
 fn solver_and_liggghts_agree_along_a_timestep_ladder_while_both_leave_the_closed_form() {
-    common::require_liggghts!(
+    support::require_liggghts!(
         "solver_and_liggghts_agree_along_a_timestep_ladder_while_both_leave_the_closed_form"
     );
     // D 2 mm scene particle, e = 0.5, at t_c/1000 (the default), t_c/10 and t_c/1.
@@ -426,10 +426,6 @@ fn sweep_bench_contact_rejects_bad_input_with_exit_2() {
     let out = sweep(&["bench", "contact", "--contacts", "0"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--contacts 0: expected at least 1"));
-}
-
-fn sweep(args: &[&str]) -> std::process::Output {
-    common::sweep_bin().args(args).output().expect("sweep starts")
 }
 
 const WALL_ARGS: [&str; 16] = [
@@ -483,7 +479,7 @@ fn sweep_contact_rejects_bad_input_with_exit_2() {
 
 #[test]
 fn sweep_contact_check_runs_one_case_from_flags() {
-    common::require_liggghts!("sweep_contact_check_runs_one_case_from_flags");
+    support::require_liggghts!("sweep_contact_check_runs_one_case_from_flags");
     let mut args = vec!["contact-check"];
     args.extend(WALL_ARGS);
     args.extend(["--vt", "2"]);

@@ -1,25 +1,13 @@
 //! Convergence and the report end to end, through the `sweep` binary: the stand-in engine
 //! (`[run] engine = "stand-in"`) for sweeps that stop by themselves, resume and extension, and
 //! real LIGGGHTS on `sweeps/quick.toml` for one sweep that ends with a report. Statistics are
-//! checked against values recomputed here from results.csv, never against our own output.
-
-mod common;
+//! checked against values recomputed here from results.csv, never against our own output, and
+//! are finite even where every MFR is zero.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Output, Stdio};
 
-fn sweep(args: &[&str]) -> Output {
-    common::sweep_bin().args(args).stdin(Stdio::null()).output().unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn p(path: &Path) -> &str {
-    path.to_str().unwrap()
-}
+use crate::support::{self, assert_all_finite, p, result_rows, stderr, sweep};
 
 /// The thesis's 4-D space on the stand-in.
 fn standin_sweep(dir: &Path, name: &str, convergence: &str) -> PathBuf {
@@ -101,14 +89,14 @@ fn lds_on_the_stand_in_stops_by_itself_and_its_statistics_are_the_prefixes() {
     assert!(err.contains(&format!("converged at N = {n} (lds {n})")), "{err}");
     assert!(err.contains("report.html"), "{err}");
     // It stopped: far fewer runs than --max, and no space past the converged one was judged.
-    let rows = common::csv_rows(&out.join("results.csv"));
+    let rows = support::csv_rows(&out.join("results.csv"));
     let done: Vec<&BTreeMap<String, String>> = rows.iter().filter(|r| r["status"] == "done").collect();
     // The stand-in's runs take microseconds, so a few hundred more start while the rule
     // bootstraps the space (1,000 resamples), over a thousand on a loaded machine; real runs
     // take seconds. What matters: it stopped short of --max.
     assert!(done.len() >= n && done.len() < 4000, "done {} n {n}", done.len());
     assert_eq!(joblog_lines(&out), done.len());
-    let conv = common::csv_rows(&out.join("convergence.csv"));
+    let conv = support::csv_rows(&out.join("convergence.csv"));
     // The verdict's space is the first converged one (spaces the overshoot completed after it,
     // on a loaded machine, may be judged too).
     let at = conv.iter().position(|r| r["converged"] == "true").unwrap();
@@ -185,7 +173,7 @@ fn lattice_on_the_stand_in_names_its_converged_level_and_the_thesis_rule_is_weak
     let s = summary(&out);
     let level = s["verdict"]["space"].as_str().expect("converged").to_string();
     assert!(err.contains(&format!("({level})")), "{err}");
-    let conv = common::csv_rows(&out.join("convergence.csv"));
+    let conv = support::csv_rows(&out.join("convergence.csv"));
     assert_eq!(conv.last().unwrap()["space"], level);
     assert_ne!(level, "lattice 8", "stopped before the last level");
     assert!(s["counts"]["pending"].as_u64().unwrap() > 0);
@@ -197,7 +185,7 @@ fn lattice_on_the_stand_in_names_its_converged_level_and_the_thesis_rule_is_weak
     // value is lo, mid or hi; each coordinate at lo or hi halves the weight.
     let box_ = [("friction", 0.1, 0.3), ("diameter", 1.0, 3.0), ("gap", 1.0, 5.0), ("blade_speed", 1.2, 1.6)];
     let (mut sw, mut swy, mut n3) = (0.0, 0.0, 0);
-    for r in common::csv_rows(&out.join("results.csv")) {
+    for r in support::csv_rows(&out.join("results.csv")) {
         let on = |v: f64, lo: f64, hi: f64| [lo, (lo + hi) / 2.0, hi].iter().any(|g| (v - g).abs() < 1e-9);
         let v: Vec<f64> = box_.iter().map(|(k, _, _)| r[*k].parse().unwrap()).collect();
         if !v.iter().zip(&box_).all(|(v, (_, lo, hi))| on(*v, *lo, *hi)) {
@@ -316,7 +304,7 @@ fn bad_input_is_one_line_and_exit_2_with_nothing_written() {
 /// The README's main command on real LIGGGHTS: a small sweep that ends with a report.
 #[test]
 fn quick_sweep_on_liggghts_ends_with_a_report() {
-    common::require_liggghts!("quick_sweep_on_liggghts_ends_with_a_report");
+    support::require_liggghts!("quick_sweep_on_liggghts_ends_with_a_report");
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("quick");
     let quick = Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps/quick.toml");
@@ -326,12 +314,12 @@ fn quick_sweep_on_liggghts_ends_with_a_report() {
     let s = summary(&out);
     assert!(["converged", "not-converged"].contains(&s["verdict"]["status"].as_str().unwrap()), "{s}");
     assert!(err.contains(&format!("report: {}", out.join("report/report.html").display())), "{err}");
-    let rows = common::csv_rows(&out.join("results.csv"));
+    let rows = support::csv_rows(&out.join("results.csv"));
     let done: Vec<f64> =
         rows.iter().filter(|r| r["status"] == "done").map(|r| r["mfr"].parse().unwrap()).collect();
     assert_eq!(s["counts"]["done"].as_u64().unwrap() as usize, done.len());
     // The last space is all four points: its mean is the mean of results.csv's MFR.
-    let conv = common::csv_rows(&out.join("convergence.csv"));
+    let conv = support::csv_rows(&out.join("convergence.csv"));
     let last = conv.last().unwrap();
     assert_eq!(last["n"], "4");
     assert_eq!(last["done"], done.len().to_string());
@@ -401,7 +389,7 @@ blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
         assert!((space.statistics.mean.unwrap() - swy / sw).abs() < 1e-12, "{}", space.label);
     }
     demsweep::report::write(&a).unwrap();
-    let conv = common::csv_rows(&out.join("convergence.csv"));
+    let conv = support::csv_rows(&out.join("convergence.csv"));
     assert_eq!((conv[1]["failed"].as_str(), conv[1]["done"].as_str()), ("5", "20"));
 
     // Every run failed: undefined statistics, empty cells, a report all the same.
@@ -419,7 +407,7 @@ blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
     assert_eq!(a.verdict.status, "not-converged");
     assert_eq!(a.spaces[1].statistics.mean, None);
     demsweep::report::write(&a).unwrap();
-    let conv = common::csv_rows(&out.join("convergence.csv"));
+    let conv = support::csv_rows(&out.join("convergence.csv"));
     assert_eq!((conv[1]["mean"].as_str(), conv[1]["kurtosis"].as_str()), ("", ""));
     let json = std::fs::read_to_string(out.join("summary.json")).unwrap();
     assert!(!json.contains("NaN") && !json.contains("inf"));
@@ -561,7 +549,7 @@ fn report_sections_for_failed_and_screened_sweeps_and_a_points_page() {
     }
     assert!(html.contains("<h2>Convergence</h2>") && html.contains("Maps over pairs of parameters"));
     assert!(html.contains("<th>gap (mm)</th>") && html.contains("<th>blade_speed (m/s)</th>"));
-    let rows = common::csv_rows(&out.join("results.csv"));
+    let rows = support::csv_rows(&out.join("results.csv"));
     assert!(rows
         .iter()
         .all(|r| r["friction"] == "0.3" && r["rolling_friction"] == "0.1" && r["density"] == "7980"));
@@ -605,4 +593,38 @@ fn report_sections_for_failed_and_screened_sweeps_and_a_points_page() {
     };
     assert!(grey(&out) > 1, "no zero-MFR cell drawn");
     assert_eq!(grey(&tmp.path().join("some-failed")), 1, "a zero-MFR cell where every MFR > 0");
+}
+
+#[test]
+fn a_space_where_every_mfr_is_zero_has_finite_statistics() {
+    let tmp = tempfile::tempdir().unwrap();
+    // Gaps below the stand-in's jam ratio: every point gives MFR 0, so std is 0.
+    let toml = tmp.path().join("zero.toml");
+    std::fs::write(
+        &toml,
+        r#"name = "zero"
+[parameters]
+gap         = { lo = 1.0, hi = 1.5, unit = "mm" }
+blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
+diameter    = { value = 2.0, unit = "mm" }
+[design.lds]
+step = 4
+max = 8
+[run]
+engine = "stand-in"
+screen = false
+"#,
+    )
+    .unwrap();
+    let d = tmp.path().join("d");
+    let o = sweep(&["lds", p(&toml), "--out", p(&d), "-q"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = sweep(&["report", p(&d), "--json"]);
+    let err = stderr(&o);
+    assert!(result_rows(&d).iter().all(|r| r["mfr"].parse::<f64>().unwrap() == 0.0));
+    assert_all_finite("stdout", &String::from_utf8_lossy(&o.stdout));
+    assert_all_finite("stderr", &err);
+    for f in ["convergence.csv", "summary.json"] {
+        assert_all_finite(f, &std::fs::read_to_string(d.join(f)).unwrap());
+    }
 }

@@ -2,17 +2,12 @@
 //! sits below the measured edge with a margin of at least 1.5× at the harshest corner of the
 //! thesis space (run for real through LIGGGHTS, on a shortened window).
 
-mod common;
-
 use std::path::{Path, PathBuf};
-use std::process::Output;
 
 use demsweep::scene::settings::SceneSettings;
 use demsweep::scene::MAX_RAYLEIGH_FRACTION;
 
-fn sweep(args: &[&str]) -> Output {
-    common::sweep_bin().args(args).output().unwrap()
-}
+use crate::support::{self, sweep};
 
 /// The thesis 4-D space, with extra `[scene]` lines.
 fn thesis_space(dir: &Path, scene: &str) -> PathBuf {
@@ -39,7 +34,7 @@ youngs_modulus = {{ value = 21.0, unit = "MPa" }}
 
 #[test]
 fn a_timestep_beyond_the_measured_bound_is_refused_unless_forced() {
-    common::require_liggghts!("a_timestep_beyond_the_measured_bound_is_refused_unless_forced");
+    support::require_liggghts!("a_timestep_beyond_the_measured_bound_is_refused_unless_forced");
     let tmp = tempfile::tempdir().unwrap();
     let beyond = MAX_RAYLEIGH_FRACTION + 0.1;
     let file = thesis_space(tmp.path(), &format!("rayleigh_fraction = {beyond}"));
@@ -69,7 +64,7 @@ fn a_timestep_beyond_the_measured_bound_is_refused_unless_forced() {
 
 #[test]
 fn bad_bench_input_is_one_line_and_writes_nothing() {
-    common::require_liggghts!("bad_bench_input_is_one_line_and_writes_nothing");
+    support::require_liggghts!("bad_bench_input_is_one_line_and_writes_nothing");
     let tmp = tempfile::tempdir().unwrap();
     let file = thesis_space(tmp.path(), "");
     let f = file.to_str().unwrap();
@@ -98,7 +93,7 @@ fn bad_bench_input_is_one_line_and_writes_nothing() {
 /// to 0.4 (1.5× = 0.6, where every seed lost atoms when measured).
 #[test]
 fn the_default_timestep_has_a_margin_of_1_5_below_the_edge_at_the_harshest_corner() {
-    common::require_liggghts!(
+    support::require_liggghts!(
         "the_default_timestep_has_a_margin_of_1_5_below_the_edge_at_the_harshest_corner"
     );
     let default = SceneSettings::default().rayleigh_fraction;

@@ -3,11 +3,11 @@
 //!
 //! Small scenes at D = 2 mm: each run is a few CPU seconds.
 
-mod common;
-
 use std::path::{Path, PathBuf};
 
 use serde_json::Value;
+
+use crate::support::{self, run_point};
 
 /// A conveyor sweep over gap and blade speed at D = 2 mm, μ = 0.2, with `extra` in `[scene]`.
 fn space(dir: &Path, extra: &str) -> PathBuf {
@@ -29,13 +29,6 @@ layout = "conveyor"
     )
     .unwrap();
     path
-}
-
-fn run_point(sweep: &Path, set: &str) -> (i32, Value, String) {
-    let out = common::sweep_bin().args(["run"]).arg(sweep).args(["--set", set, "--json"]).output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    let json = serde_json::from_slice(&out.stdout).unwrap_or(Value::Null);
-    (out.status.code().unwrap_or(-1), json, stderr)
 }
 
 fn f(r: &Value, key: &str) -> f64 {
@@ -69,7 +62,7 @@ fn assert_steady(r: &Value, what: &str) {
 
 #[test]
 fn a_thesis_speed_point_becomes_steady_holds_its_heap_and_meets_its_target() {
-    common::require_liggghts!("a_thesis_speed_point_becomes_steady_holds_its_heap_and_meets_its_target");
+    support::require_liggghts!("a_thesis_speed_point_becomes_steady_holds_its_heap_and_meets_its_target");
     let dir = tempfile::tempdir().unwrap();
     let (code, r, err) = run_point(&space(dir.path(), ""), "gap=5,blade_speed=1.4");
     assert_eq!(code, 0, "{err}");
@@ -90,7 +83,7 @@ fn a_thesis_speed_point_becomes_steady_holds_its_heap_and_meets_its_target() {
 
 #[test]
 fn a_machine_speed_point_is_steady_and_deposits_a_dense_layer() {
-    common::require_liggghts!("a_machine_speed_point_is_steady_and_deposits_a_dense_layer");
+    support::require_liggghts!("a_machine_speed_point_is_steady_and_deposits_a_dense_layer");
     // 0.4 m/s (recoaters run 0.05–0.2): the held heap does not run out, and the layer is far
     // denser than at the thesis's speed.
     let dir = tempfile::tempdir().unwrap();
@@ -106,7 +99,7 @@ fn a_machine_speed_point_is_steady_and_deposits_a_dense_layer() {
 
 #[test]
 fn nothing_passes_where_no_sphere_fits_and_mfr_rises_with_the_gap() {
-    common::require_liggghts!("nothing_passes_where_no_sphere_fits_and_mfr_rises_with_the_gap");
+    support::require_liggghts!("nothing_passes_where_no_sphere_fits_and_mfr_rises_with_the_gap");
     let dir = tempfile::tempdir().unwrap();
     let sweep = space(dir.path(), "");
     // gap 0.5 D: no 2 mm sphere passes under a 1 mm tip.
@@ -132,7 +125,7 @@ fn nothing_passes_where_no_sphere_fits_and_mfr_rises_with_the_gap() {
 fn a_cap_shorter_than_the_least_window_is_bad_input() {
     let dir = tempfile::tempdir().unwrap();
     let sweep = space(dir.path(), "window_cap_diameters = 20.0");
-    let out = common::sweep_bin()
+    let out = support::sweep_bin()
         .args(["render"])
         .arg(&sweep)
         .args(["--out"])
@@ -147,7 +140,7 @@ fn a_cap_shorter_than_the_least_window_is_bad_input() {
 
 #[test]
 fn a_flow_that_overshoots_runs_on_until_the_transient_is_behind_it() {
-    common::require_liggghts!("a_flow_that_overshoots_runs_on_until_the_transient_is_behind_it");
+    support::require_liggghts!("a_flow_that_overshoots_runs_on_until_the_transient_is_behind_it");
     // A point of the thesis's space whose flow rises to ~0.17 and then relaxes to ~0.11: the
     // deck's stop rule used to judge every block after the warm-up and stop at its minimum,
     // where the post-processing's MSER then dropped half the window and failed the point as

@@ -8,23 +8,17 @@
 //! test skips, saying so, when Slurm is not installed; `bash scripts/slurm_local.sh up` (as root)
 //! installs and starts it.
 
-mod common;
-use common::{results, sweep_bin};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output, Stdio};
+use std::process::{Child, Command, Stdio};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 use demsweep::store::{ClaimAttempt, ClaimInfo, Store};
 
-fn run(cmd: &mut Command) -> Output {
-    cmd.stdin(Stdio::null()).output().unwrap()
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
+use crate::support::{
+    self, attempt_counts, failed_sweep, output, p, repo, results, stderr, sweep, sweep_bin, text, wait_until,
+};
 
 /// Three points of the quick scene (D = 1.5 mm, gap and blade speed swept).
 const SWEEP: &str = r#"name = "cluster-test"
@@ -48,9 +42,11 @@ fn reference() -> &'static Path {
         let root = tempfile::Builder::new().prefix("cluster-ref-").tempdir().unwrap().keep();
         std::fs::write(root.join("s.toml"), SWEEP).unwrap();
         let dir = root.join("local");
-        let o = run(common::sweep_bin()
-            .args(["lds", "s.toml", "--step", "3", "--max", "3", "--jobs", "2", "-q", "--out", "local"])
-            .current_dir(&root));
+        let o = output(
+            support::sweep_bin()
+                .args(["lds", "s.toml", "--step", "3", "--max", "3", "--jobs", "2", "-q", "--out", "local"])
+                .current_dir(&root),
+        );
         assert!(matches!(o.status.code(), Some(0 | 1)), "local run: {}", text(&o.stderr));
         dir
     })
@@ -93,20 +89,8 @@ fn assert_same_as_reference(dir: &Path) {
     assert_finished_once(dir);
 }
 
-fn wait_until(what: &str, limit: Duration, mut cond: impl FnMut() -> bool) {
-    let t = Instant::now();
-    while !cond() {
-        assert!(t.elapsed() < limit, "gave up waiting for {what}");
-        std::thread::sleep(Duration::from_millis(200));
-    }
-}
-
 // ---------------------------------------------------------------------------------------------
 // Slurm
-
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
 
 /// Bring the local Slurm up; `None` (with the reason printed) when Slurm is not installed.
 fn local_slurm() -> Option<String> {
@@ -120,7 +104,7 @@ fn local_slurm() -> Option<String> {
         );
         return None;
     }
-    let o = run(Command::new("bash").arg(repo().join("scripts/slurm_local.sh")).arg("up"));
+    let o = output(Command::new("bash").arg(repo("scripts/slurm_local.sh")).arg("up"));
     assert!(o.status.success(), "slurm_local.sh up: {}{}", text(&o.stdout), text(&o.stderr));
     let conf = text(&o.stdout).lines().last().unwrap().trim_start_matches("export SLURM_CONF=").to_string();
     Some(conf)
@@ -128,7 +112,8 @@ fn local_slurm() -> Option<String> {
 
 /// Jobs of `job` (an array id) still known to squeue.
 fn squeue(conf: &str, job: &str) -> Vec<(String, String)> {
-    let o = run(Command::new("squeue").env("SLURM_CONF", conf).args(["-h", "-r", "-j", job, "-o", "%i %T"]));
+    let o =
+        output(Command::new("squeue").env("SLURM_CONF", conf).args(["-h", "-r", "-j", job, "-o", "%i %T"]));
     text(&o.stdout)
         .lines()
         .filter_map(|l| l.split_once(' ').map(|(a, b)| (a.to_string(), b.to_string())))
@@ -136,10 +121,12 @@ fn squeue(conf: &str, job: &str) -> Vec<(String, String)> {
 }
 
 fn submit(conf: &str, dir: &Path, extra: &[&str]) -> (String, String) {
-    let o = run(common::sweep_bin()
-        .env("SLURM_CONF", conf)
-        .args(["submit", dir.to_str().unwrap(), "--scheduler", "slurm", "--walltime", "00:20:00"])
-        .args(extra));
+    let o = output(
+        support::sweep_bin()
+            .env("SLURM_CONF", conf)
+            .args(["submit", dir.to_str().unwrap(), "--scheduler", "slurm", "--walltime", "00:20:00"])
+            .args(extra),
+    );
     assert!(o.status.success(), "submit: {}", text(&o.stderr));
     (text(&o.stdout).trim().to_string(), text(&o.stderr))
 }
@@ -165,7 +152,7 @@ fn slurm_array_with_a_cancelled_task_completes_on_resubmission() {
     let claim1 = dir.join("runs").join(&hash1).join("claim");
     wait_until("task 1 to claim its point", Duration::from_secs(120), || claim1.exists());
     std::thread::sleep(Duration::from_secs(2));
-    let o = run(Command::new("scancel").env("SLURM_CONF", &conf).arg(format!("{job}_1")));
+    let o = output(Command::new("scancel").env("SLURM_CONF", &conf).arg(format!("{job}_1")));
     assert!(o.status.success(), "scancel: {}", text(&o.stderr));
     wait_until("the array to end", Duration::from_secs(600), || squeue(&conf, &job).is_empty());
 
@@ -203,7 +190,7 @@ fn slurm_array_with_a_cancelled_task_completes_on_resubmission() {
     assert_eq!(subs.lines().count(), 2, "{subs}");
 
     // Nothing left: a third submission says so and submits nothing.
-    let o = run(common::sweep_bin().env("SLURM_CONF", &conf).args([
+    let o = output(support::sweep_bin().env("SLURM_CONF", &conf).args([
         "submit",
         dir.to_str().unwrap(),
         "--scheduler",
@@ -225,7 +212,8 @@ fn an_lds_chain_on_slurm_stops_at_the_verdict() {
                  [design.lds]\nstep = 4\nmax = 20\n[convergence]\ntolerance = 2.0\nfloor = 2.0\nhold = 1\n\
                  [run]\nengine = \"stand-in\"\n";
     std::fs::write(root.path().join("s.toml"), sweep).unwrap();
-    let o = run(sweep_bin().args(["lds", "s.toml", "--out", "planned", "--plan"]).current_dir(root.path()));
+    let o =
+        output(sweep_bin().args(["lds", "s.toml", "--out", "planned", "--plan"]).current_dir(root.path()));
     assert!(o.status.success(), "{}", text(&o.stderr));
     let dir = root.path().join("planned");
     let (_job, msg) = submit(&conf, &dir, &["--tasks", "2"]);
@@ -256,7 +244,7 @@ fn an_lds_chain_on_slurm_stops_at_the_verdict() {
     assert_eq!(summary["verdict"]["status"], "converged", "{summary}");
     assert_eq!(summary["verdict"]["n"], 8, "{summary}");
     // Submitting again by hand agrees: nothing to run.
-    let o = run(sweep_bin().env("SLURM_CONF", &conf).args([
+    let o = output(sweep_bin().env("SLURM_CONF", &conf).args([
         "submit",
         dir.to_str().unwrap(),
         "--scheduler",
@@ -296,7 +284,7 @@ fn pbs_task(script: &Path, index: usize, torque: bool, workdir: &Path) -> Child 
 #[test]
 fn pbs_task_bodies_under_the_pbs_environment_equal_a_local_run() {
     let (root, dir) = fresh_copy("cluster-pbs-");
-    let o = run(common::sweep_bin().args([
+    let o = output(support::sweep_bin().args([
         "submit",
         dir.to_str().unwrap(),
         "--scheduler",
@@ -319,7 +307,7 @@ fn pbs_task_bodies_under_the_pbs_environment_equal_a_local_run() {
     }
     assert_same_as_reference(&dir);
 
-    let o = run(common::sweep_bin().args([
+    let o = output(support::sweep_bin().args([
         "submit",
         dir.to_str().unwrap(),
         "--scheduler",
@@ -364,7 +352,7 @@ fn synthetic(dir: &Path, n: usize) {
 /// Compare with `tests/snapshots/NAME`, paths replaced by `DIR` and `SWEEP`; with
 /// `UPDATE_SNAPSHOTS=1` write it instead.
 fn snapshot(name: &str, got: &str) {
-    let path = repo().join("tests/snapshots").join(name);
+    let path = repo("tests/snapshots").join(name);
     if std::env::var_os("UPDATE_SNAPSHOTS").is_some() {
         std::fs::create_dir_all(path.parent().unwrap()).unwrap();
         std::fs::write(&path, got).unwrap();
@@ -384,17 +372,27 @@ fn scripts_match_their_snapshots() {
         let root = tempfile::tempdir().unwrap();
         let dir = root.path().join("snap");
         synthetic(&dir, 10);
-        let o = run(common::sweep_bin()
-            .args(["submit", dir.to_str().unwrap(), "--scheduler", scheduler, "--tasks", "4", "--dry-run"])
-            .args(["--jobs-per-task", "2", "--ranks", "2", "--walltime", "02:00:00"])
-            .args(extra));
+        let o = output(
+            support::sweep_bin()
+                .args([
+                    "submit",
+                    dir.to_str().unwrap(),
+                    "--scheduler",
+                    scheduler,
+                    "--tasks",
+                    "4",
+                    "--dry-run",
+                ])
+                .args(["--jobs-per-task", "2", "--ranks", "2", "--walltime", "02:00:00"])
+                .args(extra),
+        );
         assert!(o.status.success(), "{scheduler}: {}", text(&o.stderr));
         let ext = if scheduler == "slurm" { "slurm" } else { "pbs" };
         for kind in ["array", "report"] {
             let got = std::fs::read_to_string(dir.join(format!("cluster/{kind}.{ext}"))).unwrap();
             let got = got
                 .replace(dir.to_str().unwrap(), "DIR")
-                .replace(common::SWEEP, "SWEEP")
+                .replace(support::SWEEP, "SWEEP")
                 .replace(env!("CARGO_PKG_VERSION"), "VERSION");
             snapshot(&format!("{scheduler}-{kind}.txt"), &got);
         }
@@ -408,9 +406,11 @@ fn scripts_match_their_snapshots() {
 fn a_planned_directory_is_submitted_and_another_tasks_says_what_it_does() {
     let root = tempfile::tempdir().unwrap();
     std::fs::write(root.path().join("s.toml"), SWEEP).unwrap();
-    let o = run(sweep_bin()
-        .args(["lds", "s.toml", "--step", "3", "--max", "3", "--out", "planned", "--plan"])
-        .current_dir(root.path()));
+    let o = output(
+        sweep_bin()
+            .args(["lds", "s.toml", "--step", "3", "--max", "3", "--out", "planned", "--plan"])
+            .current_dir(root.path()),
+    );
     let err = text(&o.stderr);
     assert!(o.status.success(), "{err}");
     assert!(
@@ -429,7 +429,7 @@ fn a_planned_directory_is_submitted_and_another_tasks_says_what_it_does() {
     assert!(attempts.lines().count() <= 1, "{attempts}");
 
     let submit = |tasks: &str| {
-        let o = run(sweep_bin().args([
+        let o = output(sweep_bin().args([
             "submit",
             dir.to_str().unwrap(),
             "--scheduler",
@@ -486,13 +486,13 @@ fn bad_submit_input_is_refused_and_writes_nothing() {
         (&["--scheduler", "pbs", "--tasks", "2", "--queue", "a b", "--dry-run"][..], "--queue \"a b\""),
         (&["--scheduler", "pbs", "--tasks", "2", "--ranks", "0", "--dry-run"][..], "--ranks 0"),
     ] {
-        let o = run(common::sweep_bin().arg("submit").arg(d).args(args));
+        let o = output(support::sweep_bin().arg("submit").arg(d).args(args));
         let err = text(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
         assert!(err.contains(needle) && err.lines().count() == 1, "{args:?}: {err}");
         assert!(!dir.join("cluster").exists(), "{args:?} wrote something");
     }
-    let o = run(common::sweep_bin().args([
+    let o = output(support::sweep_bin().args([
         "submit",
         root.path().to_str().unwrap(),
         "--scheduler",
@@ -502,6 +502,36 @@ fn bad_submit_input_is_refused_and_writes_nothing() {
     ]));
     assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
     assert!(text(&o.stderr).contains("not a sweep directory"), "{}", text(&o.stderr));
+}
+
+#[test]
+fn retry_failed_in_the_tasks_of_one_submission_runs_each_failed_point_once_more() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = failed_sweep(tmp.path());
+    let o =
+        sweep(&["submit", p(&d), "--scheduler", "slurm", "--tasks", "2", "--only", "failed", "--dry-run"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let array = std::fs::read_dir(d.join("cluster"))
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| p.file_stem().is_some_and(|s| s == "array"))
+        .expect("submit wrote the array script");
+    let script = std::fs::read_to_string(array).unwrap();
+    let per_task = script
+        .split("--per-task ")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .expect("the script gives --per-task")
+        .to_string();
+    assert!(script.contains("--retry-failed"), "{script}");
+    // The array's tasks one after the other, each helping with the other's points.
+    for task in ["0", "1"] {
+        let o = sweep(&["work", p(&d), "--task", task, "--per-task", &per_task, "--retry-failed", "-q"]);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    }
+    let n = attempt_counts(&d);
+    assert!(n.values().all(|&a| a == 2), "attempts per point: {n:?}");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -574,7 +604,7 @@ fn a_frozen_task_is_taken_over_after_its_lease_and_a_live_one_is_not() {
     let hash = want[k].0.clone();
     let task = k.to_string();
     let work = |host: &str| {
-        common::sweep_bin()
+        support::sweep_bin()
             .args(["work", dir.to_str().unwrap(), "--task", &task, "--per-task", "1", "--jobs", "1"])
             .args(["--lease", "3", "--no-steal", "-q", "--host", host])
             .stdin(Stdio::null())

@@ -2,16 +2,16 @@
 //!
 //! These run the installed `liggghts` on small scenes (seconds each).
 
-mod common;
-
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use serde_json::Value;
 
+use crate::support::{self, run_point};
+
 /// A sweep file over the thesis's D and gap ranges at μ = 0.3, v = 1.6 m/s, written to `dir`.
 fn thesis_space(dir: &Path) -> PathBuf {
-    common::write_file(
+    support::write_file(
         &dir.join("space.toml"),
         r#"name = "space"
 [parameters]
@@ -20,17 +20,9 @@ gap      = { lo = 1.0, hi = 6.0, unit = "mm" }
 friction = 0.3
 blade_speed = 1.6
 [scene]
-layout = "gated"   # the lab-frame scene these tests check (tests/steady.rs: the conveyor)
+layout = "gated"   # the lab-frame scene these tests check (the `steady` tests: the conveyor)
 "#,
     )
-}
-
-/// `sweep run --json` of one point; returns (exit code, parsed JSON, stderr).
-fn run_point(sweep: &Path, set: &str) -> (i32, Value, String) {
-    let out = common::sweep_bin().args(["run"]).arg(sweep).args(["--set", set, "--json"]).output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    let json = serde_json::from_slice(&out.stdout).unwrap_or(Value::Null);
-    (out.status.code().unwrap_or(-1), json, stderr)
 }
 
 fn filled_layers(r: &Value) -> usize {
@@ -54,7 +46,7 @@ fn assert_open_case(r: &Value, what: &str) {
 
 #[test]
 fn gap_of_two_diameters_flows_and_fills_the_profile() {
-    common::require_liggghts!("gap_of_two_diameters_flows_and_fills_the_profile");
+    support::require_liggghts!("gap_of_two_diameters_flows_and_fills_the_profile");
     let dir = tempfile::tempdir().unwrap();
     let (code, r, err) = run_point(&thesis_space(dir.path()), "diameter=2,gap=4");
     assert_eq!(code, 0, "{err}");
@@ -71,7 +63,7 @@ fn gap_of_two_diameters_flows_and_fills_the_profile() {
 
 #[test]
 fn thesis_corners_run_without_errors_or_lost_atoms() {
-    common::require_liggghts!("thesis_corners_run_without_errors_or_lost_atoms");
+    support::require_liggghts!("thesis_corners_run_without_errors_or_lost_atoms");
     // D 1 and 3 mm × gap 1 and 5 mm at μ = 0.3, v = 1.6 m/s. A failed run (LIGGGHTS ERROR,
     // lost atoms, unstable energy) exits 1 with its class; all four must complete.
     let dir = tempfile::tempdir().unwrap();
@@ -94,10 +86,10 @@ fn thesis_corners_run_without_errors_or_lost_atoms() {
 
 #[test]
 fn render_writes_the_three_files_of_a_point() {
-    common::require_liggghts!("render_writes_the_three_files_of_a_point");
+    support::require_liggghts!("render_writes_the_three_files_of_a_point");
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("deck");
-    let status = common::sweep_bin()
+    let status = support::sweep_bin()
         .args(["render"])
         .arg(thesis_space(dir.path()))
         .args(["--set", "gap=3", "--out"])
@@ -116,7 +108,7 @@ fn render_writes_the_three_files_of_a_point() {
 
 #[test]
 fn a_point_outside_its_domain_a_unit_slip_or_an_unknown_name_is_bad_input() {
-    common::require_liggghts!("a_point_outside_its_domain_a_unit_slip_or_an_unknown_name_is_bad_input");
+    support::require_liggghts!("a_point_outside_its_domain_a_unit_slip_or_an_unknown_name_is_bad_input");
     let dir = tempfile::tempdir().unwrap();
     let sweep = thesis_space(dir.path());
     // Any parameter may be set, outside the sweep's range too; a value outside its domain, a
@@ -146,7 +138,7 @@ fn sweep_with_template(dir: &Path, template: &str, extra: &str) -> PathBuf {
 
 #[test]
 fn a_template_variable_the_scene_lacks_is_an_error_naming_it() {
-    common::require_liggghts!("a_template_variable_the_scene_lacks_is_an_error_naming_it");
+    support::require_liggghts!("a_template_variable_the_scene_lacks_is_an_error_naming_it");
     let dir = tempfile::tempdir().unwrap();
     let sweep = sweep_with_template(dir.path(), "units si\nrun {{ scene.blade_angle }}\n", "");
     let (code, _, err) = run_point(&sweep, "gap=1.5");
@@ -156,7 +148,7 @@ fn a_template_variable_the_scene_lacks_is_an_error_naming_it() {
 
 #[test]
 fn a_deck_that_makes_liggghts_fail_is_reported_with_its_reason() {
-    common::require_liggghts!("a_deck_that_makes_liggghts_fail_is_reported_with_its_reason");
+    support::require_liggghts!("a_deck_that_makes_liggghts_fail_is_reported_with_its_reason");
     let dir = tempfile::tempdir().unwrap();
     let deck = "units si\natom_style granular\nregion d block 0 1 0 1 0 1 units box\ncreate_box 1 d\n\
                 fix blade all mesh/surface file missing.stl type 1\nrun 10\n";
@@ -169,13 +161,13 @@ fn a_deck_that_makes_liggghts_fail_is_reported_with_its_reason() {
     assert!(r.get("mfr").is_none());
 }
 
-/// Regression guard for LIGGGHTS 3.8's mesh-topology assertion (region_neighbor_list_I.h:165),
+/// Guards against LIGGGHTS 3.8's mesh-topology assertion (region_neighbor_list_I.h:165),
 /// which some blade meshes triggered for some depths: every D × gap of the thesis's 5-level
 /// lattice, and a Weibull size distribution, must get through LIGGGHTS's setup. The deck is
 /// rendered for real and cut after its first `run` (1 step): setup errors surface there.
 #[test]
 fn every_thesis_geometry_passes_liggghts_setup() {
-    common::require_liggghts!("every_thesis_geometry_passes_liggghts_setup");
+    support::require_liggghts!("every_thesis_geometry_passes_liggghts_setup");
     let dir = tempfile::tempdir().unwrap();
     let mono = thesis_space(dir.path());
     let psd = dir.path().join("psd.toml");
@@ -194,7 +186,7 @@ fn every_thesis_geometry_passes_liggghts_setup() {
     }
     for (i, (sweep, set)) in cases.iter().enumerate() {
         let out = dir.path().join(format!("case{i}"));
-        let r = common::sweep_bin()
+        let r = support::sweep_bin()
             .arg("render")
             .arg(sweep)
             .args(["--set", set, "--out"])
@@ -222,9 +214,9 @@ fn every_thesis_geometry_passes_liggghts_setup() {
 /// stops a run whose energy explodes).
 #[test]
 fn an_unstable_timestep_fails_the_run_instead_of_giving_a_number() {
-    common::require_liggghts!("an_unstable_timestep_fails_the_run_instead_of_giving_a_number");
+    support::require_liggghts!("an_unstable_timestep_fails_the_run_instead_of_giving_a_number");
     let dir = tempfile::tempdir().unwrap();
-    let builtin = include_str!("../templates/spreading.liggghts.tera");
+    let builtin = include_str!("../../templates/spreading.liggghts.tera");
     let unstable =
         builtin.replace("timestep        {{ scene.timestep }}", "timestep        {{ scene.timestep * 10 }}");
     assert_ne!(unstable, builtin, "the template's timestep line moved");
@@ -241,7 +233,7 @@ fn an_unstable_timestep_fails_the_run_instead_of_giving_a_number() {
 /// never a number: here the rest criterion asks for an rms speed no pile reaches (1e-9 √(gD)).
 #[test]
 fn a_pile_still_moving_at_the_settle_cap_fails_as_not_settled() {
-    common::require_liggghts!("a_pile_still_moving_at_the_settle_cap_fails_as_not_settled");
+    support::require_liggghts!("a_pile_still_moving_at_the_settle_cap_fails_as_not_settled");
     let dir = tempfile::tempdir().unwrap();
     let sweep = dir.path().join("s.toml");
     std::fs::write(
@@ -261,7 +253,7 @@ fn a_pile_still_moving_at_the_settle_cap_fails_as_not_settled() {
 /// reachable: its deck has no gate and no substrate, and it runs.
 #[test]
 fn the_thesis_layout_runs_on_a_smooth_plate() {
-    common::require_liggghts!("the_thesis_layout_runs_on_a_smooth_plate");
+    support::require_liggghts!("the_thesis_layout_runs_on_a_smooth_plate");
     let dir = tempfile::tempdir().unwrap();
     let sweep = dir.path().join("s.toml");
     std::fs::write(

@@ -5,13 +5,13 @@
 //! runs back instead of running them again. Speed is measured by the bench, not asserted here
 //! (BENCHMARKS.md "Fidelity").
 
-mod common;
-
 use std::collections::HashMap;
 use std::path::Path;
 
+use crate::support;
+
 fn sweep_file(dir: &Path) -> std::path::PathBuf {
-    common::write_file(
+    support::write_file(
         &dir.join("space.toml"),
         r#"name = "space"
 [parameters]
@@ -41,14 +41,14 @@ fn result(dir: &Path, hash: &str) -> serde_json::Value {
 
 #[test]
 fn one_point_under_each_preset_is_measured_against_the_reference_and_read_back_on_a_rerun() {
-    common::require_liggghts!(
+    support::require_liggghts!(
         "one_point_under_each_preset_is_measured_against_the_reference_and_read_back_on_a_rerun"
     );
     let tmp = tempfile::tempdir().unwrap();
     let file = sweep_file(tmp.path());
     let out = tmp.path().join("bench");
     let bench = || {
-        common::sweep_bin()
+        support::sweep_bin()
             .args([
                 "bench",
                 "fidelity",
@@ -134,7 +134,7 @@ fn one_point_under_each_preset_is_measured_against_the_reference_and_read_back_o
 
 #[test]
 fn bad_bench_input_is_one_line_and_writes_nothing() {
-    common::require_liggghts!("bad_bench_input_is_one_line_and_writes_nothing");
+    support::require_liggghts!("bad_bench_input_is_one_line_and_writes_nothing");
     let tmp = tempfile::tempdir().unwrap();
     let file = sweep_file(tmp.path());
     let out = tmp.path().join("bench");
@@ -146,7 +146,7 @@ fn bad_bench_input_is_one_line_and_writes_nothing() {
         vec!["--variant", "x:supply_factor=2"],
         vec!["--variant", "x:rayleigh_fraction=0.9"],
     ] {
-        let r = common::sweep_bin()
+        let r = support::sweep_bin()
             .args(["bench", "fidelity", file.to_str().unwrap(), "--out", out.to_str().unwrap()])
             .args(&extra)
             .output()

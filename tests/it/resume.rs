@@ -1,0 +1,352 @@
+//! Interrupted and killed sweeps resume: finished runs are never run again and the results equal
+//! an uninterrupted run's; what a kill leaves — a dead process's claim, a half-written run
+//! directory, a result without its joblog line, a torn claim — is cleaned up or completed, and a
+//! killed attempt shows as interrupted. On the fake executor, the stand-in, and real LIGGGHTS
+//! (SIGKILL and SIGINT part-way through a small sweep).
+
+use std::collections::BTreeSet;
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+use demsweep::run::fake::{Behaviour, FakeExecutor};
+use demsweep::run::{self, RunAll};
+use demsweep::store;
+use demsweep::sys::process::CancelToken;
+
+use crate::support::{
+    self, assert_unique_seq, attempts, done_per_hash, hashes, joblog, lds, now, output, p, plant_claim,
+    quick_sweep, results, run_two_at_once, standin, stderr, sweep, wait_until, MS,
+};
+
+// ---- on LIGGGHTS ----
+
+/// Every point finished exactly once: one `done` (or final `failed`) line per hash.
+fn assert_done_once(dir: &Path) {
+    for (hash, a) in attempts(dir) {
+        let done = a.iter().filter(|s| *s == "done").count();
+        assert!(done <= 1, "run {hash} completed {done} times: {a:?}");
+    }
+}
+
+/// (pid, ppid, pgrp, state) of every process.
+fn processes() -> Vec<(i32, i32, i32, char)> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir("/proc").unwrap().flatten() {
+        let Ok(pid) = e.file_name().to_string_lossy().parse::<i32>() else {
+            continue;
+        };
+        let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else {
+            continue;
+        };
+        let Some(close) = stat.rfind(')') else { continue };
+        let f: Vec<&str> = stat[close + 1..].split_whitespace().collect();
+        let state = f[0].chars().next().unwrap_or('?');
+        out.push((pid, f[1].parse().unwrap(), f[2].parse().unwrap(), state));
+    }
+    out
+}
+
+/// Process groups of the children of `pid` (each job runs in its own group). A child caught
+/// between fork and its setpgid is still in `pid`'s own group, which holds this test too: that
+/// group is left out.
+fn child_groups(pid: u32) -> BTreeSet<i32> {
+    let procs = processes();
+    let own = procs.iter().find(|p| p.0 == pid as i32).map(|p| p.2);
+    procs.into_iter().filter(|p| p.1 == pid as i32 && Some(p.2) != own).map(|p| p.2).collect()
+}
+
+/// Live (non-zombie) processes in any of `groups`.
+fn alive_in(groups: &BTreeSet<i32>) -> Vec<i32> {
+    processes()
+        .into_iter()
+        .filter(|p| groups.contains(&p.2) && p.3 != 'Z' && p.3 != 'X')
+        .map(|p| p.0)
+        .collect()
+}
+
+fn any_result(dir: &Path) -> bool {
+    std::fs::read_dir(dir.join("runs"))
+        .map(|d| d.flatten().any(|e| e.path().join("result.json").exists()))
+        .unwrap_or(false)
+}
+
+/// Start `sweep lds` on `out`, wait until one run has finished while another is running, and
+/// send `signal`. Returns the child's exit status and its jobs' process groups.
+fn interrupt(sweep: &Path, out: &Path, signal: i32) -> (std::process::ExitStatus, BTreeSet<i32>) {
+    let mut child: Child = support::sweep_bin()
+        .args(["lds", sweep.to_str().unwrap(), "--max", "3", "--step", "3"])
+        .args(["--jobs", "2", "-q", "--out"])
+        .arg(out)
+        .stdin(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut groups = BTreeSet::new();
+    wait_until("a finished run with another running", Duration::from_secs(180), || {
+        groups = child_groups(child.id());
+        any_result(out) && !groups.is_empty()
+    });
+    // SAFETY: signalling the child we spawned.
+    unsafe { libc::kill(child.id() as i32, signal) };
+    let status = child.wait().unwrap();
+    (status, groups)
+}
+
+#[test]
+fn killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results() {
+    support::require_liggghts!("killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results");
+    let tmp = tempfile::tempdir().unwrap();
+    let sweep = quick_sweep(tmp.path(), "kr", "", None);
+    let lds = |out: &Path| {
+        let mut c = support::sweep_bin();
+        c.args(["lds", sweep.to_str().unwrap(), "--max", "3", "--step", "3", "--jobs", "2", "-q", "--out"])
+            .arg(out);
+        c
+    };
+
+    let reference = tmp.path().join("reference");
+    let o = output(&mut lds(&reference));
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let want = results(&reference);
+    assert_eq!(want.len(), 3);
+    assert!(want.iter().all(|r| r.1 == "done"), "{want:?}");
+
+    // SIGKILL: no chance to clean up; each run's guard takes its LIGGGHTS down with us.
+    let killed = tmp.path().join("killed");
+    let (status, groups) = interrupt(&sweep, &killed, libc::SIGKILL);
+    assert_eq!(std::os::unix::process::ExitStatusExt::signal(&status), Some(libc::SIGKILL));
+    wait_until("the killed sweep's jobs to die", Duration::from_secs(10), || alive_in(&groups).is_empty());
+    let finished_before: Vec<String> = attempts(&killed).into_keys().collect();
+    // The run cut off by the kill left its claim: status shows it as interrupted.
+    let st = output(support::sweep_bin().args(["status", "--json"]).arg(&killed));
+    let st: serde_json::Value = serde_json::from_slice(&st.stdout).unwrap();
+    assert!(st["interrupted"].as_u64().unwrap() >= 1, "{st}");
+    let o = output(support::sweep_bin().args(["resume", "--jobs", "2", "-q"]).arg(&killed));
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_done_once(&killed);
+    let a = attempts(&killed);
+    for h in &finished_before {
+        assert_eq!(a[h], vec!["done"], "run {h} finished before the kill and ran again");
+    }
+    assert_eq!(results(&killed), want);
+
+    // SIGINT: stop, kill the running jobs, record them as cancelled, exit 130.
+    let interrupted = tmp.path().join("interrupted");
+    let (status, groups) = interrupt(&sweep, &interrupted, libc::SIGINT);
+    assert_eq!(status.code(), Some(130));
+    assert_eq!(alive_in(&groups), Vec::<i32>::new(), "a LIGGGHTS job outlived `sweep`");
+    let a = attempts(&interrupted);
+    assert!(a.values().flatten().any(|s| s == "cancelled"), "{a:?}");
+    let st = output(support::sweep_bin().args(["status", "--json"]).arg(&interrupted));
+    let st: serde_json::Value = serde_json::from_slice(&st.stdout).unwrap();
+    assert_eq!(st["running"], 0, "no claim is left behind");
+    assert!(st["pending"].as_u64().unwrap() >= 1);
+    let o = output(support::sweep_bin().args(["resume", "--jobs", "2", "-q"]).arg(&interrupted));
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_done_once(&interrupted);
+    assert_eq!(results(&interrupted), want);
+
+    // Two resumes at once on a directory with nothing run yet: each point runs once.
+    let pair = tmp.path().join("pair");
+    std::fs::create_dir(&pair).unwrap();
+    for f in ["sweep.toml", "manifest.json"] {
+        std::fs::copy(reference.join(f), pair.join(f)).unwrap();
+    }
+    run_two_at_once(&["resume", "--jobs", "1", "-q"], &pair);
+    let a = attempts(&pair);
+    assert_eq!(a.len(), 3);
+    assert!(a.values().all(|v| v == &vec!["done".to_string()]), "{a:?}");
+    assert_eq!(results(&pair), want);
+}
+
+// ---- on the fake executor ----
+
+#[test]
+fn an_interrupted_sweep_resumes_without_rerunning_finished_points() {
+    let tmp = tempfile::tempdir().unwrap();
+    let s = support::fake_sweep(tmp.path(), "");
+    let design = lds(12, 4);
+    // The reference: one uninterrupted run.
+    let reference = tmp.path().join("reference");
+    let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(50 * MS));
+    run::start(&s, design.clone(), &reference, &exec, &support::quiet(2), &mut RunAll, &CancelToken::new())
+        .unwrap();
+
+    let out = tmp.path().join("out");
+    let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(200 * MS));
+    let cancel = CancelToken::new();
+    let c2 = cancel.clone();
+    let t = std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_millis(700));
+        c2.cancel();
+    });
+    let sum = run::start(&s, design, &out, &exec, &support::quiet(2), &mut RunAll, &cancel).unwrap();
+    t.join().unwrap();
+    assert!(sum.interrupted);
+    assert_eq!(sum.exit_code(), 130);
+    assert!(sum.done > 0 && sum.done < 12, "{sum:?}");
+    let before = done_per_hash(&out);
+    // Cancelled run dirs are left incomplete, without claims.
+    let status = run::status(&out).unwrap();
+    assert_eq!((status.done, status.running), (sum.done, 0));
+
+    let exec2 = FakeExecutor::new(|_, _| Behaviour::Succeed(50 * MS));
+    let sum2 = run::resume(&out, &exec2, &support::quiet(2), &mut RunAll, &CancelToken::new()).unwrap();
+    assert_eq!((sum2.done, sum2.reused, sum2.exit_code()), (12, before.len(), 0));
+    for h in before.keys() {
+        assert!(!exec2.attempts().contains_key(h), "finished run {h} ran again");
+    }
+    assert!(done_per_hash(&out).values().all(|&n| n == 1));
+    assert_eq!(results(&out), results(&reference));
+}
+
+#[test]
+fn a_stale_claim_and_a_half_written_run_dir_are_cleaned_and_rerun() {
+    let tmp = tempfile::tempdir().unwrap();
+    let s = support::fake_sweep(tmp.path(), "");
+    let out = tmp.path().join("out");
+    let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
+    run::start(&s, lds(3, 3), &out, &exec, &support::quiet(1), &mut RunAll, &CancelToken::new()).unwrap();
+    let (manifest, _) = store::Store::read_manifest(&out).unwrap();
+    let run = out.join("runs").join(&manifest.points[1].hash);
+    // A process that died mid-run: no result, a log, and its claim.
+    std::fs::remove_file(run.join("result.json")).unwrap();
+    std::fs::write(run.join("log.liggghts"), "half").unwrap();
+    let mut dead = std::process::Command::new("true").spawn().unwrap();
+    let pid = dead.id();
+    dead.wait().unwrap();
+    let claim = serde_json::json!({
+        "host": demsweep::sys::host::hostname(), "pid": pid, "start_ticks": 1, "session": "x", "claimed_at": 0.0
+    });
+    std::fs::write(run.join("claim"), claim.to_string()).unwrap();
+    assert_eq!(run::status(&out).unwrap().pending, 1);
+
+    let exec2 = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
+    let sum = run::resume(&out, &exec2, &support::quiet(1), &mut RunAll, &CancelToken::new()).unwrap();
+    assert_eq!(sum.done, 3);
+    assert_eq!(exec2.attempts().keys().collect::<Vec<_>>(), vec![&manifest.points[1].hash]);
+    assert!(!run.join("log.liggghts").exists());
+    assert!(!run.join("claim").exists());
+}
+
+#[test]
+fn a_killed_attempt_shows_as_interrupted_in_status_and_the_joblog() {
+    let tmp = tempfile::tempdir().unwrap();
+    let s = support::fake_sweep(tmp.path(), "");
+    let out = tmp.path().join("out");
+    let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
+    run::start(&s, lds(3, 3), &out, &exec, &support::quiet(1), &mut RunAll, &CancelToken::new()).unwrap();
+    let (manifest, _) = store::Store::read_manifest(&out).unwrap();
+    let hash = &manifest.points[2].hash;
+    let run = out.join("runs").join(hash);
+    // What a SIGKILL mid-run leaves: the claim of a process that is gone, no result.
+    std::fs::remove_file(run.join("result.json")).unwrap();
+    let mut dead = Command::new("true").spawn().unwrap();
+    let pid = dead.id();
+    dead.wait().unwrap();
+    let claim = serde_json::json!({
+        "host": demsweep::sys::host::hostname(), "pid": pid, "start_ticks": 1, "session": "killed", "claimed_at": 1.7e9
+    });
+    std::fs::write(run.join("claim"), claim.to_string()).unwrap();
+    let st = run::status(&out).unwrap();
+    assert_eq!((st.done, st.pending, st.interrupted), (2, 1, 1));
+    let o = support::sweep_bin().arg("status").arg(&out).output().unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("(1 interrupted"), "{text}");
+
+    let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
+    run::resume(&out, &exec, &support::quiet(1), &mut RunAll, &CancelToken::new()).unwrap();
+    let lines: Vec<_> = store::read_joblog(&out).unwrap().into_iter().filter(|l| &l.hash == hash).collect();
+    let statuses: Vec<&str> = lines.iter().map(|l| l.status.as_str()).collect();
+    assert_eq!(statuses, ["done", "interrupted", "done"], "the killed attempt is in the joblog");
+    let raw = std::fs::read_to_string(out.join("joblog.tsv")).unwrap();
+    let line = raw.lines().find(|l| l.contains("\tinterrupted\t")).unwrap();
+    // Starttime, JobRuntime, Exitval and Status of GNU parallel's columns plus ours.
+    let f: Vec<&str> = line.split('\t').collect();
+    assert_eq!(
+        (f[2], f[3], f[6], f[11]),
+        ("1700000000.000", "-", "130", "interrupted"),
+        "start = the claim's time, runtime unknown: {line}"
+    );
+    assert_eq!(run::status(&out).unwrap().interrupted, 0);
+    assert_unique_seq(&out);
+}
+
+// ---- what a kill leaves, on the stand-in ----
+
+/// `d`'s joblog without the lines of `hash`.
+fn drop_joblog_lines(d: &Path, hash: &str) {
+    let text: String = std::fs::read_to_string(d.join("joblog.tsv"))
+        .unwrap()
+        .lines()
+        .filter(|l| !l.contains(hash))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(d.join("joblog.tsv"), text).unwrap();
+}
+
+#[test]
+fn a_result_without_its_joblog_line_gets_one_and_its_dead_claim_is_removed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let toml = standin(tmp.path(), 4);
+    let d = tmp.path().join("d");
+    assert_eq!(sweep(&["lds", p(&toml), "--out", p(&d), "-q"]).status.code(), Some(0));
+    let h = hashes(&d);
+    // What a kill between result.json and the joblog line leaves: the result, the dead
+    // process's claim, and no line.
+    drop_joblog_lines(&d, &h[2]);
+    let host = std::fs::read_to_string("/proc/sys/kernel/hostname").unwrap();
+    plant_claim(&d, &h[2], host.trim(), 999_999, now() - 5.0, Some((120.0, now() - 5.0)));
+
+    let o = sweep(&["resume", p(&d), "-q"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(!d.join("runs").join(&h[2]).join("claim").exists(), "the dead claim stays");
+    let lines = joblog(&d);
+    let for_h2: Vec<_> = lines.iter().filter(|l| l["hash"] == h[2]).collect();
+    assert_eq!(for_h2.len(), 1, "{lines:?}");
+    assert_eq!(for_h2[0]["status"], "done", "{for_h2:?}");
+    // Found, not run again: every hash has exactly one done line.
+    for hash in &h {
+        assert_eq!(
+            lines.iter().filter(|l| &l["hash"] == hash && l["status"] == "done").count(),
+            1,
+            "{lines:?}"
+        );
+    }
+}
+
+#[test]
+fn a_result_with_neither_its_joblog_line_nor_a_claim_gets_its_line() {
+    // A kill after the claim was given back and before the line (as the chaos storms found):
+    // the result alone.
+    let tmp = tempfile::tempdir().unwrap();
+    let toml = standin(tmp.path(), 4);
+    let d = tmp.path().join("d");
+    assert_eq!(sweep(&["lds", p(&toml), "--out", p(&d), "-q"]).status.code(), Some(0));
+    let h = hashes(&d);
+    drop_joblog_lines(&d, &h[1]);
+    let o = sweep(&["resume", p(&d), "-q"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let lines = joblog(&d);
+    let for_h1: Vec<_> = lines.iter().filter(|l| l["hash"] == h[1]).collect();
+    assert_eq!(for_h1.len(), 1, "{lines:?}");
+    assert_eq!(for_h1[0]["status"], "done", "{for_h1:?}");
+    assert_eq!(lines.len(), h.len(), "a run ran again: {lines:?}");
+}
+
+#[test]
+fn a_claim_torn_by_a_kill_in_a_finished_run_is_removed_on_resume() {
+    // A kill between creating the claim file and writing it leaves it empty.
+    let tmp = tempfile::tempdir().unwrap();
+    let toml = standin(tmp.path(), 4);
+    let d = tmp.path().join("d");
+    assert_eq!(sweep(&["lds", p(&toml), "--out", p(&d), "-q"]).status.code(), Some(0));
+    let h = hashes(&d);
+    let claim = d.join("runs").join(&h[3]).join("claim");
+    std::fs::write(&claim, "").unwrap();
+    let o = sweep(&["resume", p(&d), "-q"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(!claim.exists(), "the torn claim stays");
+    assert_eq!(joblog(&d).len(), h.len(), "a run ran again");
+}

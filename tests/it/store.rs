@@ -1,0 +1,366 @@
+//! What a sweep directory holds is accepted only when it belongs where it lies: a hand-edited,
+//! inconsistent or truncated manifest is refused naming the field, swapped hashes are named as
+//! such, and a result that is unreadable, copied from another run, of another point or
+//! physically impossible is named and run again — nothing wrong ever becomes a number. A full
+//! disk stops the sweep with a store error (not failed runs), says where, leaves no temporaries,
+//! and resume finishes it. On the stand-in and the fake executor, and on LIGGGHTS for the full
+//! disk under a real run.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+use demsweep::run::fake::{Behaviour, FakeExecutor};
+use demsweep::run::{self, RunAll};
+use demsweep::store;
+use demsweep::sys::process::CancelToken;
+
+use crate::support::{
+    self, assert_all_finite, assert_unique_seq, done_per_hash, engine_sweep, lds, p, result_rows, snapshot,
+    stderr, sweep, Mount, MS,
+};
+
+// ---- the manifest ----
+
+#[test]
+fn an_inconsistent_or_truncated_manifest_is_refused_naming_the_field() {
+    let tmp = tempfile::tempdir().unwrap();
+    let s = support::fake_sweep(tmp.path(), "");
+    let out = tmp.path().join("out");
+    let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
+    run::start(&s, lds(4, 2), &out, &exec, &support::quiet(1), &mut RunAll, &CancelToken::new()).unwrap();
+    let path = out.join("manifest.json");
+    let good = std::fs::read_to_string(&path).unwrap();
+    let edit = |f: &dyn Fn(&mut serde_json::Value)| {
+        let mut v: serde_json::Value = serde_json::from_str(&good).unwrap();
+        f(&mut v);
+        serde_json::to_string_pretty(&v).unwrap()
+    };
+    let hash0 = serde_json::from_str::<serde_json::Value>(&good).unwrap()["points"][0]["hash"].clone();
+    let cases: Vec<(String, &str, bool)> = vec![
+        (edit(&|v| v["spaces"][0]["points"][1] = 99.into()), "spaces[0].points[1] = 99: no such point", true),
+        (edit(&|v| v["points"][2]["index"] = 5.into()), "points[2].index = 5: expected 2", true),
+        (edit(&|v| v["points"][1]["hash"] = "../../etc".into()), "points[1].hash = \"../../etc\"", true),
+        (
+            edit(&|v| v["points"][3]["hash"] = hash0.clone()),
+            "points[3].hash: the same as points[0].hash",
+            true,
+        ),
+        (
+            edit(&|v| v["points"][0]["values"] = serde_json::json!([2.5])),
+            "points[0].values: 1 values for 2",
+            true,
+        ),
+        (edit(&|v| v["spaces"] = serde_json::json!([])), "spaces: expected at least one", true),
+        (
+            edit(&|v| v["parameters"] = serde_json::json!(["gap", "friction"])),
+            "parameters [gap, friction]",
+            false,
+        ),
+        (good[..good.len() / 2].to_string(), "truncated or not JSON", true),
+        (String::new(), "truncated or not JSON", true),
+    ];
+    for (text, needle, status_too) in cases {
+        std::fs::write(&path, &text).unwrap();
+        let before = snapshot(&out);
+        let mut commands = vec![vec!["resume", "-q"]];
+        if status_too {
+            commands.push(vec!["status"]);
+        }
+        for args in commands {
+            let o = support::sweep_bin().args(&args).arg(&out).output().unwrap();
+            let err = stderr(&o);
+            assert_eq!(o.status.code(), Some(2), "{args:?} {needle}: {err}");
+            assert_eq!(err.lines().count(), 1, "{err}");
+            assert!(
+                err.contains(needle) && err.contains("manifest.json"),
+                "{args:?}: {err:?} lacks {needle:?}"
+            );
+            assert!(!err.contains("panicked"), "{err}");
+        }
+        assert_eq!(snapshot(&out), before, "{needle}: a refused resume changed the directory");
+    }
+}
+
+/// Swap the hashes of points `i` and `j` in manifest.json.
+fn swap_hashes(d: &Path, i: usize, j: usize) {
+    let path = d.join("manifest.json");
+    let mut m: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let points = m["points"].as_array_mut().unwrap();
+    let hi = points[i]["hash"].clone();
+    points[i]["hash"] = points[j]["hash"].clone();
+    points[j]["hash"] = hi;
+    std::fs::write(&path, serde_json::to_string_pretty(&m).unwrap()).unwrap();
+}
+
+#[test]
+fn swapped_hashes_in_the_manifest_are_named_as_such_by_report_and_resume() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = finished_standin(tmp.path());
+    let before = std::fs::read(d.join("results.csv")).unwrap();
+    swap_hashes(&d, 0, 1);
+    for args in [vec!["report", p(&d)], vec!["resume", p(&d), "-q"]] {
+        let o = sweep(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains("manifest.json") && err.contains("swapped"), "{args:?}: {err}");
+        assert!(err.contains("points 0 and 1"), "{args:?}: {err}");
+        assert!(!err.contains("--force") && !err.contains("templates changed"), "{args:?}: {err}");
+        // Nothing was rewritten from the wrong pairing.
+        assert_eq!(std::fs::read(d.join("results.csv")).unwrap(), before, "{args:?}");
+    }
+}
+
+// ---- results read back ----
+
+/// A finished stand-in sweep of 8 points in two spaces, in `root/d`.
+fn finished_standin(root: &Path) -> PathBuf {
+    let toml = engine_sweep(root, "finished", "stand-in", 8, 4, "");
+    let d = root.join("d");
+    let o = sweep(&["lds", p(&toml), "--out", p(&d), "-q"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    d
+}
+
+fn result_path(d: &Path, hash: &str) -> PathBuf {
+    d.join("runs").join(hash).join("result.json")
+}
+
+/// Set one field of a run's result.json to `value` (JSON text), as an edit by hand would.
+fn edit_result(d: &Path, hash: &str, field: &str, value: &str) {
+    let path = result_path(d, hash);
+    let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    v[field] = serde_json::from_str(value).unwrap();
+    std::fs::write(&path, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+}
+
+#[test]
+fn a_result_copied_from_another_run_directory_is_run_again_naming_the_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = finished_standin(tmp.path());
+    let before = result_rows(&d);
+    let (h0, h1) = (before[0]["hash"].clone(), before[1]["hash"].clone());
+    assert_ne!(before[0]["mfr"], before[1]["mfr"]);
+    std::fs::copy(result_path(&d, &h1), result_path(&d, &h0)).unwrap();
+
+    // The report does not pair point 0 with point 1's MFR, and says which file is wrong.
+    let o = sweep(&["report", p(&d)]);
+    let err = stderr(&o);
+    assert!(err.contains(&format!("runs/{h0}/result.json")), "{err}");
+    let after = result_rows(&d);
+    assert_ne!(after[0]["mfr"], before[1]["mfr"], "point 0 took point 1's MFR");
+    assert_ne!(after[0]["status"], "done");
+
+    // Resume runs it again, and it comes back with its own number.
+    let o = sweep(&["resume", p(&d), "-q"]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(err.contains(&format!("runs/{h0}/result.json")) && err.contains("runs again"), "{err}");
+    let after = result_rows(&d);
+    assert_eq!(after[0]["mfr"], before[0]["mfr"]);
+    assert_eq!(after[0]["status"], "done");
+    assert_eq!(after[1]["mfr"], before[1]["mfr"]);
+}
+
+#[test]
+fn a_result_with_parameters_of_another_point_is_not_accepted() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = finished_standin(tmp.path());
+    let before = result_rows(&d);
+    let h0 = before[0]["hash"].clone();
+    let gap: f64 = before[0]["gap"].parse().unwrap();
+    edit_result(&d, &h0, "parameters", &format!(r#"{{"gap": {}, "blade_speed": 1.3}}"#, gap + 0.5));
+    let o = sweep(&["resume", p(&d), "-q"]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(err.contains(&format!("runs/{h0}/result.json")) && err.contains("parameters"), "{err}");
+    assert_eq!(result_rows(&d)[0]["mfr"], before[0]["mfr"]);
+}
+
+#[test]
+fn an_impossible_mfr_in_a_result_is_run_again_not_accepted_as_done() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = finished_standin(tmp.path());
+    let before = result_rows(&d);
+    let (h0, h1, h2) = (before[0]["hash"].clone(), before[1]["hash"].clone(), before[2]["hash"].clone());
+    edit_result(&d, &h0, "mfr", "-0.5");
+    edit_result(&d, &h1, "mfr", "0.9");
+    edit_result(&d, &h2, "mass_flow_is_fine", "true");
+    let o = sweep(&["resume", p(&d), "-q"]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    for h in [&h0, &h1] {
+        assert!(err.contains(&format!("runs/{h}/result.json")), "{err}");
+    }
+    assert!(err.contains("0.74"), "the warning states the bound: {err}");
+    let after = result_rows(&d);
+    assert_eq!(after[0]["mfr"], before[0]["mfr"]);
+    assert_eq!(after[1]["mfr"], before[1]["mfr"]);
+    // An extra field is no defect: that point is not run again.
+    assert!(!err.contains(&format!("runs/{h2}/result.json")), "{err}");
+}
+
+#[test]
+fn an_impossible_vx_in_a_result_is_run_again() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = finished_standin(tmp.path());
+    let before = result_rows(&d);
+    let h0 = before[0]["hash"].clone();
+    let mut vx = vec!["null".to_string(); 12];
+    vx[0] = "1e300".into();
+    edit_result(&d, &h0, "vx", &format!("[{}]", vx.join(",")));
+    let o = sweep(&["resume", p(&d), "-q"]);
+    let err = stderr(&o);
+    assert!(err.contains(&format!("runs/{h0}/result.json")) && err.contains("v_x"), "{err}");
+    assert_eq!(result_rows(&d)[0]["vx_1"], before[0]["vx_1"]);
+}
+
+#[test]
+fn an_overflowing_mfr_leaves_no_nan_or_inf_in_convergence_or_the_verdict() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = finished_standin(tmp.path());
+    let h3 = result_rows(&d)[3]["hash"].clone();
+    edit_result(&d, &h3, "mfr", "1e308");
+    let o = sweep(&["report", p(&d), "--json"]);
+    let err = stderr(&o);
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(err.contains(&format!("runs/{h3}/result.json")), "{err}");
+    assert_all_finite("stdout", &String::from_utf8_lossy(&o.stdout));
+    assert_all_finite("stderr", &err);
+    for f in ["convergence.csv", "summary.json", "results.csv"] {
+        assert_all_finite(f, &std::fs::read_to_string(d.join(f)).unwrap());
+    }
+}
+
+#[test]
+fn an_unreadable_result_is_named_in_status_and_run_again() {
+    let tmp = tempfile::tempdir().unwrap();
+    let s = support::fake_sweep(tmp.path(), "");
+    let out = tmp.path().join("out");
+    let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
+    run::start(&s, lds(3, 3), &out, &exec, &support::quiet(1), &mut RunAll, &CancelToken::new()).unwrap();
+    let (manifest, _) = store::Store::read_manifest(&out).unwrap();
+    let result = out.join("runs").join(&manifest.points[1].hash).join("result.json");
+    std::fs::write(&result, "{\"format\": 1, \"hash\": ").unwrap();
+    let o = support::sweep_bin().arg("status").arg(&out).output().unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains(&format!("warning: {}: unreadable", result.display())), "{text}");
+    let exec2 = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
+    let sum = run::resume(&out, &exec2, &support::quiet(1), &mut RunAll, &CancelToken::new()).unwrap();
+    assert_eq!((sum.done, sum.ran), (3, 1));
+    assert_eq!(exec2.attempts().keys().collect::<Vec<_>>(), vec![&manifest.points[1].hash]);
+}
+
+// ---- a full disk ----
+
+/// Files whose name says they are temporaries of an atomic write.
+fn temporaries(dir: &Path) -> Vec<PathBuf> {
+    snapshot(dir).into_keys().filter(|p| p.to_string_lossy().contains(".tmp.")).collect()
+}
+
+#[test]
+fn a_full_disk_stops_the_sweep_says_where_and_resume_finishes_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let s = support::fake_sweep(tmp.path(), "");
+    let fs = tmp.path().join("fs");
+    let mount = match Mount::tmpfs(&fs, "size=256k") {
+        Ok(m) => m,
+        Err(why) => {
+            eprintln!("SKIPPED: cannot mount a small tmpfs to fill: {why}");
+            return;
+        }
+    };
+    let out = fs.join("out");
+    // Each run leaves 40 kB of "log": about five fit.
+    let mut exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
+    exec.output_bytes = 40_000;
+    let err = run::start(&s, lds(12, 12), &out, &exec, &support::quiet(1), &mut RunAll, &CancelToken::new())
+        .unwrap_err();
+    let msg = err.to_string();
+    assert_ne!(err.code(), 0);
+    assert!(msg.contains(&format!("no space left on tmpfs ({})", fs.display())), "{msg}");
+    assert!(msg.contains(&format!("while writing {}", out.display())), "{msg}");
+    assert!(msg.contains(&format!("sweep resume {}", out.display())), "{msg}");
+    // It stopped at the first store error: nothing started after it.
+    let attempts: usize = exec.attempts().values().sum();
+    let lines = store::read_joblog(&out).unwrap();
+    let done = lines.iter().filter(|l| l.status == "done").count();
+    assert!((1..12).contains(&done), "{lines:?}");
+    assert_eq!(attempts, done + 1, "runs were started after the disk was full");
+    assert!(temporaries(&out).is_empty(), "{:?}", temporaries(&out));
+    // status and results.csv agree: the lost run is pending, not failed.
+    let st = run::status(&out).unwrap();
+    assert_eq!((st.done, st.failed, st.pending), (done, 0, 12 - done));
+    if let Ok(csv) = std::fs::read_to_string(out.join("results.csv")) {
+        assert_eq!(csv.matches(",done,").count(), done, "{csv}");
+        assert!(!csv.contains(",failed,"), "{csv}");
+    }
+
+    // A killed writer's temporary is removed on the next open.
+    let dead = {
+        let mut c = Command::new("true").spawn().unwrap();
+        let pid = c.id();
+        c.wait().unwrap();
+        pid
+    };
+    let stale = out.join(format!(".results.csv.tmp.{}.{dead}.0", demsweep::sys::atomic::temporary_host()));
+    mount.remount("size=4m");
+    std::fs::write(&stale, "half").unwrap();
+    let exec2 = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
+    let sum = run::resume(&out, &exec2, &support::quiet(2), &mut RunAll, &CancelToken::new()).unwrap();
+    assert_eq!((sum.done, sum.failed, sum.reused), (12, 0, done));
+    assert!(temporaries(&out).is_empty(), "{:?}", temporaries(&out));
+    let per_hash = done_per_hash(&out);
+    assert!(per_hash.len() == 12 && per_hash.values().all(|&n| n == 1), "{per_hash:?}");
+    assert_unique_seq(&out);
+}
+
+#[test]
+fn a_full_disk_under_liggghts_is_a_store_error_not_failed_runs_and_resume_finishes_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let sweep = support::quick_lds_sweep(tmp.path(), "full", "");
+    let fs = tmp.path().join("fs");
+    // A run of this scene leaves 0.77 to 0.88 MB (mesh, pile, dump): the first fits, the
+    // second does not.
+    let mount = match Mount::tmpfs(&fs, "size=1600k") {
+        Ok(m) => m,
+        Err(why) => {
+            eprintln!("SKIPPED: cannot mount a small tmpfs to fill: {why}");
+            return;
+        }
+    };
+    let out = fs.join("out");
+    let o = support::sweep_bin()
+        .args(["lds", sweep.to_str().unwrap(), "--max", "3", "--step", "3", "--jobs", "1", "-q", "--out"])
+        .arg(&out)
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    let err = stderr(&o);
+    eprintln!("the full-disk sweep said: {err}");
+    assert!(!matches!(o.status.code(), Some(0) | Some(1) | Some(2)), "{:?}: {err}", o.status);
+    assert!(
+        err.contains(&format!("no space left on tmpfs ({}) while writing {}", fs.display(), out.display())),
+        "{err}"
+    );
+    assert!(temporaries(&out).is_empty(), "{:?}", temporaries(&out));
+    let lines = store::read_joblog(&out).unwrap();
+    assert!(lines.iter().all(|l| l.status != "failed"), "a full disk became failed runs: {lines:?}");
+    let st = run::status(&out).unwrap();
+    let done = lines.iter().filter(|l| l.status == "done").count();
+    assert_eq!((st.done, st.failed, st.pending), (done, 0, 3 - done), "{lines:?}");
+    assert!(done >= 1, "the first run should have fitted: {lines:?}");
+
+    mount.remount("size=16m");
+    let o = support::sweep_bin()
+        .args(["resume", "--jobs", "2", "-q"])
+        .arg(&out)
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let per_hash = done_per_hash(&out);
+    assert!(per_hash.len() == 3 && per_hash.values().all(|&n| n == 1), "{per_hash:?}");
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    assert_eq!(csv.matches(",done,").count(), 3, "{csv}");
+}
