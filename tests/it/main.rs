@@ -35,3 +35,6 @@ mod vtk;
 
 // What a sweep ends with: statistics, convergence and the report.
 mod report;
+
+// How the code is laid out: the layering of src/ that docs/architecture.md states.
+mod architecture;
