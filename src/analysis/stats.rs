@@ -60,6 +60,17 @@ impl Statistic {
         }
     }
 
+    /// Replace this statistic of `m` by `v`.
+    pub fn set(self, m: &mut Moments, v: f64) {
+        let slot = match self {
+            Statistic::Mean => &mut m.mean,
+            Statistic::Std => &mut m.std,
+            Statistic::Skewness => &mut m.skewness,
+            Statistic::Kurtosis => &mut m.kurtosis,
+        };
+        *slot = Some(v);
+    }
+
     /// This statistic of `m`.
     pub fn of(self, m: &Moments) -> Option<f64> {
         match self {

@@ -137,6 +137,12 @@ pub(super) fn submit(a: SubmitArgs) -> Result<i32, Error> {
         SchedulerArg::Pbs => Scheduler::PbsPro,
         SchedulerArg::Torque => Scheduler::Torque,
     };
+    // How a node starts `sweep`: the sweep file's [cluster] keys, else this very executable.
+    let cluster = demsweep::run::load_dir_sweep(&a.dir)?.file.cluster;
+    let exe = match cluster.command {
+        Some(c) => std::path::PathBuf::from(c),
+        None => std::env::current_exe()?,
+    };
     let opts = SubmitOptions {
         scheduler,
         tasks: a.tasks,
@@ -149,7 +155,8 @@ pub(super) fn submit(a: SubmitArgs) -> Result<i32, Error> {
         only: Only { missing: a.only.contains(&OnlyArg::Missing), failed: a.only.contains(&OnlyArg::Failed) },
         template: a.template,
         steal: !a.no_steal,
-        exe: std::env::current_exe()?,
+        exe,
+        prologue: cluster.prologue,
         chain: None,
     };
     let (manifest, _) = demsweep::store::Store::read_manifest(&a.dir)?;

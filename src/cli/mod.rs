@@ -19,7 +19,7 @@ use demsweep::sweep::Sweep;
 /// Parameter sweeps of LIGGGHTS powder-spreading simulations.
 ///
 /// Turns a sweep file (TOML) into a design — a regular lattice or scrambled Halton points —,
-/// renders one LIGGGHTS deck per point, runs them as a job pool, and reads the mass flow rate
+/// renders one LIGGGHTS deck per point, runs them as a job pool, and reads the mass flow ratio
 /// (MFR) and the v_x profile in front of the blade from the dumps.
 ///
 /// Exit codes: 0 success; 1 a sweep finished but some runs failed; 2 bad input (nothing on disk
@@ -41,6 +41,10 @@ enum Command {
     /// Ends by writing the report (as `sweep report`) and printing the verdict, naming the level.
     /// Points where nothing can pass under the blade are screened as MFR = 0 once a sample of
     /// them ran with MFR = 0 ([run] screen; `sweep points --screen` shows which).
+    #[command(
+        after_help = "Examples:\n  sweep lattice sweeps/quick.toml                  # levels from the file, into runs/quick/
+  sweep lattice my.toml --levels 3,5,9 --out runs/lat   # nested 3^d, 5^d, 9^d"
+    )]
     Lattice(sweep::LatticeArgs),
     /// Run scrambled-Halton points in batches of --step up to --max, stopping once the MFR
     /// statistics converge.
@@ -51,17 +55,31 @@ enum Command {
     /// A larger --max on a converged directory extends it and judges again past its old extent.
     /// Points where nothing can pass under the blade are screened as MFR = 0 once a sample of
     /// them ran with MFR = 0 ([run] screen; `sweep points --screen` shows which).
+    #[command(
+        after_help = "Examples:\n  sweep lds sweeps/quick.toml                      # 8 points, into runs/quick/
+  sweep lds my.toml --max 64 --out runs/my         # extend runs/my to 64 points
+  sweep lds my.toml --out /scratch/me/lds --plan   # write the directory for `sweep submit`"
+    )]
     Lds(sweep::LdsArgs),
     /// Finish an interrupted sweep; every completed run is reused.
     ///
     /// Keeps the convergence rule and verdict of DIR/sweep.toml: a converged sweep runs nothing
     /// more. Ends by writing the report.
+    #[command(
+        after_help = "Examples:\n  sweep resume runs/quick                          # after Ctrl-C, a crash, a lost node
+  sweep resume runs/quick --retry-failed           # run the failed points again"
+    )]
     Resume(sweep::ResumeArgs),
     /// Counts of a sweep directory: done, failed, running, screened, pending; the screen's verdict.
+    #[command(after_help = "Examples:\n  sweep status runs/quick
+  sweep status runs/quick --json")]
     Status(sweep::DirArgs),
     /// Release the claims of a sweep directory that no live process on this machine holds:
     /// another host's (a lost node, a clock far ahead, an old claim without a lease) or a dead
     /// process's. Use it once their holders are known to be gone; `status` names them.
+    #[command(
+        after_help = "Examples:\n  sweep unclaim /scratch/me/lds                    # after a node was lost for good"
+    )]
     Unclaim(sweep::UnclaimArgs),
     /// Write convergence.csv, summary.json and report/ (plots, report.html) of a sweep directory.
     ///
@@ -70,16 +88,36 @@ enum Command {
     /// timing, sensitivity indices and spreading quality in summary.json; every figure as SVG and
     /// PNG and a self-contained report.html in DIR/report/. The rule is DIR/sweep.toml's
     /// [convergence] unless overridden below. Prints the verdict and the path of report.html.
+    #[command(
+        after_help = "Examples:\n  sweep report runs/quick                          # the rule of runs/quick/sweep.toml
+  sweep report runs/quick --tolerance 0.1          # judge again at 10% of each scale"
+    )]
     Report(sweep::ReportArgs),
     /// One point of a sweep directory: its parameters (swept and fixed), result or failure,
     /// spreading quality, v_x profile, run directory, and the command that reruns it with
     /// particle and blade dumps for ParaView (`sweep run ... --vtk`).
+    #[command(
+        after_help = "Examples:\n  sweep show runs/quick 3                          # point #3 (results.csv index 3)
+  sweep show runs/quick 3 --json"
+    )]
     Show(sweep::ShowArgs),
     /// Print a design as CSV (header = swept parameter names, values in their units).
+    #[command(
+        after_help = "Examples:\n  sweep points sweeps/quick.toml                   # the LDS design as sweep lds runs it
+  sweep points my.toml --lattice 5 --screen        # a 5^d lattice, closed points marked"
+    )]
     Points(point::PointsArgs),
     /// Write the deck, blade mesh and initial pile of one point without running it.
+    #[command(
+        after_help = "Examples:\n  sweep render sweeps/quick.toml --set gap=3 --out deck   # deck/in.liggghts, blade.stl, pile.data"
+    )]
     Render(point::RenderArgs),
-    /// Run one point through LIGGGHTS and print its result.
+    /// Run one point (through LIGGGHTS, or the sweep's stand-in engine) and print the
+    /// parameters it used, its MFR with the standard error, and v_x by height.
+    #[command(
+        after_help = "Examples:\n  sweep run sweeps/quick.toml --set gap=3          # MFR ± SE and v_x; others mid-range
+  sweep run runs/quick/sweep.toml --set gap=3,blade_speed=1.4 --vtk --out view"
+    )]
     Run(point::RunArgs),
     /// The statistics of a CSV column (mean, std, skewness, kurtosis) with bootstrap intervals.
     ///
@@ -88,12 +126,19 @@ enum Command {
     /// median. Empty cells and cells that are not finite numbers are skipped and counted. Skewness
     /// and kurtosis are undefined (null) when every value is equal. Intervals: 95% percentile
     /// bootstrap, 1,000 resamples, seed 14.
+    #[command(after_help = "Examples:\n  sweep stats runs/quick/results.csv --column mfr
+  sweep stats runs/quick/results.csv --column mfr --by gap,blade_speed")]
     Stats(stats::StatsArgs),
     /// One single-contact case on the Hertz–Mindlin reference solver, as JSON.
     Contact(contact::ContactArgs),
     /// Single-contact cases through LIGGGHTS, compared with the reference solver.
     ContactCheck(contact::ContactCheckArgs),
     /// Write and submit a Slurm or PBS array job that runs a sweep directory on a cluster.
+    #[command(
+        after_help = "Examples:\n  sweep lds my.toml --out /scratch/me/lds --plan   # first, on the login node
+  sweep submit /scratch/me/lds --scheduler slurm --tasks 50 --jobs-per-task 4 --walltime 04:00:00
+  sweep submit /scratch/me/lds --scheduler pbs --tasks 50 --dry-run   # the scripts only"
+    )]
     Submit(cluster::SubmitArgs),
     /// One array task of `sweep submit`: run the task's share of a sweep directory.
     #[command(hide = true)]
@@ -104,6 +149,10 @@ enum Command {
     /// The same emulator as report.html's: Matérn 5/2, each point's own noise where its result
     /// records an mfr_se. Prints the leave-one-out error beside the prediction; warns when a
     /// value lies outside the swept range.
+    #[command(
+        after_help = "Examples:\n  sweep predict runs/quick --set gap=2.5           # blade_speed at mid-range
+  sweep predict runs/quick --set gap=2.5,blade_speed=1.3 --json"
+    )]
     Predict(predict::PredictArgs),
     /// Benchmarks: run time against error of the fidelity presets (`fidelity`), the scene's
     /// stability edge (`stability`), and the contact reference solver's own stability

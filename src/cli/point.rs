@@ -57,7 +57,8 @@ pub(super) struct RenderArgs {
 pub(crate) const FORCE_HELP: &str =
     "Run points outside the bounds the scene is built for: a timestep above 0.5 \
      Rayleigh times (the measured safe bound, BENCHMARKS.md \"Stability edge\") or below 0.01, \
-     more than 200,000 particles, a mean diameter below 10 µm or above 20 mm, a gap below 0.1 D.";
+     more than 200,000 particles, a mean diameter below 10 µm or above 20 mm, a gap below 0.1 D, \
+     a blade speed outside 0.001–10 m/s, a density outside 100–25,000 kg/m³.";
 
 #[derive(Args)]
 pub(super) struct RunArgs {
@@ -147,6 +148,7 @@ pub(super) fn render(a: RenderArgs) -> Result<i32, Error> {
     if a.out.exists() && !a.out.is_dir() {
         return Err(Error::input(format!("--out {}: exists and is not a directory", a.out.display())));
     }
+    check_bounds(&sweep, &values, &a.set)?;
     let ctx = PointContext::new(sweep)?;
     let prepared = prepare_set(&ctx, &values, &a.set)?;
     notes.iter().for_each(|n| eprintln!("note: {n}"));
@@ -179,54 +181,62 @@ fn prepare_set(ctx: &PointContext, values: &[f64], set: &[String]) -> Result<poi
 
 pub(super) fn run_one(a: RunArgs) -> Result<i32, Error> {
     demsweep::sys::process::install_interrupt_handler();
-    let sweep = Sweep::load(&a.sweep)?;
-    let (mut sweep, values, notes) = point::with_set(&sweep, &a.set)?;
+    let file_sweep = Sweep::load(&a.sweep)?;
+    let (mut sweep, values, notes) = point::with_set(&file_sweep, &a.set)?;
     check_timestep(&mut sweep, a.force)?;
     sweep.file.scene.vtk = a.vtk;
     if let Some(out) = a.out.as_ref().filter(|o| o.exists() && !o.is_dir()) {
         return Err(Error::input(format!("--out {}: exists and is not a directory", out.display())));
     }
-    let ctx = PointContext::new(sweep)?;
-    let prepared = prepare_set(&ctx, &values, &a.set)?;
+    // The point's bounds before the engine is looked for: a unit slip is bad input (exit 2)
+    // whether or not LIGGGHTS is installed.
+    let scene = check_bounds(&sweep, &values, &a.set)?;
+    let standin = demsweep::run::standin::selected(&sweep);
+    let ctx = if standin { None } else { Some(PointContext::new(sweep.clone())?) };
+    let prepared = ctx.as_ref().map(|c| prepare_set(c, &values, &a.set)).transpose()?;
     notes.iter().for_each(|n| eprintln!("note: {n}"));
     let temp;
     let dir = match &a.out {
-        Some(d) => d.clone(),
+        Some(d) => {
+            std::fs::create_dir_all(d)
+                .map_err(|e| Error::Internal(format!("cannot create {}: {e}", d.display())))?;
+            d.clone()
+        }
         None => {
             temp = tempfile::Builder::new().prefix("sweep-run-").tempdir()?;
             temp.path().to_path_buf()
         }
     };
     if !a.json {
-        let sc = &prepared.scene;
-        eprintln!("running {} (dt = {:.3e} s) in {}", ctx.layout.what_runs(sc), sc.timestep, dir.display());
-        if prepared.scene.nothing_passes() {
+        if standin {
+            eprintln!("running the stand-in engine (a made-up model, not LIGGGHTS) in {}", dir.display());
+        } else {
+            let what = match &ctx {
+                Some(c) => c.layout.what_runs(&scene),
+                None => String::new(),
+            };
+            eprintln!("running {what} (dt = {:.3e} s) in {}", scene.timestep, dir.display());
+        }
+        if scene.nothing_passes() {
             eprintln!("the screen closes this point: nothing can pass under the blade (a sweep counts it as MFR = 0)");
         }
     }
     let cancel = demsweep::sys::process::CancelToken::new();
-    match point::execute(&ctx, &prepared, &dir, &cancel) {
+    let outcome = match (&ctx, &prepared) {
+        (Some(ctx), Some(p)) => point::execute(ctx, p, &dir, &cancel),
+        _ => {
+            use demsweep::run::pool::Executor;
+            let exec = demsweep::run::standin::StandIn::new(sweep.clone())?;
+            exec.execute(&exec.prepare(&values)?, &dir, &cancel)
+        }
+    };
+    match outcome {
         RunOutcome::Done(r) => {
             if a.json {
                 println!("{}", serde_json::to_string_pretty(&r).map_err(|e| Error::Internal(e.to_string()))?);
             } else {
-                let vx: Vec<String> =
-                    r.vx.iter().map(|v| v.map(|v| format!("{v:.3}")).unwrap_or_else(|| "-".into())).collect();
-                println!(
-                    "MFR        {:.4}  ({} particles; flux cross-check {:.4}, {})",
-                    r.mfr,
-                    r.mfr_particles,
-                    r.mfr_flux,
-                    if r.steady { "steady" } else { "NOT steady" }
-                );
-                println!("v_x (m/s)  {}", vx.join(" "));
-                println!(
-                    "particles  {}   steps {}   simulated {:.4} s   wall {:.1} s",
-                    r.particles, r.steps, r.simulated_time, r.wall_time
-                );
-                for w in &r.warnings {
-                    println!("warning    {w}");
-                }
+                println!("{}", used_line(&file_sweep, &a.set, &r));
+                print_result(&r, &scene);
             }
             if a.vtk {
                 eprintln!("ParaView: open {}/particles_*.vtk and blade_*.vtk", dir.display());
@@ -244,5 +254,81 @@ pub(super) fn run_one(a: RunArgs) -> Result<i32, Error> {
             Ok(exit::RUNS_FAILED)
         }
         RunOutcome::Cancelled => Err(Error::Interrupted),
+    }
+}
+
+/// The scene of the point, or the refusal of a value outside its bounds, naming the `--set`.
+fn check_bounds(sweep: &Sweep, values: &[f64], set: &[String]) -> Result<demsweep::scene::Scene, Error> {
+    let parameters = point::resolve(sweep, values);
+    demsweep::scenes::build(&parameters, &sweep.file.scene).map_err(|e| {
+        let with = if set.is_empty() { String::new() } else { format!(" with --set {}", set.join(",")) };
+        Error::input(format!("{}{with}: {e}", sweep.path.display()))
+    })
+}
+
+/// `point      gap = 3 mm (--set), blade_speed = 1.4 m/s (middle of 1.2–1.6)`: the swept
+/// parameters the run used and where each value came from, and any other `--set`.
+fn used_line(file_sweep: &Sweep, set: &[String], r: &demsweep::outcome::RunResult) -> String {
+    use demsweep::scene::plausible::show;
+    use demsweep::sweep::ParamKind;
+    let given: Vec<&str> = set.iter().filter_map(|s| s.split_once('=')).map(|(n, _)| n.trim()).collect();
+    let value = |name: &str, unit: &str| {
+        let v = r.parameters.get(name).map_or("?".to_string(), |v| show(*v));
+        if unit == "-" {
+            format!("{name} = {v}")
+        } else {
+            format!("{name} = {v} {unit}")
+        }
+    };
+    let mut parts: Vec<String> = file_sweep
+        .swept
+        .iter()
+        .map(|p| match p.kind {
+            _ if given.contains(&p.name.as_str()) => format!("{} (--set)", value(&p.name, p.unit)),
+            ParamKind::Swept { lo, hi, .. } => {
+                format!("{} (middle of {}–{})", value(&p.name, p.unit), show(lo), show(hi))
+            }
+            ParamKind::Fixed(_) => value(&p.name, p.unit),
+        })
+        .collect();
+    for name in given.iter().filter(|n| !file_sweep.swept.iter().any(|p| p.name == **n)) {
+        let unit = demsweep::scene::params::lookup(name).map_or("", |i| i.unit);
+        parts.push(format!("{} (--set)", value(name, unit)));
+    }
+    format!("point      {}; the others as in {}", parts.join(", "), file_sweep.path.display())
+}
+
+/// A finished point for the terminal: MFR with its standard error, v_x by height, the run.
+fn print_result(r: &demsweep::outcome::RunResult, scene: &demsweep::scene::Scene) {
+    let se = r.mfr_se.map_or(String::new(), |se| format!(" ± {se:.4} (SE)"));
+    println!(
+        "MFR        {:.4}{se}  ({} particles; flux cross-check {:.4}, {})",
+        r.mfr,
+        r.mfr_particles,
+        r.mfr_flux,
+        if r.steady { "steady" } else { "NOT steady" }
+    );
+    let cell = |s: String| format!("{s:>6}");
+    let heights: Vec<String> =
+        (1..=r.vx.len()).map(|k| cell(format!("{:.2}", scene.layer_height(k) * 1e3))).collect();
+    let vx: Vec<String> =
+        r.vx.iter().map(|v| cell(v.map(|v| format!("{v:.3}")).unwrap_or_else(|| "-".into()))).collect();
+    println!("v_x in front of the blade, layer k at z = gap + k·D/2 above the plate:");
+    println!("  z (mm)     {}", heights.join(" "));
+    println!("  v_x (m/s)  {}", vx.join(" "));
+    println!(
+        "particles  {}   steps {}   simulated {:.4} s   wall {:.1} s",
+        r.particles, r.steps, r.simulated_time, r.wall_time
+    );
+    let mut notes: Vec<&str> = Vec::new();
+    for w in &r.warnings {
+        match demsweep::engine::chatter(w) {
+            Some(note) if !notes.contains(&note) => notes.push(note),
+            Some(_) => {}
+            None => println!("warning    {w}"),
+        }
+    }
+    for n in notes {
+        println!("note       {n}");
     }
 }

@@ -106,6 +106,7 @@ pub(super) struct DirArgs {
 
 #[derive(Args)]
 pub(super) struct ShowArgs {
+    /// The sweep directory (holding manifest.json).
     dir: PathBuf,
     /// The point's index (results.csv's `index` column).
     index: usize,
@@ -252,7 +253,17 @@ pub(super) fn finish(s: &Summary, sweep: &Sweep) -> Result<i32, Error> {
     let code = finish_runs(s);
     eprintln!("{}: {}", analysis.verdict.status, analysis.verdict.reason);
     eprintln!("report: {}", html.display());
+    print_answer(&analysis);
     Ok(code)
+}
+
+/// The answer on stdout: recommended settings, layer warning, what matters, verdict, next step.
+fn print_answer(analysis: &demsweep::report::Analysis) {
+    if let Some(a) = &analysis.answer {
+        for line in a.lines() {
+            println!("{line}");
+        }
+    }
 }
 
 /// Say what to do next about the runs and return the exit code.
@@ -318,5 +329,8 @@ pub(super) fn report(a: ReportArgs) -> Result<i32, Error> {
     }
     eprintln!("{}: {}", analysis.verdict.status, analysis.verdict.reason);
     eprintln!("report: {}", html.display());
+    if !a.json {
+        print_answer(&analysis);
+    }
     Ok(exit::SUCCESS)
 }

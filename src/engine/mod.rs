@@ -444,6 +444,17 @@ fn warnings(log: &str) -> Vec<String> {
     out
 }
 
+/// A LIGGGHTS warning a user of `sweep` cannot act on, and the one line that says so instead:
+/// the contact model runs unoptimised because it is not in the whitelist LIGGGHTS was compiled
+/// with (only recompiling LIGGGHTS changes that). The warning stays in the run's log and
+/// `result.json`.
+pub fn chatter(warning: &str) -> Option<&'static str> {
+    warning.contains("not located in any whitelist").then_some(
+        "LIGGGHTS runs this contact model unoptimised (up to 20 % slower; it is not in the \
+         whitelist LIGGGHTS was compiled with): harmless, nothing to do",
+    )
+}
+
 /// Read the thermo blocks (`thermo_style custom step atoms ke`) and warnings of a log.
 fn analyse_log(log: &str, limits: &LogLimits) -> LogAnalysis {
     let mut a = LogAnalysis::default();
@@ -529,6 +540,14 @@ mod tests {
         );
         // A one-line warning does not swallow the thermo header or rows after it.
         assert_eq!(w[1], "WARNING: Less insertions than requested (../fix_insert.cpp:792)");
+    }
+
+    #[test]
+    fn the_whitelist_warning_is_chatter_and_others_are_not() {
+        let log = "WARNING: \n\tThe contact model you specified is not located in any whitelist.\n\tBecause of this\n\n (./src/contact_models.h:364)\nWARNING: Less insertions than requested (../fix_insert.cpp:792)\n";
+        let w = warnings(log);
+        assert!(chatter(&w[0]).is_some(), "{w:?}");
+        assert_eq!(chatter(&w[1]), None);
     }
 
     fn log(rows: &str) -> String {

@@ -24,7 +24,7 @@ pub struct RunResult {
     pub hash: String,
     /// Every scene parameter, swept and fixed, in the sweep file's units.
     pub parameters: BTreeMap<String, f64>,
-    /// Mass flow rate from the deposited layer (docs/scene.md "Metrics", thesis Eq. 15–17), dimensionless.
+    /// Mass flow ratio from the deposited layer (docs/scene.md "Metrics", thesis Eq. 15–17), dimensionless.
     pub mfr: f64,
     /// The same from the flux of particles past the blade's front face (cross-check).
     pub mfr_flux: f64,

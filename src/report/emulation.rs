@@ -179,6 +179,7 @@ pub struct Prediction {
 pub fn parse_setting(sweep: &Sweep, sets: &[String]) -> crate::error::Result<Vec<f64>> {
     use crate::sweep::ParamKind;
     let mut values: Vec<Option<f64>> = vec![None; sweep.swept.len()];
+    let mut given: Vec<Option<String>> = vec![None; sweep.swept.len()];
     for item in sets.iter().filter(|s| !s.trim().is_empty()) {
         let (name, value) = item
             .split_once('=')
@@ -195,6 +196,12 @@ pub fn parse_setting(sweep: &Sweep, sets: &[String]) -> crate::error::Result<Vec
             value.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
                 crate::Error::input(format!("--set {name}={value}: expected a finite number"))
             })?;
+        if let Some(first) = &given[i] {
+            return Err(crate::Error::input(format!(
+                "--set {name}: given twice ({first} and {value}); give each parameter once"
+            )));
+        }
+        given[i] = Some(value.to_string());
         values[i] = Some(v);
     }
     Ok(sweep

@@ -29,6 +29,39 @@ fn fmt_short_sig(v: f64) -> String {
     format!("{v:.digits$}")
 }
 
+/// ` †` when `estimate` lies outside its interval (the table's note says why that can happen).
+fn misses(estimate: Option<f64>, iv: crate::analysis::stats::Interval) -> &'static str {
+    match (estimate, iv.lo, iv.hi) {
+        (Some(v), Some(lo), Some(hi)) if v < lo || v > hi => " †",
+        _ => "",
+    }
+}
+
+/// The answer first: what to set and how sure, the layer it gives, what matters, the verdict
+/// and what to do next.
+fn answer_block(a: &Analysis) -> String {
+    let Some(x) = &a.answer else { return String::new() };
+    let mut h = String::from("<div class=\"answer\"><h2>The answer</h2>\n");
+    h.push_str(&format!("<p><b>Recommended settings:</b> {}.</p>\n", esc(&x.recommendation)));
+    if let Some(w) = &x.layer_warning {
+        h.push_str(&format!("<p class=\"warn\"><b>Warning:</b> {}.</p>\n", esc(w)));
+    }
+    if let Some(m) = &x.matters {
+        h.push_str(&format!("<p><b>What matters:</b> {}.</p>\n", esc(m)));
+    }
+    h.push_str(&format!("<p><b>Verdict:</b> {}.</p>\n", esc(&x.verdict)));
+    if let Some(n) = &x.next {
+        h.push_str(&format!("<p><b>Next:</b> {}.</p>\n", esc(n)));
+    }
+    h.push_str(&format!(
+        "<p class=\"muted\">How these are found: the recommendation by the criterion of <a href=\"#advice\">Spreading \
+         quality and recommended settings</a>; the ranking in <a href=\"#matters\">Which parameter matters</a>; the \
+         verdict in <a href=\"#convergence\">Convergence</a>{}.</p></div>\n",
+        if a.failures.is_empty() { "" } else { "; the failed runs in <a href=\"#failures\">Failures</a>" }
+    ));
+    h
+}
+
 /// A table of the points a figure labels by `#index`.
 fn points_table(a: &Analysis, f: &Figure) -> String {
     if f.points.is_empty() {
@@ -73,7 +106,10 @@ th{background:#f2f2f2}td.l,th.l{text-align:left}
 .allfailed{background:#c33;color:#fff;padding:.8em 1em;border-radius:6px;font-size:1.15em;margin:1em 0}
 figure{margin:1em 0}figure img{max-width:100%;height:auto;border:1px solid #eee}figcaption{font-size:.9em;color:#444}
 .grid{display:grid;grid-template-columns:repeat(auto-fill,minmax(min(100%,560px),1fr));gap:8px}.grid figure{margin:0}.file{color:#888}
-.bar{display:inline-block;height:.8em;background:#1f77b4}.muted{color:#666}";
+.bar{display:inline-block;height:.8em;background:#1f77b4}.muted{color:#666}
+.answer{border:2px solid #1f77b4;border-radius:6px;padding:.4em 1em;margin:1em 0;background:#f5f9fd}
+.answer h2{border:0;margin:.3em 0}.answer p{margin:.45em 0}.warn{background:#fff4dc;border-left:4px solid #d90;padding:.3em .6em}
+details{margin:.5em 0}summary{cursor:pointer;color:#1f5f99}";
 
 /// Header cells of the swept parameters, with units.
 fn parameter_headers(a: &Analysis) -> String {
@@ -239,7 +275,7 @@ fn advice_section(a: &Analysis, figures: &[Figure]) -> String {
         h.push_str("</div>\n");
     }
     h.push_str(
-        "<h2>Spreading quality and recommended settings</h2>\n<p>Each done point's v_x profile in front of the blade \
+        "<h2 id=\"advice\">Spreading quality and recommended settings</h2>\n<p>Each done point's v_x profile in front of the blade \
          (thesis §4.1) is <b>unstable</b> when its layers depart from their neighbours' mean by more than 3% of the \
          blade speed (RMS), else <b>inefficient</b> when the top three layers move less than 6% of the blade speed \
          faster than the bottom three (nearly uniform), else <b>ideal</b>. The classes against the layer they leave:</p>\n\
@@ -367,15 +403,7 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
             ),
         );
     } else {
-        push(
-            &mut h,
-            &format!(
-                "<div class=\"verdict {}\"><b>{}</b>: {}</div>\n",
-                a.verdict.status,
-                a.verdict.status,
-                esc(&a.verdict.reason)
-            ),
-        );
+        push(&mut h, &answer_block(a));
     }
     push(
         &mut h,
@@ -392,11 +420,11 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
     if let Some(line) = a.screen.sentence() {
         push(&mut h, &format!("<p>{}.</p>\n", esc(&line)));
     }
-    push(&mut h, &setup_section(a));
-    push(&mut h, &failures_section(a, figures));
     if measured {
         push(&mut h, &measured_sections(a, figures));
     }
+    push(&mut h, &failures_section(a, figures));
+    push(&mut h, &setup_section(a));
     push(&mut h, "</body></html>\n");
     h
 }
@@ -407,7 +435,16 @@ fn measured_sections(a: &Analysis, figures: &[Figure]) -> String {
     let mut h = String::new();
     let push = |h: &mut String, s: &str| h.push_str(s);
     // Convergence table: one cell per statistic (value, interval, change), so it fits 800 px.
-    push(&mut h, "<h2>Convergence</h2>\n");
+    push(&mut h, "<a id=\"convergence\"></a><h2>Convergence</h2>\n");
+    push(
+        &mut h,
+        &format!(
+            "<div class=\"verdict {}\"><b>{}</b>: {}</div>\n",
+            a.verdict.status,
+            a.verdict.status,
+            esc(a.answer.as_ref().map_or(&a.verdict.reason, |x| &x.verdict))
+        ),
+    );
     push(&mut h, &format!("<p>{}.", esc(&a.criteria.describe())));
     if a.criteria.min_points > 0 {
         push(
@@ -418,7 +455,9 @@ fn measured_sections(a: &Analysis, figures: &[Figure]) -> String {
     push(
         &mut h,
         " Each cell: the statistic of MFR (–), its 95% percentile bootstrap interval (1,000 resamples) and its change from \
-         the previous space (✓: within the rule).</p>\n<div class=\"wide\"><table><tr><th class=\"l\">space</th><th>N</th><th>done</th><th>failed</th>",
+         the previous space (✓: within the rule). †: the interval misses the estimate, which a percentile \
+         bootstrap interval of a skewed or bounded statistic can do on few points (the resamples' statistic is \
+         biased against the sample's).</p>\n<div class=\"wide\"><table><tr><th class=\"l\">space</th><th>N</th><th>done</th><th>failed</th>",
     );
     for s in STATISTICS {
         push(&mut h, &format!("<th>{} (–)</th>", s.name()));
@@ -457,10 +496,11 @@ fn measured_sections(a: &Analysis, figures: &[Figure]) -> String {
             push(
                 &mut h,
                 &format!(
-                    "<td>{}<br><small>[{}, {}]</small>{}</td>",
+                    "<td>{}<br><small>[{}, {}]{}</small>{}</td>",
                     num(st.of(&s.statistics)),
                     sig(iv.lo),
                     sig(iv.hi),
+                    misses(st.of(&s.statistics), iv),
                     change
                 ),
             );
@@ -477,11 +517,21 @@ fn measured_sections(a: &Analysis, figures: &[Figure]) -> String {
     push(&mut h, "</table></div>\n");
     if let Some(s) = a.spaces.iter().find(|s| s.converged).or(a.spaces.last()) {
         if let Some(ch) = &s.changes {
-            push(&mut h, &format!("<p>The tests at {} (N = {}):</p>\n<ul>\n", esc(&s.label), s.n));
+            let failed = STATISTICS.iter().filter(|st| !ch[st.name()].within).count();
+            push(
+                &mut h,
+                &format!(
+                    "<details><summary>The rule's tests at {} (N = {}): {} of {} failed</summary>\n<ul>\n",
+                    esc(&s.label),
+                    s.n,
+                    failed,
+                    STATISTICS.len()
+                ),
+            );
             for st in STATISTICS {
                 push(&mut h, &format!("<li>{}: {}</li>\n", st.name(), esc(&ch[st.name()].test)));
             }
-            push(&mut h, "</ul>\n");
+            push(&mut h, "</ul></details>\n");
         }
         push(&mut h, &format!("<p>{}</p>\n", esc(&super::weights_sentence(s))));
         match &s.noise {
@@ -512,7 +562,7 @@ fn measured_sections(a: &Analysis, figures: &[Figure]) -> String {
     // Sensitivity.
     push(
         &mut h,
-        "<h2>Which parameter matters</h2>\n<p>First-order sensitivity indices of MFR over every done point \
+        "<h2 id=\"matters\">Which parameter matters</h2>\n<p>First-order sensitivity indices of MFR over every done point \
          (adjusted correlation ratio: the share of MFR's variance explained by one parameter alone; no extra runs).</p>\n\
          <table><tr><th class=\"l\">parameter</th><th>S₁ (–)</th><th>95% interval</th><th class=\"l\"></th><th>bins</th></tr>\n",
     );
@@ -584,17 +634,24 @@ fn emulator_section(a: &Analysis) -> String {
         cv.q2,
         cv.coverage95 * 100.0
     ));
-    h.push_str("<table><tr><th class=\"l\">statistic</th><th>raw sample</th><th>emulator <small>[95% interval]</small></th></tr>\n");
+    h.push_str(&format!(
+        "<p>The space's statistics from the emulator: each the posterior median over {} sample paths of the \
+         fitted process, with its 95% posterior interval (not the statistics of the mean surface, which is smoother \
+         than any function the emulator deems possible, and so less spread out).</p>\n",
+        e.statistics.paths
+    ));
+    h.push_str("<table><tr><th class=\"l\">statistic</th><th>raw sample</th><th>emulator: posterior median <small>[95% interval]</small></th></tr>\n");
     let raw = a.statistics;
     for (k, st) in STATISTICS.iter().enumerate() {
         let iv = e.statistics.intervals[k];
         h.push_str(&format!(
-            "<tr><td class=\"l\">{}</td><td>{}</td><td>{} <small>[{}, {}]</small></td></tr>\n",
+            "<tr><td class=\"l\">{}</td><td>{}</td><td>{} <small>[{}, {}]{}</small></td></tr>\n",
             st.name(),
             num(raw.as_ref().and_then(|m| st.of(m))),
             num(st.of(&e.statistics.statistics)),
             sig(iv.lo),
-            sig(iv.hi)
+            sig(iv.hi),
+            misses(st.of(&e.statistics.statistics), iv)
         ));
     }
     h.push_str("</table>\n");
@@ -620,7 +677,8 @@ fn emulator_section(a: &Analysis) -> String {
             continue;
         }
         h.push_str(&format!(
-            "<p>Best {class} points by the emulator's MFR:</p>\n<table><tr><th>point</th><th>run MFR</th><th>emulator MFR ± SE</th></tr>\n"
+            "<p>Highest MFR by the emulator among the points whose v_x profile is <i>{class}</i> (a ranking within \
+             the class, not a recommendation; the recommended settings are above):</p>\n<table><tr><th>point</th><th>run MFR</th><th>emulator MFR ± SE</th></tr>\n"
         ));
         for b in list {
             h.push_str(&format!(

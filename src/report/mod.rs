@@ -10,6 +10,7 @@
 //! [`crate::analysis::convergence`], [`crate::analysis::sensitivity`], [`crate::measure::quality`]).
 
 mod advice;
+pub mod answer;
 pub mod emulation;
 mod gallery;
 mod html;
@@ -285,6 +286,8 @@ pub struct Analysis {
     pub failures: Vec<FailedPoint>,
     /// The v_x classes against the layer, the recommended settings, the thesis's conclusions.
     pub advice: advice::Advice,
+    /// The answer first: recommended settings, layer warning, what matters, verdict, next step.
+    pub answer: Option<answer::Answer>,
     #[serde(skip)]
     pub points: Vec<PointRow>,
 }
@@ -386,7 +389,7 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
         .or_else(|| manifest.identity.get("engine_version"))
         .map(|v| v.as_str().map(String::from).unwrap_or_else(|| v.to_string()))
         .unwrap_or_else(|| "unknown".into());
-    Ok(Analysis {
+    let mut a = Analysis {
         format: SUMMARY_FORMAT,
         tool: format!("demsweep {}", env!("CARGO_PKG_VERSION")),
         name: manifest.name.clone(),
@@ -412,15 +415,19 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
         best_ideal,
         failures,
         advice,
+        answer: None,
         points,
-    })
+    };
+    a.answer = Some(answer::answer(&a));
+    Ok(a)
 }
 
 /// The `mfr_se` a run's result.json records, if it does (results written before the per-point
 /// standard error was measured have none). Read as plain JSON so that either form reads.
 fn mfr_se(dir: &Path, hash: &str) -> Option<f64> {
-    let text = std::fs::read_to_string(dir.join("runs").join(hash).join("result.json")).ok()?;
-    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    let path = dir.join("runs").join(hash).join("result.json");
+    let bytes = crate::sys::read::read_capped(&path, crate::store::OUTCOME_CAP).ok()?;
+    let v: serde_json::Value = serde_json::from_slice(&bytes).ok()?;
     v.get("mfr_se")?.as_f64().filter(|s| s.is_finite() && *s >= 0.0)
 }
 
@@ -595,7 +602,8 @@ fn verdict(spaces: &[SpaceRow], counts: &SummaryCounts, c: &Criteria) -> Verdict
 
 /// Wall time (union of attempts) and core-seconds from `joblog.tsv`, read by column name.
 fn timing(dir: &Path) -> Timing {
-    let text = std::fs::read_to_string(dir.join("joblog.tsv")).unwrap_or_default();
+    let text = crate::sys::read::read_text_capped(&dir.join("joblog.tsv"), crate::store::JOBLOG_CAP)
+        .unwrap_or_default();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap_or("").split('\t').collect();
     let col = |name: &str| header.iter().position(|h| *h == name);

@@ -30,6 +30,9 @@ pub struct PointPage {
     pub failure: Option<RunFailure>,
     pub quality: Option<Quality>,
     pub profile: Option<Profile>,
+    /// Height above the plate of each v_x layer, mm (z = gap + k·D/2); empty when the point
+    /// has no result.
+    pub vx_heights_mm: Vec<f64>,
     pub run_dir: PathBuf,
     /// Files in the run directory.
     pub files: Vec<String>,
@@ -78,6 +81,7 @@ pub fn show(dir: &Path, index: usize) -> Result<PointPage> {
         _ => ("pending", None, None),
     };
     let measured = result.as_ref().or(failure.as_ref().and_then(|f| f.measured.as_deref()));
+    let vx_heights_mm = measured.map_or_else(Vec::new, |r| layer_heights_mm(&sweep, r));
     let (quality, profile) = match measured {
         Some(r) => {
             let v = r.parameters.get("blade_speed").copied().unwrap_or(f64::NAN);
@@ -95,10 +99,22 @@ pub fn show(dir: &Path, index: usize) -> Result<PointPage> {
         failure,
         quality,
         profile,
+        vx_heights_mm,
         run_dir,
         files,
         view_command,
     })
+}
+
+/// The height of each v_x layer of a result, mm, from its parameters and the sweep's scene (a
+/// point run with `--force` is outside the bounds, so they are not checked here).
+fn layer_heights_mm(sweep: &Sweep, r: &RunResult) -> Vec<f64> {
+    let mut settings = sweep.file.scene.clone();
+    settings.force_bounds = true;
+    match crate::scenes::build(&r.parameters, &settings) {
+        Ok(s) => (1..=r.vx.len()).map(|k| s.layer_height(k) * 1e3).collect(),
+        Err(_) => Vec::new(),
+    }
 }
 
 impl PointPage {
@@ -139,9 +155,10 @@ impl PointPage {
         }
         if let Some(r) = measured {
             let _ = writeln!(t, "\nresult:");
+            let se = r.mfr_se.map_or(String::new(), |se| format!(" ± {se:.4} (SE)"));
             let _ = writeln!(
                 t,
-                "  MFR              {:.4} (–), from {} particle crossings",
+                "  MFR              {:.4}{se} (–), from {} particle crossings",
                 r.mfr, r.mfr_particles
             );
             let _ = writeln!(t, "  MFR (flux check) {:.4} (–)", r.mfr_flux);
@@ -166,14 +183,15 @@ impl PointPage {
             }
             let v = r.parameters.get("blade_speed").copied().unwrap_or(f64::NAN);
             let _ = writeln!(t, "\nv_x profile in front of the blade (layer k at gap + k·D/2):");
-            let _ = writeln!(t, "  {:>5} {:>12} {:>14}", "k", "v_x (m/s)", "v_x / v (–)");
+            let _ = writeln!(t, "  {:>5} {:>8} {:>12} {:>14}", "k", "z (mm)", "v_x (m/s)", "v_x / v (–)");
             for (k, x) in r.vx.iter().enumerate() {
+                let z = self.vx_heights_mm.get(k).map_or("?".to_string(), |z| format!("{z:.2}"));
                 match x {
                     Some(x) => {
-                        let _ = writeln!(t, "  {:>5} {:>12.4} {:>14.4}", k + 1, x, x / v);
+                        let _ = writeln!(t, "  {:>5} {:>8} {:>12.4} {:>14.4}", k + 1, z, x, x / v);
                     }
                     None => {
-                        let _ = writeln!(t, "  {:>5} {:>12} {:>14}", k + 1, "empty", "");
+                        let _ = writeln!(t, "  {:>5} {:>8} {:>12} {:>14}", k + 1, z, "empty", "");
                     }
                 }
             }

@@ -98,8 +98,11 @@ pub struct SubmitOptions {
     pub template: Option<PathBuf>,
     /// Tasks help with other tasks' leftovers once their own points are done.
     pub steal: bool,
-    /// The `sweep` executable the tasks run (on the shared file system).
+    /// The `sweep` the tasks run: a path on the shared file system, or a command the node's
+    /// PATH finds (`[cluster] command`).
     pub exe: PathBuf,
+    /// Lines each script runs before `sweep` (`[cluster] prologue`: `module load ...`).
+    pub prologue: Vec<String>,
     /// An LDS sweep submitted batch by batch; `None`: every point as one array.
     pub chain: Option<Chain>,
 }
@@ -336,6 +339,7 @@ pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendere
     ctx.insert("name", &job_name(&manifest.name));
     ctx.insert("dir", &dir.display().to_string());
     ctx.insert("sweep", &o.exe.display().to_string());
+    ctx.insert("prologue", &o.prologue.join("\n"));
     ctx.insert("per_task", &layout.per_task);
     ctx.insert("cpus", &(o.jobs_per_task * o.ranks as usize));
     ctx.insert("ranks", &o.ranks);
@@ -595,7 +599,7 @@ pub fn work(
     }
     let sweep = crate::run::load_dir_sweep(dir)?;
     if crate::run::standin::selected(&sweep) {
-        let exec = crate::run::standin::StandIn::new(sweep);
+        let exec = crate::run::standin::StandIn::new(sweep)?;
         return work_with(dir, &manifest, &exec, w, opts, cancel);
     }
     let exec = crate::run::PointExecutor::new(sweep)?.with_ranks(w.ranks);

@@ -100,7 +100,7 @@ impl SweepExecutor {
     /// The stand-in when the sweep selects it, else LIGGGHTS (found and identified here).
     pub fn for_sweep(sweep: &Sweep) -> Result<SweepExecutor> {
         if standin::selected(sweep) {
-            Ok(SweepExecutor::StandIn(Box::new(StandIn::new(sweep.clone()))))
+            Ok(SweepExecutor::StandIn(Box::new(StandIn::new(sweep.clone())?)))
         } else {
             Ok(SweepExecutor::Real(Box::new(PointExecutor::new(sweep.clone())?)))
         }

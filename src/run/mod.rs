@@ -210,6 +210,7 @@ pub fn resume_share<E: Executor>(
     let (mut manifest, toml) = Store::read_manifest(dir)?;
     let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
     check_parameters(dir, &manifest, &sweep)?;
+    Store::open(dir).check_joblog()?;
     let jobs: Vec<E::Job> = manifest
         .points
         .par_iter()
@@ -222,6 +223,9 @@ pub fn resume_share<E: Executor>(
     Store::open(dir).check_pairing(&manifest)?;
     let identity = exec.identity();
     let diff = identity_diff(&manifest.identity, &identity);
+    if !opts.force && changed > 0 {
+        refuse_edited_sweep_toml(dir, &toml, changed, manifest.points.len())?;
+    }
     if !opts.force && (!diff.is_empty() || changed > 0) {
         let what = if diff.is_empty() {
             format!("{changed} of {} decks render differently", manifest.points.len())
@@ -252,6 +256,21 @@ pub fn resume_share<E: Executor>(
         store.write_manifest(&toml, &manifest)?;
     }
     execute(&store, &manifest, exec, jobs, &sweep, opts, order, hook, cancel)
+}
+
+/// Refuse to resume when `DIR/sweep.toml` was edited since the manifest was written in a way
+/// that changes the points' decks, naming the keys.
+fn refuse_edited_sweep_toml(dir: &Path, toml: &str, changed: usize, points: usize) -> Result<()> {
+    let edits = Store::sweep_toml_changes(dir, toml);
+    if edits.is_empty() {
+        return Ok(());
+    }
+    Err(Error::input(format!(
+        "{}: {}: edited since the sweep started, so {changed} of {points} points render differently; \
+         restore it, or `--force` re-runs the changed points with the new value",
+        dir.join("sweep.toml").display(),
+        edits.join("; ")
+    )))
 }
 
 /// Refuse a manifest whose hashes are those its points render to, but paired with the wrong
@@ -296,6 +315,7 @@ fn execute<E: Executor>(
     hook: &mut dyn SpaceHook,
     cancel: &CancelToken,
 ) -> Result<Summary> {
+    store.check_run_dirs(manifest)?;
     // Leftovers of atomic writes cut off by a kill or a full disk.
     store.remove_stale_temporaries()?;
     let screen = Screen::of(sweep);

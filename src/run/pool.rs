@@ -201,6 +201,13 @@ impl<E: Executor> Worker<'_, E> {
         Ok(())
     }
 
+    /// Log an attempt of the process that held the stale claim `by` (its host and pid, not ours).
+    fn log_for(&self, record: AttemptRecord, by: &ClaimInfo) -> Result<(), StoreError> {
+        self.joblog.lock().unwrap().append_as(&record, &by.host, by.pid)?;
+        self.send(Event::Attempt { record, retrying: false });
+        Ok(())
+    }
+
     fn one(&self, job: E::Job, hash: &str) -> Result<(), StoreError> {
         let hash = hash.to_string();
         let (claim, stale) = match self.store.claim(&hash)? {
@@ -246,7 +253,7 @@ impl<E: Executor> Worker<'_, E> {
             // Finished by a process killed before its joblog line: write the line it owed.
             if let Some(old) = stale {
                 if !crate::store::logged_outcomes(self.store.dir())?.contains(&hash) {
-                    self.log(AttemptRecord::finished(&hash, &outcome, old.claimed_at), false)?;
+                    self.log_for(AttemptRecord::finished(&hash, &outcome, old.claimed_at), &old)?;
                 }
             }
             return Ok(Some((outcome, false)));
@@ -261,7 +268,7 @@ impl<E: Executor> Worker<'_, E> {
                 status: "interrupted",
                 class: None,
             };
-            self.log(record, false)?;
+            self.log_for(record, &old)?;
         }
         if self.cancel.is_cancelled() {
             return Ok(None);

@@ -55,6 +55,8 @@ pub struct Progress {
     bar: Option<ProgressBar>,
     start: Instant,
     last_line: Instant,
+    /// Runs other processes hold, and who holds them.
+    held: Option<String>,
 }
 
 impl Progress {
@@ -69,7 +71,12 @@ impl Progress {
             b.enable_steady_tick(Duration::from_millis(500));
             b
         });
-        Progress { mode, bar, start: Instant::now(), last_line: Instant::now() }
+        Progress { mode, bar, start: Instant::now(), last_line: Instant::now(), held: None }
+    }
+
+    /// Runs held by other processes, named in the progress line (`1 held by node7 pid 42 ...`).
+    pub fn set_held(&mut self, held: Option<String>) {
+        self.held = held;
     }
 
     /// Redraw (bar) or print a line if [`LINE_EVERY`] has passed (lines).
@@ -118,7 +125,11 @@ impl Progress {
     }
 
     fn message(&self, c: &Counts) -> String {
-        message(c, eta(c, self.start.elapsed()))
+        let m = message(c, eta(c, self.start.elapsed()));
+        match &self.held {
+            Some(h) => format!("{m} · {h}"),
+            None => m,
+        }
     }
 }
 

@@ -59,9 +59,24 @@ pub(super) struct Reporter<'a> {
     sample: BTreeSet<usize>,
     /// Closed points queued to run (again) and not finished yet.
     awaiting: BTreeSet<usize>,
+    /// Runs another process holds, waited for: the progress line names the holder.
+    held: BTreeMap<String, store::ClaimInfo>,
     pub(super) verdict: Verdict,
     /// The fixed parameters' columns of results.csv.
     fixed: Vec<(String, f64)>,
+}
+
+/// `1 held by node7 (pid 4242, lease renewed 12 s ago)`: the runs other processes hold, which
+/// this one waits for, and who holds the first; `None` when none is held.
+fn held_note(held: &BTreeMap<String, store::ClaimInfo>, now: f64) -> Option<String> {
+    let c = held.values().next()?;
+    let renewed = c.renewed_at.unwrap_or(c.claimed_at);
+    let lease = match c.lease_s {
+        Some(l) => format!("lease {:.0} s, renewed {:.0} s ago", l, (now - renewed).max(0.0)),
+        None => "a claim without a lease: it stands until its holder ends".into(),
+    };
+    let others = if held.len() > 1 { " (and others)" } else { "" };
+    Some(format!("{} held by {} pid {} ({lease}){others}, waited for", held.len(), c.host, c.pid))
 }
 
 impl<'a> Reporter<'a> {
@@ -129,6 +144,7 @@ impl<'a> Reporter<'a> {
             screen,
             sample,
             awaiting,
+            held: BTreeMap::new(),
             verdict: Verdict::Pending,
             fixed,
         };
@@ -211,13 +227,18 @@ impl<'a> Reporter<'a> {
 
     pub(super) fn event(&mut self, e: &Event) -> Flow {
         match e {
-            Event::Started { .. } => {
+            Event::Started { hash } => {
                 self.counts.running += 1;
                 self.ran += 1;
+                self.held.remove(hash);
+            }
+            Event::Busy { hash, owner } => {
+                self.held.insert(hash.clone(), owner.clone());
             }
             // The pool wrote its joblog line.
             Event::Attempt { .. } => {}
             Event::Finished { hash, outcome, ran } => {
+                self.held.remove(hash);
                 if *ran {
                     self.counts.running -= 1;
                 }
@@ -257,8 +278,9 @@ impl<'a> Reporter<'a> {
             Event::StoreError { hash, error } => {
                 self.errors.push(format!("{error} (run {})", &hash[..12.min(hash.len())]));
             }
-            Event::Busy { .. } | Event::Tick => {}
+            Event::Tick => {}
         }
+        self.progress.set_held(held_note(&self.held, crate::sys::host::unix_now()));
         self.progress.update(&self.counts);
         if self.results_dirty && self.results_written.elapsed() >= RESULTS_EVERY {
             self.write_results();

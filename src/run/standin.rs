@@ -19,8 +19,9 @@ use std::path::Path;
 
 use sha2::{Digest, Sha256};
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::outcome::{RunOutcome, RunResult, RESULT_FORMAT, VX_LAYERS};
+use crate::point::deck::Template;
 use crate::point::{resolve, RESULT};
 use crate::run::pool::Executor;
 use crate::sweep::Sweep;
@@ -53,8 +54,15 @@ pub struct StandInJob {
 }
 
 impl StandIn {
-    pub fn new(sweep: Sweep) -> StandIn {
-        StandIn { sweep }
+    /// The stand-in for `sweep`, refusing what LIGGGHTS's executor refuses before it runs: a
+    /// template that does not load. (Each point's bounds are checked as it is prepared.)
+    pub fn new(sweep: Sweep) -> Result<StandIn> {
+        if let Some(path) = sweep.template_path() {
+            let layout = crate::scenes::of(&sweep.file.scene).map_err(|e| Error::input(e.to_string()))?;
+            Template::load(Some(&path), layout)
+                .map_err(|e| Error::input(format!("{}: scene.template: {e}", sweep.path.display())))?;
+        }
+        Ok(StandIn { sweep })
     }
 }
 
@@ -67,6 +75,9 @@ impl Executor for StandIn {
 
     fn prepare(&self, swept: &[f64]) -> Result<StandInJob> {
         let parameters = resolve(&self.sweep, swept);
+        // The scene's bounds and unit slips, as a LIGGGHTS point is refused.
+        crate::scenes::build(&parameters, &self.sweep.file.scene)
+            .map_err(|e| Error::input(format!("{}: {e}", self.sweep.path.display())))?;
         let mut h = Sha256::new();
         h.update(format!("{NAME} {MODEL_VERSION}\n"));
         for (k, v) in &parameters {
@@ -97,7 +108,8 @@ impl Executor for StandIn {
             mfr,
             mfr_flux: mfr,
             mfr_particles: 0,
-            mfr_se: None,
+            // The model's own noise: what a seed-to-seed repeat would scatter by.
+            mfr_se: Some(point.mean_mfr() * MFR_NOISE),
             steady_state: None,
             vx_se: Vec::new(),
             mfr_windows: vec![mfr; 4],

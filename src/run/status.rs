@@ -135,7 +135,8 @@ pub fn status(dir: &Path) -> Result<StatusReport> {
 
 /// The verdict of the last report (`DIR/summary.json`), if one was written.
 fn read_verdict(dir: &Path) -> Option<bool> {
-    let text = std::fs::read_to_string(dir.join("summary.json")).ok()?;
+    let text =
+        crate::sys::read::read_text_capped(&dir.join("summary.json"), crate::store::OUTCOME_CAP).ok()?;
     let v: serde_json::Value = serde_json::from_str(&text).ok()?;
     v.get("verdict")?.get("converged")?.as_bool()
 }

@@ -23,6 +23,12 @@ pub const MAX_DIAMETER_MM: f64 = 20.0;
 /// Smallest gap, in mean diameters: below it not even a sphere resting in a pocket fits under
 /// the blade (that starts at 0.55 D), so such a point is a sure zero or a slip.
 pub const MIN_GAP_DIAMETERS: f64 = 0.1;
+/// Blade speeds the scene is built for, m/s: recoaters run at 10–500 mm/s, the thesis at
+/// 1.2–1.6 m/s; above 10 m/s is a speed written in mm/s, below 1 mm/s a run that never ends.
+pub const BLADE_SPEED_M_S: (f64, f64) = (0.001, 10.0);
+/// Particle densities the scene is built for, kg/m³: polymers (≈ 1,000) to tungsten
+/// (19,300); outside is a density written in g/cm³ (7.98 for steel) or a slip of exponent.
+pub const DENSITY_KG_M3: (f64, f64) = (100.0, 25_000.0);
 /// Smallest timestep, as a fraction of the Rayleigh time: 10× finer than the reference fidelity.
 pub const MIN_RAYLEIGH_FRACTION: f64 = 0.01;
 
@@ -54,6 +60,7 @@ pub fn check(scene: &Scene, values: &BTreeMap<String, f64>, settings: &SceneSett
             show(d_value / 1e3)
         ));
     }
+    check_speed_and_density(values)?;
     let gap = mm(scene.gap);
     if gap < MIN_GAP_DIAMETERS * d {
         return Err(format!(
@@ -89,6 +96,34 @@ pub fn check(scene: &Scene, values: &BTreeMap<String, f64>, settings: &SceneSett
             show(MIN_RAYLEIGH_FRACTION),
             scene.spread_steps() as f64
         ));
+    }
+    Ok(())
+}
+
+/// Blade speed and density within [`BLADE_SPEED_M_S`] and [`DENSITY_KG_M3`], naming the slip.
+fn check_speed_and_density(values: &BTreeMap<String, f64>) -> Result<(), String> {
+    const FORCE: &str = "(--force runs it anyway)";
+    let checks = [
+        ("blade_speed", "m/s", BLADE_SPEED_M_S, "mm/s", 1e-3),
+        ("density", "kg/m3", DENSITY_KG_M3, "g/cm³", 1e3),
+    ];
+    for (name, unit, (lo, hi), slip, factor) in checks {
+        let Some(&v) = values.get(name) else { continue };
+        let meant = v * factor;
+        let guess = if (lo..=hi).contains(&meant) {
+            format!(" — did you mean {} (written in {slip})?", show(meant))
+        } else {
+            String::new()
+        };
+        if v < lo || v > hi {
+            return Err(format!(
+                "{name} {} {unit}: outside the {}–{} {unit} the scene is built for; values are in \
+                 {unit}{guess} {FORCE}",
+                show(v),
+                show(lo),
+                show(hi)
+            ));
+        }
     }
     Ok(())
 }

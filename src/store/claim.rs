@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use super::joblog::JOBLOG;
 use super::{io, DirLock, Store, StoreError, LOCK};
-use crate::outcome::{RunFailure, RunResult};
+use crate::outcome::{RunFailure, RunResult, RESULT_FORMAT, VX_LAYERS};
 use crate::sys::host::{process_start_ticks, unix_now};
 
 impl Store {
@@ -209,7 +209,7 @@ pub struct Claim {
 /// directory holds neither file.
 pub(super) fn finished_state(dir: &Path) -> Option<RunState> {
     fn read<T: serde::de::DeserializeOwned>(path: &Path) -> Option<Result<T, String>> {
-        match fs::read(path) {
+        match crate::sys::read::read_capped(path, super::OUTCOME_CAP) {
             Ok(bytes) => Some(serde_json::from_slice(&bytes).map_err(|e| format!("unreadable ({e})"))),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
             Err(e) => Some(Err(format!("unreadable ({e})"))),
@@ -226,6 +226,7 @@ pub(super) fn finished_state(dir: &Path) -> Option<RunState> {
                 super::short(&r.hash)
             ));
         }
+        well_formed(r)?;
         crate::measure::plausible::check_result(r)
     };
     match read::<RunResult>(&result).map(|r| r.and_then(|r| own(&r).map(|()| r))) {
@@ -234,12 +235,40 @@ pub(super) fn finished_state(dir: &Path) -> Option<RunState> {
         None => {}
     }
     let failure = dir.join("failure.json");
-    match read::<RunFailure>(&failure) {
+    let failure_format = |f: RunFailure| match f.format {
+        RESULT_FORMAT => Ok(f),
+        n => Err(other_format(n)),
+    };
+    match read::<RunFailure>(&failure).map(|f| f.and_then(failure_format)) {
         Some(Ok(f)) => return Some(RunState::Failed(Box::new(f))),
         Some(Err(reason)) => damaged = damaged.or(Some(RunState::Damaged { file: failure, reason })),
         None => {}
     }
     damaged
+}
+
+/// What the types of a `result.json` cannot say: it is of this version's format, a done run is
+/// steady (an unsteady one is a failure), and it has one v_x per layer.
+fn well_formed(r: &RunResult) -> Result<(), String> {
+    if r.format != RESULT_FORMAT {
+        return Err(other_format(r.format));
+    }
+    if !r.steady {
+        return Err("steady = false: a done run is steady (an unsteady run is a failure); \
+                    the file was edited or is damaged"
+            .into());
+    }
+    for (what, n) in [("vx", r.vx.len()), ("vx_se", r.vx_se.len())] {
+        // vx_se is absent from results of the gated layouts.
+        if n != VX_LAYERS && !(what == "vx_se" && n == 0) {
+            return Err(format!("{what}: {n} layers, expected {VX_LAYERS}"));
+        }
+    }
+    Ok(())
+}
+
+fn other_format(n: u32) -> String {
+    format!("format {n}: expected {RESULT_FORMAT} (written by another version of sweep, which this one cannot read)")
 }
 
 /// The first entry of `dir` that a sweep does not write (a user's file), if any: a directory
@@ -253,7 +282,7 @@ pub fn foreign_entry(dir: &Path) -> Option<String> {
 }
 
 pub(super) fn read_claim(path: &Path) -> Option<ClaimInfo> {
-    serde_json::from_str(&fs::read_to_string(path).ok()?).ok()
+    serde_json::from_slice(&crate::sys::read::read_capped(path, super::CLAIM_CAP).ok()?).ok()
 }
 
 /// Whether a claim's lease still runs at `now` (Unix seconds). A claim without a lease (written

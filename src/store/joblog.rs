@@ -6,7 +6,7 @@
 //! hash`) is still read, and appended to in its own format, so one file never mixes the two.
 
 use std::collections::HashMap;
-use std::fs::{self, File, OpenOptions};
+use std::fs::{File, OpenOptions};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::{SystemTime, UNIX_EPOCH};
@@ -25,6 +25,16 @@ impl Store {
         Ok(())
     }
 
+    /// Refuse a joblog this version would not read back (see [`joblog_format`]); a missing one
+    /// is fine (it is created when the first attempt is logged).
+    pub fn check_joblog(&self) -> Result<(), StoreError> {
+        let path = self.dir.join(JOBLOG);
+        match std::fs::symlink_metadata(&path) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+            _ => joblog_format(&path).map(drop),
+        }
+    }
+
     /// Open the joblog for appending attempts, creating it with its header if missing.
     pub fn joblog(&self) -> Result<Joblog, StoreError> {
         let lock = self.dir.join(LOCK);
@@ -32,10 +42,38 @@ impl Store {
         self.joblog_header()?;
         let path = self.dir.join(JOBLOG);
         let file = OpenOptions::new().read(true).append(true).open(&path).map_err(io(&path))?;
-        let first = fs::read_to_string(&path).map_err(io(&path))?.lines().next().unwrap_or("").to_string();
-        let old = first.starts_with(OLD_HEADER_START);
+        let old = joblog_format(&path)?;
         Ok(Joblog { file, path, lock, host: self.host.clone(), old, index: HashMap::new() })
     }
+}
+
+/// Whether the joblog at `path` is of the earlier format (else the current one). A joblog of
+/// any other header (GNU parallel's own, of nine columns) is refused: lines appended under it
+/// would not be read back, and their numbering would start again.
+fn joblog_format(path: &Path) -> Result<bool, StoreError> {
+    use std::io::{BufRead, Read};
+    let file = crate::sys::read::open_regular(path).map_err(io(path))?;
+    let mut first = Vec::new();
+    std::io::BufReader::new(file.take(4096)).read_until(b'\n', &mut first).map_err(io(path))?;
+    let first = String::from_utf8_lossy(&first);
+    let first = first.trim_end_matches(['\n', '\r']);
+    if first.starts_with(OLD_HEADER_START) {
+        return Ok(true);
+    }
+    // An empty file gets the header before the first line.
+    if first == JOBLOG_HEADER || first.is_empty() {
+        return Ok(false);
+    }
+    let columns = first.split('\t').count();
+    Err(StoreError::NotASweep {
+        path: path.to_path_buf(),
+        reason: format!(
+            "its header ({columns} columns, {:?}) is not the one sweep writes ({FIELDS} columns, \
+             starting Seq, Host, …, ending Index, Hash, Status, Class, Pid); move the file away and \
+             sweep starts a new joblog",
+            first.chars().take(60).collect::<String>()
+        ),
+    })
 }
 
 /// The joblog's file name.
@@ -117,6 +155,13 @@ impl Joblog {
 
     /// Append one attempt; returns its sequence number.
     pub fn append(&mut self, a: &AttemptRecord) -> Result<u64, StoreError> {
+        let host = self.host.clone();
+        self.append_as(a, &host, std::process::id())
+    }
+
+    /// [`Joblog::append`] of an attempt made by another process (`host`, `pid`): the line a
+    /// killed attempt owes, written by the process that found its claim.
+    pub fn append_as(&mut self, a: &AttemptRecord, host: &str, pid: u32) -> Result<u64, StoreError> {
         let _lock = DirLock::take(&self.lock)?;
         let (last, ends_with_newline) = last_seq(&self.file).map_err(io(&self.path))?;
         let seq = last + 1;
@@ -124,8 +169,9 @@ impl Joblog {
         // A line cut short (a full disk) is closed first, so that ours starts a line.
         let runtime = if a.runtime_s.is_finite() { format!("{:.3}", a.runtime_s) } else { "-".into() };
         let open = if ends_with_newline { "" } else { "\n" };
-        let (host, pid, status, class, hash) =
-            (&self.host, std::process::id(), a.status, a.class.unwrap_or("-"), &a.hash);
+        // Tabs and newlines would break the line's columns.
+        let host = host.replace(['\t', '\n', '\r'], " ");
+        let (status, class, hash) = (a.status, a.class.unwrap_or("-"), &a.hash);
         let line = if self.old {
             format!("{open}{seq}\t{host}\t{pid}\t{start:.3}\t{runtime}\t{status}\t{class}\t{hash}\n")
         } else {
@@ -189,7 +235,7 @@ pub fn logged_outcomes(dir: &Path) -> Result<std::collections::BTreeSet<String>,
 /// Read `DIR/joblog.tsv`.
 pub fn read_joblog(dir: &Path) -> Result<Vec<JoblogLine>, StoreError> {
     let path = dir.join(JOBLOG);
-    let text = fs::read_to_string(&path).map_err(io(&path))?;
+    let text = crate::sys::read::read_text_capped(&path, super::JOBLOG_CAP).map_err(io(&path))?;
     Ok(text
         .lines()
         .filter(|l| !is_header(l))

@@ -39,14 +39,28 @@ impl Store {
         self.joblog_header()?;
         let toml_path = self.dir.join("sweep.toml");
         crate::sys::atomic::write(&toml_path, sweep_toml.as_bytes()).map_err(io(&toml_path))?;
-        crate::sys::atomic::write_json(&path, manifest).map_err(io(&path))?;
+        let written = Written { manifest, seals: seals(manifest), sweep_toml };
+        crate::sys::atomic::write_json(&path, &written).map_err(io(&path))?;
         Ok(())
+    }
+
+    /// `key: recorded → now` for every setting of `DIR/sweep.toml` that differs from the copy
+    /// the manifest recorded when it was written (none for a manifest without a copy).
+    pub fn sweep_toml_changes(dir: &Path, now: &str) -> Vec<String> {
+        let Ok(text) = read_text(&Self::manifest_path(dir), super::MANIFEST_CAP) else { return Vec::new() };
+        let recorded = serde_json::from_str::<serde_json::Value>(&text)
+            .ok()
+            .and_then(|v| v.get("sweep_toml")?.as_str().map(str::to_string));
+        match recorded {
+            Some(recorded) => toml_changes(&recorded, now),
+            None => Vec::new(),
+        }
     }
 
     /// Read `manifest.json` and `sweep.toml` of `dir`.
     pub fn read_manifest(dir: &Path) -> Result<(Manifest, String), StoreError> {
         let path = Self::manifest_path(dir);
-        let text = fs::read_to_string(&path).map_err(|e| StoreError::NotASweep {
+        let text = read_text(&path, super::MANIFEST_CAP).map_err(|e| StoreError::NotASweep {
             path: dir.to_path_buf(),
             reason: format!(
                 "not a sweep directory (cannot read manifest.json: {})",
@@ -70,14 +84,114 @@ impl Store {
             serde_json::from_str(&text).map_err(|e| not_a_sweep(format!("unreadable manifest: {e}")))?;
         manifest
             .validate()
+            .and_then(|()| check_seals(&manifest, value.get("seals")))
             .map_err(|e| not_a_sweep(format!("{e}; the manifest was edited or is damaged")))?;
         let toml_path = dir.join("sweep.toml");
-        let sweep = fs::read_to_string(&toml_path).map_err(|e| StoreError::NotASweep {
+        let sweep = read_text(&toml_path, super::SWEEP_TOML_CAP).map_err(|e| StoreError::NotASweep {
             path: toml_path.clone(),
             reason: format!("cannot read the resolved sweep file: {e}"),
         })?;
         Ok((manifest, sweep))
     }
+}
+
+/// A file of the directory as UTF-8 text: a regular file of at most `cap` bytes.
+fn read_text(path: &Path, cap: u64) -> std::io::Result<String> {
+    let bytes = crate::sys::read::read_capped(path, cap)?;
+    String::from_utf8(bytes).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e))
+}
+
+/// `manifest.json` as written: the manifest, each point's seal (in point order) and the
+/// resolved sweep file it was planned from.
+#[derive(Serialize)]
+struct Written<'a> {
+    #[serde(flatten)]
+    manifest: &'a Manifest,
+    seals: Vec<String>,
+    sweep_toml: &'a str,
+}
+
+/// A point's seal: 16 hex digits of SHA-256 over its index, values and hash. A hand edit of a
+/// point's values or hash (which pairs it with another run, or none) no longer matches it.
+fn seal(index: usize, values: &[f64], hash: &str) -> String {
+    use sha2::{Digest, Sha256};
+    let mut h = Sha256::new();
+    h.update(format!("{index}\n"));
+    for v in values {
+        h.update(format!("{:016x}\n", v.to_bits()));
+    }
+    h.update(hash.as_bytes());
+    crate::sys::hex(&h.finalize()[..8])
+}
+
+fn seals(m: &Manifest) -> Vec<String> {
+    use rayon::prelude::*;
+    m.points.par_iter().map(|p| seal(p.index, &p.values, &p.hash)).collect()
+}
+
+/// Every point matches its seal (a manifest written before seals has none); the error names
+/// the point, or the two points whose hashes were swapped.
+fn check_seals(m: &Manifest, seals: Option<&serde_json::Value>) -> Result<(), String> {
+    let Some(seals) = seals else { return Ok(()) };
+    let seals: Vec<&str> = match seals.as_array() {
+        Some(a) if a.len() == m.points.len() => a.iter().map(|s| s.as_str().unwrap_or("")).collect(),
+        _ => return Err(format!("seals: expected one per point ({})", m.points.len())),
+    };
+    let ours = self::seals(m);
+    let wrong: Vec<usize> = (0..seals.len()).filter(|&i| seals[i] != ours[i]).collect();
+    let Some(&first) = wrong.first() else { return Ok(()) };
+    // Two points each holding the other's hash: a swap.
+    if wrong.len() <= 1000 {
+        for &i in &wrong {
+            let p = &m.points[i];
+            let partner = wrong.iter().find(|&&j| {
+                let q = &m.points[j];
+                j != i && seal(i, &p.values, &q.hash) == seals[i] && seal(j, &q.values, &p.hash) == seals[j]
+            });
+            if let Some(&j) = partner {
+                let (i, j) = (i.min(j), i.max(j));
+                return Err(format!(
+                    "points: the hashes of points {i} and {j} are swapped: each names the run of the \
+                     other (swap them back, or start the sweep in a new directory)"
+                ));
+            }
+        }
+    }
+    let more =
+        if wrong.len() > 1 { format!(" (and {} more points)", wrong.len() - 1) } else { String::new() };
+    Err(format!(
+        "points[{first}].values or points[{first}].hash: edited since the sweep wrote them (they no \
+         longer match seals[{first}]){more}; restore it from a copy, or start the sweep in a new directory"
+    ))
+}
+
+/// `key: a → b` for every leaf that differs between two sweep files, design, convergence and
+/// cluster left out (an extension changes the design; the rule and how a cluster starts `sweep`
+/// may change freely).
+fn toml_changes(a: &str, b: &str) -> Vec<String> {
+    fn walk(path: &str, a: Option<&toml::Value>, b: Option<&toml::Value>, out: &mut Vec<String>) {
+        match (a, b) {
+            (Some(toml::Value::Table(x)), Some(toml::Value::Table(y))) => {
+                let keys: std::collections::BTreeSet<&String> = x.keys().chain(y.keys()).collect();
+                for k in keys {
+                    let p = if path.is_empty() { k.clone() } else { format!("{path}.{k}") };
+                    if path.is_empty() && ["design", "convergence", "cluster"].contains(&k.as_str()) {
+                        continue;
+                    }
+                    walk(&p, x.get(k), y.get(k), out);
+                }
+            }
+            _ if a != b => {
+                let show = |v: Option<&toml::Value>| v.map_or("(absent)".to_string(), |v| v.to_string());
+                out.push(format!("{path} = {} (the sweep ran with {})", show(b), show(a)));
+            }
+            _ => {}
+        }
+    }
+    let parse = |t: &str| t.parse::<toml::Table>().ok().map(toml::Value::Table);
+    let mut out = Vec::new();
+    walk("", parse(a).as_ref(), parse(b).as_ref(), &mut out);
+    out
 }
 
 /// Version of `manifest.json`.

@@ -55,6 +55,15 @@ use crate::sys::disk::{describe_io, is_no_space};
 use crate::sys::host::{process_start_ticks, unix_now};
 use claim::{finished_state, LEASE_MS};
 
+/// Most bytes read of each file of a sweep directory: a manifest of a million points is about
+/// 300 MB, a run's outcome a few MB with its block series; a file past these was not written by
+/// `sweep` (or is `/dev/zero` behind a link) and is refused rather than read into memory.
+pub const MANIFEST_CAP: u64 = 2 << 30;
+pub const SWEEP_TOML_CAP: u64 = 16 << 20;
+pub const OUTCOME_CAP: u64 = 256 << 20;
+pub const CLAIM_CAP: u64 = 1 << 20;
+pub const JOBLOG_CAP: u64 = 16 << 30;
+
 /// The lock file of a sweep directory: claims, joblog lines and the manifest are written under
 /// its `flock`.
 const LOCK: &str = ".lock";
@@ -223,6 +232,30 @@ impl Store {
             }
         }
         Ok(removed)
+    }
+
+    /// Refuse an entry of `runs/` that bears the hash of one of `manifest`'s points but is not a
+    /// directory (a file put there by hand): the run could neither be read nor started there.
+    pub fn check_run_dirs(&self, manifest: &Manifest) -> Result<(), StoreError> {
+        let runs = self.dir.join("runs");
+        let Ok(entries) = fs::read_dir(&runs) else { return Ok(()) };
+        let hashes: std::collections::HashSet<&str> =
+            manifest.points.iter().map(|p| p.hash.as_str()).collect();
+        for e in entries.flatten() {
+            let name = e.file_name();
+            let Some(name) = name.to_str().filter(|n| hashes.contains(n)) else { continue };
+            // A link to a directory is one.
+            if !e.file_type().is_ok_and(|t| t.is_dir()) && !fs::metadata(e.path()).is_ok_and(|m| m.is_dir()) {
+                return Err(StoreError::NotASweep {
+                    path: e.path(),
+                    reason: format!(
+                        "not a directory, where the run of a point ({}) belongs; remove it and resume",
+                        short(name)
+                    ),
+                });
+            }
+        }
+        Ok(())
     }
 
     /// Run `f` under the directory's lock (a consistent read-then-write of a shared file).

@@ -51,7 +51,8 @@ pub fn begin_submission_round(dir: &Path) -> Result<(), StoreError> {
 /// Join the round of the last submission of `dir` that re-ran failures, if there was one
 /// (`sweep work`); the stores this process opens from now on retry in that round.
 pub fn join_submission_round(dir: &Path) {
-    let text = std::fs::read_to_string(submission_round_path(dir)).unwrap_or_default();
+    let text =
+        crate::sys::read::read_text_capped(&submission_round_path(dir), super::CLAIM_CAP).unwrap_or_default();
     if let Ok(s) = text.trim().parse::<f64>() {
         let _ = FIXED_ROUND.set(from_unix(s));
     }
@@ -66,8 +67,10 @@ impl Store {
         }
         let path = self.dir.join("retry.json");
         let _lock = DirLock::take(&self.dir.join(LOCK))?;
-        let old: RoundFile =
-            std::fs::read(&path).ok().and_then(|b| serde_json::from_slice(&b).ok()).unwrap_or_default();
+        let old: RoundFile = crate::sys::read::read_capped(&path, super::CLAIM_CAP)
+            .ok()
+            .and_then(|b| serde_json::from_slice(&b).ok())
+            .unwrap_or_default();
         // Members on other hosts cannot be seen: a round spans one host's processes.
         let mut members: Vec<(String, u32, u64)> = old
             .members

@@ -29,6 +29,25 @@ pub struct SweepFile {
     pub scene: SceneSettings,
     #[serde(default)]
     pub run: RunSettings,
+    #[serde(default, skip_serializing_if = "ClusterSettings::is_default")]
+    pub cluster: ClusterSettings,
+}
+
+/// `[cluster]`: how the scripts of `sweep submit` start `sweep` on a node.
+#[derive(Debug, Clone, Default, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct ClusterSettings {
+    /// The command that runs `sweep` on a node, e.g. `"sweep"` (found on the node's PATH) or
+    /// `"/opt/demsweep/bin/sweep"`; default: the executable that submits.
+    pub command: Option<String>,
+    /// Lines each script runs first, e.g. `["module load liggghts/3.8", "module load demsweep"]`.
+    pub prologue: Vec<String>,
+}
+
+impl ClusterSettings {
+    fn is_default(&self) -> bool {
+        *self == ClusterSettings::default()
+    }
 }
 
 /// One entry of `[parameters]` as written: either `{ lo, hi, [unit], [scale] }` or `{ value,

@@ -76,6 +76,27 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>,
             format!("{:?}: expected no control characters (newline, tab, escape)", file.name),
         ));
     }
+    // Invisible characters that reorder or hide text (a right-to-left override) would make the
+    // directory and the report's title read as another name.
+    if let Some(c) = file.name.chars().find(|c| is_format_char(*c)) {
+        return Err(bad(
+            "name",
+            format!(
+                "{:?}: expected no invisible formatting characters (U+{:04X}: bidirectional \
+                 override, zero-width or similar)",
+                file.name, c as u32
+            ),
+        ));
+    }
+    if file.name.len() > MAX_NAME_BYTES {
+        return Err(bad(
+            "name",
+            format!(
+                "{} bytes long: expected at most {MAX_NAME_BYTES} (it names the directory runs/<name>)",
+                file.name.len()
+            ),
+        ));
+    }
     let mut swept = Vec::new();
     let mut fixed = Vec::new();
     for (name, value) in &file.parameters {
@@ -288,7 +309,36 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>,
                 .into(),
         ));
     }
+    let cl = &file.cluster;
+    if let Some(c) = &cl.command {
+        if c.trim().is_empty() || c.chars().any(|c| c.is_control() || c.is_whitespace()) {
+            return Err(bad(
+                "cluster.command",
+                format!("{c:?}: expected one command or path, without spaces (e.g. \"sweep\" or \"/opt/bin/sweep\")"),
+            ));
+        }
+    }
+    if let Some((i, line)) = cl.prologue.iter().enumerate().find(|(_, l)| l.chars().any(char::is_control)) {
+        return Err(bad(
+            &format!("cluster.prologue[{i}]"),
+            format!("{line:?}: expected one line of shell without control characters (give each line as its own string)"),
+        ));
+    }
     Ok((swept, fixed))
+}
+
+/// Longest sweep name, in bytes: it becomes a directory name (at most 255 bytes on Linux) and
+/// the report's title.
+pub const MAX_NAME_BYTES: usize = 100;
+
+/// Unicode format characters (category Cf) that change how text around them displays:
+/// bidirectional controls, zero-width spaces and joiners, the soft hyphen, the byte-order mark.
+fn is_format_char(c: char) -> bool {
+    matches!(
+        c as u32,
+        0x00AD | 0x061C | 0x180E | 0x200B..=0x200F | 0x202A..=0x202E | 0x2060..=0x2064 | 0x2066..=0x206F
+            | 0xFEFF | 0xFFF9..=0xFFFB
+    )
 }
 
 /// Units a value is often written in by mistake, and the factor to the catalogue's unit.

@@ -36,5 +36,8 @@ mod vtk;
 // What a sweep ends with: statistics, convergence and the report.
 mod report;
 
+// What a hostile run found, each defect with its regression test; the answer a sweep ends with.
+mod answer;
+
 // How the code is laid out: the layering of src/ that docs/architecture.md states.
 mod architecture;
