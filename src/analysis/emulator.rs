@@ -326,6 +326,33 @@ impl Emulator {
         (self.y_mean + self.y_scale * mean, self.y_scale * var.sqrt())
     }
 
+    /// The emulator's MFR at `u` without its SE: O(N) rather than O(N²), for many points.
+    pub fn mean(&self, u: &[f64]) -> f64 {
+        let m: f64 = self
+            .x
+            .iter()
+            .zip(&self.alpha)
+            .map(|(p, a)| self.sigma2 * matern52(dist(p, u, &self.theta)) * a)
+            .sum();
+        self.y_mean + self.y_scale * (self.mu + m)
+    }
+
+    /// The prior covariance of the latent MFR at `a` and `b`, in MFR units².
+    pub fn prior_cov(&self, a: &[f64], b: &[f64]) -> f64 {
+        self.y_scale.powi(2) * self.sigma2 * matern52(dist(a, b, &self.theta))
+    }
+
+    /// L⁻¹k(X, u) in MFR units: the posterior covariance of the latent MFR at `a` and `b` is
+    /// `prior_cov(a, b) − whitened(a)·whitened(b)` (what a sequential design updates).
+    pub fn whitened(&self, u: &[f64]) -> Vec<f64> {
+        forward(&self.chol, self.n(), &self.kstar(u)).into_iter().map(|v| v * self.y_scale).collect()
+    }
+
+    /// The fitted nugget in MFR units²: the noise no point reports.
+    pub fn nugget_variance(&self) -> f64 {
+        self.nugget * self.y_scale.powi(2)
+    }
+
     /// Leave-one-out residuals in closed form (hyperparameters held), given the true `y`.
     pub fn loo(&self, y: &[f64], se: &[Option<f64>]) -> CrossValidation {
         let n = self.n();

@@ -4,6 +4,7 @@
 //! Pure functions of numbers and settings: nothing here runs a point, drives a sweep or touches
 //! a sweep directory.
 
+pub mod adapt;
 pub mod convergence;
 pub mod emulator;
 pub mod noise;

@@ -18,7 +18,7 @@ use statrs::statistics::{Data, OrderStatistics, Statistics};
 const CONSTANT_REL: f64 = 1e-12;
 
 /// The four statistics of the thesis plus the moment skewness.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
 pub struct Moments {
     pub n: usize,
     /// Eq. 18: Σx/N. `None` for an empty set.
@@ -117,7 +117,7 @@ pub fn moments(x: &[f64]) -> Moments {
 }
 
 /// A confidence interval; `None` bounds when too few resamples defined the statistic.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
 pub struct Interval {
     pub lo: Option<f64>,
     pub hi: Option<f64>,

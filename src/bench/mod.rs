@@ -1,10 +1,11 @@
 //! Benchmarks behind `sweep bench`: run time against error of the fidelity presets
-//! ([`fidelity`]), the scene's stability edge ([`stability`]), and the contact reference
-//! solver's own stability ([`contact`]).
+//! ([`fidelity`]), the scene's stability edge ([`stability`]), the contact reference
+//! solver's own stability ([`contact`]), and the designs against a known answer ([`designs`]).
 //!
 //! The top of the pipeline beside the command line: a bench may use every stage below it.
 
 pub mod contact;
+pub mod designs;
 pub mod fidelity;
 pub mod stability;
 

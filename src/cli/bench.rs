@@ -57,6 +57,115 @@ pub(super) enum BenchCommand {
     /// DIR/contact-drift.csv, contact-stiffness.csv and contact-timestep.csv and prints the
     /// tables (BENCHMARKS.md "Reference solver stability").
     Contact(BenchContactArgs),
+    /// The designs against a known answer: `sweep adapt` against the LDS and the trapezoid
+    /// lattice, runs needed until the answer is within tolerance of the truth.
+    ///
+    /// The surface is the stand-in engine's model over the sweep file's space, or with
+    /// --replay RESULTS.csv a recorded sweep of that space replayed (an emulator of all its done
+    /// runs; each run its mean plus noise at the SE of the nearest recorded run). The truth: the noiseless surface
+    /// on 20,000 scrambled-Halton points. Targets: mean within 2 %, std within 3 %, skewness and
+    /// kurtosis within 5 % of their scale, the first-order sensitivity ranking the truth's, the
+    /// recommended run's true MFR within one SE of the truth's best. Runs in process (no sweep
+    /// directory) with the functions the sweeps use; prints the tables of BENCHMARKS.md.
+    Designs(DesignsArgs),
+}
+
+#[derive(Args)]
+pub(super) struct DesignsArgs {
+    /// The sweep file whose space is compared (the stand-in model over it, unless --replay).
+    sweep: PathBuf,
+    /// Replay these recorded runs instead: a results.csv of a sweep of this space (columns
+    /// named as its parameters, status, mfr, mfr_se).
+    #[arg(long)]
+    replay: Option<PathBuf>,
+    /// Seeds of the LDS and the adaptive design.
+    #[arg(long, value_delimiter = ',', default_value = "14,15,16")]
+    seeds: Vec<u64>,
+    /// The adaptive design's first batch (default 10 per parameter), batch and max.
+    #[arg(long)]
+    first: Option<usize>,
+    #[arg(long, default_value_t = 20)]
+    batch: usize,
+    #[arg(long, default_value_t = 240)]
+    max: usize,
+    /// The share of each adaptive batch placed for coverage (default: the design's).
+    #[arg(long, default_value_t = demsweep::analysis::adapt::EXPLORE)]
+    explore: f64,
+    /// LDS checkpoints (runs).
+    #[arg(long, value_delimiter = ',', default_value = "40,80,120,160,200,240,400,800,1600,2400")]
+    lds: Vec<usize>,
+    /// LDS checkpoints up to this many runs are also read through the emulator.
+    #[arg(long, default_value_t = 800)]
+    emulate_to: usize,
+    /// Lattice levels (values per parameter).
+    #[arg(long, value_delimiter = ',', default_value = "3,4,5,6,7")]
+    levels: Vec<usize>,
+}
+
+pub(super) fn bench_designs(a: DesignsArgs) -> Result<i32, Error> {
+    use demsweep::bench::designs::{self, Plan, ReplaySurface, StandInSurface, Surface};
+    let sweep = Sweep::load(&a.sweep)?;
+    let surface: Box<dyn Surface> = match &a.replay {
+        Some(csv) => {
+            let (x, y, se) = replay_runs(&sweep, csv)?;
+            let emulator = demsweep::analysis::emulator::Emulator::fit(&x, &y, &se).ok_or_else(|| {
+                Error::input(format!(
+                    "{}: too few done runs to replay (or MFR the same everywhere)",
+                    csv.display()
+                ))
+            })?;
+            let recorded = x.into_iter().zip(se).filter_map(|(u, s)| Some((u, s?))).collect();
+            Box::new(ReplaySurface { emulator, recorded })
+        }
+        None => Box::new(StandInSurface { sweep: sweep.clone() }),
+    };
+    let names: Vec<String> = sweep.names().iter().map(|s| s.to_string()).collect();
+    let plan = Plan {
+        seeds: a.seeds,
+        first: a.first.unwrap_or(10 * names.len()),
+        batch: a.batch.max(1),
+        max: a.max,
+        explore: a.explore,
+        lds: a.lds,
+        emulate_to: a.emulate_to,
+        levels: a.levels,
+    };
+    let truth = designs::truth(surface.as_ref(), &names);
+    let rows = designs::compare(surface.as_ref(), &names, &plan);
+    print!("{}", designs::tables(&truth, &rows));
+    Ok(exit::SUCCESS)
+}
+
+/// Unit points, MFR and SE of a set of runs.
+type Runs = (Vec<Vec<f64>>, Vec<f64>, Vec<Option<f64>>);
+
+/// The done runs (and screened zeros) of a results.csv as unit points, MFR and SE.
+fn replay_runs(sweep: &Sweep, path: &std::path::Path) -> Result<Runs, Error> {
+    let mut r = csv::Reader::from_path(path).map_err(|e| Error::input(format!("{}: {e}", path.display())))?;
+    let h = r.headers().map_err(|e| Error::input(format!("{}: {e}", path.display())))?.clone();
+    let col = |n: &str| {
+        h.iter()
+            .position(|c| c == n)
+            .ok_or_else(|| Error::input(format!("{}: no column `{n}`", path.display())))
+    };
+    let names = sweep.names();
+    let cols: Vec<usize> = names.iter().map(|n| col(n)).collect::<Result<_, _>>()?;
+    let (status, mfr, se) = (col("status")?, col("mfr")?, col("mfr_se")?);
+    let mut out = (Vec::new(), Vec::new(), Vec::new());
+    for rec in r.records() {
+        let rec = rec.map_err(|e| Error::input(format!("{}: {e}", path.display())))?;
+        let y = match &rec[status] {
+            "done" => rec[mfr].parse::<f64>().ok().filter(|v| v.is_finite()),
+            "screened" => Some(0.0),
+            _ => None,
+        };
+        let Some(y) = y else { continue };
+        let values: Vec<f64> = cols.iter().map(|&c| rec[c].parse::<f64>().unwrap_or(f64::NAN)).collect();
+        out.0.push(demsweep::sweep::space::unit_point(sweep, &values));
+        out.1.push(y);
+        out.2.push(rec[se].parse::<f64>().ok().filter(|v| v.is_finite() && *v >= 0.0));
+    }
+    Ok(out)
 }
 
 #[derive(Args)]

@@ -160,6 +160,14 @@ pub(super) fn submit(a: SubmitArgs) -> Result<i32, Error> {
         chain: None,
     };
     let (manifest, _) = demsweep::store::Store::read_manifest(&a.dir)?;
+    if let demsweep::store::DesignRecord::Adapt { .. } = manifest.design {
+        return Err(Error::input(format!(
+            "{}: an adaptive sweep plans each batch from the last one's results, which an array \
+             job cannot do; run `sweep resume {}` inside one job instead",
+            a.dir.display(),
+            a.dir.display()
+        )));
+    }
     let step = match manifest.design {
         demsweep::store::DesignRecord::Lds { step, .. } if !a.all_at_once => Some(step),
         _ => None,

@@ -61,6 +61,17 @@ enum Command {
   sweep lds my.toml --out /scratch/me/lds --plan   # write the directory for `sweep submit`"
     )]
     Lds(sweep::LdsArgs),
+    /// Run a sequential design: a scrambled-Halton first batch, then batches placed where the
+    /// emulator says the MFR statistics are least known, until they are known.
+    ///
+    /// After each batch a Gaussian-process emulator (each run's own SE as its noise) gives the
+    /// four statistics of MFR over the space with 95% intervals from its posterior; the rule
+    /// ([convergence], or the flags below) judges them batch to batch, and once it holds no new
+    /// runs start. The next batch is the set of candidates that most reduces the statistics'
+    /// posterior variance, each over its scale (docs/statistics.md "Adaptive design");
+    /// DIR/batches.csv says why each point was chosen. A seeded adapt with the same results
+    /// plans the same points; `sweep resume DIR` continues it. Ends by writing the report.
+    Adapt(sweep::AdaptArgs),
     /// Finish an interrupted sweep; every completed run is reused.
     ///
     /// Keeps the convergence rule and verdict of DIR/sweep.toml: a converged sweep runs nothing
@@ -209,6 +220,7 @@ pub fn run(cli: Cli) -> Result<i32, Error> {
         Command::Points(a) => point::points(a),
         Command::Lattice(a) => sweep::lattice(a),
         Command::Lds(a) => sweep::lds(a),
+        Command::Adapt(a) => sweep::adapt(a),
         Command::Resume(a) => sweep::resume(a),
         Command::Status(a) => sweep::status(a),
         Command::Unclaim(a) => sweep::unclaim(a),
@@ -225,6 +237,7 @@ pub fn run(cli: Cli) -> Result<i32, Error> {
         Command::Bench(bench::BenchCommand::Stability(a)) => bench::bench_stability(a),
         Command::Bench(bench::BenchCommand::Fidelity(a)) => bench::bench_fidelity(a),
         Command::Bench(bench::BenchCommand::Contact(a)) => bench::bench_contact(a),
+        Command::Bench(bench::BenchCommand::Designs(a)) => bench::bench_designs(a),
     }
 }
 

@@ -8,6 +8,7 @@ use clap::Args;
 use demsweep::analysis::convergence::Criteria;
 use demsweep::analysis::stats::Bootstrap;
 use demsweep::error::{exit, Error};
+use demsweep::run::adapt::AdaptWatch;
 use demsweep::run::{self as driver, Summary, Watch};
 use demsweep::store::DesignRecord;
 use demsweep::sweep::Sweep;
@@ -59,6 +60,32 @@ pub(super) struct LdsArgs {
     /// pending) and run nothing: for `sweep submit` on a cluster, or `sweep resume` later.
     #[arg(long)]
     plan: bool,
+    #[arg(long, help = super::point::FORCE_HELP)]
+    force: bool,
+}
+
+#[derive(Args)]
+pub(super) struct AdaptArgs {
+    /// The sweep file (TOML): parameters, design, convergence rule, scene.
+    sweep: PathBuf,
+    /// Points of the first (scrambled-Halton) batch; default design.adapt.first, else 10 per
+    /// swept parameter.
+    #[arg(long)]
+    first: Option<usize>,
+    /// Points of every later batch; default design.adapt.batch, else the directory's, else --jobs.
+    #[arg(long)]
+    batch: Option<usize>,
+    /// Most points to run; default design.adapt.max. A larger --max on an existing directory
+    /// extends it and judges again past its old extent.
+    #[arg(long)]
+    max: Option<usize>,
+    /// Sweep directory (default: runs/<sweep name>). An existing one is continued.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    #[command(flatten)]
+    convergence: ConvergenceArgs,
+    #[command(flatten)]
+    pool: PoolArgs,
     #[arg(long, help = super::point::FORCE_HELP)]
     force: bool,
 }
@@ -190,6 +217,56 @@ pub(super) fn lds(a: LdsArgs) -> Result<i32, Error> {
     start(sweep, design, a.out, &a.pool, a.plan)
 }
 
+pub(super) fn adapt(a: AdaptArgs) -> Result<i32, Error> {
+    let mut sweep = Sweep::load(&a.sweep)?;
+    check_timestep(&mut sweep, a.force)?;
+    a.convergence.overrides().apply(&mut sweep.file.convergence)?;
+    let opts = run_options(&a.pool, false, false)?;
+    let ad = &sweep.file.design.adapt;
+    let file = a.sweep.display();
+    let source = |flag: &str, key: &str, given: Option<usize>, from_file: usize| match given {
+        Some(v) => (v, flag.to_string()),
+        None => (from_file, format!("design.adapt.{key} in {file}")),
+    };
+    let (first, first_src) = source("--first", "first", a.first, ad.first);
+    let first = if first == 0 && a.first.is_none() { 10 * sweep.dim() } else { first };
+    let (max, max_src) = source("--max", "max", a.max, ad.max);
+    let out = a.out.unwrap_or_else(|| driver::default_out(&sweep));
+    // The batch size is part of the design: an existing directory keeps its own unless told.
+    let existing = demsweep::store::Store::read_manifest(&out).ok().and_then(|(m, _)| match m.design {
+        DesignRecord::Adapt { batch, .. } => Some(batch),
+        _ => None,
+    });
+    let batch = match (a.batch, ad.batch, existing) {
+        (Some(b), ..) => b,
+        (None, b, _) if b > 0 => b,
+        (None, _, Some(b)) => b,
+        _ => opts.jobs,
+    };
+    if first == 0 {
+        return Err(Error::input(format!("{first_src} 0: expected a positive number of points")));
+    }
+    if batch == 0 {
+        return Err(Error::input("--batch 0: expected a positive number of points per batch"));
+    }
+    demsweep::design::lds_size(max).map_err(|e| Error::input(format!("{max_src} {max}: {e}")))?;
+    if max < first {
+        return Err(Error::input(format!(
+            "{max_src} {max} is less than {first_src} {first}: expected max ≥ first; lower the \
+             first batch or raise max"
+        )));
+    }
+    let design = DesignRecord::Adapt { first, batch, max, seed: ad.seed };
+    driver::check_out_dir(&out)?;
+    sweep.file.convergence.min_points = driver::judge_from(&out, &sweep, &design)?;
+    demsweep::sys::process::install_interrupt_handler();
+    let mut watch = AdaptWatch::new(&out, &sweep, Criteria::from_settings(&sweep.file.convergence));
+    let cancel = CancelToken::new();
+    let exec = driver::SweepExecutor::for_sweep(&sweep)?;
+    let summary = driver::adapt::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?;
+    finish(&summary, &sweep)
+}
+
 pub(super) fn start(
     mut sweep: Sweep,
     design: DesignRecord,
@@ -238,10 +315,17 @@ pub(super) fn resume(a: ResumeArgs) -> Result<i32, Error> {
     demsweep::sys::process::install_interrupt_handler();
     // The same rule as the run that made the directory (DIR/sweep.toml), so a converged sweep
     // stays stopped where it converged.
-    let mut watch = Watch::new(Criteria::from_settings(&sweep.file.convergence));
+    let criteria = Criteria::from_settings(&sweep.file.convergence);
     let cancel = CancelToken::new();
     let exec = driver::SweepExecutor::for_sweep(&sweep)?;
-    let summary = driver::resume(&a.dir, &exec, &opts, &mut watch, &cancel)?;
+    let (manifest, _) = demsweep::store::Store::read_manifest(&a.dir)?;
+    let summary = if let DesignRecord::Adapt { .. } = manifest.design {
+        let mut watch = AdaptWatch::new(&a.dir, &sweep, criteria);
+        driver::adapt::run(&a.dir, &exec, &opts, &mut watch, &cancel)?
+    } else {
+        let mut watch = Watch::new(criteria);
+        driver::resume(&a.dir, &exec, &opts, &mut watch, &cancel)?
+    };
     finish(&summary, &sweep)
 }
 

@@ -213,6 +213,12 @@ pub fn first_index(scrambling: Scrambling) -> u64 {
 /// The first `n` points of the `dim`-dimensional Halton sequence with `scrambling`, starting
 /// at [`first_index`]. `seed` is used by `Random` only.
 pub fn halton(dim: usize, n: usize, scrambling: Scrambling, seed: u64) -> super::Points {
+    halton_range(dim, 0, n, scrambling, seed)
+}
+
+/// Points `skip` to `skip + n − 1` of the design [`halton`] starts (its first `skip` points
+/// left out): a later block of the same sequence.
+pub fn halton_range(dim: usize, skip: u64, n: usize, scrambling: Scrambling, seed: u64) -> super::Points {
     let bases = primes(dim);
     let digits: Vec<Digits> = bases
         .iter()
@@ -223,7 +229,7 @@ pub fn halton(dim: usize, n: usize, scrambling: Scrambling, seed: u64) -> super:
             Scrambling::Random => Digits::PerPosition(random_permutations(seed, k, b)),
         })
         .collect();
-    let start = first_index(scrambling);
+    let start = first_index(scrambling) + skip;
     (start..start + n as u64)
         .map(|i| bases.iter().zip(&digits).map(|(&b, d)| d.value(i, b)).collect())
         .collect()

@@ -246,6 +246,11 @@ fn next(a: &Analysis) -> Option<String> {
                     more.join(",")
                 )
             }
+            DesignRecord::Adapt { max, .. } => format!(
+                "raise design.adapt.max: `sweep adapt {dir}/sweep.toml --max {} --out {dir}` keeps the {} points run and adds batches",
+                2 * max,
+                max
+            ),
         }),
         _ => {}
     }

@@ -9,6 +9,7 @@
 //! Not responsible for running anything or for the statistics themselves ([`crate::analysis::stats`],
 //! [`crate::analysis::convergence`], [`crate::analysis::sensitivity`], [`crate::measure::quality`]).
 
+mod adaptive;
 mod advice;
 pub mod answer;
 pub mod emulation;
@@ -337,7 +338,7 @@ pub fn read_points(dir: &Path) -> Result<(Manifest, Sweep, Vec<PointRow>, Screen
 /// Read a sweep directory and analyse it with `criteria`.
 pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Analysis> {
     let (manifest, sweep, points, screen) = read_points(dir)?;
-    let spaces = judge_spaces(&manifest, &points, criteria, boot);
+    let spaces = judge_spaces(dir, &sweep, &manifest, &points, criteria, boot);
     let emulator = emulation::analyse(&sweep, &points, &spaces, criteria);
     let counts = count(&manifest, &points, spaces.len());
     let verdict = verdict(&spaces, &counts, criteria);
@@ -348,8 +349,8 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
     let (x, y): (Vec<Vec<f64>>, Vec<f64>) =
         points.iter().filter_map(|p| p.mfr().map(|m| (p.values.clone(), m))).unzip();
     let sboot = Bootstrap { resamples: boot.resamples.min(500), ..*boot };
-    let sensitivity = sensitivity::ranked(sensitivity::with_intervals(&manifest.parameters, &x, &y, &sboot));
-    let (sensitivity_reliable, sensitivity_note) = sensitivity::reliability(y.len(), &sensitivity);
+    let (sensitivity, sensitivity_reliable, sensitivity_note) =
+        adaptive::sensitivity(&sweep, &manifest, &points, &x, &y, &sboot);
     let mut quality: BTreeMap<&'static str, usize> = Quality::ALL.iter().map(|q| (q.as_str(), 0)).collect();
     for (_, _, q) in &done {
         *quality.entry(q.as_str()).or_default() += 1;
@@ -433,7 +434,19 @@ fn mfr_se(dir: &Path, hash: &str) -> Option<f64> {
 
 /// Statistics, intervals and judgements of the complete spaces, in order, up to the first
 /// space that still has pending points.
-fn judge_spaces(manifest: &Manifest, points: &[PointRow], c: &Criteria, boot: &Bootstrap) -> Vec<SpaceRow> {
+///
+/// An adaptive design is not a uniform sample: its spaces' statistics are the emulator's over
+/// the whole space, with the posterior's intervals ([`crate::analysis::adapt`]), as the sweep
+/// judged them while it ran.
+fn judge_spaces(
+    dir: &Path,
+    sweep: &Sweep,
+    manifest: &Manifest,
+    points: &[PointRow],
+    c: &Criteria,
+    boot: &Bootstrap,
+) -> Vec<SpaceRow> {
+    let adaptive = matches!(manifest.design, DesignRecord::Adapt { .. });
     let mut rows = Vec::new();
     let mut judged: Vec<SpaceStats> = Vec::new();
     for space in &manifest.spaces {
@@ -446,9 +459,13 @@ fn judge_spaces(manifest: &Manifest, points: &[PointRow], c: &Criteria, boot: &B
         let (mfr, w) = convergence::space_values(&values, &all_mfr, c.lattice_weights);
         let se: Vec<Option<f64>> = members.iter().filter(|p| p.mfr().is_some()).map(|p| p.mfr_se).collect();
         let noise = crate::analysis::noise::split(&mfr, &se, w.as_deref());
-        let st = SpaceStats::of(members.len(), &mfr, w.as_deref(), boot);
+        let (st, iv) = if adaptive {
+            adaptive::emulated_space(dir, sweep, &space.label, &members)
+        } else {
+            let iv = crate::analysis::weights::bootstrap(&mfr, w.as_deref(), boot);
+            (SpaceStats::of(members.len(), &mfr, w.as_deref(), boot), iv)
+        };
         let m = st.moments;
-        let iv = crate::analysis::weights::bootstrap(&mfr, w.as_deref(), boot);
         judged.push(st);
         rows.push(SpaceRow {
             label: space.label.clone(),
@@ -457,7 +474,7 @@ fn judge_spaces(manifest: &Manifest, points: &[PointRow], c: &Criteria, boot: &B
             done: mfr.len(),
             failed: members.iter().filter(|p| matches!(p.state, PointState::Failed { .. })).count(),
             statistics: m,
-            weights: if w.is_some() { "trapezoid" } else { "equal" },
+            weights: adaptive::weights_label(adaptive, w.is_some()),
             equal_weights: w.as_ref().map(|_| stats::moments(&mfr)),
             noise,
             intervals: STATISTICS.iter().zip(iv).map(|(s, i)| (s.name(), i)).collect(),
@@ -505,6 +522,7 @@ fn count(manifest: &Manifest, points: &[PointRow], complete: usize) -> SummaryCo
 /// weights would move the mean and the std.
 pub fn weights_sentence(s: &SpaceRow) -> String {
     match &s.equal_weights {
+        None if s.weights == adaptive::WEIGHTS => adaptive::weights_sentence(s),
         None => format!("{}: every point weighted equally.", s.label),
         Some(eq) => {
             let rel = |a: Option<f64>, b: Option<f64>| match (a, b) {

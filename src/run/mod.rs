@@ -22,6 +22,7 @@
 //! Not responsible for running one point (the [`Executor`]), for scheduling ([`crate::run::pool`]) or
 //! for the directory's formats ([`crate::store`]); no statistics here.
 
+pub mod adapt;
 pub mod cluster;
 mod executor;
 #[cfg(any(test, feature = "test-support"))]
@@ -174,10 +175,19 @@ fn create<E: Executor>(
     // Created, or checked and extended, under the directory's lock: a second `sweep` on the
     // same new directory waits, then finds the manifest and shares the work.
     let store = Store::open(out);
-    store.write_manifest_checked(&toml, &manifest, |old| match old {
-        Some((old, old_toml)) => check_extension(out, &old, &old_toml, &manifest, &toml),
-        None => Ok(()),
+    let in_force = store.update_manifest(|old| -> Result<Option<(Manifest, String)>> {
+        let Some((old, old_toml)) = old else {
+            return Ok(Some((manifest.clone(), toml.clone())));
+        };
+        check_extension(out, &old, &old_toml, &manifest, &toml)?;
+        if old.points.len() > manifest.points.len() {
+            // An adaptive sweep's later batches, which its design alone does not give.
+            Ok(Some((Manifest { design: manifest.design.clone(), ..old }, toml.clone())))
+        } else {
+            Ok(Some((manifest.clone(), toml.clone())))
+        }
     })?;
+    let manifest = in_force.map_or(manifest, |(m, _)| m);
     Ok((store, manifest, jobs))
 }
 

@@ -132,18 +132,44 @@ pub fn plan_with_progress<E: Executor>(
             ends.push(*max);
             ends.into_iter().map(|n| (format!("lds {n}"), all[..n].to_vec())).collect()
         }
+        // The design alone fixes only the first batch; the driver plans the others from the
+        // results ([`crate::run::adapt`]).
+        DesignRecord::Adapt { first, max, seed, .. } => {
+            if *first == 0 || *max > MAX_POINTS || max < first {
+                return Err(Error::input(format!(
+                    "adapt first {first}, max {max}: expected 1 ≤ first ≤ max ≤ {MAX_POINTS}"
+                )));
+            }
+            vec![(format!("adapt {first}"), halton(dim, *first, crate::sweep::Scrambling::Random, *seed))]
+        }
     };
+    let spaces = spaces
+        .into_iter()
+        .map(|(label, unit)| {
+            (label, unit.iter().map(|u| crate::sweep::space::scale_point(sweep, u)).collect())
+        })
+        .collect();
+    plan_values(exec, sweep, spaces, cancel, progress)
+}
+
+/// [`plan_with_progress`] of spaces given as lists of points in the sweep's units.
+pub(super) fn plan_values<E: Executor>(
+    exec: &E,
+    sweep: &Sweep,
+    spaces: Vec<(String, Vec<Vec<f64>>)>,
+    cancel: &CancelToken,
+    progress: ProgressMode,
+) -> Result<SweepPlan<E::Job>> {
     // Distinct values first (LDS prefixes and nested lattices repeat points), each prepared
     // once, on every core: rendering and hashing 10,000 decks takes tens of seconds on one.
     let mut distinct: Vec<Vec<f64>> = Vec::new();
     let mut by_bits: HashMap<Vec<u64>, usize> = HashMap::new();
     let space_values: Vec<(String, Vec<usize>)> = spaces
         .into_iter()
-        .map(|(label, unit)| {
-            let members = unit
-                .iter()
-                .map(|u| {
-                    let values = crate::sweep::space::scale_point(sweep, u);
+        .map(|(label, points)| {
+            let members = points
+                .into_iter()
+                .map(|values| {
                     let bits = values.iter().map(|v| v.to_bits()).collect();
                     *by_bits.entry(bits).or_insert_with(|| {
                         distinct.push(values);
@@ -194,6 +220,12 @@ pub fn resolved_toml(sweep: &Sweep, design: &DesignRecord) -> Result<String> {
             f.design.lds.max = *max;
             f.design.lds.scrambling = *scrambling;
             f.design.lds.seed = *seed;
+        }
+        DesignRecord::Adapt { first, batch, max, seed } => {
+            f.design.adapt.first = *first;
+            f.design.adapt.batch = *batch;
+            f.design.adapt.max = *max;
+            f.design.adapt.seed = *seed;
         }
     }
     let body = toml::to_string(&f).map_err(|e| Error::Internal(format!("resolved sweep: {e}")))?;
@@ -312,8 +344,10 @@ pub(super) fn check_extension(
             diff.join("; ")
         )));
     }
-    let prefix = old.points.len() <= new.points.len()
-        && old.points.iter().zip(&new.points).all(|(a, b)| a.hash == b.hash);
+    // An adaptive design is planned a batch at a time: its first batch starts the points
+    // already there.
+    let grows = old.points.len() <= new.points.len() || matches!(new.design, DesignRecord::Adapt { .. });
+    let prefix = grows && old.points.iter().zip(&new.points).all(|(a, b)| a.hash == b.hash);
     if !prefix {
         return Err(Error::input(format!(
             "{d}: its {} points are not the first points of this design ({}); a design can \
@@ -329,6 +363,7 @@ fn design_kind(d: &DesignRecord) -> &'static str {
     match d {
         DesignRecord::Lattice { .. } => "lattice",
         DesignRecord::Lds { .. } => "lds",
+        DesignRecord::Adapt { .. } => "adapt",
     }
 }
 
@@ -338,6 +373,9 @@ pub(super) fn design_label(d: &DesignRecord) -> String {
             format!("lattice levels {}", levels.iter().map(|l| l.to_string()).collect::<Vec<_>>().join(","))
         }
         DesignRecord::Lds { step, max, .. } => format!("lds step {step}, max {max}"),
+        DesignRecord::Adapt { first, batch, max, .. } => {
+            format!("adapt first {first}, batch {batch}, max {max}")
+        }
     }
 }
 
@@ -381,7 +419,8 @@ pub fn judge_from(out: &Path, sweep: &Sweep, design: &DesignRecord) -> Result<us
     let old_min =
         Sweep::parse(&old_toml, &out.join("sweep.toml")).map_or(0, |s| s.file.convergence.min_points);
     let extends = match (&old.design, design) {
-        (DesignRecord::Lds { max: a, .. }, DesignRecord::Lds { max: b, .. }) => b > a,
+        (DesignRecord::Lds { max: a, .. }, DesignRecord::Lds { max: b, .. })
+        | (DesignRecord::Adapt { max: a, .. }, DesignRecord::Adapt { max: b, .. }) => b > a,
         (DesignRecord::Lattice { levels: a }, DesignRecord::Lattice { levels: b }) => {
             b.len() > a.len() && b.starts_with(a)
         }

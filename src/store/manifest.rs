@@ -29,19 +29,36 @@ impl Store {
         manifest: &Manifest,
         check: impl FnOnce(Option<(Manifest, String)>) -> Result<(), E>,
     ) -> Result<(), E> {
+        self.update_manifest(|old| {
+            check(old)?;
+            Ok(Some((manifest.clone(), sweep_toml.to_string())))
+        })
+        .map(drop)
+    }
+
+    /// Under the directory's lock (creating the directory if needed): `decide` sees the
+    /// manifest and `sweep.toml` there (`None` for a new directory) and returns what to write
+    /// instead (`None`: leave them). Returns the manifest in force afterwards, if any.
+    pub fn update_manifest<E: From<StoreError>>(
+        &self,
+        decide: impl FnOnce(Option<(Manifest, String)>) -> Result<Option<(Manifest, String)>, E>,
+    ) -> Result<Option<(Manifest, String)>, E> {
         fs::create_dir_all(&self.dir).map_err(io(&self.dir))?;
         let _lock = DirLock::take(&self.dir.join(LOCK))?;
         let path = Self::manifest_path(&self.dir);
         let old = if path.exists() { Some(Self::read_manifest(&self.dir)?) } else { None };
-        check(old)?;
+        let had = old.clone();
+        let Some((manifest, sweep_toml)) = decide(old)? else {
+            return Ok(had);
+        };
         let runs = self.dir.join("runs");
         fs::create_dir_all(&runs).map_err(io(&runs))?;
         self.joblog_header()?;
         let toml_path = self.dir.join("sweep.toml");
         crate::sys::atomic::write(&toml_path, sweep_toml.as_bytes()).map_err(io(&toml_path))?;
-        let written = Written { manifest, seals: seals(manifest), sweep_toml };
+        let written = Written { manifest: &manifest, seals: seals(&manifest), sweep_toml: &sweep_toml };
         crate::sys::atomic::write_json(&path, &written).map_err(io(&path))?;
-        Ok(())
+        Ok(Some((manifest, sweep_toml)))
     }
 
     /// `key: recorded → now` for every setting of `DIR/sweep.toml` that differs from the copy
@@ -201,14 +218,29 @@ pub const MANIFEST_FORMAT: u32 = 1;
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(tag = "kind", rename_all = "kebab-case")]
 pub enum DesignRecord {
-    Lattice { levels: Vec<usize> },
-    Lds { step: usize, max: usize, scrambling: crate::sweep::Scrambling, seed: u64 },
+    Lattice {
+        levels: Vec<usize>,
+    },
+    Lds {
+        step: usize,
+        max: usize,
+        scrambling: crate::sweep::Scrambling,
+        seed: u64,
+    },
+    /// `sweep adapt`: a scrambled-Halton first batch, then batches chosen from the results so
+    /// far; the manifest grows by one space per batch.
+    Adapt {
+        first: usize,
+        batch: usize,
+        max: usize,
+        seed: u64,
+    },
 }
 
 /// One nested space: a lattice level or an LDS prefix.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct SpaceRecord {
-    /// `"lattice 5"`, `"lds 400"`.
+    /// `"lattice 5"`, `"lds 400"`, `"adapt 48"`.
     pub label: String,
     /// Indices into [`Manifest::points`].
     pub points: Vec<usize>,
@@ -285,6 +317,9 @@ impl Manifest {
         match &self.design {
             DesignRecord::Lds { step, max, .. } if *step == 0 || max < step => {
                 Err(format!("design: lds step {step}, max {max}: expected 1 ≤ step ≤ max"))
+            }
+            DesignRecord::Adapt { first, batch, max, .. } if *first == 0 || *batch == 0 || max < first => {
+                Err(format!("design: adapt first {first}, batch {batch}, max {max}: expected 1 ≤ first ≤ max, batch ≥ 1"))
             }
             DesignRecord::Lattice { levels } if levels.iter().any(|&l| l < 2) => {
                 Err(format!("design: lattice levels {levels:?}: expected each at least 2"))

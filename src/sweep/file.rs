@@ -78,11 +78,38 @@ pub struct DesignSettings {
     /// Lattice levels: n values per dimension, run in order (`sweep lattice`).
     pub lattice_levels: Vec<usize>,
     pub lds: LdsSettings,
+    pub adapt: AdaptSettings,
 }
 
 impl Default for DesignSettings {
     fn default() -> Self {
-        DesignSettings { lattice_levels: vec![5, 6, 7, 9, 10], lds: LdsSettings::default() }
+        DesignSettings {
+            lattice_levels: vec![5, 6, 7, 9, 10],
+            lds: LdsSettings::default(),
+            adapt: AdaptSettings::default(),
+        }
+    }
+}
+
+/// `[design.adapt]`: the sequential design of `sweep adapt` (docs/statistics.md "Adaptive
+/// design").
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct AdaptSettings {
+    /// Points of the first batch, scrambled Halton; 0 means 10 per swept parameter (the
+    /// "10·d" starting design of Loeppky, Sacks & Welch 2009).
+    pub first: usize,
+    /// Points of every later batch; 0 means the job slots (`--jobs`).
+    pub batch: usize,
+    /// Most points to run.
+    pub max: usize,
+    /// Seed of the first batch's scrambling, of the candidates and of the emulator's draws.
+    pub seed: u64,
+}
+
+impl Default for AdaptSettings {
+    fn default() -> Self {
+        AdaptSettings { first: 0, batch: 0, max: 240, seed: DEFAULT_SEED }
     }
 }
 

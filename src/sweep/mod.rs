@@ -12,7 +12,9 @@ mod validate;
 pub use crate::analysis::convergence::ConvergenceSettings;
 pub use crate::design::halton::Scrambling;
 pub use crate::scene::settings::{SceneSettings, SizeDistributionSpec, FIDELITIES, KNOBS};
-pub use file::{DesignSettings, LdsSettings, RunSettings, Scale, SweepFile, DEFAULT_SEED, SWEEP_FORMAT};
+pub use file::{
+    AdaptSettings, DesignSettings, LdsSettings, RunSettings, Scale, SweepFile, DEFAULT_SEED, SWEEP_FORMAT,
+};
 use validate::{io_reason, toml_error, validate};
 
 use std::path::{Path, PathBuf};

@@ -197,7 +197,9 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>,
             format!("{}: expected at least 2 values per dimension", d.lattice_levels[i]),
         ));
     }
-    for (key, n) in [("design.lds.step", d.lds.step), ("design.lds.max", d.lds.max)] {
+    for (key, n) in
+        [("design.lds.step", d.lds.step), ("design.lds.max", d.lds.max), ("design.adapt.max", d.adapt.max)]
+    {
         crate::design::lds_size(n).map_err(|e| bad(key, format!("{n}: {e}")))?;
     }
     let c = &file.convergence;

@@ -13,7 +13,8 @@ mod design;
 mod input;
 
 // Running a sweep: the pool, failed runs, interruption and resume, several processes on one
-// directory, what the directory holds, the engine, the screen, clusters.
+// directory, what the directory holds, the engine, the screen, clusters, the adaptive design.
+mod adapt;
 mod cluster;
 mod concurrency;
 mod engine;

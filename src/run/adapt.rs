@@ -1,0 +1,370 @@
+//! `sweep adapt`: a sequential design, run batch by batch in one sweep directory.
+//!
+//! The first batch is `design.adapt.first` scrambled-Halton points. Each later batch is planned
+//! from the results so far by the criterion of [`crate::analysis::adapt`] and appended to the
+//! manifest as one more space (`adapt N`: the first N points), so every directory tool —
+//! `status`, `report`, `predict`, the joblog, `resume` — reads it as it reads an LDS sweep.
+//!
+//! The loop: run the unfinished points of the manifest ([`super::resume`], with the
+//! [`AdaptWatch`] as the space hook, which judges each batch by the emulator's statistics);
+//! stop if the rule holds, the sweep was interrupted, a point is still unfinished, or `max`
+//! points are planned; else plan the next batch and go round.
+//!
+//! Several processes may share one directory. A batch is a pure function of the points and
+//! results before it, so two processes that finish a batch plan the same next one; the first
+//! to take the directory's lock appends it, and the other finds it there and runs its share of
+//! it (the claims keep every run to one process). A resume re-runs nothing: it judges the
+//! finished batches again (the same numbers) and goes on where the directory stands.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+
+use super::{RunOptions, Summary};
+use crate::analysis::adapt::{self as criterion, Choice};
+use crate::analysis::convergence::{judge, Criteria, SpaceStats};
+use crate::analysis::emulator::{self, Emulator};
+use crate::analysis::stats::{Interval, Moments};
+use crate::error::{Error, Result};
+use crate::run::pool::{Executor, Flow};
+use crate::run::SpaceHook;
+use crate::store::{DesignRecord, Manifest, PointRecord, PointStatus, SpaceRecord, Store};
+use crate::sweep::Sweep;
+use crate::sys::process::CancelToken;
+
+/// Most points an emulator conditions on (as the report's: past it a seeded random subset).
+pub const FIT_MAX: usize = 800;
+/// Seed of the emulator's statistics draws (the report's).
+pub const STATS_SEED: u64 = 14;
+
+/// `batches.csv`: why each planned point went where it went.
+pub const BATCHES: &str = "batches.csv";
+
+/// The points of a space the emulator is fitted to — done runs and screened zeros, in
+/// manifest order, thinned to [`FIT_MAX`] — as unit coordinates, MFR and SE.
+pub fn fit_data(
+    sweep: &Sweep,
+    points: &[(&PointRecord, &PointStatus)],
+) -> (Vec<Vec<f64>>, Vec<f64>, Vec<Option<f64>>) {
+    let usable: Vec<(&PointRecord, f64, Option<f64>)> = points
+        .iter()
+        .filter_map(|(p, s)| match s {
+            PointStatus::Done(r) if r.mfr.is_finite() => {
+                Some((*p, r.mfr, r.mfr_se.filter(|v| v.is_finite())))
+            }
+            PointStatus::Screened => Some((*p, 0.0, None)),
+            _ => None,
+        })
+        .collect();
+    let picked = emulator::subset(usable.len(), FIT_MAX, 2);
+    let mut out = (Vec::new(), Vec::new(), Vec::new());
+    for i in picked {
+        let (p, y, se) = usable[i];
+        out.0.push(crate::sweep::space::unit_point(sweep, &p.values));
+        out.1.push(y);
+        out.2.push(se);
+    }
+    out
+}
+
+/// `adapt-stats.json`: the emulator's statistics of each judged space, so that a resume and
+/// the report read them instead of fitting every space's emulator again. Only a cache: each
+/// entry holds a digest of the points and results it came from and is used only when they are
+/// the same.
+pub const STATS_CACHE: &str = "adapt-stats.json";
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct Cached {
+    digest: String,
+    moments: Moments,
+    intervals: [Interval; 4],
+}
+
+/// The digest of an emulator's inputs (and of the settings of its statistics).
+fn digest(x: &[Vec<f64>], y: &[f64], se: &[Option<f64>]) -> String {
+    let mut h = Sha256::new();
+    h.update(format!("{} {} {} {}\n", criterion::DRAWS, criterion::PATHS, STATS_SEED, emulator::FIT_POINTS));
+    for ((u, v), s) in x.iter().zip(y).zip(se) {
+        for c in u.iter().chain([v]) {
+            h.update(c.to_bits().to_le_bytes());
+        }
+        h.update(s.map_or([0xff; 8], |s| s.to_bits().to_le_bytes()));
+    }
+    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+}
+
+fn read_cache(dir: &Path) -> BTreeMap<String, Cached> {
+    std::fs::read_to_string(dir.join(STATS_CACHE))
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok())
+        .unwrap_or_default()
+}
+
+/// The emulator's statistics of a space (`n` points) whose usable points are `x`, `y`, `se`,
+/// and their posterior intervals: from `DIR/adapt-stats.json` when it holds them for these
+/// inputs, else computed (and the emulator returned) and recorded there.
+pub fn space_statistics(
+    dir: &Path,
+    label: &str,
+    n: usize,
+    x: &[Vec<f64>],
+    y: &[f64],
+    se: &[Option<f64>],
+) -> (SpaceStats, [Interval; 4], Option<Emulator>) {
+    let key = digest(x, y, se);
+    if let Some(c) = read_cache(dir).get(label).filter(|c| c.digest == key) {
+        let noise = c.intervals.map(|i| i.lo.zip(i.hi).map(|(lo, hi)| (hi - lo) / 2.0));
+        return (SpaceStats { n, moments: c.moments, noise }, c.intervals, None);
+    }
+    let em = Emulator::fit(x, y, se);
+    let (st, e) = criterion::space_stats(n, em.as_ref(), STATS_SEED);
+    let intervals = e.map_or([Interval::UNDEFINED; 4], |e| e.intervals);
+    // Another process may write it meanwhile: the last writer wins, and a lost entry is only
+    // computed again.
+    let mut cache = read_cache(dir);
+    cache.insert(label.to_string(), Cached { digest: key, moments: st.moments, intervals });
+    if let Ok(text) = serde_json::to_string(&cache) {
+        let _ = crate::sys::atomic::write(&dir.join(STATS_CACHE), text.as_bytes());
+    }
+    (st, intervals, em)
+}
+
+/// The rule applied to an adaptive sweep: the [`SpaceHook`] that judges each batch by the
+/// emulator's statistics of the space, and keeps the last emulator for planning the next batch.
+pub struct AdaptWatch {
+    dir: PathBuf,
+    sweep: Sweep,
+    criteria: Criteria,
+    spaces: Vec<SpaceStats>,
+    labels: Vec<String>,
+    /// The space the sweep converged at, once it has.
+    pub converged_at: Option<(String, usize)>,
+    /// The last judged space's label, its emulator if this process fitted it, and the points
+    /// it is fitted to.
+    last: Option<(String, Option<Emulator>, Fit)>,
+}
+
+/// Unit points, MFR and SE of the points an emulator is fitted to.
+type Fit = (Vec<Vec<f64>>, Vec<f64>, Vec<Option<f64>>);
+
+impl AdaptWatch {
+    /// The watch of the adaptive sweep in `dir`.
+    pub fn new(dir: &Path, sweep: &Sweep, criteria: Criteria) -> AdaptWatch {
+        AdaptWatch {
+            dir: dir.to_path_buf(),
+            sweep: sweep.clone(),
+            criteria,
+            spaces: Vec::new(),
+            labels: Vec::new(),
+            converged_at: None,
+            last: None,
+        }
+    }
+}
+
+impl SpaceHook for AdaptWatch {
+    fn space_complete(&mut self, space: &SpaceRecord, points: &[(&PointRecord, &PointStatus)]) -> Flow {
+        // A resume or a later batch fires the spaces judged before again: the same points and
+        // results, so the same numbers.
+        let k = match self.labels.iter().position(|l| *l == space.label) {
+            Some(k) => k,
+            None => {
+                let (x, y, se) = fit_data(&self.sweep, points);
+                let (st, _, em) = space_statistics(&self.dir, &space.label, points.len(), &x, &y, &se);
+                self.spaces.push(st);
+                self.labels.push(space.label.clone());
+                self.last = Some((space.label.clone(), em, (x, y, se)));
+                self.spaces.len() - 1
+            }
+        };
+        match judge(&self.spaces[..=k], &self.criteria).last() {
+            Some(j) if j.converged => {
+                self.converged_at = Some((space.label.clone(), points.len()));
+                Flow::Drain
+            }
+            _ => Flow::Continue,
+        }
+    }
+}
+
+/// `sweep adapt SWEEP`: create the directory with the first batch (or check an existing one
+/// and take its batches as they are), then run it as [`run`] does.
+pub fn start<E: Executor>(
+    sweep: &Sweep,
+    design: DesignRecord,
+    out: &Path,
+    exec: &E,
+    opts: &RunOptions,
+    watch: &mut AdaptWatch,
+    cancel: &CancelToken,
+) -> Result<Summary> {
+    super::create(sweep, design, out, exec, opts.progress, cancel)?;
+    run(out, exec, opts, watch, cancel)
+}
+
+/// Run an adaptive sweep directory until the rule holds, `max` points have run, or it is
+/// interrupted: batch by batch, planning each from the results before it.
+pub fn run<E: Executor>(
+    dir: &Path,
+    exec: &E,
+    opts: &RunOptions,
+    watch: &mut AdaptWatch,
+    cancel: &CancelToken,
+) -> Result<Summary> {
+    let mut ran = 0;
+    let mut reused = None;
+    let mut before: Option<Summary> = None;
+    loop {
+        let mut s = match super::resume(dir, exec, opts, watch, cancel) {
+            // Interrupted while preparing the next batch's runs: the sweep as it stood.
+            Err(Error::Interrupted) if before.is_some() => {
+                let mut s = before.take().expect("checked");
+                s.interrupted = true;
+                return Ok(s);
+            }
+            r => r?,
+        };
+        ran += s.ran;
+        let reused_first = *reused.get_or_insert(s.reused);
+        let stop =
+            s.interrupted || s.stopped_after.is_some() || s.pending > 0 || watch.converged_at.is_some();
+        if stop || !plan_next(dir, exec, watch, s.points)? {
+            s.ran = ran;
+            s.reused = reused_first;
+            return Ok(s);
+        }
+        s.ran = ran;
+        s.reused = reused_first;
+        before = Some(s);
+    }
+}
+
+/// Append the next batch to the manifest, planned from `watch`'s last emulator (`ran`: the
+/// points of the manifest just run). `true` when there are new points to run, planned here or
+/// by another process meanwhile; `false` when `max` is reached or the last space was not
+/// judged (unfinished).
+fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &AdaptWatch, ran: usize) -> Result<bool> {
+    let (manifest, toml) = Store::read_manifest(dir)?;
+    if manifest.points.len() > ran {
+        return Ok(true);
+    }
+    let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
+    let DesignRecord::Adapt { batch, max, seed, .. } = manifest.design else {
+        return Err(Error::input(format!("{}: not an adaptive sweep", dir.display())));
+    };
+    let Some(last) = manifest.spaces.last() else { return Ok(false) };
+    let Some((label, em, (x, y, se))) = watch.last.as_ref().filter(|(l, ..)| *l == last.label) else {
+        return Ok(false);
+    };
+    // Judged from the cache: fitted now (the same inputs, so the same emulator).
+    let fitted;
+    let em = match em {
+        Some(em) => Some(em),
+        None => {
+            fitted = Emulator::fit(x, y, se);
+            fitted.as_ref()
+        }
+    };
+    let size = batch.min(max.saturating_sub(manifest.points.len()));
+    if size == 0 {
+        return Ok(false);
+    }
+    let k = manifest.spaces.len() - 1;
+    let cands = criterion::candidates(sweep.dim(), k, seed);
+    let (chosen, j_before) = match em.and_then(|em| {
+        let noise = criterion::new_run_noise(em, se);
+        let refs = criterion::reference(sweep.dim(), seed);
+        criterion::next_batch(
+            em,
+            noise,
+            &cands,
+            &refs,
+            x,
+            size,
+            criterion::explore_count(size, criterion::EXPLORE),
+        )
+    }) {
+        Some(c) => c,
+        // No emulator yet (too few done points, or MFR the same everywhere): the candidates in
+        // their quasi-random order, which fill the space.
+        None => (
+            cands[..size.min(cands.len())]
+                .iter()
+                .map(|u| Choice { point: u.clone(), mfr: f64::NAN, se: f64::NAN, gain: 0.0 })
+                .collect(),
+            f64::NAN,
+        ),
+    };
+    let values: Vec<Vec<f64>> =
+        chosen.iter().map(|c| crate::sweep::space::scale_point(&sweep, &c.point)).collect();
+    let jobs: Vec<E::Job> = values.iter().map(|v| exec.prepare(v)).collect::<Result<_>>()?;
+    let store = Store::open(dir);
+    let base = manifest.points.len();
+    let mut appended = false;
+    store.update_manifest(|now: Option<(Manifest, String)>| -> Result<Option<(Manifest, String)>> {
+        let Some((mut m, t)) = now else { return Ok(None) };
+        // Another process planned this batch first: run its.
+        if m.spaces.len() != manifest.spaces.len() || m.points.len() != base {
+            appended = true;
+            return Ok(None);
+        }
+        let mut rows = Vec::new();
+        for ((values, job), c) in values.iter().zip(&jobs).zip(&chosen) {
+            let hash = exec.hash(job);
+            if m.points.iter().any(|p| p.hash == hash) {
+                continue;
+            }
+            let index = m.points.len();
+            let closed = sweep.file.run.screen && exec.closed(job);
+            m.points.push(PointRecord { index, values: values.clone(), hash: hash.to_string(), closed });
+            rows.push((index, c));
+        }
+        if rows.is_empty() {
+            return Ok(None);
+        }
+        let n = m.points.len();
+        m.spaces.push(SpaceRecord { label: format!("adapt {n}"), points: (0..n).collect() });
+        write_batches(dir, &sweep, label, k + 1, j_before, &rows)?;
+        appended = true;
+        Ok(Some((m, t)))
+    })?;
+    Ok(appended)
+}
+
+/// Append the rows of one batch to `DIR/batches.csv` (written whole, atomically, under the
+/// directory's lock): each planned point, the emulator's MFR and SE there before the batch, and
+/// the share of the criterion it was expected to remove.
+fn write_batches(
+    dir: &Path,
+    sweep: &Sweep,
+    from: &str,
+    batch: usize,
+    j_before: f64,
+    rows: &[(usize, &Choice)],
+) -> Result<()> {
+    let path = dir.join(BATCHES);
+    let mut text = std::fs::read_to_string(&path).unwrap_or_default();
+    if text.is_empty() {
+        let names: Vec<&str> = sweep.swept.iter().map(|p| p.name.as_str()).collect();
+        text = format!(
+            "batch,index,planned_from,criterion_before,gain,emulator_mfr,emulator_se,{}\n",
+            names.join(",")
+        );
+    }
+    let num = |v: f64| if v.is_finite() { format!("{v}") } else { String::new() };
+    for (index, c) in rows {
+        let values = crate::sweep::space::scale_point(sweep, &c.point);
+        text.push_str(&format!(
+            "{batch},{index},{from},{},{},{},{},{}\n",
+            num(j_before),
+            num(c.gain),
+            num(c.mfr),
+            num(c.se),
+            values.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(",")
+        ));
+    }
+    crate::sys::atomic::write(&path, text.as_bytes())
+        .map_err(|e| Error::Internal(format!("{}: {e}", path.display())))
+}
