@@ -9,10 +9,11 @@
 use crate::measure::frame::Frame;
 use crate::outcome::RunResult;
 
-/// Highest possible MFR. MFR is the packing fraction of the spread layer over the gap height,
-/// so it cannot exceed the densest packing of equal spheres, π/√18 ≈ 0.7405
-/// (Kepler; random close packing is ≈ 0.64).
-pub const MFR_MAX: f64 = 0.74;
+/// Highest possible packing of a layer: the densest packing of equal spheres, π/√18 ≈ 0.7405
+/// (Kepler; random close packing is ≈ 0.64). The layer's packing is bounded by it; MFR (the
+/// deposit over the gap alone) is bounded by it times layer_thickness / gap, since on a rough
+/// substrate the deposit also fills the pockets below the tops.
+pub const PACKING_MAX: f64 = 0.74;
 
 /// Highest possible |v_x| of a particle, in multiples of the blade speed. The blade pushes the
 /// heap at its own speed; grains thrown ahead of it move at a few times that at most, and a run
@@ -24,11 +25,11 @@ fn bad(what: &str, v: f64, expected: &str) -> String {
     format!("{what} = {v}: expected {expected}")
 }
 
-fn check_mfr(what: &str, v: f64, lo: f64) -> Result<(), String> {
-    if v.is_finite() && (lo..=MFR_MAX).contains(&v) {
+fn check_within(what: &str, v: f64, hi: f64) -> Result<(), String> {
+    if v.is_finite() && (0.0..=hi).contains(&v) {
         Ok(())
     } else {
-        Err(bad(what, v, &format!("a finite number in [{lo}, {MFR_MAX}]")))
+        Err(bad(what, v, &format!("a finite number in [0, {}]", crate::scene::plausible::round_to(hi, 4))))
     }
 }
 
@@ -36,15 +37,26 @@ fn vx_limit(blade_speed: f64) -> f64 {
     VX_MAX_BLADE_SPEEDS * blade_speed.abs()
 }
 
-/// Every number of a result finite and possible: 0 ≤ MFR ≤ [`MFR_MAX`] (the flux and window
-/// MFRs, net counts, within ±[`MFR_MAX`]), each v_x within [`VX_MAX_BLADE_SPEEDS`] blade speeds,
+/// Every number of a result finite and possible: the layer's packing at most [`PACKING_MAX`],
+/// 0 ≤ MFR ≤ [`PACKING_MAX`] × layer_thickness / gap (the flux and window MFRs, net counts,
+/// within ± that), each v_x within [`VX_MAX_BLADE_SPEEDS`] blade speeds,
 /// the p-value in [0, 1], counts and times consistent.
 pub fn check_result(r: &RunResult) -> Result<(), String> {
-    check_mfr("mfr", r.mfr, 0.0)?;
-    check_mfr("mfr_flux", r.mfr_flux.abs(), 0.0).map_err(|_| bad("mfr_flux", r.mfr_flux, "within ±0.74"))?;
+    let gap = r.parameters.get("gap").map(|g| g * 1e-3);
+    let thicker = match (r.layer_thickness, gap) {
+        (Some(t), Some(g)) if t.is_finite() && g > 0.0 && t >= g => t / g,
+        _ => 1.0,
+    };
+    if let Some(p) = r.layer_packing {
+        check_within("layer_packing", p, PACKING_MAX)?;
+    }
+    let mfr_max = PACKING_MAX * thicker;
+    let within = format!("within ±{}", crate::scene::plausible::round_to(mfr_max, 4));
+    check_within("mfr", r.mfr, mfr_max)?;
+    check_within("mfr_flux", r.mfr_flux.abs(), mfr_max).map_err(|_| bad("mfr_flux", r.mfr_flux, &within))?;
     for (i, w) in r.mfr_windows.iter().enumerate() {
-        check_mfr(&format!("mfr_windows[{i}]"), w.abs(), 0.0)
-            .map_err(|_| bad(&format!("mfr_windows[{i}]"), *w, "within ±0.74"))?;
+        check_within(&format!("mfr_windows[{i}]"), w.abs(), mfr_max)
+            .map_err(|_| bad(&format!("mfr_windows[{i}]"), *w, &within))?;
     }
     if !(r.steady_p.is_finite() && (0.0..=1.0).contains(&r.steady_p)) {
         return Err(bad("steady_p", r.steady_p, "a p-value in [0, 1]"));

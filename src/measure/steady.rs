@@ -45,6 +45,8 @@ pub struct Block {
     /// Mass on the strip behind the blade at the block's end, kg.
     pub strip: f64,
     pub heap: u64,
+    /// Mass of the heap at the block's end, kg (0 in a log that does not print it).
+    pub heap_mass: f64,
 }
 
 /// The steady-state answers of a conveyor run.
@@ -84,7 +86,8 @@ pub fn parse_log(log: &str) -> Result<(Vec<Block>, String), SteadyError> {
             let num = |key: &str| field(key).and_then(|v| v.parse::<f64>().ok());
             match (num("step"), num("gone"), num("strip"), num("heap")) {
                 (Some(step), Some(gone), Some(strip), Some(heap)) => {
-                    blocks.push(Block { step: step as u64, gone, strip, heap: heap as u64 })
+                    let heap_mass = num("heapmass").unwrap_or(0.0);
+                    blocks.push(Block { step: step as u64, gone, strip, heap: heap as u64, heap_mass })
                 }
                 _ => return Err(SteadyError::Unreadable(line.to_string())),
             }
@@ -216,6 +219,10 @@ pub fn compute(scene: &Scene, blocks: &[Block], stop: &str, frames: &[Frame]) ->
         heap_start,
         heap_end,
         heap_target: c.heap_particles as u64,
+        // kg per m of blade width is g per mm.
+        heap_mass_per_width: window.iter().map(|b| b.heap_mass).sum::<f64>()
+            / window.len() as f64
+            / scene.depth,
         stop: stop.into(),
     };
     let mut why = Vec::new();
@@ -335,7 +342,7 @@ mod tests {
                    demsweep: stop cap after 800 steps\n";
         let (b, stop) = parse_log(log).unwrap();
         assert_eq!(stop, "cap");
-        assert_eq!(b[1], Block { step: 400, gone: 0.0005, strip: 0.0012, heap: 901 });
+        assert_eq!(b[1], Block { step: 400, gone: 0.0005, strip: 0.0012, heap: 901, heap_mass: 0.03 });
         assert_eq!(parse_log("demsweep: stop target at step 3\n").unwrap_err(), SteadyError::TooFewBlocks(0));
         assert!(parse_log("demsweep: block 1 step x\n").is_err());
     }
@@ -359,6 +366,7 @@ mod tests {
                 gone: y * m,
                 strip: 0.0,
                 heap: c.heap_particles as u64,
+                heap_mass: 0.0,
             })
             .collect();
         let st = compute(&scene, &blocks, "target", &[]);

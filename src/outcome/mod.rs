@@ -53,6 +53,17 @@ pub struct RunResult {
     /// written before it was measured, and from engines that give none).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub layer: Option<crate::outcome::layer::Layer>,
+    /// The layer's thickness, m: the gap plus the open depth of the substrate's pockets that the
+    /// powder reaches below the tops (docs/scene.md "Layer packing"); absent in older results.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub layer_thickness: Option<f64>,
+    /// The deposit's packing over that thickness: MFR × gap / layer_thickness. Bounded by the
+    /// packing of spheres, as MFR is not at thin gaps on a rough substrate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub layer_packing: Option<f64>,
+    /// Its standard error (MFR's, scaled alike).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub layer_packing_se: Option<f64>,
     /// Timesteps of the settle (until at rest, or the fixed settle of the thesis layout).
     pub settle_steps: u64,
     /// Timesteps run in all: settle and spread.

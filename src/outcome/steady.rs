@@ -26,6 +26,10 @@ pub struct SteadyState {
     pub heap_start: u64,
     pub heap_end: u64,
     pub heap_target: u64,
+    /// The heap's mean mass over the window per width of blade, kg/m (= g/mm): the same at
+    /// every D for one `heap_height` (absent in older results).
+    #[serde(default)]
+    pub heap_mass_per_width: f64,
     /// `"target"`: the precision target ended the run; `"cap"`: the window cap did.
     pub stop: String,
 }

@@ -14,6 +14,7 @@ pub mod params;
 pub mod passage;
 pub mod pile;
 pub mod plausible;
+pub mod pockets;
 pub mod psd;
 pub mod settings;
 
@@ -121,6 +122,9 @@ pub struct Scene {
     pub substrate_diameter: f64,
     pub substrate_spacing: f64,
     pub substrate_n: [usize; 2],
+    /// Open depth of the substrate's pockets below its tops that the powder reaches, m
+    /// ([`pockets`]); 0 on a smooth plate.
+    pub open_depth: f64,
     /// x of the gate closing the dose's region during the settle; 0: no gate.
     pub gate_x: f64,
     // The initial pile: a jittered simple-cubic block nx × ny × nz with this spacing, from x0.
@@ -179,7 +183,7 @@ pub struct Scene {
 /// downstream. All lengths in m.
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct Conveyor {
-    /// Height of the held heap (gap + heap_diameters·D), and the particles it holds at a
+    /// Height of the held heap (gap + the `heap_height` parameter), and the particles it holds at a
     /// packing of 0.6 in its 30° repose triangle.
     pub heap_height: f64,
     pub heap_particles: usize,
@@ -227,6 +231,8 @@ pub struct Base {
     pub d: f64,
     pub d_min: f64,
     pub gap: f64,
+    /// Height of the heap in front of the blade above its tip, m.
+    pub heap_height: f64,
     pub speed: f64,
     pub density: f64,
     /// Young's modulus as the deck sets it (the stiffness factor applied, at least LIGGGHTS's
@@ -294,6 +300,7 @@ impl Base {
             d,
             d_min,
             gap,
+            heap_height: get("heap_height") * mm,
             speed,
             density,
             youngs,
@@ -308,6 +315,16 @@ impl Base {
 }
 
 impl Scene {
+    /// The spread layer's thickness: the gap plus the pockets' open depth, m.
+    pub fn layer_thickness(&self) -> f64 {
+        self.gap + self.open_depth
+    }
+
+    /// The deposit's packing over the layer's thickness, for an MFR (mass over ρ·w·gap·v).
+    pub fn layer_packing(&self, mfr: f64) -> f64 {
+        mfr * self.gap / self.layer_thickness()
+    }
+
     /// Particles of powder in the scene: the dose, or the held heap's target count.
     pub fn powder_particles(&self) -> usize {
         self.particles.max(self.conveyor.heap_particles)

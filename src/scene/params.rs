@@ -100,6 +100,17 @@ pub const CATALOGUE: &[ParamInfo] = &[
         description: "height of the blade tip above the plate",
     },
     ParamInfo {
+        name: "heap_height",
+        unit: "mm",
+        // 10 D at the thesis's centre diameter, 2 mm: the heap every earlier result was measured
+        // with at that point.
+        default: 20.0,
+        min: Bound::Open(0.0),
+        max: Bound::None,
+        description:
+            "height of the heap in front of the blade above its tip (conveyor: held; gated: the dose's)",
+    },
+    ParamInfo {
         name: "blade_speed",
         unit: "m/s",
         default: 1.4,

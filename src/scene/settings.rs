@@ -69,17 +69,13 @@ pub struct SceneSettings {
     /// rough substrate and is released when the blade starts) or `"thesis"` (the thesis's pile
     /// on a smooth plate, settled for a fixed time).
     pub layout: String,
-    /// Gated layout: `"rough"` (default: a layer of fixed spheres, as the previous powder layer
-    /// a blade spreads onto) or `"smooth"` (a flat plate).
+    /// Gated and conveyor layouts: `"rough"` (default: a layer of fixed spheres, as the previous
+    /// powder layer a blade spreads onto) or `"smooth"` (a flat plate).
     pub substrate: String,
     /// Gated layout: longest settle, s; a pile still moving then fails the run (`not-settled`).
     pub settle_max_s: f64,
     /// Gated layout: blade travel past the opened gate before the window starts, in diameters.
     pub window_start_diameters: f64,
-    /// Conveyor layout: height of the heap held in front of the blade above the gap, in
-    /// diameters (the heap is gap + this × D tall at 30° repose, topped up to its particle count
-    /// every fifth of a block).
-    pub heap_diameters: f64,
     /// Size of the heap in front of the blade, relative to the planned one (gated: gap + 10 D
     /// tall at 30° repose; thesis: the heap left at the end, gap + 6 D tall).
     pub supply_factor: f64,
@@ -196,7 +192,6 @@ impl SceneSettings {
         s.settle_max_s = self.settle_max_s;
         s.window_start_diameters = self.window_start_diameters;
         s.supply_factor = self.supply_factor;
-        s.heap_diameters = self.heap_diameters;
         s.size_distribution = self.size_distribution.clone();
         s.vx_band_diameters = self.vx_band_diameters;
         s.thesis_band = self.thesis_band;
@@ -274,7 +269,6 @@ impl Default for SceneSettings {
             settle_max_s: 1.0,
             window_start_diameters: 30.0,
             supply_factor: 1.0,
-            heap_diameters: 10.0,
             size_distribution: SizeDistributionSpec::default(),
             vx_band_diameters: 0.25,
             thesis_band: false,

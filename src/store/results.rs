@@ -34,7 +34,8 @@ impl PointStatus {
 /// its verification sample, empty for an open point), mfr_se (the standard error of MFR, from
 /// batch means over the steady window), stop (`target` or `cap`: what ended the window), and
 /// the spread layer's quality where the run measured it ([`crate::measure::layer`]): layer_cv and
-/// layer_cv_noise (–), covered_fraction (–), roughness_d (top-surface RMS height, in D).
+/// layer_cv_noise (–), covered_fraction (–), roughness_d (top-surface RMS height, in D); then
+/// layer_packing and its SE (the deposit's packing over the gap and the pockets it fills).
 pub fn write_results(
     dir: &Path,
     parameters: &[String],
@@ -52,6 +53,7 @@ pub fn write_results(
     header.extend((1..=VX_LAYERS).map(|k| format!("vx_{k}")));
     header.extend(["runtime_s", "hash", "quality", "screen", "mfr_se", "stop"].map(String::from));
     header.extend(LAYER_COLUMNS.map(String::from));
+    header.extend(["layer_packing", "layer_packing_se"].map(String::from));
     w.write_record(&header).expect("in-memory csv");
     for (p, s) in points.iter().zip(status) {
         let mut row: Vec<String> = vec![p.index.to_string()];
@@ -121,6 +123,14 @@ pub fn write_results(
             }
             None => std::array::from_fn(|_| String::new()),
         });
+        let packing = match s {
+            PointStatus::Done(r) => (r.layer_packing, r.layer_packing_se),
+            PointStatus::Failed(f) => {
+                f.measured.as_ref().map_or((None, None), |r| (r.layer_packing, r.layer_packing_se))
+            }
+            _ => (None, None),
+        };
+        row.extend([packing.0, packing.1].map(|v| v.map_or(String::new(), |v| v.to_string())));
         w.write_record(&row).expect("in-memory csv");
     }
     let bytes = w.into_inner().expect("in-memory csv");

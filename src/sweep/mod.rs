@@ -136,6 +136,16 @@ mod preset_tests {
     }
 
     #[test]
+    fn the_retired_heap_diameters_names_what_replaces_it_in_one_line() {
+        let err = scene_of("heap_diameters = 10").unwrap_err().to_string();
+        assert!(
+            err.starts_with("t.toml:5: scene.heap_diameters: replaced by the parameter heap_height"),
+            "{err}"
+        );
+        assert!(err.contains("10 at D = 2 mm is heap_height = 20") && !err.contains('\n'), "{err}");
+    }
+
+    #[test]
     fn the_resolved_settings_read_back_to_themselves() {
         // DIR/sweep.toml holds every key: a resume must see the same knobs.
         let text = "name = \"t\"\n[parameters]\ngap = { lo = 1.0, hi = 2.0 }\n[scene]\nfidelity = \"thesis\"\nwindow_diameters = 30\n";

@@ -31,6 +31,15 @@ pub(super) fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> Error 
         .replace("expected u32", "expected a whole number ≥ 0");
     let mut extra = String::new();
     // serde's message: "unknown field `frction`, expected one of `a`, `b`".
+    if msg.starts_with("unknown field `heap_diameters`") {
+        let at = line.map(|l| format!(":{l}")).unwrap_or_default();
+        return Error::input(format!(
+            "{}{at}: scene.heap_diameters: replaced by the parameter heap_height, the heap's height above the \
+             blade tip in mm (e.g. `heap_height = 20` under [parameters]); heap_diameters × D keeps today's \
+             heap at that D: 10 at D = 2 mm is heap_height = 20",
+            path.display()
+        ));
+    }
     if let Some(rest) = msg.strip_prefix("unknown field `") {
         if let Some((word, tail)) = rest.split_once('`') {
             let candidates: Vec<&str> = tail.split('`').skip(1).step_by(2).collect();

@@ -24,12 +24,13 @@ mod resume;
 mod screen;
 mod store;
 
-// What a run measures: one point, the steady state, the timestep's stability edge, the
+// What a run measures: one point, the recoater's bounds, the steady state, the timestep's stability edge, the
 // fidelity presets, VTK output, the contact model and the dump parser.
 mod contact;
 mod dump;
 mod fidelity;
 mod point;
+mod recoater;
 mod stability;
 mod steady;
 mod vtk;

@@ -39,7 +39,6 @@ impl Layout for Conveyor {
         for (k, v) in [
             ("scene.block_diameters", s.block_diameters),
             ("scene.window_cap_diameters", s.window_cap_diameters),
-            ("scene.heap_diameters", s.heap_diameters),
         ] {
             if !(v.is_finite() && v > 0.0) {
                 return bad(k, format!("{v}: expected a positive number"));
@@ -101,7 +100,6 @@ impl Layout for Conveyor {
     fn setup_rows(&self, sc: &SceneSettings) -> SetupRows {
         SetupRows {
             head: vec![
-                ("held heap, height above the gap (D)", short(sc.heap_diameters)),
                 ("block of the deposit series, travel (D)", short(sc.block_diameters)),
                 ("warm-up (s)", short(sc.warmup_s)),
                 (
@@ -133,10 +131,13 @@ impl Layout for Conveyor {
 /// blade held still, the substrate moving and the heap topped up.
 fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let psd = base.psd.clone();
+    let heap_above = base.heap_height;
+    // A smooth substrate: no spheres; the plate moves, sheared at −v (the deck's `shear x`).
+    let rough = settings.substrate == "rough";
     let mut s = moving_blade::derive(base, settings, Dose::Free);
     let d = s.diameter;
     let (gap, v, dt) = (s.gap, s.blade_speed, s.timestep);
-    let heap_height = gap + settings.heap_diameters * d;
+    let heap_height = gap + heap_above;
     let heap_base = heap_height / REPOSE_DEG.to_radians().tan();
     let heap_particles =
         (LAYER_FRACTION_MAX * 0.5 * heap_height * heap_base * s.depth / psd.mean_volume()).ceil() as usize;
@@ -193,11 +194,13 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     s.blade_top = blade_top;
     s.x_hi = x_hi;
     s.z_hi = blade_top + 2.0 * d + v * v / GRAVITY;
-    s.z_lo = -d;
-    s.substrate_n = [n_x, n_y];
-    s.substrate_spacing = spacing;
-    s.substrate_diameter = d;
-    s.substrate_particles = n_x * n_y;
+    s.z_lo = if rough { -d } else { 0.0 };
+    s.substrate_n = if rough { [n_x, n_y] } else { [0, 0] };
+    s.substrate_spacing = if rough { spacing } else { 0.0 };
+    s.substrate_diameter = if rough { d } else { 0.0 };
+    s.substrate_particles = s.substrate_n[0] * s.substrate_n[1];
+    s.open_depth =
+        if rough { crate::scene::pockets::open_depth(spacing, d, psd.min_diameter()) } else { 0.0 };
     s.gate_x = 0.0;
     s.rest_ke = 0.0;
     s.settle_steps = 0;
@@ -259,6 +262,9 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         vx: st.vx,
         particles: scene.conveyor.heap_particles,
         layer,
+        layer_thickness: Some(scene.layer_thickness()),
+        layer_packing: Some(scene.layer_packing(st.mfr)),
+        layer_packing_se: Some(scene.layer_packing(st.mfr_se)),
         settle_steps: 0,
         steps,
         simulated_time: steps as f64 * scene.timestep,

@@ -33,8 +33,6 @@ const RAMP_DIAMETERS: f64 = 2.0;
 const LATTICE_CLEARANCE: f64 = 1.05;
 /// Length over height of the initial pile block.
 const PILE_ASPECT: f64 = 1.5;
-/// Gated layout: height of the heap pushed by the blade above the gap, in diameters.
-const GATED_HEAP_DIAMETERS: f64 = 10.0;
 /// Gated layout: MFR assumed when sizing the dose's deposit, above every MFR measured over a
 /// 24-point LDS draw of the thesis space (largest 0.126). MFR rises with the heap the blade
 /// pushes, so a dose sized at the mean MFR (0.07) was tried to keep the heap the same whatever
@@ -110,7 +108,7 @@ impl Layout for MovingBlade {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Dose {
     /// Settles at rest in a region closed by a gate and is released when the blade starts; the
-    /// blade pushes a heap gap + 10 D tall through the window.
+    /// blade pushes a heap `heap_height` above its tip through the window.
     Gated,
     /// A free pile settled for a fixed time; the blade pushes the heap left at the window's
     /// end, gap + 6 D tall.
@@ -119,8 +117,21 @@ pub enum Dose {
 
 /// The scene of a moving-blade point: the pile, the blade's travel, the window, the timing.
 pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
-    let Base { psd, d, d_min, gap, speed, density, youngs, poisson, rayleigh_time, timestep, .. } =
-        base.clone();
+    let Base {
+        psd,
+        d,
+        d_min,
+        gap,
+        speed,
+        density,
+        youngs,
+        poisson,
+        rayleigh_time,
+        timestep,
+        heap_height,
+        ..
+    } = base.clone();
+    let heap_above = heap_height;
     // Geometry in units of the mean diameter, so the particle count barely changes with D.
     // The dose starts as a jittered simple-cubic block (an exact, reproducible count; no
     // random insertion to fall short). The depth is a whole number of lattice spacings so
@@ -138,7 +149,7 @@ pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
     // v_x layers (z up to gap + 6 D). Gated: the heap the blade pushes through the window,
     // gap + 10 D tall, whatever the window's length (MFR depends on the heap: the study
     // measured +15 % at one point when a longer window's dose made the heap larger).
-    let heap_height = gap + if gated { GATED_HEAP_DIAMETERS } else { 6.0 } * d;
+    let heap_height = gap + if gated { heap_above } else { 6.0 * d };
     let heap_area = settings.supply_factor * heap_height.powi(2) / (2.0 * REPOSE_DEG.to_radians().tan());
     let window = settings.window_diameters * d;
     // Travel of the blade's front from its start to the window's start, for a block of
@@ -281,6 +292,7 @@ pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
         substrate_diameter: if rough { d } else { 0.0 },
         substrate_spacing,
         substrate_n,
+        open_depth: if rough { crate::scene::pockets::open_depth(substrate_spacing, d, d_min) } else { 0.0 },
         gate_x: if gated { pile_x1 } else { 0.0 },
         pile_x0,
         pile_x1,
@@ -354,6 +366,9 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         vx: m.vx,
         particles: m.particles,
         layer: m.layer,
+        layer_thickness: Some(scene.layer_thickness()),
+        layer_packing: Some(scene.layer_packing(m.mfr)),
+        layer_packing_se: None,
         settle_steps,
         steps,
         simulated_time: steps as f64 * scene.timestep,
@@ -459,11 +474,16 @@ mod tests {
     }
 
     #[test]
-    fn particle_count_scales_weakly_with_diameter() {
-        // Geometry is in diameters, so the count depends on gap/D, not on D itself.
-        let a = scene(&[("diameter", 1.0), ("gap", 2.0)]).particles;
-        let b = scene(&[("diameter", 3.0), ("gap", 6.0)]).particles;
+    fn particle_count_depends_on_the_geometry_in_diameters_only() {
+        // Everything but the heap is in diameters: with the heap scaled alike, the count depends
+        // on gap/D and heap_height/D, not on D itself.
+        let a = scene(&[("diameter", 1.0), ("gap", 2.0), ("heap_height", 10.0)]).particles;
+        let b = scene(&[("diameter", 3.0), ("gap", 6.0), ("heap_height", 30.0)]).particles;
         assert_eq!(a, b);
+        // A heap in millimetres holds more particles of a smaller powder.
+        let fine = scene(&[("diameter", 1.0), ("gap", 2.0)]).particles;
+        let coarse = scene(&[("diameter", 2.0), ("gap", 4.0)]).particles;
+        assert!(fine > 2 * coarse, "{fine} against {coarse}");
     }
 
     #[test]
