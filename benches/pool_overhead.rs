@@ -11,7 +11,7 @@ use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-use demsweep::outcome::{RunOutcome, RunResult, RESULT_FORMAT};
+use demsweep::outcome::{RunOutcome, RunResult};
 use demsweep::run::pool::{self, Executor, Flow, PoolOptions};
 use demsweep::store::Store;
 use demsweep::sys::atomic::write_json;
@@ -39,31 +39,10 @@ impl Executor for TrueExecutor {
         let (o, took) = process::run(Command::new("true"), Duration::from_secs(60), cancel);
         assert_eq!(o, ProcessOutcome::Exited(0));
         let r = RunResult {
-            format: RESULT_FORMAT,
             hash: job.clone(),
-            parameters: Default::default(),
-            mfr: 0.0,
-            mfr_flux: 0.0,
-            mfr_particles: 0,
-            mfr_se: None,
-            steady_state: None,
-            vx_se: Vec::new(),
-            mfr_windows: vec![],
-            steady: true,
-            steady_p: 1.0,
-            vx: vec![],
-            particles: 0,
-            layer: None,
-            layer_thickness: None,
-            layer_packing: None,
-            layer_packing_se: None,
-            settle_steps: 0,
-            steps: 0,
-            simulated_time: 0.0,
             wall_time: took.as_secs_f64(),
-            cpu_time: None,
             engine_version: "true".into(),
-            warnings: vec![],
+            ..RunResult::default()
         };
         write_json(&run_dir.join("result.json"), &r).unwrap();
         RunOutcome::Done(r)

@@ -515,30 +515,17 @@ mod tests {
     fn result(mfr: f64, vx: Vec<Option<f64>>) -> RunResult {
         RunResult {
             format: 1,
-            hash: String::new(),
             parameters: BTreeMap::from([("blade_speed".to_string(), 2.0)]),
             mfr,
             mfr_flux: mfr,
             mfr_particles: 100,
-            mfr_se: None,
-            steady_state: None,
-            vx_se: Vec::new(),
-            mfr_windows: vec![],
-            steady: true,
-            steady_p: 1.0,
             vx,
             particles: 10,
-            layer: None,
-            layer_thickness: None,
-            layer_packing: None,
-            layer_packing_se: None,
-            settle_steps: 0,
             steps: 10,
-            simulated_time: 0.0,
             wall_time: 1.0,
             cpu_time: Some(1.0),
             engine_version: String::new(),
-            warnings: vec![],
+            ..RunResult::default()
         }
     }
 

@@ -79,6 +79,40 @@ pub struct RunResult {
     pub warnings: Vec<String>,
 }
 
+impl Default for RunResult {
+    /// A result of the current format that measured nothing: a base for the stand-in and test
+    /// engines to fill (`RunResult { mfr, ..RunResult::default() }`).
+    fn default() -> RunResult {
+        RunResult {
+            format: RESULT_FORMAT,
+            hash: String::new(),
+            parameters: BTreeMap::new(),
+            mfr: 0.0,
+            mfr_flux: 0.0,
+            mfr_particles: 0,
+            mfr_se: None,
+            steady_state: None,
+            mfr_windows: Vec::new(),
+            steady: true,
+            steady_p: 1.0,
+            vx: Vec::new(),
+            vx_se: Vec::new(),
+            particles: 0,
+            layer: None,
+            layer_thickness: None,
+            layer_packing: None,
+            layer_packing_se: None,
+            settle_steps: 0,
+            steps: 0,
+            simulated_time: 0.0,
+            wall_time: 0.0,
+            cpu_time: None,
+            engine_version: String::new(),
+            warnings: Vec::new(),
+        }
+    }
+}
+
 /// Why a run failed. The class decides whether the pool retries it.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Hash, PartialOrd, Ord)]
 #[serde(rename_all = "kebab-case")]

@@ -188,7 +188,6 @@ impl Executor for FakeExecutor {
             (ProcessOutcome::Exited(0), _) => {
                 let names = ["a", "b", "c", "d", "e", "f"];
                 let r = RunResult {
-                    format: RESULT_FORMAT,
                     hash: job.hash.clone(),
                     parameters: job
                         .values
@@ -198,26 +197,12 @@ impl Executor for FakeExecutor {
                         .collect::<BTreeMap<_, _>>(),
                     mfr: (self.mfr)(&job.values),
                     mfr_flux: (self.mfr)(&job.values),
-                    mfr_particles: 0,
-                    mfr_se: None,
-                    steady_state: None,
-                    vx_se: Vec::new(),
-                    mfr_windows: vec![],
-                    steady: true,
-                    steady_p: 1.0,
                     vx: vec![Some(0.5); VX_LAYERS],
                     particles: 1,
-                    layer: None,
-                    layer_thickness: None,
-                    layer_packing: None,
-                    layer_packing_se: None,
-                    settle_steps: 0,
                     steps: 1,
-                    simulated_time: 0.0,
                     wall_time: took.as_secs_f64(),
-                    cpu_time: None,
                     engine_version: "fake".into(),
-                    warnings: vec![],
+                    ..RunResult::default()
                 };
                 let _ = write_json(&run_dir.join("result.json"), &r);
                 RunOutcome::Done(r)

@@ -305,31 +305,11 @@ mod tests {
 
     fn done(mfr: f64) -> PointStatus {
         PointStatus::Done(Box::new(RunResult {
-            format: RESULT_FORMAT,
-            hash: String::new(),
-            parameters: Default::default(),
             mfr,
             mfr_flux: mfr,
-            mfr_particles: 0,
-            mfr_se: None,
-            steady_state: None,
-            vx_se: Vec::new(),
-            mfr_windows: vec![],
-            steady: true,
-            steady_p: 1.0,
-            vx: vec![],
-            particles: 0,
-            layer: None,
-            layer_thickness: None,
-            layer_packing: None,
-            layer_packing_se: None,
-            settle_steps: 0,
-            steps: 0,
-            simulated_time: 0.0,
             wall_time: 1.0,
-            cpu_time: None,
             engine_version: String::new(),
-            warnings: vec![],
+            ..RunResult::default()
         }))
     }
 

@@ -102,32 +102,17 @@ impl Executor for StandIn {
         let mut noise = Noise::new(&job.hash);
         let (mfr, vx) = point.model(&mut noise);
         let r = RunResult {
-            format: RESULT_FORMAT,
             hash: job.hash.clone(),
             parameters: job.parameters.clone(),
             mfr,
             mfr_flux: mfr,
-            mfr_particles: 0,
             // The model's own noise: what a seed-to-seed repeat would scatter by.
             mfr_se: Some(point.mean_mfr() * MFR_NOISE),
-            steady_state: None,
-            vx_se: Vec::new(),
             mfr_windows: vec![mfr; 4],
-            steady: true,
-            steady_p: 1.0,
             vx: vx.into_iter().map(Some).collect(),
-            particles: 0,
-            layer: None,
-            layer_thickness: None,
-            layer_packing: None,
-            layer_packing_se: None,
-            settle_steps: 0,
-            steps: 0,
-            simulated_time: 0.0,
-            wall_time: 0.0,
-            cpu_time: None,
             engine_version: format!("{NAME} {MODEL_VERSION}"),
             warnings: vec![format!("{NAME}: a made-up model, not LIGGGHTS")],
+            ..RunResult::default()
         };
         match write_json(&run_dir.join(RESULT), &r) {
             Ok(()) => RunOutcome::Done(r),
