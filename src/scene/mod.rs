@@ -122,9 +122,6 @@ pub struct Scene {
     pub substrate_diameter: f64,
     pub substrate_spacing: f64,
     pub substrate_n: [usize; 2],
-    /// Open depth of the substrate's pockets below its tops that the powder reaches, m
-    /// ([`pockets`]); 0 on a smooth plate.
-    pub open_depth: f64,
     /// x of the gate closing the dose's region during the settle; 0: no gate.
     pub gate_x: f64,
     // The initial pile: a jittered simple-cubic block nx × ny × nz with this spacing, from x0.
@@ -317,7 +314,17 @@ impl Base {
 impl Scene {
     /// The spread layer's thickness: the gap plus the pockets' open depth, m.
     pub fn layer_thickness(&self) -> f64 {
-        self.gap + self.open_depth
+        self.gap + self.open_depth()
+    }
+
+    /// Open depth of the substrate's pockets below its tops that the powder's smallest sphere
+    /// reaches, m ([`pockets`]); 0 on a smooth plate. Computed when a run is measured, not
+    /// when a point is planned.
+    pub fn open_depth(&self) -> f64 {
+        if self.substrate_particles == 0 {
+            return 0.0;
+        }
+        pockets::open_depth(self.substrate_spacing, self.substrate_diameter, self.min_diameter())
     }
 
     /// The deposit's packing over the layer's thickness, for an MFR (mass over ρ·w·gap·v).

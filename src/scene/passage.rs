@@ -87,7 +87,8 @@ impl Scene {
         self.gap < self.lowest_top() - self.load_margin()
     }
 
-    fn min_diameter(&self) -> f64 {
+    /// The smallest sphere of the powder, m.
+    pub fn min_diameter(&self) -> f64 {
         self.size_classes.iter().map(|c| c.diameter).fold(f64::INFINITY, f64::min)
     }
 }

@@ -19,7 +19,7 @@ use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
 
 /// Grid cells per lattice spacing.
-const CELLS: usize = 96;
+const CELLS: usize = 64;
 
 /// The open depth, m, under a square lattice of spacing `spacing` of spheres of diameter
 /// `substrate_diameter` (tops at z = 0, plate at −`substrate_diameter`) that spheres of diameter

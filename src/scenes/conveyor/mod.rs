@@ -199,8 +199,6 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     s.substrate_spacing = if rough { spacing } else { 0.0 };
     s.substrate_diameter = if rough { d } else { 0.0 };
     s.substrate_particles = s.substrate_n[0] * s.substrate_n[1];
-    s.open_depth =
-        if rough { crate::scene::pockets::open_depth(spacing, d, psd.min_diameter()) } else { 0.0 };
     s.gate_x = 0.0;
     s.rest_ke = 0.0;
     s.settle_steps = 0;

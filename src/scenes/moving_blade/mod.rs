@@ -292,7 +292,6 @@ pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
         substrate_diameter: if rough { d } else { 0.0 },
         substrate_spacing,
         substrate_n,
-        open_depth: if rough { crate::scene::pockets::open_depth(substrate_spacing, d, d_min) } else { 0.0 },
         gate_x: if gated { pile_x1 } else { 0.0 },
         pile_x0,
         pile_x1,
