@@ -1,7 +1,11 @@
 //! The top-level error type and the exit codes it maps to.
 //!
-//! Library modules return their own `thiserror` enums; this type is what the CLI sees, and its
-//! [`Error::code`] is the process exit code (`sweep --help` lists them).
+//! Each folder returns its own `thiserror` enum naming the file, key, value or run it is about
+//! (`sweep::SweepError`, `store::StoreError`, `run::RunError`, ...). This file sits below them
+//! all, so it cannot name them: each folder converts its enum into [`Error`] in its own file
+//! (`impl From<SweepError> for crate::Error`), choosing per variant what kind of failure it is —
+//! bad input, the engine, or internal — and keeping the folder's error as the source. What a
+//! kind means to the shell is decided here, once, in [`Error::code`].
 
 /// Exit codes, documented in `sweep --help` and the README.
 pub mod exit {
@@ -15,52 +19,72 @@ pub mod exit {
     pub const ENGINE: i32 = 3;
     /// An I/O or internal failure.
     pub const INTERNAL: i32 = 4;
-    /// Interrupted (Ctrl-C / SIGTERM); the sweep directory is resumable.
+    /// Interrupted (Ctrl-C); the sweep directory is resumable. Death by signal n is 128 + n, so
+    /// SIGTERM is 143.
     pub const INTERRUPTED: i32 = 130;
 }
+
+/// A folder's error, kept whole as the source of an [`Error`].
+pub type Source = Box<dyn std::error::Error + Send + Sync + 'static>;
 
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// Bad user input; the message names the file, key or value and what was expected.
-    #[error("{0}")]
-    Input(String),
+    #[error(transparent)]
+    Input(Source),
     /// The engine failed (not found, or a single run failed).
-    #[error("{0}")]
-    Engine(String),
-    /// A feature that a later release fills.
-    #[error("`sweep {0}` is not implemented yet")]
-    NotYet(&'static str),
-    #[error("{0}")]
-    Internal(String),
+    #[error(transparent)]
+    Engine(Source),
+    /// An I/O failure or a broken invariant.
+    #[error(transparent)]
+    Internal(Source),
+    /// Interrupted (Ctrl-C / SIGTERM) before anything was said about it.
     #[error("interrupted")]
     Interrupted,
-    /// A sweep finished with this many failed runs.
-    #[error("{0} run(s) failed")]
-    RunsFailed(usize),
+    /// A sweep stopped by a signal; it said how far it got and how to resume.
+    #[error("interrupted: {finished} of {total} points finished")]
+    SweepInterrupted { finished: usize, total: usize },
+    /// A sweep, a run or a check finished with `failed` of its `total` runs failed; they were
+    /// listed where they happened, never averaged in.
+    #[error("{failed} of {total} runs failed")]
+    RunsFailed { failed: usize, total: usize },
 }
 
 impl Error {
+    /// The process exit code: the one place where a failure becomes a number.
     pub fn code(&self) -> i32 {
         match self {
-            Error::Input(_) | Error::NotYet(_) => exit::BAD_INPUT,
+            Error::Input(_) => exit::BAD_INPUT,
             Error::Engine(_) => exit::ENGINE,
             Error::Internal(_) => exit::INTERNAL,
             // Death by signal n is 128 + n (SIGINT: 130, SIGTERM: 143).
-            Error::Interrupted => {
+            Error::Interrupted | Error::SweepInterrupted { .. } => {
                 crate::sys::process::interrupt_signal().map_or(exit::INTERRUPTED, |s| 128 + s)
             }
-            Error::RunsFailed(_) => exit::RUNS_FAILED,
+            Error::RunsFailed { .. } => exit::RUNS_FAILED,
         }
     }
 
+    /// Whether the command has already said this on stderr (the failed runs with their reasons,
+    /// how far an interrupted sweep got), so that `main` adds no line of its own.
+    pub fn told(&self) -> bool {
+        matches!(self, Error::RunsFailed { .. } | Error::SweepInterrupted { .. })
+    }
+
+    /// Bad input described by a message alone (a flag of the command line).
     pub fn input(msg: impl Into<String>) -> Self {
-        Error::Input(msg.into())
+        Error::Input(msg.into().into())
+    }
+
+    /// An internal failure described by a message alone.
+    pub fn internal(msg: impl Into<String>) -> Self {
+        Error::Internal(msg.into().into())
     }
 }
 
 impl From<std::io::Error> for Error {
     fn from(e: std::io::Error) -> Self {
-        Error::Internal(e.to_string())
+        Error::Internal(Box::new(e))
     }
 }
 

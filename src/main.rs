@@ -10,9 +10,11 @@ fn main() {
         Err(e) => std::process::exit(argument_error(e)),
     };
     let code = match cli::run(cli) {
-        Ok(code) => code,
+        Ok(()) => demsweep::error::exit::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
+            if !e.told() {
+                eprintln!("error: {e}");
+            }
             e.code()
         }
     };

@@ -135,7 +135,7 @@ pub fn run(
         prepared.push((c, prep));
     }
     std::fs::create_dir_all(&plan.out)
-        .map_err(|e| Error::Internal(format!("cannot create {}: {e}", plan.out.display())))?;
+        .map_err(|e| Error::internal(format!("cannot create {}: {e}", plan.out.display())))?;
     let next = AtomicUsize::new(0);
     let done = AtomicUsize::new(0);
     let runs: Mutex<Vec<Run>> = Mutex::new(Vec::new());
@@ -488,7 +488,7 @@ pub fn write(
     title: &str,
 ) -> Result<Vec<PathBuf>> {
     let out = &plan.out;
-    let plot_err = |e: Box<dyn std::error::Error>| Error::Internal(format!("fidelity plot: {e}"));
+    let plot_err = |e: Box<dyn std::error::Error>| Error::internal(format!("fidelity plot: {e}"));
     let svg = plot_svg(summaries, variants, title).map_err(plot_err)?;
     let png = crate::report::to_png(&svg).map_err(plot_err)?;
     let files = [
@@ -501,7 +501,7 @@ pub fn write(
     let mut paths = Vec::new();
     for (p, bytes) in files {
         crate::sys::atomic::write(&p, &bytes)
-            .map_err(|e| Error::Internal(format!("cannot write {}: {e}", p.display())))?;
+            .map_err(|e| Error::internal(format!("cannot write {}: {e}", p.display())))?;
         paths.push(p);
     }
     Ok(paths)

@@ -2,10 +2,9 @@
 
 use std::path::PathBuf;
 
-use super::contact::contact_error;
 use super::jobs;
 use clap::{Args, Subcommand};
-use demsweep::error::{exit, Error};
+use demsweep::error::Error;
 use demsweep::point::{self, PointContext};
 use demsweep::run::{self as driver};
 use demsweep::sweep::Sweep;
@@ -102,7 +101,7 @@ pub(super) struct DesignsArgs {
     levels: Vec<usize>,
 }
 
-pub(super) fn bench_designs(a: DesignsArgs) -> Result<i32, Error> {
+pub(super) fn bench_designs(a: DesignsArgs) -> Result<(), Error> {
     use demsweep::bench::designs::{self, Plan, ReplaySurface, StandInSurface, Surface};
     let sweep = Sweep::load(&a.sweep)?;
     let surface: Box<dyn Surface> = match &a.replay {
@@ -133,7 +132,7 @@ pub(super) fn bench_designs(a: DesignsArgs) -> Result<i32, Error> {
     let truth = designs::truth(surface.as_ref(), &names);
     let rows = designs::compare(surface.as_ref(), &names, &plan);
     print!("{}", designs::tables(&truth, &rows));
-    Ok(exit::SUCCESS)
+    Ok(())
 }
 
 /// Unit points, MFR and SE of a set of runs.
@@ -225,7 +224,7 @@ pub(super) struct StabilityArgs {
     out: Option<PathBuf>,
 }
 
-pub(super) fn bench_fidelity(a: FidelityArgs) -> Result<i32, Error> {
+pub(super) fn bench_fidelity(a: FidelityArgs) -> Result<(), Error> {
     use demsweep::bench::fidelity;
     let sweep = Sweep::load(&a.sweep)?;
     let bad = |m: String| Err(Error::input(m));
@@ -295,10 +294,10 @@ pub(super) fn bench_fidelity(a: FidelityArgs) -> Result<i32, Error> {
     for f in files {
         eprintln!("wrote {}", f.display());
     }
-    Ok(exit::SUCCESS)
+    Ok(())
 }
 
-pub(super) fn bench_stability(a: StabilityArgs) -> Result<i32, Error> {
+pub(super) fn bench_stability(a: StabilityArgs) -> Result<(), Error> {
     use demsweep::bench::stability;
     let sweep = Sweep::load(&a.sweep)?;
     let bad = |m: String| Err(Error::input(m));
@@ -345,7 +344,7 @@ pub(super) fn bench_stability(a: StabilityArgs) -> Result<i32, Error> {
     stability::check(&ctx, &plan)?;
     let heading = stability::describe_corner(&ctx.sweep, &plan.corner);
     std::fs::create_dir_all(&plan.out)
-        .map_err(|e| Error::Internal(format!("cannot create {}: {e}", plan.out.display())))?;
+        .map_err(|e| Error::internal(format!("cannot create {}: {e}", plan.out.display())))?;
     println!("harshest corner: {heading}; {} seeds per level", plan.seeds);
     println!(
         "{:<9} {:>8} {:>8} {:>10} {:>8} {:>7} {:>8} {:>7} {:>7}  verdict",
@@ -400,10 +399,10 @@ pub(super) fn bench_stability(a: StabilityArgs) -> Result<i32, Error> {
     for f in files {
         eprintln!("wrote {}", f.display());
     }
-    Ok(exit::SUCCESS)
+    Ok(())
 }
 
-pub(super) fn bench_contact(a: BenchContactArgs) -> Result<i32, Error> {
+pub(super) fn bench_contact(a: BenchContactArgs) -> Result<(), Error> {
     use demsweep::bench::contact::{drift, stiffness, timestep, to_csv};
     if a.contacts == 0 {
         return Err(Error::input("--contacts 0: expected at least 1"));
@@ -412,34 +411,32 @@ pub(super) fn bench_contact(a: BenchContactArgs) -> Result<i32, Error> {
         return Err(Error::input(format!("--out {}: not a directory", a.out.display())));
     }
     std::fs::create_dir_all(&a.out)
-        .map_err(|e| Error::Internal(format!("cannot create {}: {e}", a.out.display())))?;
+        .map_err(|e| Error::internal(format!("cannot create {}: {e}", a.out.display())))?;
     let write = |name: &str, text: String| -> Result<(), Error> {
         let path = a.out.join(name);
         demsweep::sys::atomic::write(&path, text.as_bytes())
-            .map_err(|e| Error::Internal(format!("cannot write {}: {e}", path.display())))?;
+            .map_err(|e| Error::internal(format!("cannot write {}: {e}", path.display())))?;
         eprintln!("wrote {}", path.display());
         Ok(())
     };
 
     println!("Energy drift at e = 1 over {} contacts (E_N/E_0* = closed form)", a.contacts);
-    let rows =
-        drift::run(&drift::default_cases(), &drift::DEFAULT_LADDER, a.contacts).map_err(contact_error)?;
+    let rows = drift::run(&drift::default_cases(), &drift::DEFAULT_LADDER, a.contacts)?;
     print!("{}", drift::table(&rows));
-    write("contact-drift.csv", to_csv(&rows).map_err(contact_error)?)?;
+    write("contact-drift.csv", to_csv(&rows)?)?;
 
     println!("\nStiffness ratios (q = wall/particle modulus; errors against Hertz theory)");
     let rows = stiffness::run(&stiffness::PARTICLE_MODULI, &stiffness::RATIOS);
     print!("{}", stiffness::table(&rows));
-    write("contact-stiffness.csv", to_csv(&rows).map_err(contact_error)?)?;
+    write("contact-stiffness.csv", to_csv(&rows)?)?;
 
     println!("\nTimestep ladder, reference solver against {}", a.engine.display());
-    let rows = timestep::run(&timestep::default_cases(), &timestep::DEFAULT_LADDER, &a.engine)
-        .map_err(contact_error)?;
+    let rows = timestep::run(&timestep::default_cases(), &timestep::DEFAULT_LADDER, &a.engine)?;
     print!("{}", timestep::table(&rows));
-    write("contact-timestep.csv", to_csv(&rows).map_err(contact_error)?)?;
+    write("contact-timestep.csv", to_csv(&rows)?)?;
     if rows.iter().all(|r| r.liggghts_restitution_n.is_none()) {
         let first = rows.first().map_or("", |r| r.error.as_str());
-        return Err(Error::Engine(format!("LIGGGHTS failed on every ladder case: {first}")));
+        return Err(Error::Engine(format!("LIGGGHTS failed on every ladder case: {first}").into()));
     }
-    Ok(exit::SUCCESS)
+    Ok(())
 }

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use super::sweep::finish_runs;
 use super::{run_options, PoolArgs};
 use clap::Args;
-use demsweep::error::{exit, Error};
+use demsweep::error::Error;
 use demsweep::sys::process::CancelToken;
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -121,7 +121,7 @@ pub(super) struct WorkArgs {
     quiet: bool,
 }
 
-pub(super) fn submit(a: SubmitArgs) -> Result<i32, Error> {
+pub(super) fn submit(a: SubmitArgs) -> Result<(), Error> {
     use demsweep::run::cluster::{self, Only, Scheduler, SubmitOptions};
     if a.jobs_per_task == 0 {
         return Err(Error::input("--jobs-per-task 0: expected at least 1"));
@@ -174,8 +174,8 @@ pub(super) fn submit(a: SubmitArgs) -> Result<i32, Error> {
     };
     let mut opts = opts;
     if let Some(step) = step {
-        if let Some(code) = chain_stops(&a.dir, a.after_batch)? {
-            return Ok(code);
+        if chain_stops(&a.dir, a.after_batch)? {
+            return Ok(());
         }
         opts.chain = Some(cluster::Chain { step, next: next_command(&a.dir, &opts)? });
     }
@@ -198,7 +198,7 @@ pub(super) fn submit(a: SubmitArgs) -> Result<i32, Error> {
                 c.failed,
                 if c.failed > 0 && !opts.only.failed { " (`--only failed` re-runs them)" } else { "" }
             );
-            return Ok(exit::SUCCESS);
+            return Ok(());
         }
     };
     if let Some(note) = &rendered.layout_note {
@@ -232,7 +232,7 @@ pub(super) fn submit(a: SubmitArgs) -> Result<i32, Error> {
             report.display()
         );
         println!("{}", array.display());
-        return Ok(exit::SUCCESS);
+        return Ok(());
     }
     let (job, report_job) = cluster::submit(&a.dir, &rendered, &array, &report)?;
     let after = if rendered.batch.is_some() {
@@ -245,13 +245,13 @@ pub(super) fn submit(a: SubmitArgs) -> Result<i32, Error> {
         cluster::cluster_dir(&a.dir).join("logs").display()
     );
     println!("{job}");
-    Ok(exit::SUCCESS)
+    Ok(())
 }
 
 /// Whether an LDS chain ends here: the MFR statistics converged (say so, submit nothing), or,
 /// for the job after a batch, the batch left points unfinished (cut off: a re-submission by
-/// hand decides). `Some(exit code)` when it ends.
-fn chain_stops(dir: &std::path::Path, after_batch: Option<usize>) -> Result<Option<i32>, Error> {
+/// hand decides).
+fn chain_stops(dir: &std::path::Path, after_batch: Option<usize>) -> Result<bool, Error> {
     use demsweep::analysis::convergence::Criteria;
     let sweep = demsweep::run::load_dir_sweep(dir)?;
     let criteria = Criteria::from_settings(&sweep.file.convergence);
@@ -259,7 +259,7 @@ fn chain_stops(dir: &std::path::Path, after_batch: Option<usize>) -> Result<Opti
         demsweep::report::analyse(dir, &criteria, &demsweep::analysis::stats::Bootstrap::default())?;
     if analysis.verdict.converged {
         eprintln!("nothing to submit: {}: {}", analysis.verdict.status, analysis.verdict.reason);
-        return Ok(Some(exit::SUCCESS));
+        return Ok(true);
     }
     if let Some(upto) = after_batch {
         let (manifest, _) = demsweep::store::Store::read_manifest(dir)?;
@@ -273,10 +273,10 @@ fn chain_stops(dir: &std::path::Path, after_batch: Option<usize>) -> Result<Opti
                  `sweep submit {}` re-submits them and carries the chain on",
                 dir.display()
             );
-            return Ok(Some(exit::SUCCESS));
+            return Ok(true);
         }
     }
-    Ok(None)
+    Ok(false)
 }
 
 /// The command the job after a batch runs: this submission again, as the judge of the batch.
@@ -322,7 +322,7 @@ fn next_command(dir: &std::path::Path, o: &demsweep::run::cluster::SubmitOptions
     Ok(cmd.join(" "))
 }
 
-pub(super) fn work(a: WorkArgs) -> Result<i32, Error> {
+pub(super) fn work(a: WorkArgs) -> Result<(), Error> {
     if a.per_task == 0 {
         return Err(Error::input("--per-task 0: expected at least 1"));
     }
@@ -362,5 +362,5 @@ pub(super) fn work(a: WorkArgs) -> Result<i32, Error> {
         a.task, summary.ran, summary.done, summary.points, summary.screened, summary.failed
     );
     // A task writes no report: the dependent report job does, once every task has ended.
-    Ok(finish_runs(&summary))
+    finish_runs(&summary)
 }

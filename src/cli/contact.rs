@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use demsweep::error::{exit, Error};
+use demsweep::error::Error;
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub(super) enum ContactCase {
@@ -144,30 +144,22 @@ pub(super) struct ContactCheckArgs {
     keep: Option<PathBuf>,
 }
 
-pub(super) fn contact(a: ContactArgs) -> Result<i32, Error> {
-    let outcome = demsweep::contact::run(&a.case.case()?).map_err(contact_error)?;
-    let json = serde_json::to_string_pretty(&outcome).map_err(|e| Error::Internal(e.to_string()))?;
+pub(super) fn contact(a: ContactArgs) -> Result<(), Error> {
+    let outcome = demsweep::contact::run(&a.case.case()?)?;
+    let json = serde_json::to_string_pretty(&outcome).map_err(|e| Error::internal(e.to_string()))?;
     println!("{json}");
-    Ok(exit::SUCCESS)
+    Ok(())
 }
 
-pub(super) fn contact_check(a: ContactCheckArgs) -> Result<i32, Error> {
+pub(super) fn contact_check(a: ContactCheckArgs) -> Result<(), Error> {
     use demsweep::contact::check;
     let cases =
         if a.case.given() { vec![("cli".to_string(), a.case.case()?)] } else { check::default_cases() };
-    let report = check::run_cases(&cases, &a.engine, a.keep.as_deref()).map_err(contact_error)?;
+    let report = check::run_cases(&cases, &a.engine, a.keep.as_deref())?;
     print!("{}", report.table());
-    Ok(if report.passed() { exit::SUCCESS } else { exit::RUNS_FAILED })
-}
-
-/// Bad case parameters are input errors (exit 2); LIGGGHTS failures are engine errors (3).
-pub(super) fn contact_error(e: demsweep::contact::ContactError) -> Error {
-    use demsweep::contact::ContactError as C;
-    match e {
-        C::Input { .. } | C::PassedThrough { .. } => Error::Input(e.to_string()),
-        C::Engine(_) | C::Output { .. } => Error::Engine(e.to_string()),
-        C::NoSeparation { .. } | C::Analysis(_) | C::Unsupported(_) | C::Io(_) => {
-            Error::Internal(e.to_string())
-        }
+    let failed = report.cases.iter().filter(|c| !c.passed()).count();
+    match failed {
+        0 => Ok(()),
+        failed => Err(Error::RunsFailed { failed, total: report.cases.len() }),
     }
 }

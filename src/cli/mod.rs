@@ -215,7 +215,7 @@ struct PoolArgs {
     quiet: bool,
 }
 
-pub fn run(cli: Cli) -> Result<i32, Error> {
+pub fn run(cli: Cli) -> Result<(), Error> {
     match cli.command {
         Command::Points(a) => point::points(a),
         Command::Lattice(a) => sweep::lattice(a),

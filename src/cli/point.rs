@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use super::check_timestep;
 use clap::Args;
-use demsweep::error::{exit, Error};
+use demsweep::error::Error;
 use demsweep::outcome::RunOutcome;
 use demsweep::point::{self, PointContext};
 use demsweep::sweep::{Scrambling, Sweep};
@@ -83,7 +83,7 @@ pub(super) struct RunArgs {
     force: bool,
 }
 
-pub(super) fn points(a: PointsArgs) -> Result<i32, Error> {
+pub(super) fn points(a: PointsArgs) -> Result<(), Error> {
     let sweep = Sweep::load(&a.sweep)?;
     let unit = match (a.lattice, a.lds) {
         (Some(l), _) => {
@@ -135,13 +135,13 @@ pub(super) fn points(a: PointsArgs) -> Result<i32, Error> {
         out.flush()
     };
     match write(&mut out) {
-        Ok(()) => Ok(exit::SUCCESS),
-        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(exit::SUCCESS),
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
         Err(e) => Err(e.into()),
     }
 }
 
-pub(super) fn render(a: RenderArgs) -> Result<i32, Error> {
+pub(super) fn render(a: RenderArgs) -> Result<(), Error> {
     let sweep = Sweep::load(&a.sweep)?;
     let (mut sweep, values, notes) = point::with_set(&sweep, &a.set)?;
     check_timestep(&mut sweep, a.force)?;
@@ -154,7 +154,7 @@ pub(super) fn render(a: RenderArgs) -> Result<i32, Error> {
     notes.iter().for_each(|n| eprintln!("note: {n}"));
     std::fs::create_dir_all(&a.out)
         .and_then(|_| prepared.deck.write(&a.out))
-        .map_err(|e| Error::Internal(format!("cannot write to {}: {e}", a.out.display())))?;
+        .map_err(|e| Error::internal(format!("cannot write to {}: {e}", a.out.display())))?;
     let s = &prepared.scene;
     eprintln!(
         "wrote {}/{{in.liggghts,blade.stl,pile.data}}: {} on {} substrate spheres, dt = {:.3e} s, hash {}",
@@ -164,14 +164,14 @@ pub(super) fn render(a: RenderArgs) -> Result<i32, Error> {
         s.timestep,
         &prepared.hash[..16]
     );
-    Ok(exit::SUCCESS)
+    Ok(())
 }
 
 /// [`point::prepare`], with a refusal that names the `--set` it came with.
 fn prepare_set(ctx: &PointContext, values: &[f64], set: &[String]) -> Result<point::Prepared, Error> {
     point::prepare(ctx, values).map_err(|e| match e {
-        Error::Input(msg) if !set.is_empty() => {
-            let path = format!("{}: ", ctx.sweep.path.display());
+        Error::Input(e) if !set.is_empty() => {
+            let (msg, path) = (e.to_string(), format!("{}: ", ctx.sweep.path.display()));
             let rest = msg.strip_prefix(&path).unwrap_or(&msg);
             Error::input(format!("{} with --set {}: {rest}", ctx.sweep.path.display(), set.join(",")))
         }
@@ -179,7 +179,7 @@ fn prepare_set(ctx: &PointContext, values: &[f64], set: &[String]) -> Result<poi
     })
 }
 
-pub(super) fn run_one(a: RunArgs) -> Result<i32, Error> {
+pub(super) fn run_one(a: RunArgs) -> Result<(), Error> {
     demsweep::sys::process::install_interrupt_handler();
     let file_sweep = Sweep::load(&a.sweep)?;
     let (mut sweep, values, notes) = point::with_set(&file_sweep, &a.set)?;
@@ -199,7 +199,7 @@ pub(super) fn run_one(a: RunArgs) -> Result<i32, Error> {
     let dir = match &a.out {
         Some(d) => {
             std::fs::create_dir_all(d)
-                .map_err(|e| Error::Internal(format!("cannot create {}: {e}", d.display())))?;
+                .map_err(|e| Error::internal(format!("cannot create {}: {e}", d.display())))?;
             d.clone()
         }
         None => {
@@ -233,7 +233,7 @@ pub(super) fn run_one(a: RunArgs) -> Result<i32, Error> {
     match outcome {
         RunOutcome::Done(r) => {
             if a.json {
-                println!("{}", serde_json::to_string_pretty(&r).map_err(|e| Error::Internal(e.to_string()))?);
+                println!("{}", serde_json::to_string_pretty(&r).map_err(|e| Error::internal(e.to_string()))?);
             } else {
                 println!("{}", used_line(&file_sweep, &a.set, &r));
                 print_result(&r, &scene);
@@ -241,17 +241,17 @@ pub(super) fn run_one(a: RunArgs) -> Result<i32, Error> {
             if a.vtk {
                 eprintln!("ParaView: open {}/particles_*.vtk and blade_*.vtk", dir.display());
             }
-            Ok(exit::SUCCESS)
+            Ok(())
         }
         RunOutcome::Failed(f) => {
             if a.json {
-                println!("{}", serde_json::to_string_pretty(&f).map_err(|e| Error::Internal(e.to_string()))?);
+                println!("{}", serde_json::to_string_pretty(&f).map_err(|e| Error::internal(e.to_string()))?);
             }
             eprintln!("error: run failed ({}): {}", f.class.as_str(), f.reason);
             if a.out.is_none() && !f.log_tail.is_empty() {
                 eprintln!("last lines of the log:\n{}", f.log_tail);
             }
-            Ok(exit::RUNS_FAILED)
+            Err(Error::RunsFailed { failed: 1, total: 1 })
         }
         RunOutcome::Cancelled => Err(Error::Interrupted),
     }

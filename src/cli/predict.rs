@@ -19,7 +19,7 @@ pub(super) struct PredictArgs {
     json: bool,
 }
 
-pub(super) fn predict(a: PredictArgs) -> Result<i32, Error> {
+pub(super) fn predict(a: PredictArgs) -> Result<(), Error> {
     let p = demsweep::report::emulation::predict(&a.dir, &a.set)?;
     for name in &p.outside {
         eprintln!(
@@ -28,11 +28,11 @@ pub(super) fn predict(a: PredictArgs) -> Result<i32, Error> {
         );
     }
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&p).map_err(|e| Error::Internal(e.to_string()))?);
+        println!("{}", serde_json::to_string_pretty(&p).map_err(|e| Error::internal(e.to_string()))?);
     } else {
         let setting: Vec<String> = p.parameters.iter().map(|(k, v)| format!("{k}={v}")).collect();
         println!("MFR {:.4} ± {:.4} (predictive SE) at {}", p.mfr, p.se, setting.join(", "));
         println!("emulator: {} points, leave-one-out RMSE {:.4}", p.points, p.loo_rmse);
     }
-    Ok(0)
+    Ok(())
 }

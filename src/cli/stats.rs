@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 use demsweep::analysis::stats::Bootstrap;
-use demsweep::error::{exit, Error};
+use demsweep::error::Error;
 
 #[derive(Args)]
 pub(super) struct StatsArgs {
@@ -22,7 +22,7 @@ pub(super) struct StatsArgs {
     json: bool,
 }
 
-pub(super) fn stats(a: StatsArgs) -> Result<i32, Error> {
+pub(super) fn stats(a: StatsArgs) -> Result<(), Error> {
     let table = demsweep::report::read_columns(&a.file, &a.column, &a.by)?;
     let column = &table.column;
     let m = demsweep::analysis::stats::moments(&column.values);
@@ -59,7 +59,7 @@ pub(super) fn stats(a: StatsArgs) -> Result<i32, Error> {
             "intervals": intervals,
             "sensitivity": sensitivity,
         });
-        println!("{}", serde_json::to_string_pretty(&out).map_err(|e| Error::Internal(e.to_string()))?);
+        println!("{}", serde_json::to_string_pretty(&out).map_err(|e| Error::internal(e.to_string()))?);
     } else {
         let f = |v: Option<f64>| v.map_or("undefined".to_string(), |v| format!("{v:.6}"));
         println!(
@@ -82,5 +82,5 @@ pub(super) fn stats(a: StatsArgs) -> Result<i32, Error> {
             }
         }
     }
-    Ok(exit::SUCCESS)
+    Ok(())
 }

@@ -7,7 +7,7 @@ use super::{check_timestep, run_options, ConvergenceArgs, PoolArgs};
 use clap::Args;
 use demsweep::analysis::convergence::Criteria;
 use demsweep::analysis::stats::Bootstrap;
-use demsweep::error::{exit, Error};
+use demsweep::error::Error;
 use demsweep::run::adapt::AdaptWatch;
 use demsweep::run::{self as driver, Summary, Watch};
 use demsweep::store::DesignRecord;
@@ -142,17 +142,17 @@ pub(super) struct ShowArgs {
     json: bool,
 }
 
-pub(super) fn show(a: ShowArgs) -> Result<i32, Error> {
+pub(super) fn show(a: ShowArgs) -> Result<(), Error> {
     let page = demsweep::report::show::show(&a.dir, a.index)?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&page).map_err(|e| Error::Internal(e.to_string()))?);
+        println!("{}", serde_json::to_string_pretty(&page).map_err(|e| Error::internal(e.to_string()))?);
     } else {
         print!("{}", page.to_text());
     }
-    Ok(exit::SUCCESS)
+    Ok(())
 }
 
-pub(super) fn lattice(a: LatticeArgs) -> Result<i32, Error> {
+pub(super) fn lattice(a: LatticeArgs) -> Result<(), Error> {
     let mut sweep = Sweep::load(&a.sweep)?;
     check_timestep(&mut sweep, a.force)?;
     a.convergence.overrides().apply(&mut sweep.file.convergence)?;
@@ -189,7 +189,7 @@ pub(super) fn check_levels(dim: usize, levels: &[usize], source: &str) -> Result
     Ok(())
 }
 
-pub(super) fn lds(a: LdsArgs) -> Result<i32, Error> {
+pub(super) fn lds(a: LdsArgs) -> Result<(), Error> {
     let mut sweep = Sweep::load(&a.sweep)?;
     check_timestep(&mut sweep, a.force)?;
     a.convergence.overrides().apply(&mut sweep.file.convergence)?;
@@ -217,7 +217,7 @@ pub(super) fn lds(a: LdsArgs) -> Result<i32, Error> {
     start(sweep, design, a.out, &a.pool, a.plan)
 }
 
-pub(super) fn adapt(a: AdaptArgs) -> Result<i32, Error> {
+pub(super) fn adapt(a: AdaptArgs) -> Result<(), Error> {
     let mut sweep = Sweep::load(&a.sweep)?;
     check_timestep(&mut sweep, a.force)?;
     a.convergence.overrides().apply(&mut sweep.file.convergence)?;
@@ -273,7 +273,7 @@ pub(super) fn start(
     out: Option<PathBuf>,
     p: &PoolArgs,
     plan_only: bool,
-) -> Result<i32, Error> {
+) -> Result<(), Error> {
     let opts = run_options(p, false, false)?;
     let out = out.unwrap_or_else(|| driver::default_out(&sweep));
     // Every input is checked before LIGGGHTS is looked at.
@@ -296,7 +296,7 @@ fn plan(
     design: DesignRecord,
     out: &std::path::Path,
     opts: &driver::RunOptions,
-) -> Result<i32, Error> {
+) -> Result<(), Error> {
     let cancel = CancelToken::new();
     let exec = driver::SweepExecutor::for_sweep(sweep)?;
     let (points, unfinished) = driver::plan_dir(sweep, design, out, &exec, opts.progress, &cancel)?;
@@ -305,10 +305,10 @@ fn plan(
     eprintln!(
         "run them here: `sweep resume {dir}`; on a cluster: `sweep submit {dir} --scheduler slurm --tasks N`"
     );
-    Ok(exit::SUCCESS)
+    Ok(())
 }
 
-pub(super) fn resume(a: ResumeArgs) -> Result<i32, Error> {
+pub(super) fn resume(a: ResumeArgs) -> Result<(), Error> {
     let opts = run_options(&a.pool, a.retry_failed, a.force)?;
     let mut sweep = driver::load_dir_sweep(&a.dir)?;
     sweep.file.scene.force_bounds = a.force;
@@ -329,16 +329,17 @@ pub(super) fn resume(a: ResumeArgs) -> Result<i32, Error> {
     finish(&summary, &sweep)
 }
 
-/// Write the report, say what happened and what to do next, and return the exit code.
-pub(super) fn finish(s: &Summary, sweep: &Sweep) -> Result<i32, Error> {
+/// Write the report, say what happened and what to do next; failed runs or an interruption are
+/// the error returned.
+pub(super) fn finish(s: &Summary, sweep: &Sweep) -> Result<(), Error> {
     let criteria = Criteria::from_settings(&sweep.file.convergence);
     let analysis = demsweep::report::analyse(&s.dir, &criteria, &Bootstrap::default())?;
     let html = demsweep::report::write(&analysis)?;
-    let code = finish_runs(s);
+    let ended = finish_runs(s);
     eprintln!("{}: {}", analysis.verdict.status, analysis.verdict.reason);
     eprintln!("report: {}", html.display());
     print_answer(&analysis);
-    Ok(code)
+    ended
 }
 
 /// The answer on stdout: recommended settings, layer warning, what matters, verdict, next step.
@@ -350,8 +351,8 @@ fn print_answer(analysis: &demsweep::report::Analysis) {
     }
 }
 
-/// Say what to do next about the runs and return the exit code.
-pub(super) fn finish_runs(s: &Summary) -> i32 {
+/// Say what to do next about the runs; failed runs or an interruption are the error returned.
+pub(super) fn finish_runs(s: &Summary) -> Result<(), Error> {
     let dir = s.dir.display();
     if let Some(line) = s.screen.sentence() {
         let warning =
@@ -370,21 +371,21 @@ pub(super) fn finish_runs(s: &Summary) -> i32 {
     if let Some(space) = &s.stopped_after {
         eprintln!("the rule held after {space}: no new runs started");
     }
-    s.exit_code()
+    s.ended()
 }
 
-pub(super) fn status(a: DirArgs) -> Result<i32, Error> {
+pub(super) fn status(a: DirArgs) -> Result<(), Error> {
     let report = demsweep::run::status(&a.dir)?;
     if a.json {
-        let text = serde_json::to_string_pretty(&report).map_err(|e| Error::Internal(e.to_string()))?;
+        let text = serde_json::to_string_pretty(&report).map_err(|e| Error::internal(e.to_string()))?;
         println!("{text}");
     } else {
         print!("{}", report.to_text());
     }
-    Ok(exit::SUCCESS)
+    Ok(())
 }
 
-pub(super) fn unclaim(a: UnclaimArgs) -> Result<i32, Error> {
+pub(super) fn unclaim(a: UnclaimArgs) -> Result<(), Error> {
     let (manifest, _) = demsweep::store::Store::read_manifest(&a.dir)?;
     let store = demsweep::store::Store::open(&a.dir);
     let hashes: Vec<String> = manifest.points.iter().map(|p| p.hash.clone()).collect();
@@ -397,10 +398,10 @@ pub(super) fn unclaim(a: UnclaimArgs) -> Result<i32, Error> {
         released.len(),
         a.dir.display()
     );
-    Ok(exit::SUCCESS)
+    Ok(())
 }
 
-pub(super) fn report(a: ReportArgs) -> Result<i32, Error> {
+pub(super) fn report(a: ReportArgs) -> Result<(), Error> {
     let sweep = driver::load_dir_sweep(&a.dir)?;
     let mut settings = sweep.file.convergence.clone();
     a.convergence.overrides().apply(&mut settings)?;
@@ -409,12 +410,12 @@ pub(super) fn report(a: ReportArgs) -> Result<i32, Error> {
     demsweep::run::rewrite_results(&a.dir)?;
     let html = demsweep::report::write(&analysis)?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&analysis).map_err(|e| Error::Internal(e.to_string()))?);
+        println!("{}", serde_json::to_string_pretty(&analysis).map_err(|e| Error::internal(e.to_string()))?);
     }
     eprintln!("{}: {}", analysis.verdict.status, analysis.verdict.reason);
     eprintln!("report: {}", html.display());
     if !a.json {
         print_answer(&analysis);
     }
-    Ok(exit::SUCCESS)
+    Ok(())
 }

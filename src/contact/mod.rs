@@ -56,6 +56,20 @@ pub enum ContactError {
     Io(#[from] std::io::Error),
 }
 
+/// Bad case parameters are input errors (exit 2); LIGGGHTS failures are engine errors (3).
+impl From<ContactError> for crate::Error {
+    fn from(e: ContactError) -> Self {
+        use ContactError as C;
+        match e {
+            C::Input { .. } | C::PassedThrough { .. } => crate::Error::Input(Box::new(e)),
+            C::Engine(_) | C::Output { .. } => crate::Error::Engine(Box::new(e)),
+            C::NoSeparation { .. } | C::Analysis(_) | C::Unsupported(_) | C::Io(_) => {
+                crate::Error::Internal(Box::new(e))
+            }
+        }
+    }
+}
+
 /// What sphere 1 hits.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Target {

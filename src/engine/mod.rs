@@ -34,6 +34,16 @@ pub enum EngineError {
     Interrupted,
 }
 
+/// A missing or unidentifiable engine is exit 3; Ctrl-C while identifying it is an interruption.
+impl From<EngineError> for crate::Error {
+    fn from(e: EngineError) -> Self {
+        match e {
+            EngineError::Interrupted => crate::Error::Interrupted,
+            e => crate::Error::Engine(Box::new(e)),
+        }
+    }
+}
+
 /// A located LIGGGHTS executable and what it says it is.
 #[derive(Debug, Clone)]
 pub struct Engine {

@@ -41,11 +41,7 @@ impl PointContext {
         let template = Template::load(sweep.template_path().as_deref(), layout)
             .map_err(|e| Error::input(e.to_string()))?;
         // Under the process's interrupt flag (Ctrl-C, SIGTERM), like every run.
-        let engine =
-            Engine::locate(sweep.file.run.engine.as_deref(), &CancelToken::new()).map_err(|e| match e {
-                crate::engine::EngineError::Interrupted => Error::Interrupted,
-                e => Error::Engine(e.to_string()),
-            })?;
+        let engine = Engine::locate(sweep.file.run.engine.as_deref(), &CancelToken::new())?;
         let timeout = Duration::from_secs_f64(sweep.file.run.timeout_s);
         Ok(PointContext { sweep, layout, engine, template, timeout })
     }

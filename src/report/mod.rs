@@ -662,14 +662,14 @@ fn timing(dir: &Path) -> Timing {
 /// Write `convergence.csv`, `summary.json` and `report/` into the analysed directory; returns
 /// the path of `report.html`.
 pub fn write(a: &Analysis) -> Result<PathBuf> {
-    let io = |p: &Path, e: std::io::Error| Error::Internal(format!("cannot write {}: {e}", p.display()));
+    let io = |p: &Path, e: std::io::Error| Error::internal(format!("cannot write {}: {e}", p.display()));
     let csv_path = a.dir.join("convergence.csv");
     crate::sys::atomic::write(&csv_path, convergence_csv(a).as_bytes()).map_err(|e| io(&csv_path, e))?;
     let json_path = a.dir.join("summary.json");
     crate::sys::atomic::write_json(&json_path, a).map_err(|e| io(&json_path, e))?;
     let out = a.dir.join("report");
     std::fs::create_dir_all(&out).map_err(|e| io(&out, e))?;
-    let figures = gallery::draw_all(a).map_err(|e| Error::Internal(format!("cannot draw the plots: {e}")))?;
+    let figures = gallery::draw_all(a).map_err(|e| Error::internal(format!("cannot draw the plots: {e}")))?;
     for f in &figures {
         for (ext, bytes) in [("svg", f.svg.as_bytes()), ("png", f.png.as_slice())] {
             let p = out.join(format!("{}.{ext}", f.name));

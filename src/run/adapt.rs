@@ -366,5 +366,5 @@ fn write_batches(
         ));
     }
     crate::sys::atomic::write(&path, text.as_bytes())
-        .map_err(|e| Error::Internal(format!("{}: {e}", path.display())))
+        .map_err(|e| Error::internal(format!("{}: {e}", path.display())))
 }

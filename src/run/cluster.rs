@@ -138,7 +138,7 @@ impl Layout {
         let text = match std::fs::read_to_string(&path) {
             Ok(t) => t,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-            Err(e) => return Err(Error::Internal(format!("{}: {e}", path.display()))),
+            Err(e) => return Err(Error::internal(format!("{}: {e}", path.display()))),
         };
         let l: Layout = serde_json::from_str(&text).map_err(|e| {
             Error::input(format!(
@@ -472,7 +472,7 @@ pub fn cluster_dir(dir: &Path) -> PathBuf {
 /// the array script's path and the report script's.
 pub fn write(dir: &Path, r: &Rendered) -> Result<(PathBuf, PathBuf)> {
     let cdir = cluster_dir(dir);
-    let io = |p: &Path, e: std::io::Error| Error::Internal(format!("{}: {e}", p.display()));
+    let io = |p: &Path, e: std::io::Error| Error::internal(format!("{}: {e}", p.display()));
     std::fs::create_dir_all(cdir.join("logs")).map_err(|e| io(&cdir, e))?;
     let lpath = Layout::path(dir);
     let existing = Layout::read(dir)?;
@@ -527,10 +527,10 @@ fn run_submit(cmd: &str, script: &Path, extra: &[String]) -> Result<String> {
         c.arg("--parsable");
     }
     c.args(extra).arg(script);
-    let out = c.output().map_err(|e| Error::Internal(format!("cannot run {cmd}: {e}")))?;
+    let out = c.output().map_err(|e| Error::internal(format!("cannot run {cmd}: {e}")))?;
     let stdout = String::from_utf8_lossy(&out.stdout).trim().to_string();
     if !out.status.success() || stdout.is_empty() {
-        return Err(Error::Internal(format!(
+        return Err(Error::internal(format!(
             "{cmd} {} failed ({}): {}",
             script.display(),
             out.status,

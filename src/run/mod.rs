@@ -94,17 +94,21 @@ pub struct Summary {
 }
 
 impl Summary {
-    /// 130 interrupted, 1 when runs failed, else 0 (the exit codes of `sweep --help`).
-    pub fn exit_code(&self) -> i32 {
-        use crate::error::exit;
+    /// How the sweep ended: an interruption, or failed runs, is the error (the driver has
+    /// written them to the joblog; `sweep status` lists them).
+    pub fn ended(&self) -> Result<()> {
         if self.interrupted {
-            // Death by signal n is 128 + n; a cancel without a signal reads as Ctrl-C.
-            crate::sys::process::interrupt_signal().map_or(exit::INTERRUPTED, |s| 128 + s)
+            Err(Error::SweepInterrupted { finished: self.done + self.failed, total: self.points })
         } else if self.failed > 0 {
-            exit::RUNS_FAILED
+            Err(Error::RunsFailed { failed: self.failed, total: self.points })
         } else {
-            exit::SUCCESS
+            Ok(())
         }
+    }
+
+    /// The exit code of [`Summary::ended`]: 0, or what [`Error::code`] makes of its error.
+    pub fn exit_code(&self) -> i32 {
+        self.ended().map_or_else(|e| e.code(), |()| crate::error::exit::SUCCESS)
     }
 }
 

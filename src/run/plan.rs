@@ -228,7 +228,7 @@ pub fn resolved_toml(sweep: &Sweep, design: &DesignRecord) -> Result<String> {
             f.design.adapt.seed = *seed;
         }
     }
-    let body = toml::to_string(&f).map_err(|e| Error::Internal(format!("resolved sweep: {e}")))?;
+    let body = toml::to_string(&f).map_err(|e| Error::internal(format!("resolved sweep: {e}")))?;
     Ok(format!(
         "# The sweep as resolved by demsweep {} (resolved-sweep format {}).\n{body}",
         env!("CARGO_PKG_VERSION"),

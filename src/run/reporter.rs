@@ -320,7 +320,7 @@ impl<'a> Reporter<'a> {
                 1 => String::new(),
                 n => format!(" ({n} write errors in all)"),
             };
-            return Err(Error::Internal(format!(
+            return Err(Error::internal(format!(
                 "{e}{more}; started no run after it; once that is fixed, `sweep resume {}` finishes the sweep",
                 self.store.dir().display()
             )));

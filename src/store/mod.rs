@@ -79,8 +79,8 @@ pub enum StoreError {
 impl From<StoreError> for crate::Error {
     fn from(e: StoreError) -> Self {
         match e {
-            StoreError::Io { .. } => crate::Error::Internal(e.to_string()),
-            StoreError::NotASweep { .. } => crate::Error::Input(e.to_string()),
+            StoreError::Io { .. } => crate::Error::internal(e.to_string()),
+            StoreError::NotASweep { .. } => crate::Error::input(e.to_string()),
         }
     }
 }
