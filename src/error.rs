@@ -70,16 +70,6 @@ impl Error {
     pub fn told(&self) -> bool {
         matches!(self, Error::RunsFailed { .. } | Error::SweepInterrupted { .. })
     }
-
-    /// Bad input described by a message alone (a flag of the command line).
-    pub fn input(msg: impl Into<String>) -> Self {
-        Error::Input(msg.into().into())
-    }
-
-    /// An internal failure described by a message alone.
-    pub fn internal(msg: impl Into<String>) -> Self {
-        Error::Internal(msg.into().into())
-    }
 }
 
 impl From<std::io::Error> for Error {

@@ -311,10 +311,24 @@ pub struct Overrides {
     pub hold: Option<usize>,
 }
 
+/// A command-line override the sweep file would refuse: `--tolerance -1: expected ...`.
+#[derive(Debug, thiserror::Error)]
+#[error("{flag} {why}")]
+pub struct OverrideError {
+    pub flag: &'static str,
+    pub why: String,
+}
+
+impl From<OverrideError> for crate::Error {
+    fn from(e: OverrideError) -> Self {
+        crate::Error::Input(Box::new(e))
+    }
+}
+
 impl Overrides {
     /// Apply to `c`, refusing values the sweep file would refuse (naming the flag).
-    pub fn apply(&self, c: &mut ConvergenceSettings) -> crate::Result<()> {
-        let bad = |flag: &str, what: String| crate::Error::input(format!("{flag} {what}"));
+    pub fn apply(&self, c: &mut ConvergenceSettings) -> Result<(), OverrideError> {
+        let bad = |flag: &'static str, why: String| OverrideError { flag, why };
         if let Some(r) = &self.rule {
             if Rule::parse(r).is_none() {
                 return Err(bad("--rule", format!("{r}: expected \"scaled\", \"any\" or \"all\"")));

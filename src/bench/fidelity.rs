@@ -17,7 +17,7 @@ use std::sync::Mutex;
 
 use plotters::prelude::*;
 
-use crate::bench::opt;
+use crate::bench::{opt, BenchError};
 use crate::error::{Error, Res, Result};
 use crate::outcome::{FailureClass, RunOutcome, RunResult};
 use crate::point::{self, PointContext};
@@ -38,31 +38,29 @@ pub fn variants(sweep: &Sweep, presets: &[String], extra: &[String]) -> Result<V
     let mut out: Vec<Variant> = Vec::new();
     for name in presets {
         let preset = SceneSettings::preset(name).ok_or_else(|| {
-            Error::input(format!(
-                "--presets {name}: not a fidelity preset; expected some of {}",
+            let why = format!(
+                "not a fidelity preset; expected some of {}",
                 crate::scene::settings::FIDELITIES.join(", ")
-            ))
+            );
+            BenchError::Flag { given: format!("--presets {name}"), why }
         })?;
         let scene = sweep.file.scene.with_knobs_of(&preset);
         out.push(Variant { name: name.clone(), sweep: sweep.with_scene(scene)? });
     }
     let fast = SceneSettings::preset("fast").expect("the fast preset exists");
     for spec in extra {
-        let (name, sets) = spec
-            .split_once(':')
-            .ok_or_else(|| Error::input(format!("--variant {spec}: expected NAME:key=value,...")))?;
+        let variant = |why: String| BenchError::Flag { given: format!("--variant {spec}"), why };
+        let (name, sets) =
+            spec.split_once(':').ok_or_else(|| variant("expected NAME:key=value,...".into()))?;
         let name = name.trim();
         if name.is_empty() || out.iter().any(|v| v.name == name) {
-            return Err(Error::input(format!("--variant {spec}: expected a new, non-empty name")));
+            return Err(variant("expected a new, non-empty name".into()).into());
         }
         let mut scene = sweep.file.scene.with_knobs_of(&fast);
         for set in sets.split(',').filter(|s| !s.trim().is_empty()) {
-            let (k, v) = set
-                .split_once('=')
-                .ok_or_else(|| Error::input(format!("--variant {spec}: `{set}`: expected key=value")))?;
-            scene = scene
-                .with_knob(k.trim(), v.trim())
-                .map_err(|e| Error::input(format!("--variant {spec}: {e}")))?;
+            let (k, v) =
+                set.split_once('=').ok_or_else(|| variant(format!("`{set}`: expected key=value")))?;
+            scene = scene.with_knob(k.trim(), v.trim()).map_err(variant)?;
         }
         scene.fidelity = format!("fast+{name}");
         // Validation checks the preset's name; the variant's knobs are what it checks.
@@ -135,7 +133,7 @@ pub fn run(
         prepared.push((c, prep));
     }
     std::fs::create_dir_all(&plan.out)
-        .map_err(|e| Error::internal(format!("cannot create {}: {e}", plan.out.display())))?;
+        .map_err(|source| BenchError::Create { path: plan.out.clone(), source })?;
     let next = AtomicUsize::new(0);
     let done = AtomicUsize::new(0);
     let runs: Mutex<Vec<Run>> = Mutex::new(Vec::new());
@@ -488,7 +486,7 @@ pub fn write(
     title: &str,
 ) -> Result<Vec<PathBuf>> {
     let out = &plan.out;
-    let plot_err = |e: Box<dyn std::error::Error>| Error::internal(format!("fidelity plot: {e}"));
+    let plot_err = |e: Box<dyn std::error::Error>| BenchError::Plot { bench: "fidelity", why: e.to_string() };
     let svg = plot_svg(summaries, variants, title).map_err(plot_err)?;
     let png = crate::report::to_png(&svg).map_err(plot_err)?;
     let files = [
@@ -501,7 +499,7 @@ pub fn write(
     let mut paths = Vec::new();
     for (p, bytes) in files {
         crate::sys::atomic::write(&p, &bytes)
-            .map_err(|e| Error::internal(format!("cannot write {}: {e}", p.display())))?;
+            .map_err(|source| BenchError::Write { path: p.clone(), source })?;
         paths.push(p);
     }
     Ok(paths)

@@ -24,3 +24,38 @@ pub fn opt(v: Option<f64>, digits: usize) -> String {
 pub fn cell(v: Option<f64>) -> String {
     v.map_or("-".to_string(), |v| format!("{v:.2e}"))
 }
+
+/// What a bench refuses or fails at: a flag, a file of its output, a plot, LIGGGHTS.
+#[derive(Debug, thiserror::Error)]
+pub enum BenchError {
+    /// A flag's value: `--variant fine: expected NAME:key=value,...`.
+    #[error("{given}: {why}")]
+    Flag { given: String, why: String },
+    /// The output directory could not be created.
+    #[error("cannot create {}: {source}", path.display())]
+    Create { path: std::path::PathBuf, source: std::io::Error },
+    /// An output file could not be written.
+    #[error("cannot write {}: {source}", path.display())]
+    Write { path: std::path::PathBuf, source: std::io::Error },
+    /// The bench's figure could not be drawn.
+    #[error("{bench} plot: {why}")]
+    Plot { bench: &'static str, why: String },
+    /// A thread running one case panicked.
+    #[error("run thread panicked")]
+    Panicked,
+    /// LIGGGHTS ran none of the contact timestep ladder's cases.
+    #[error("LIGGGHTS failed on every ladder case: {first}")]
+    NoLadderCase { first: String },
+}
+
+/// A flag is bad input (exit 2), LIGGGHTS failing every case is the engine (3), the rest is
+/// internal (4).
+impl From<BenchError> for crate::Error {
+    fn from(e: BenchError) -> Self {
+        match e {
+            BenchError::Flag { .. } => crate::Error::Input(Box::new(e)),
+            BenchError::NoLadderCase { .. } => crate::Error::Engine(Box::new(e)),
+            _ => crate::Error::Internal(Box::new(e)),
+        }
+    }
+}

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 use plotters::prelude::*;
 
-use super::opt;
+use super::{opt, BenchError};
 use crate::error::{Error, Res, Result};
 use crate::outcome::{FailureClass, RunOutcome};
 use crate::point::{self, PointContext};
@@ -248,7 +248,7 @@ fn run_level(
                 .collect();
             handles
                 .into_iter()
-                .map(|h| h.join().unwrap_or_else(|_| Err(Error::internal("run thread panicked"))))
+                .map(|h| h.join().unwrap_or_else(|_| Err(BenchError::Panicked.into())))
                 .collect()
         });
         for o in outcomes {
@@ -465,7 +465,8 @@ pub fn plot_svg(results: &[LevelResult], title: &str) -> Res<String> {
 
 /// Write stability.csv, stability-runs.csv, stability.svg and stability.png in `out`.
 pub fn write(out: &Path, results: &[LevelResult], title: &str) -> Result<Vec<PathBuf>> {
-    let plot_err = |e: Box<dyn std::error::Error>| Error::internal(format!("stability plot: {e}"));
+    let plot_err =
+        |e: Box<dyn std::error::Error>| BenchError::Plot { bench: "stability", why: e.to_string() };
     let svg = plot_svg(results, title).map_err(plot_err)?;
     let png = crate::report::to_png(&svg).map_err(plot_err)?;
     let files = [
@@ -477,7 +478,7 @@ pub fn write(out: &Path, results: &[LevelResult], title: &str) -> Result<Vec<Pat
     let mut paths = Vec::new();
     for (p, bytes) in files {
         crate::sys::atomic::write(&p, &bytes)
-            .map_err(|e| Error::internal(format!("cannot write {}: {e}", p.display())))?;
+            .map_err(|source| BenchError::Write { path: p.clone(), source })?;
         paths.push(p);
     }
     Ok(paths)

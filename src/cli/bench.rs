@@ -2,11 +2,13 @@
 
 use std::path::PathBuf;
 
+use super::error::flag;
 use super::jobs;
 use clap::{Args, Subcommand};
+use demsweep::bench::BenchError;
 use demsweep::error::Error;
 use demsweep::point::{self, PointContext};
-use demsweep::run::{self as driver};
+use demsweep::run::{self as driver, RunError};
 use demsweep::sweep::Sweep;
 use demsweep::sys::process::CancelToken;
 
@@ -108,10 +110,7 @@ pub(super) fn bench_designs(a: DesignsArgs) -> Result<(), Error> {
         Some(csv) => {
             let (x, y, se) = replay_runs(&sweep, csv)?;
             let emulator = demsweep::analysis::emulator::Emulator::fit(&x, &y, &se).ok_or_else(|| {
-                Error::input(format!(
-                    "{}: too few done runs to replay (or MFR the same everywhere)",
-                    csv.display()
-                ))
+                flag(csv.display().to_string(), "too few done runs to replay (or MFR the same everywhere)")
             })?;
             let recorded = x.into_iter().zip(se).filter_map(|(u, s)| Some((u, s?))).collect();
             Box::new(ReplaySurface { emulator, recorded })
@@ -140,19 +139,16 @@ type Runs = (Vec<Vec<f64>>, Vec<f64>, Vec<Option<f64>>);
 
 /// The done runs (and screened zeros) of a results.csv as unit points, MFR and SE.
 fn replay_runs(sweep: &Sweep, path: &std::path::Path) -> Result<Runs, Error> {
-    let mut r = csv::Reader::from_path(path).map_err(|e| Error::input(format!("{}: {e}", path.display())))?;
-    let h = r.headers().map_err(|e| Error::input(format!("{}: {e}", path.display())))?.clone();
-    let col = |n: &str| {
-        h.iter()
-            .position(|c| c == n)
-            .ok_or_else(|| Error::input(format!("{}: no column `{n}`", path.display())))
-    };
+    let bad = |why: String| flag(path.display().to_string(), why);
+    let mut r = csv::Reader::from_path(path).map_err(|e| bad(e.to_string()))?;
+    let h = r.headers().map_err(|e| bad(e.to_string()))?.clone();
+    let col = |n: &str| h.iter().position(|c| c == n).ok_or_else(|| bad(format!("no column `{n}`")));
     let names = sweep.names();
     let cols: Vec<usize> = names.iter().map(|n| col(n)).collect::<Result<_, _>>()?;
     let (status, mfr, se) = (col("status")?, col("mfr")?, col("mfr_se")?);
     let mut out = (Vec::new(), Vec::new(), Vec::new());
     for rec in r.records() {
-        let rec = rec.map_err(|e| Error::input(format!("{}: {e}", path.display())))?;
+        let rec = rec.map_err(|e| bad(e.to_string()))?;
         let y = match &rec[status] {
             "done" => rec[mfr].parse::<f64>().ok().filter(|v| v.is_finite()),
             "screened" => Some(0.0),
@@ -227,17 +223,16 @@ pub(super) struct StabilityArgs {
 pub(super) fn bench_fidelity(a: FidelityArgs) -> Result<(), Error> {
     use demsweep::bench::fidelity;
     let sweep = Sweep::load(&a.sweep)?;
-    let bad = |m: String| Err(Error::input(m));
     if a.points == 0 {
-        return bad("--points 0: expected at least 1".into());
+        return Err(flag("--points 0", "expected at least 1"));
     }
     if a.seeds == 0 {
-        return bad("--seeds 0: expected at least 1".into());
+        return Err(flag("--seeds 0", "expected at least 1"));
     }
     let jobs = jobs(a.jobs)?;
     let variants = fidelity::variants(&sweep, &a.presets, &a.variant)?;
     if variants.is_empty() {
-        return bad("--presets: expected at least one preset or --variant".into());
+        return Err(flag("--presets", "expected at least one preset or --variant"));
     }
     let lds = &sweep.file.design.lds;
     let unit = demsweep::design::halton::halton(sweep.dim(), a.points, lds.scrambling, lds.seed);
@@ -300,42 +295,40 @@ pub(super) fn bench_fidelity(a: FidelityArgs) -> Result<(), Error> {
 pub(super) fn bench_stability(a: StabilityArgs) -> Result<(), Error> {
     use demsweep::bench::stability;
     let sweep = Sweep::load(&a.sweep)?;
-    let bad = |m: String| Err(Error::input(m));
     if sweep.file.scene.timestep_s > 0.0 {
-        return bad(format!(
-            "{}: scene.timestep_s = {} fixes the timestep (fidelity \"{}\"); the stability bench drives \
+        let why = format!(
+            "scene.timestep_s = {} fixes the timestep (fidelity \"{}\"); the stability bench drives \
              scene.rayleigh_fraction, so use a fidelity without a fixed step (\"fast\" or \"reference\")",
-            a.sweep.display(),
-            sweep.file.scene.timestep_s,
-            sweep.file.scene.fidelity
-        ));
+            sweep.file.scene.timestep_s, sweep.file.scene.fidelity
+        );
+        return Err(flag(a.sweep.display().to_string(), why));
     }
     if a.fractions.is_empty() || a.fractions.iter().any(|f| !(f.is_finite() && *f > 0.0 && *f <= 1.0)) {
-        return bad(format!(
-            "--fractions {:?}: expected fractions of the Rayleigh time in (0, 1]",
-            a.fractions
+        return Err(flag(
+            format!("--fractions {:?}", a.fractions),
+            "expected fractions of the Rayleigh time in (0, 1]",
         ));
     }
     if a.fractions.windows(2).any(|w| w[1] <= w[0]) {
-        return bad(format!("--fractions {:?}: expected increasing fractions", a.fractions));
+        return Err(flag(format!("--fractions {:?}", a.fractions), "expected increasing fractions"));
     }
     let corner = stability::harshest_corner(&sweep);
     let e0 = point::resolve(&sweep, &corner)["youngs_modulus"];
     let moduli = a.moduli.unwrap_or_else(|| stability::default_moduli(e0));
     if moduli.is_empty() || moduli.iter().any(|e| !(e.is_finite() && (5.0..=1000.0).contains(e))) {
-        return bad(format!("--moduli {moduli:?}: expected Young's moduli in [5, 1000] MPa"));
+        return Err(flag(format!("--moduli {moduli:?}"), "expected Young's moduli in [5, 1000] MPa"));
     }
     if moduli.windows(2).any(|w| w[1] >= w[0]) {
-        return bad(format!("--moduli {moduli:?}: expected decreasing moduli"));
+        return Err(flag(format!("--moduli {moduli:?}"), "expected decreasing moduli"));
     }
     if a.seeds == 0 {
-        return bad("--seeds 0: expected at least 1".into());
+        return Err(flag("--seeds 0", "expected at least 1"));
     }
     let jobs = jobs(a.jobs)?;
     let out = a.out.unwrap_or_else(|| PathBuf::from("runs").join(format!("{}-stability", sweep.file.name)));
     driver::check_out_dir(&out)?;
     if std::fs::read_dir(&out).map(|mut d| d.next().is_some()).unwrap_or(false) {
-        return bad(format!("{}: not empty; choose another --out", out.display()));
+        return Err(RunError::OutDir { dir: out, why: "not empty".into() }.into());
     }
     demsweep::sys::process::install_interrupt_handler();
     let ctx = PointContext::new(sweep)?;
@@ -344,7 +337,7 @@ pub(super) fn bench_stability(a: StabilityArgs) -> Result<(), Error> {
     stability::check(&ctx, &plan)?;
     let heading = stability::describe_corner(&ctx.sweep, &plan.corner);
     std::fs::create_dir_all(&plan.out)
-        .map_err(|e| Error::internal(format!("cannot create {}: {e}", plan.out.display())))?;
+        .map_err(|source| BenchError::Create { path: plan.out.clone(), source })?;
     println!("harshest corner: {heading}; {} seeds per level", plan.seeds);
     println!(
         "{:<9} {:>8} {:>8} {:>10} {:>8} {:>7} {:>8} {:>7} {:>7}  verdict",
@@ -405,17 +398,16 @@ pub(super) fn bench_stability(a: StabilityArgs) -> Result<(), Error> {
 pub(super) fn bench_contact(a: BenchContactArgs) -> Result<(), Error> {
     use demsweep::bench::contact::{drift, stiffness, timestep, to_csv};
     if a.contacts == 0 {
-        return Err(Error::input("--contacts 0: expected at least 1"));
+        return Err(flag("--contacts 0", "expected at least 1"));
     }
     if a.out.exists() && !a.out.is_dir() {
-        return Err(Error::input(format!("--out {}: not a directory", a.out.display())));
+        return Err(flag(format!("--out {}", a.out.display()), "not a directory"));
     }
-    std::fs::create_dir_all(&a.out)
-        .map_err(|e| Error::internal(format!("cannot create {}: {e}", a.out.display())))?;
+    std::fs::create_dir_all(&a.out).map_err(|source| BenchError::Create { path: a.out.clone(), source })?;
     let write = |name: &str, text: String| -> Result<(), Error> {
         let path = a.out.join(name);
         demsweep::sys::atomic::write(&path, text.as_bytes())
-            .map_err(|e| Error::internal(format!("cannot write {}: {e}", path.display())))?;
+            .map_err(|source| BenchError::Write { path: path.clone(), source })?;
         eprintln!("wrote {}", path.display());
         Ok(())
     };
@@ -436,7 +428,7 @@ pub(super) fn bench_contact(a: BenchContactArgs) -> Result<(), Error> {
     write("contact-timestep.csv", to_csv(&rows)?)?;
     if rows.iter().all(|r| r.liggghts_restitution_n.is_none()) {
         let first = rows.first().map_or("", |r| r.error.as_str());
-        return Err(Error::Engine(format!("LIGGGHTS failed on every ladder case: {first}").into()));
+        return Err(BenchError::NoLadderCase { first: first.to_string() }.into());
     }
     Ok(())
 }

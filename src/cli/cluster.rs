@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+use super::error::flag;
 use super::sweep::finish_runs;
 use super::{run_options, PoolArgs};
 use clap::Args;
@@ -124,13 +125,13 @@ pub(super) struct WorkArgs {
 pub(super) fn submit(a: SubmitArgs) -> Result<(), Error> {
     use demsweep::run::cluster::{self, Only, Scheduler, SubmitOptions};
     if a.jobs_per_task == 0 {
-        return Err(Error::input("--jobs-per-task 0: expected at least 1"));
+        return Err(flag("--jobs-per-task 0", "expected at least 1"));
     }
     if a.ranks == 0 {
-        return Err(Error::input("--ranks 0: expected at least 1"));
+        return Err(flag("--ranks 0", "expected at least 1"));
     }
     if a.lease == 0 {
-        return Err(Error::input("--lease 0: expected seconds, at least 1"));
+        return Err(flag("--lease 0", "expected seconds, at least 1"));
     }
     let scheduler = match a.scheduler {
         SchedulerArg::Slurm => Scheduler::Slurm,
@@ -161,12 +162,14 @@ pub(super) fn submit(a: SubmitArgs) -> Result<(), Error> {
     };
     let (manifest, _) = demsweep::store::Store::read_manifest(&a.dir)?;
     if let demsweep::store::DesignRecord::Adapt { .. } = manifest.design {
-        return Err(Error::input(format!(
-            "{}: an adaptive sweep plans each batch from the last one's results, which an array \
-             job cannot do; run `sweep resume {}` inside one job instead",
-            a.dir.display(),
-            a.dir.display()
-        )));
+        return Err(flag(
+            a.dir.display().to_string(),
+            format!(
+                "an adaptive sweep plans each batch from the last one's results, which an array \
+                 job cannot do; run `sweep resume {}` inside one job instead",
+                a.dir.display()
+            ),
+        ));
     }
     let step = match manifest.design {
         demsweep::store::DesignRecord::Lds { step, .. } if !a.all_at_once => Some(step),
@@ -181,11 +184,13 @@ pub(super) fn submit(a: SubmitArgs) -> Result<(), Error> {
     }
     let cmd = scheduler.submit_command();
     if !a.dry_run && !cluster::on_path(cmd) {
-        return Err(Error::input(format!(
-            "--scheduler {}: `{cmd}` is not on PATH (not a {} login node?); --dry-run writes the scripts only",
-            scheduler.name(),
-            scheduler.name()
-        )));
+        return Err(flag(
+            format!("--scheduler {}", scheduler.name()),
+            format!(
+                "`{cmd}` is not on PATH (not a {} login node?); --dry-run writes the scripts only",
+                scheduler.name()
+            ),
+        ));
     }
     let rendered = match cluster::plan(&a.dir, &opts)? {
         Ok(r) => r,
@@ -281,7 +286,7 @@ fn chain_stops(dir: &std::path::Path, after_batch: Option<usize>) -> Result<bool
 
 /// The command the job after a batch runs: this submission again, as the judge of the batch.
 fn next_command(dir: &std::path::Path, o: &demsweep::run::cluster::SubmitOptions) -> Result<String, Error> {
-    let dir = std::path::absolute(dir).map_err(|e| Error::input(format!("{}: {e}", dir.display())))?;
+    let dir = std::path::absolute(dir).map_err(|e| flag(dir.display().to_string(), e.to_string()))?;
     let quote = |s: &str| format!("'{}'", s.replace('\'', "'\\''"));
     let mut cmd = vec![
         quote(&o.exe.display().to_string()),
@@ -305,7 +310,7 @@ fn next_command(dir: &std::path::Path, o: &demsweep::run::cluster::SubmitOptions
     }
     if let Some(t) = &o.template {
         let t =
-            std::path::absolute(t).map_err(|e| Error::input(format!("--template {}: {e}", t.display())))?;
+            std::path::absolute(t).map_err(|e| flag(format!("--template {}", t.display()), e.to_string()))?;
         cmd.extend(["--template".into(), quote(&t.display().to_string())]);
     }
     let only: Vec<&str> = [(o.only.missing, "missing"), (o.only.failed, "failed")]
@@ -324,20 +329,20 @@ fn next_command(dir: &std::path::Path, o: &demsweep::run::cluster::SubmitOptions
 
 pub(super) fn work(a: WorkArgs) -> Result<(), Error> {
     if a.per_task == 0 {
-        return Err(Error::input("--per-task 0: expected at least 1"));
+        return Err(flag("--per-task 0", "expected at least 1"));
     }
     if a.ranks == 0 {
-        return Err(Error::input("--ranks 0: expected at least 1"));
+        return Err(flag("--ranks 0", "expected at least 1"));
     }
     let cores = a.jobs.unwrap_or_else(super::default_jobs);
     if cores < a.ranks as usize {
-        return Err(Error::input(format!(
-            "--jobs {cores} --ranks {}: a run needs {} cores; give --jobs at least --ranks",
-            a.ranks, a.ranks
-        )));
+        return Err(flag(
+            format!("--jobs {cores} --ranks {}", a.ranks),
+            format!("a run needs {} cores; give --jobs at least --ranks", a.ranks),
+        ));
     }
     if a.lease == 0 {
-        return Err(Error::input("--lease 0: expected seconds, at least 1"));
+        return Err(flag("--lease 0", "expected seconds, at least 1"));
     }
     demsweep::store::set_default_lease(std::time::Duration::from_secs(a.lease));
     if let Some(h) = &a.host {

@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use super::error::CliError;
 use clap::Args;
 use demsweep::error::Error;
 
@@ -92,7 +93,7 @@ impl CaseArgs {
     fn case(&self) -> Result<demsweep::contact::Case, Error> {
         use demsweep::contact::{Case, Material, Target};
         fn need<T: Copy>(v: Option<T>, flag: &str, what: &str) -> Result<T, Error> {
-            v.ok_or_else(|| Error::input(format!("{flag}: required, expected {what}")))
+            v.ok_or_else(|| super::error::flag(flag, format!("required, expected {what}")))
         }
         let radius = need(self.radius, "--radius", "a radius in m")?;
         let density = need(self.density, "--density", "a density in kg/m^3")?;
@@ -146,7 +147,7 @@ pub(super) struct ContactCheckArgs {
 
 pub(super) fn contact(a: ContactArgs) -> Result<(), Error> {
     let outcome = demsweep::contact::run(&a.case.case()?)?;
-    let json = serde_json::to_string_pretty(&outcome).map_err(|e| Error::internal(e.to_string()))?;
+    let json = serde_json::to_string_pretty(&outcome).map_err(CliError::Json)?;
     println!("{json}");
     Ok(())
 }

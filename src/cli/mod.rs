@@ -5,6 +5,7 @@
 mod bench;
 mod cluster;
 mod contact;
+mod error;
 mod point;
 mod predict;
 mod stats;
@@ -14,7 +15,7 @@ use clap::{Args, Parser, Subcommand};
 use demsweep::error::Error;
 use demsweep::run::progress::ProgressMode;
 use demsweep::run::RunOptions;
-use demsweep::sweep::Sweep;
+use demsweep::sweep::{Sweep, SweepError};
 
 /// Parameter sweeps of LIGGGHTS powder-spreading simulations.
 ///
@@ -249,8 +250,9 @@ fn check_timestep(sweep: &mut Sweep, force: bool) -> Result<(), Error> {
         return Ok(());
     }
     if sweep.file.scene.timestep_s == 0.0 {
-        demsweep::scene::check_rayleigh_fraction(sweep.file.scene.rayleigh_fraction)
-            .map_err(|e| Error::input(format!("{}: scene.rayleigh_fraction: {e}", sweep.path.display())))?;
+        demsweep::scene::check_rayleigh_fraction(sweep.file.scene.rayleigh_fraction).map_err(|why| {
+            SweepError::Key { path: sweep.path.clone(), key: "scene.rayleigh_fraction".into(), why }
+        })?;
     }
     Ok(())
 }
@@ -268,7 +270,7 @@ fn default_jobs() -> usize {
 /// The value of a `--jobs` flag: at least 1, the machine's cores when not given.
 fn jobs(flag: Option<usize>) -> Result<usize, Error> {
     match flag {
-        Some(0) => Err(Error::input("--jobs 0: expected at least 1")),
+        Some(0) => Err(error::flag("--jobs 0", "expected at least 1")),
         Some(n) => Ok(n),
         None => Ok(default_jobs()),
     }

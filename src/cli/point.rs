@@ -4,10 +4,11 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use super::check_timestep;
+use super::error::{flag, CliError};
 use clap::Args;
 use demsweep::error::Error;
 use demsweep::outcome::RunOutcome;
-use demsweep::point::{self, PointContext};
+use demsweep::point::{self, PointContext, PointError};
 use demsweep::sweep::{Scrambling, Sweep};
 
 #[derive(Args)]
@@ -87,14 +88,13 @@ pub(super) fn points(a: PointsArgs) -> Result<(), Error> {
     let sweep = Sweep::load(&a.sweep)?;
     let unit = match (a.lattice, a.lds) {
         (Some(l), _) => {
-            demsweep::design::lattice_size(sweep.dim(), l)
-                .map_err(|e| Error::input(format!("--lattice {l}: {e}")))?;
+            demsweep::design::lattice_size(sweep.dim(), l).map_err(|e| flag(format!("--lattice {l}"), e))?;
             demsweep::design::lattice::lattice(sweep.dim(), l)
         }
         (None, n) => {
             let lds = &sweep.file.design.lds;
             let n = n.unwrap_or(lds.max);
-            demsweep::design::lds_size(n).map_err(|e| Error::input(format!("--lds {n}: {e}")))?;
+            demsweep::design::lds_size(n).map_err(|e| flag(format!("--lds {n}"), e))?;
             let scrambling = if a.no_scramble { Scrambling::None } else { lds.scrambling };
             demsweep::design::halton::halton(sweep.dim(), n, scrambling, lds.seed)
         }
@@ -146,7 +146,7 @@ pub(super) fn render(a: RenderArgs) -> Result<(), Error> {
     let (mut sweep, values, notes) = point::with_set(&sweep, &a.set)?;
     check_timestep(&mut sweep, a.force)?;
     if a.out.exists() && !a.out.is_dir() {
-        return Err(Error::input(format!("--out {}: exists and is not a directory", a.out.display())));
+        return Err(flag(format!("--out {}", a.out.display()), "exists and is not a directory"));
     }
     check_bounds(&sweep, &values, &a.set)?;
     let ctx = PointContext::new(sweep)?;
@@ -154,7 +154,7 @@ pub(super) fn render(a: RenderArgs) -> Result<(), Error> {
     notes.iter().for_each(|n| eprintln!("note: {n}"));
     std::fs::create_dir_all(&a.out)
         .and_then(|_| prepared.deck.write(&a.out))
-        .map_err(|e| Error::internal(format!("cannot write to {}: {e}", a.out.display())))?;
+        .map_err(|source| CliError::WriteTo { path: a.out.clone(), source })?;
     let s = &prepared.scene;
     eprintln!(
         "wrote {}/{{in.liggghts,blade.stl,pile.data}}: {} on {} substrate spheres, dt = {:.3e} s, hash {}",
@@ -168,15 +168,12 @@ pub(super) fn render(a: RenderArgs) -> Result<(), Error> {
 }
 
 /// [`point::prepare`], with a refusal that names the `--set` it came with.
-fn prepare_set(ctx: &PointContext, values: &[f64], set: &[String]) -> Result<point::Prepared, Error> {
-    point::prepare(ctx, values).map_err(|e| match e {
-        Error::Input(e) if !set.is_empty() => {
-            let (msg, path) = (e.to_string(), format!("{}: ", ctx.sweep.path.display()));
-            let rest = msg.strip_prefix(&path).unwrap_or(&msg);
-            Error::input(format!("{} with --set {}: {rest}", ctx.sweep.path.display(), set.join(",")))
-        }
-        e => e,
-    })
+fn prepare_set(
+    ctx: &PointContext,
+    values: &[f64],
+    set: &[String],
+) -> Result<point::Prepared, point::PointError> {
+    point::prepare(ctx, values).map_err(|e| if set.is_empty() { e } else { e.with_set(&ctx.sweep.path, set) })
 }
 
 pub(super) fn run_one(a: RunArgs) -> Result<(), Error> {
@@ -186,7 +183,7 @@ pub(super) fn run_one(a: RunArgs) -> Result<(), Error> {
     check_timestep(&mut sweep, a.force)?;
     sweep.file.scene.vtk = a.vtk;
     if let Some(out) = a.out.as_ref().filter(|o| o.exists() && !o.is_dir()) {
-        return Err(Error::input(format!("--out {}: exists and is not a directory", out.display())));
+        return Err(flag(format!("--out {}", out.display()), "exists and is not a directory"));
     }
     // The point's bounds before the engine is looked for: a unit slip is bad input (exit 2)
     // whether or not LIGGGHTS is installed.
@@ -198,8 +195,7 @@ pub(super) fn run_one(a: RunArgs) -> Result<(), Error> {
     let temp;
     let dir = match &a.out {
         Some(d) => {
-            std::fs::create_dir_all(d)
-                .map_err(|e| Error::internal(format!("cannot create {}: {e}", d.display())))?;
+            std::fs::create_dir_all(d).map_err(|source| CliError::Create { path: d.clone(), source })?;
             d.clone()
         }
         None => {
@@ -233,7 +229,7 @@ pub(super) fn run_one(a: RunArgs) -> Result<(), Error> {
     match outcome {
         RunOutcome::Done(r) => {
             if a.json {
-                println!("{}", serde_json::to_string_pretty(&r).map_err(|e| Error::internal(e.to_string()))?);
+                println!("{}", serde_json::to_string_pretty(&r).map_err(CliError::Json)?);
             } else {
                 println!("{}", used_line(&file_sweep, &a.set, &r));
                 print_result(&r, &scene);
@@ -245,7 +241,7 @@ pub(super) fn run_one(a: RunArgs) -> Result<(), Error> {
         }
         RunOutcome::Failed(f) => {
             if a.json {
-                println!("{}", serde_json::to_string_pretty(&f).map_err(|e| Error::internal(e.to_string()))?);
+                println!("{}", serde_json::to_string_pretty(&f).map_err(CliError::Json)?);
             }
             eprintln!("error: run failed ({}): {}", f.class.as_str(), f.reason);
             if a.out.is_none() && !f.log_tail.is_empty() {
@@ -258,11 +254,15 @@ pub(super) fn run_one(a: RunArgs) -> Result<(), Error> {
 }
 
 /// The scene of the point, or the refusal of a value outside its bounds, naming the `--set`.
-fn check_bounds(sweep: &Sweep, values: &[f64], set: &[String]) -> Result<demsweep::scene::Scene, Error> {
+fn check_bounds(sweep: &Sweep, values: &[f64], set: &[String]) -> Result<demsweep::scene::Scene, PointError> {
     let parameters = point::resolve(sweep, values);
-    demsweep::scenes::build(&parameters, &sweep.file.scene).map_err(|e| {
-        let with = if set.is_empty() { String::new() } else { format!(" with --set {}", set.join(",")) };
-        Error::input(format!("{}{with}: {e}", sweep.path.display()))
+    demsweep::scenes::build(&parameters, &sweep.file.scene).map_err(|source| {
+        let e = PointError::Scene { path: sweep.path.clone(), source };
+        if set.is_empty() {
+            e
+        } else {
+            e.with_set(&sweep.path, set)
+        }
     })
 }
 

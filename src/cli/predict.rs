@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+use super::error::CliError;
 use clap::Args;
 use demsweep::error::Error;
 
@@ -28,7 +29,7 @@ pub(super) fn predict(a: PredictArgs) -> Result<(), Error> {
         );
     }
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&p).map_err(|e| Error::internal(e.to_string()))?);
+        println!("{}", serde_json::to_string_pretty(&p).map_err(CliError::Json)?);
     } else {
         let setting: Vec<String> = p.parameters.iter().map(|(k, v)| format!("{k}={v}")).collect();
         println!("MFR {:.4} ± {:.4} (predictive SE) at {}", p.mfr, p.se, setting.join(", "));

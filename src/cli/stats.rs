@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+use super::error::CliError;
 use clap::Args;
 use demsweep::analysis::stats::Bootstrap;
 use demsweep::error::Error;
@@ -59,7 +60,7 @@ pub(super) fn stats(a: StatsArgs) -> Result<(), Error> {
             "intervals": intervals,
             "sensitivity": sensitivity,
         });
-        println!("{}", serde_json::to_string_pretty(&out).map_err(|e| Error::internal(e.to_string()))?);
+        println!("{}", serde_json::to_string_pretty(&out).map_err(CliError::Json)?);
     } else {
         let f = |v: Option<f64>| v.map_or("undefined".to_string(), |v| format!("{v:.6}"));
         println!(

@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use super::error::{flag, CliError};
 use super::{check_timestep, run_options, ConvergenceArgs, PoolArgs};
 use clap::Args;
 use demsweep::analysis::convergence::Criteria;
@@ -145,7 +146,7 @@ pub(super) struct ShowArgs {
 pub(super) fn show(a: ShowArgs) -> Result<(), Error> {
     let page = demsweep::report::show::show(&a.dir, a.index)?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&page).map_err(|e| Error::internal(e.to_string()))?);
+        println!("{}", serde_json::to_string_pretty(&page).map_err(CliError::Json)?);
     } else {
         print!("{}", page.to_text());
     }
@@ -175,16 +176,17 @@ pub(super) fn lattice(a: LatticeArgs) -> Result<(), Error> {
 pub(super) fn check_levels(dim: usize, levels: &[usize], source: &str) -> Result<(), Error> {
     let list = levels.iter().map(|l| l.to_string()).collect::<Vec<_>>().join(",");
     if levels.is_empty() {
-        return Err(Error::input(format!("{source}: expected at least one level, e.g. 5,6,7")));
+        return Err(flag(source, "expected at least one level, e.g. 5,6,7"));
     }
     for &l in levels {
         demsweep::design::lattice_size(dim, l)
-            .map_err(|e| Error::input(format!("{source} {list}: level {l}: {e}")))?;
+            .map_err(|e| flag(format!("{source} {list}"), format!("level {l}: {e}")))?;
     }
     if levels.windows(2).any(|w| w[1] <= w[0]) {
-        return Err(Error::input(format!(
-            "{source} {list}: expected increasing levels (each space larger than the one before)"
-        )));
+        return Err(flag(
+            format!("{source} {list}"),
+            "expected increasing levels (each space larger than the one before)",
+        ));
     }
     Ok(())
 }
@@ -204,14 +206,16 @@ pub(super) fn lds(a: LdsArgs) -> Result<(), Error> {
         None => (l.max, format!("design.lds.max in {file}")),
     };
     if step == 0 {
-        return Err(Error::input(format!("{step_src} 0: expected a positive number of points per batch")));
+        return Err(flag(format!("{step_src} 0"), "expected a positive number of points per batch"));
     }
-    demsweep::design::lds_size(max).map_err(|e| Error::input(format!("{max_src} {max}: {e}")))?;
+    demsweep::design::lds_size(max).map_err(|e| flag(format!("{max_src} {max}"), e))?;
     if max < step {
-        return Err(Error::input(format!(
-            "{max_src} {max} is less than {step_src} {step}: expected max ≥ step (a batch of \
-             {step} points never completes); lower the step or raise max"
-        )));
+        return Err(flag(
+            format!("{max_src} {max} is less than {step_src} {step}"),
+            format!(
+                "expected max ≥ step (a batch of {step} points never completes); lower the step or raise max"
+            ),
+        ));
     }
     let design = DesignRecord::Lds { step, max, scrambling: l.scrambling, seed: l.seed };
     start(sweep, design, a.out, &a.pool, a.plan)
@@ -244,17 +248,17 @@ pub(super) fn adapt(a: AdaptArgs) -> Result<(), Error> {
         _ => opts.jobs,
     };
     if first == 0 {
-        return Err(Error::input(format!("{first_src} 0: expected a positive number of points")));
+        return Err(flag(format!("{first_src} 0"), "expected a positive number of points"));
     }
     if batch == 0 {
-        return Err(Error::input("--batch 0: expected a positive number of points per batch"));
+        return Err(flag("--batch 0", "expected a positive number of points per batch"));
     }
-    demsweep::design::lds_size(max).map_err(|e| Error::input(format!("{max_src} {max}: {e}")))?;
+    demsweep::design::lds_size(max).map_err(|e| flag(format!("{max_src} {max}"), e))?;
     if max < first {
-        return Err(Error::input(format!(
-            "{max_src} {max} is less than {first_src} {first}: expected max ≥ first; lower the \
-             first batch or raise max"
-        )));
+        return Err(flag(
+            format!("{max_src} {max} is less than {first_src} {first}"),
+            "expected max ≥ first; lower the first batch or raise max",
+        ));
     }
     let design = DesignRecord::Adapt { first, batch, max, seed: ad.seed };
     driver::check_out_dir(&out)?;
@@ -377,7 +381,7 @@ pub(super) fn finish_runs(s: &Summary) -> Result<(), Error> {
 pub(super) fn status(a: DirArgs) -> Result<(), Error> {
     let report = demsweep::run::status(&a.dir)?;
     if a.json {
-        let text = serde_json::to_string_pretty(&report).map_err(|e| Error::internal(e.to_string()))?;
+        let text = serde_json::to_string_pretty(&report).map_err(CliError::Json)?;
         println!("{text}");
     } else {
         print!("{}", report.to_text());
@@ -410,7 +414,7 @@ pub(super) fn report(a: ReportArgs) -> Result<(), Error> {
     demsweep::run::rewrite_results(&a.dir)?;
     let html = demsweep::report::write(&analysis)?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&analysis).map_err(|e| Error::internal(e.to_string()))?);
+        println!("{}", serde_json::to_string_pretty(&analysis).map_err(CliError::Json)?);
     }
     eprintln!("{}: {}", analysis.verdict.status, analysis.verdict.reason);
     eprintln!("report: {}", html.display());

@@ -4,13 +4,16 @@
 //! run in a directory it is given. The pool calls both; `sweep render` and `sweep run` too.
 
 pub mod deck;
+mod error;
+
+pub use error::PointError;
 
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Duration;
 
 use crate::engine::{Engine, LogLimits, RunStatus};
-use crate::error::{hint, Error, Result};
+use crate::error::{hint, Result};
 use crate::outcome::{FailureClass, RunFailure, RunOutcome, RESULT_FORMAT};
 use crate::point::deck::{Deck, Template};
 use crate::scene::{mesh, params, Scene};
@@ -37,9 +40,8 @@ pub struct PointContext {
 impl PointContext {
     pub fn new(sweep: Sweep) -> Result<PointContext> {
         // The template first: a bad one is bad input, found before the engine is run.
-        let layout = crate::scenes::of(&sweep.file.scene).map_err(|e| Error::input(e.to_string()))?;
-        let template = Template::load(sweep.template_path().as_deref(), layout)
-            .map_err(|e| Error::input(e.to_string()))?;
+        let layout = crate::scenes::of(&sweep.file.scene).map_err(PointError::Layout)?;
+        let template = Template::load(sweep.template_path().as_deref(), layout).map_err(PointError::Deck)?;
         // Under the process's interrupt flag (Ctrl-C, SIGTERM), like every run.
         let engine = Engine::locate(sweep.file.run.engine.as_deref(), &CancelToken::new())?;
         let timeout = Duration::from_secs_f64(sweep.file.run.timeout_s);
@@ -139,39 +141,45 @@ pub fn fixed_columns(sweep: &Sweep) -> Vec<(String, f64)> {
 /// (each once, in its catalogue unit, inside its physical domain). A set parameter becomes fixed
 /// at its value; the swept parameters not set take the middle of their range. Returns the sweep
 /// so changed, its swept values, and a note for each value outside the sweep's own range.
-pub fn with_set(sweep: &Sweep, sets: &[String]) -> Result<(Sweep, Vec<f64>, Vec<String>)> {
+pub fn with_set(sweep: &Sweep, sets: &[String]) -> Result<(Sweep, Vec<f64>, Vec<String>), PointError> {
+    let bad = |item: String, why: String| PointError::Set { item, why };
     let mut out = sweep.clone();
     let mut seen: Vec<(String, String)> = Vec::new();
     let mut notes = Vec::new();
     for item in sets.iter().filter(|s| !s.trim().is_empty()) {
         if item.chars().any(char::is_control) {
-            return Err(Error::input(format!(
-                "--set {item:?}: expected name=value without control characters (newline, tab)"
-            )));
+            return Err(bad(
+                format!("{item:?}"),
+                "expected name=value without control characters (newline, tab)".into(),
+            ));
         }
         let (name, value) =
-            item.split_once('=').ok_or_else(|| Error::input(format!("--set {item}: expected name=value")))?;
+            item.split_once('=').ok_or_else(|| bad(item.clone(), "expected name=value".into()))?;
         let (name, value) = (name.trim(), value.trim());
         let Some(info) = params::lookup(name) else {
             let known: Vec<&str> = params::CATALOGUE.iter().map(|p| p.name).collect();
-            return Err(Error::input(format!(
-                "--set {name}: unknown parameter{}; known: {}",
-                hint(name, known.iter().copied()),
-                known.join(", ")
-            )));
+            return Err(bad(
+                name.into(),
+                format!(
+                    "unknown parameter{}; known: {}",
+                    hint(name, known.iter().copied()),
+                    known.join(", ")
+                ),
+            ));
         };
         if let Some((_, first)) = seen.iter().find(|(n, _)| n == name) {
-            return Err(Error::input(format!(
-                "--set {name}: given twice ({first} and {value}); give each parameter once"
-            )));
+            return Err(bad(
+                name.into(),
+                format!("given twice ({first} and {value}); give each parameter once"),
+            ));
         }
         let v: f64 = value
             .parse()
             .ok()
             .filter(|v: &f64| v.is_finite())
-            .ok_or_else(|| Error::input(format!("--set {name}={value}: expected a finite number")))?;
+            .ok_or_else(|| bad(format!("{name}={value}"), "expected a finite number".into()))?;
         if !info.accepts(v) {
-            return Err(Error::input(format!("--set {name}={value}: outside {}", info.domain())));
+            return Err(bad(format!("{name}={value}"), format!("outside {}", info.domain())));
         }
         seen.push((name.to_string(), value.to_string()));
         if let Some(p) = out.swept.iter().find(|p| p.name == name) {
@@ -200,12 +208,11 @@ pub fn with_set(sweep: &Sweep, sets: &[String]) -> Result<(Sweep, Vec<f64>, Vec<
 }
 
 /// Build the scene and deck of one point and hash it. Pure: touches no file.
-pub fn prepare(ctx: &PointContext, swept_values: &[f64]) -> Result<Prepared> {
+pub fn prepare(ctx: &PointContext, swept_values: &[f64]) -> Result<Prepared, PointError> {
     let parameters = resolve(&ctx.sweep, swept_values);
     let scene = crate::scenes::build(&parameters, &ctx.sweep.file.scene)
-        .map_err(|e| Error::input(format!("{}: {e}", ctx.sweep.path.display())))?;
-    let mut deck =
-        Deck::new(&ctx.template, &scene, &ctx.engine.identity()).map_err(|e| Error::input(e.to_string()))?;
+        .map_err(|source| PointError::Scene { path: ctx.sweep.path.clone(), source })?;
+    let mut deck = Deck::new(&ctx.template, &scene, &ctx.engine.identity())?;
     deck.header = header(&parameters, &deck.hash);
     Ok(Prepared { hash: deck.hash.clone(), parameters, scene, deck })
 }

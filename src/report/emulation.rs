@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
-use super::{PointRow, SpaceRow};
+use super::{PointRow, ReportError, SpaceRow};
 use crate::analysis::convergence::{self, Change, Criteria, SpaceStats};
 use crate::analysis::emulator::{CrossValidation, EmulatedStatistics, Emulator};
 use crate::analysis::stats::STATISTICS;
@@ -176,30 +176,32 @@ pub struct Prediction {
 /// Parse `--set name=value,...` for a prediction: every name a swept parameter, every value a
 /// finite number (outside the swept range allowed, and named in [`Prediction::outside`]);
 /// unset parameters at the middle of their range.
-pub fn parse_setting(sweep: &Sweep, sets: &[String]) -> crate::error::Result<Vec<f64>> {
+pub fn parse_setting(sweep: &Sweep, sets: &[String]) -> Result<Vec<f64>, ReportError> {
     use crate::sweep::ParamKind;
     let mut values: Vec<Option<f64>> = vec![None; sweep.swept.len()];
     let mut given: Vec<Option<String>> = vec![None; sweep.swept.len()];
     for item in sets.iter().filter(|s| !s.trim().is_empty()) {
         let (name, value) = item
             .split_once('=')
-            .ok_or_else(|| crate::Error::input(format!("--set {item}: expected name=value")))?;
+            .ok_or_else(|| ReportError::Set { item: item.clone(), why: "expected name=value".into() })?;
         let (name, value) = (name.trim(), value.trim());
         let i = sweep.swept.iter().position(|p| p.name == name).ok_or_else(|| {
-            crate::Error::input(format!(
-                "--set {name}: not a swept parameter of the sweep{}; swept: {}",
+            let why = format!(
+                "not a swept parameter of the sweep{}; swept: {}",
                 crate::error::hint(name, sweep.names()),
                 sweep.names().join(", ")
-            ))
+            );
+            ReportError::Set { item: name.into(), why }
         })?;
-        let v =
-            value.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
-                crate::Error::input(format!("--set {name}={value}: expected a finite number"))
-            })?;
+        let v = value.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| ReportError::Set {
+            item: format!("{name}={value}"),
+            why: "expected a finite number".into(),
+        })?;
         if let Some(first) = &given[i] {
-            return Err(crate::Error::input(format!(
-                "--set {name}: given twice ({first} and {value}); give each parameter once"
-            )));
+            return Err(ReportError::Set {
+                item: name.into(),
+                why: format!("given twice ({first} and {value}); give each parameter once"),
+            });
         }
         given[i] = Some(value.to_string());
         values[i] = Some(v);
@@ -222,12 +224,9 @@ pub fn predict(dir: &std::path::Path, sets: &[String]) -> crate::error::Result<P
     let (_, sweep, points, _) = super::read_points(dir)?;
     let values = parse_setting(&sweep, sets)?;
     let rows: Vec<&PointRow> = points.iter().collect();
-    let f = fit(&sweep, &rows).ok_or_else(|| {
-        crate::Error::input(format!(
-            "{}: no emulator: it needs at least {} done points with MFR that varies",
-            dir.display(),
-            crate::analysis::emulator::MIN_POINTS
-        ))
+    let f = fit(&sweep, &rows).ok_or_else(|| ReportError::NoEmulator {
+        dir: dir.to_path_buf(),
+        min: crate::analysis::emulator::MIN_POINTS,
     })?;
     let u = crate::sweep::space::unit_point(&sweep, &values);
     let (m, se) = f.emulator.predict(&u);

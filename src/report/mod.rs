@@ -13,11 +13,13 @@ mod adaptive;
 mod advice;
 pub mod answer;
 pub mod emulation;
+mod error;
 mod gallery;
 mod html;
 mod maps;
 mod plots;
 pub mod show;
+pub use error::ReportError;
 pub use plots::to_png;
 
 use std::collections::BTreeMap;
@@ -28,7 +30,7 @@ use serde::Serialize;
 use crate::analysis::convergence::{self, Change, Criteria, Judgement, SpaceStats};
 use crate::analysis::sensitivity;
 use crate::analysis::stats::{self, Bootstrap, Interval, Moments, STATISTICS};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::measure::quality::{self, Quality};
 use crate::outcome::RunResult;
 use crate::run::screen::{Screen, ScreenReport};
@@ -661,15 +663,15 @@ fn timing(dir: &Path) -> Timing {
 
 /// Write `convergence.csv`, `summary.json` and `report/` into the analysed directory; returns
 /// the path of `report.html`.
-pub fn write(a: &Analysis) -> Result<PathBuf> {
-    let io = |p: &Path, e: std::io::Error| Error::internal(format!("cannot write {}: {e}", p.display()));
+pub fn write(a: &Analysis) -> Result<PathBuf, ReportError> {
+    let io = |p: &Path, source: std::io::Error| ReportError::Write { path: p.to_path_buf(), source };
     let csv_path = a.dir.join("convergence.csv");
     crate::sys::atomic::write(&csv_path, convergence_csv(a).as_bytes()).map_err(|e| io(&csv_path, e))?;
     let json_path = a.dir.join("summary.json");
     crate::sys::atomic::write_json(&json_path, a).map_err(|e| io(&json_path, e))?;
     let out = a.dir.join("report");
     std::fs::create_dir_all(&out).map_err(|e| io(&out, e))?;
-    let figures = gallery::draw_all(a).map_err(|e| Error::internal(format!("cannot draw the plots: {e}")))?;
+    let figures = gallery::draw_all(a).map_err(|e| ReportError::Draw(e.to_string()))?;
     for f in &figures {
         for (ext, bytes) in [("svg", f.svg.as_bytes()), ("png", f.png.as_slice())] {
             let p = out.join(format!("{}.{ext}", f.name));
@@ -694,35 +696,37 @@ pub struct CsvColumns {
 /// Read `column` (and the `by` columns) of a CSV file by header name: empty cells and
 /// non-numbers are skipped and counted. A missing file or column, or a column with no numbers,
 /// is bad input, named in one line.
-pub fn read_columns(path: &Path, column: &str, by: &[String]) -> Result<CsvColumns> {
-    let p = path.display();
-    let bytes = std::fs::read(path).map_err(|e| {
-        Error::input(format!(
-            "cannot read {p}: {}",
-            if e.kind() == std::io::ErrorKind::NotFound { "no such file".to_string() } else { e.to_string() }
-        ))
+pub fn read_columns(path: &Path, column: &str, by: &[String]) -> Result<CsvColumns, ReportError> {
+    let bad = |why: String| ReportError::Csv { path: path.to_path_buf(), why };
+    let bytes = std::fs::read(path).map_err(|e| ReportError::Read {
+        path: path.to_path_buf(),
+        why: if e.kind() == std::io::ErrorKind::NotFound {
+            "no such file".to_string()
+        } else {
+            e.to_string()
+        },
     })?;
     let mut r = csv::ReaderBuilder::new().flexible(true).from_reader(bytes.as_slice());
-    let header = r.headers().map_err(|e| Error::input(format!("{p}: not a CSV file: {e}")))?.clone();
+    let header = r.headers().map_err(|e| bad(format!("not a CSV file: {e}")))?.clone();
     if header.is_empty() || header.iter().all(|h| h.trim().is_empty()) {
-        return Err(Error::input(format!("{p}: empty file; expected a header row with a column `{column}`")));
+        return Err(bad(format!("empty file; expected a header row with a column `{column}`")));
     }
     let find = |name: &str| {
         header.iter().position(|h| h.trim() == name).ok_or_else(|| {
-            Error::input(format!(
-                "{p}: no column `{name}`{}; columns: {}",
+            bad(format!(
+                "no column `{name}`{}; columns: {}",
                 crate::error::hint(name, header.iter()),
                 header.iter().collect::<Vec<_>>().join(", ")
             ))
         })
     };
     let i = find(column)?;
-    let js: Vec<usize> = by.iter().map(|b| find(b)).collect::<Result<_>>()?;
+    let js: Vec<usize> = by.iter().map(|b| find(b)).collect::<Result<_, _>>()?;
     let mut cells = Vec::new();
     let mut xy = Vec::new();
     let num = |s: &str| s.trim().parse::<f64>().ok().filter(|v| v.is_finite());
     for (line, rec) in r.records().enumerate() {
-        let rec = rec.map_err(|e| Error::input(format!("{p}: row {}: {e}", line + 2)))?;
+        let rec = rec.map_err(|e| bad(format!("row {}: {e}", line + 2)))?;
         let cell = rec.get(i).unwrap_or("");
         if let Some(y) = num(cell) {
             let x: Option<Vec<f64>> = js.iter().map(|&j| num(rec.get(j).unwrap_or(""))).collect();
@@ -734,8 +738,8 @@ pub fn read_columns(path: &Path, column: &str, by: &[String]) -> Result<CsvColum
     }
     let c = stats::parse_cells(cells.iter().map(String::as_str));
     if c.values.is_empty() {
-        return Err(Error::input(format!(
-            "{p}: column `{column}` has no numbers ({} empty, {} not numbers)",
+        return Err(bad(format!(
+            "column `{column}` has no numbers ({} empty, {} not numbers)",
             c.empty, c.non_numeric
         )));
     }

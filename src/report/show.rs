@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use crate::error::{Error, Result};
+use super::ReportError;
+use crate::error::Result;
 use crate::measure::quality::{self, Profile, Quality};
 use crate::outcome::{RunFailure, RunResult};
 use crate::run::screen::Screen;
@@ -46,11 +47,7 @@ pub fn show(dir: &Path, index: usize) -> Result<PointPage> {
     let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
     let n = manifest.points.len();
     let Some(point) = manifest.points.get(index) else {
-        return Err(Error::input(format!(
-            "{}: no point {index}; the sweep has {n} points (indices 0 to {})",
-            dir.display(),
-            n.saturating_sub(1)
-        )));
+        return Err(ReportError::NoPoint { dir: dir.to_path_buf(), index, points: n }.into());
     };
     let store = Store::open(dir);
     let (statuses, _, _) = Screen::of(&sweep).statuses(&store, &manifest);

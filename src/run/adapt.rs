@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
-use super::{RunOptions, Summary};
+use super::{RunError, RunOptions, Summary};
 use crate::analysis::adapt::{self as criterion, Choice};
 use crate::analysis::convergence::{judge, Criteria, SpaceStats};
 use crate::analysis::emulator::{self, Emulator};
@@ -252,7 +252,7 @@ fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &AdaptWatch, ran: usize) 
     }
     let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
     let DesignRecord::Adapt { batch, max, seed, .. } = manifest.design else {
-        return Err(Error::input(format!("{}: not an adaptive sweep", dir.display())));
+        return Err(RunError::Dir { path: dir.to_path_buf(), why: "not an adaptive sweep".into() }.into());
     };
     let Some(last) = manifest.spaces.last() else { return Ok(false) };
     let Some((label, em, (x, y, se))) = watch.last.as_ref().filter(|(l, ..)| *l == last.label) else {
@@ -366,5 +366,5 @@ fn write_batches(
         ));
     }
     crate::sys::atomic::write(&path, text.as_bytes())
-        .map_err(|e| Error::internal(format!("{}: {e}", path.display())))
+        .map_err(|e| RunError::Write { path: path.clone(), source: e }.into())
 }

@@ -23,8 +23,14 @@ use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Error, Result};
+use crate::error::Result;
+use crate::run::ClusterError;
 use crate::store::{Manifest, PointStatus, RunState, Store};
+
+/// A refused flag of `sweep submit` / `sweep work` (bad input).
+fn flag(given: String, why: String) -> crate::Error {
+    ClusterError::Flag { given, why }.into()
+}
 
 /// The built-in Slurm template.
 pub const SLURM_TEMPLATE: &str = include_str!("../../templates/slurm.tera");
@@ -138,21 +144,18 @@ impl Layout {
         let text = match std::fs::read_to_string(&path) {
             Ok(t) => t,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-            Err(e) => return Err(Error::internal(format!("{}: {e}", path.display()))),
+            Err(source) => return Err(ClusterError::Io { path, source }.into()),
         };
-        let l: Layout = serde_json::from_str(&text).map_err(|e| {
-            Error::input(format!(
-                "{}: unreadable ({e}); it fixes which points each array index runs",
-                path.display()
-            ))
+        let l: Layout = serde_json::from_str(&text).map_err(|e| ClusterError::File {
+            path: path.clone(),
+            why: format!("unreadable ({e}); it fixes which points each array index runs"),
         })?;
         if l.format != LAYOUT_FORMAT || l.per_task == 0 {
-            return Err(Error::input(format!(
-                "{}: format {}, per_task {}: expected format {LAYOUT_FORMAT}, per_task ≥ 1",
-                path.display(),
-                l.format,
-                l.per_task
-            )));
+            let why = format!(
+                "format {}, per_task {}: expected format {LAYOUT_FORMAT}, per_task ≥ 1",
+                l.format, l.per_task
+            );
+            return Err(ClusterError::File { path, why }.into());
         }
         Ok(Some(l))
     }
@@ -252,7 +255,8 @@ pub struct SubmitCounts {
 pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendered, SubmitCounts>> {
     let (manifest, toml) = Store::read_manifest(dir)?;
     let sweep = crate::sweep::Sweep::parse(&toml, &dir.join("sweep.toml"))?;
-    let dir = std::path::absolute(dir).map_err(|e| Error::input(format!("{}: {e}", dir.display())))?;
+    let dir = std::path::absolute(dir)
+        .map_err(|e| ClusterError::File { path: dir.to_path_buf(), why: e.to_string() })?;
     check_word("DIR", &dir.display().to_string())?;
     check_word("the sweep executable", &o.exe.display().to_string())?;
     check_walltime(&o.walltime)?;
@@ -267,7 +271,7 @@ pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendere
     let fresh = |t: usize| Layout { format: LAYOUT_FORMAT, per_task: span.div_ceil(t.min(span).max(1)) };
     let mut layout_note = None;
     let layout = match (Layout::read(&dir)?, o.tasks) {
-        (_, Some(0)) => return Err(Error::input("--tasks 0: expected at least 1")),
+        (_, Some(0)) => return Err(flag("--tasks 0".into(), "expected at least 1".into())),
         (Some(old), Some(t)) if fresh(t).per_task != old.per_task => {
             // Another --tasks: lay the points out again only when no task of the old layout
             // still runs, since a running task's index means the old block of points.
@@ -293,10 +297,13 @@ pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendere
         (Some(l), _) => l,
         (None, Some(t)) => fresh(t),
         (None, None) => {
-            return Err(Error::input(format!(
-            "--tasks: required for the first submission of {} ({n} points): how many array tasks share them",
-            dir.display()
-        )))
+            return Err(flag(
+                "--tasks".into(),
+                format!(
+                    "required for the first submission of {} ({n} points): how many array tasks share them",
+                    dir.display()
+                ),
+            ))
         }
     };
     // Points a verified screen skipped need no task; while it is pending, the closed points do
@@ -328,7 +335,7 @@ pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendere
     let tasks = layout.tasks_of(wanted.iter().copied());
     let template = match &o.template {
         Some(p) => std::fs::read_to_string(p)
-            .map_err(|e| Error::input(format!("--template {}: {e}", p.display())))?,
+            .map_err(|e| flag(format!("--template {}", p.display()), e.to_string()))?,
         None => match o.scheduler {
             Scheduler::Slurm => SLURM_TEMPLATE.to_string(),
             _ => PBS_TEMPLATE.to_string(),
@@ -368,7 +375,7 @@ pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendere
         let name = format!("{}.tera", o.scheduler.script_ext());
         tera.add_raw_template(&name, &template)
             .and_then(|_| tera.render(&name, &c))
-            .map_err(|e| Error::input(format!("{name}: {}", tera_chain(&e))))
+            .map_err(|e| ClusterError::Template { name: name.clone(), why: tera_chain(&e) }.into())
     };
     let points = wanted.len();
     Ok(Ok(Rendered {
@@ -414,9 +421,10 @@ fn check_word(what: &str, v: &str) -> Result<()> {
     if ok {
         Ok(())
     } else {
-        Err(Error::input(format!(
-            "{what} {v:?}: expected letters, digits and / . _ - + @ , = : ~ only (it goes into #SBATCH/#PBS lines unquoted)"
-        )))
+        Err(flag(
+            format!("{what} {v:?}"),
+            "expected letters, digits and / . _ - + @ , = : ~ only (it goes into #SBATCH/#PBS lines unquoted)".into(),
+        ))
     }
 }
 
@@ -426,7 +434,10 @@ fn check_walltime(w: &str) -> Result<()> {
     let parts: Vec<&str> = rest.split(':').collect();
     let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
     let bad = || {
-        Err(Error::input(format!("--walltime {w:?}: expected HH:MM:SS (or D-HH:MM:SS, or minutes), longer than zero, with minutes and seconds below 60")))
+        Err(flag(
+            format!("--walltime {w:?}"),
+            "expected HH:MM:SS (or D-HH:MM:SS, or minutes), longer than zero, with minutes and seconds below 60".into(),
+        ))
     };
     if !(digits(days) && parts.len() <= 3 && parts.iter().all(|p| digits(p))) {
         return bad();
@@ -472,7 +483,7 @@ pub fn cluster_dir(dir: &Path) -> PathBuf {
 /// the array script's path and the report script's.
 pub fn write(dir: &Path, r: &Rendered) -> Result<(PathBuf, PathBuf)> {
     let cdir = cluster_dir(dir);
-    let io = |p: &Path, e: std::io::Error| Error::internal(format!("{}: {e}", p.display()));
+    let io = |p: &Path, source: std::io::Error| ClusterError::Io { path: p.to_path_buf(), source };
     std::fs::create_dir_all(cdir.join("logs")).map_err(|e| io(&cdir, e))?;
     let lpath = Layout::path(dir);
     let existing = Layout::read(dir)?;
@@ -527,15 +538,16 @@ fn run_submit(cmd: &str, script: &Path, extra: &[String]) -> Result<String> {
         c.arg("--parsable");
     }
     c.args(extra).arg(script);
-    let out = c.output().map_err(|e| Error::internal(format!("cannot run {cmd}: {e}")))?;
+    let out = c.output().map_err(|source| ClusterError::Start { cmd: cmd.into(), source })?;
     let stdout = String::from_utf8_lossy(&out.stdout).trim().to_string();
     if !out.status.success() || stdout.is_empty() {
-        return Err(Error::internal(format!(
-            "{cmd} {} failed ({}): {}",
-            script.display(),
-            out.status,
-            String::from_utf8_lossy(&out.stderr).trim()
-        )));
+        return Err(ClusterError::Submit {
+            cmd: cmd.into(),
+            script: script.to_path_buf(),
+            status: out.status.to_string(),
+            stderr: String::from_utf8_lossy(&out.stderr).trim().to_string(),
+        }
+        .into());
     }
     // `sbatch --parsable` prints `id` or `id;cluster`.
     Ok(stdout.lines().last().unwrap_or("").split(';').next().unwrap_or("").to_string())
@@ -589,13 +601,12 @@ pub fn work(
     let (manifest, _) = Store::read_manifest(dir)?;
     let n = manifest.points.len();
     if task_points(w.task, w.per_task, n).is_empty() {
-        return Err(Error::input(format!(
-            "--task {}: no such task; {} points at {} per task make tasks 0-{}",
-            w.task,
-            n,
+        let why = format!(
+            "no such task; {n} points at {} per task make tasks 0-{}",
             w.per_task,
             n.div_ceil(w.per_task).saturating_sub(1)
-        )));
+        );
+        return Err(flag(format!("--task {}", w.task), why));
     }
     let sweep = crate::run::load_dir_sweep(dir)?;
     if crate::run::standin::selected(&sweep) {

@@ -24,6 +24,7 @@
 
 pub mod adapt;
 pub mod cluster;
+mod error;
 mod executor;
 #[cfg(any(test, feature = "test-support"))]
 pub mod fake;
@@ -49,6 +50,7 @@ use crate::store::{self, DesignRecord, Manifest, PointStatus, RunState, Store, M
 use crate::sweep::Sweep;
 use crate::sys::process::CancelToken;
 
+pub use error::{ClusterError, RunError};
 pub use executor::{PointExecutor, PointJob, SweepExecutor, SweepJob};
 use plan::{check_extension, check_parameters};
 pub use plan::{
@@ -157,11 +159,9 @@ fn create<E: Executor>(
         // Another `sweep` may write the manifest while we look: only a stranger with no
         // manifest after it is one.
         if let Some(stranger) = store::foreign_entry(out).filter(|_| !Store::manifest_path(out).exists()) {
-            return Err(Error::input(format!(
-                "{}: exists and is not a sweep directory (no manifest.json, and it holds {stranger:?}); \
-                 choose another --out",
-                out.display()
-            )));
+            let why =
+                format!("exists and is not a sweep directory (no manifest.json, and it holds {stranger:?})");
+            return Err(RunError::OutDir { dir: out.to_path_buf(), why }.into());
         }
     }
     let SweepPlan { spaces, points, jobs } = plan_with_progress(exec, sweep, &design, cancel, progress)?;
@@ -246,11 +246,11 @@ pub fn resume_share<E: Executor>(
         } else {
             diff.join("; ")
         };
-        return Err(Error::input(format!(
-            "{}: the engine or templates changed since the sweep started ({what}); \
-             `--force` re-runs the changed points with the new ones",
-            dir.display()
-        )));
+        let why = format!(
+            "the engine or templates changed since the sweep started ({what}); \
+             `--force` re-runs the changed points with the new ones"
+        );
+        return Err(RunError::Dir { path: dir.to_path_buf(), why }.into());
     }
     let store = Store::open(dir);
     // The screen is decided again from each point (a pure function of the point and the
@@ -279,12 +279,12 @@ fn refuse_edited_sweep_toml(dir: &Path, toml: &str, changed: usize, points: usiz
     if edits.is_empty() {
         return Ok(());
     }
-    Err(Error::input(format!(
-        "{}: {}: edited since the sweep started, so {changed} of {points} points render differently; \
+    let why = format!(
+        "{}: edited since the sweep started, so {changed} of {points} points render differently; \
          restore it, or `--force` re-runs the changed points with the new value",
-        dir.join("sweep.toml").display(),
         edits.join("; ")
-    )))
+    );
+    Err(RunError::Dir { path: dir.join("sweep.toml"), why }.into())
 }
 
 /// Refuse a manifest whose hashes are those its points render to, but paired with the wrong
@@ -304,11 +304,11 @@ fn refuse_swapped(dir: &Path, manifest: &Manifest, rendered: &[&str]) -> Result<
         [i, j] => format!("points {i} and {j}"),
         w => format!("{} points (first {:?})", w.len(), &w[..w.len().min(4)]),
     };
-    Err(Error::input(format!(
-        "{}: the hashes of {pair} are swapped: each point names the run another point renders to; \
-         the manifest was edited or is damaged (swap them back, or start the sweep in a new directory)",
-        Store::manifest_path(dir).display()
-    )))
+    let why = format!(
+        "the hashes of {pair} are swapped: each point names the run another point renders to; \
+         the manifest was edited or is damaged (swap them back, or start the sweep in a new directory)"
+    );
+    Err(RunError::Dir { path: Store::manifest_path(dir), why }.into())
 }
 
 /// Run the unfinished points of a manifest.

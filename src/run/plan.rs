@@ -13,6 +13,7 @@ use crate::design::{halton::halton, lattice::lattice};
 use crate::error::{Error, Result};
 use crate::run::pool::Executor;
 use crate::run::progress::ProgressMode;
+use crate::run::RunError;
 use crate::store::{DesignRecord, Manifest, PointRecord, SpaceRecord, Store};
 use crate::sweep::Sweep;
 use crate::sys::process::CancelToken;
@@ -107,15 +108,19 @@ pub fn plan_with_progress<E: Executor>(
             let mut out = Vec::new();
             for &l in levels {
                 if l < 2 {
-                    return Err(Error::input(format!(
-                        "lattice level {l}: expected at least 2 values per dimension"
-                    )));
+                    return Err(RunError::Design {
+                        design: format!("lattice level {l}"),
+                        why: "expected at least 2 values per dimension".into(),
+                    }
+                    .into());
                 }
                 let n = l.checked_pow(dim as u32).filter(|&n| n <= MAX_POINTS);
                 if n.is_none() {
-                    return Err(Error::input(format!(
-                        "lattice level {l} in {dim} dimensions: more than {MAX_POINTS} points"
-                    )));
+                    return Err(RunError::Design {
+                        design: format!("lattice level {l} in {dim} dimensions"),
+                        why: format!("more than {MAX_POINTS} points"),
+                    }
+                    .into());
                 }
                 out.push((format!("lattice {l}"), lattice(dim, l)));
             }
@@ -123,9 +128,11 @@ pub fn plan_with_progress<E: Executor>(
         }
         DesignRecord::Lds { step, max, scrambling, seed } => {
             if *step == 0 || *max == 0 || *max > MAX_POINTS || max < step {
-                return Err(Error::input(format!(
-                    "lds step {step}, max {max}: expected 1 ≤ step ≤ max ≤ {MAX_POINTS}"
-                )));
+                return Err(RunError::Design {
+                    design: format!("lds step {step}, max {max}"),
+                    why: format!("expected 1 ≤ step ≤ max ≤ {MAX_POINTS}"),
+                }
+                .into());
             }
             let all = halton(dim, *max, *scrambling, *seed);
             let mut ends: Vec<usize> = (1..).map(|k| k * step).take_while(|&n| n < *max).collect();
@@ -136,9 +143,11 @@ pub fn plan_with_progress<E: Executor>(
         // results ([`crate::run::adapt`]).
         DesignRecord::Adapt { first, max, seed, .. } => {
             if *first == 0 || *max > MAX_POINTS || max < first {
-                return Err(Error::input(format!(
-                    "adapt first {first}, max {max}: expected 1 ≤ first ≤ max ≤ {MAX_POINTS}"
-                )));
+                return Err(RunError::Design {
+                    design: format!("adapt first {first}, max {max}"),
+                    why: format!("expected 1 ≤ first ≤ max ≤ {MAX_POINTS}"),
+                }
+                .into());
             }
             vec![(format!("adapt {first}"), halton(dim, *first, crate::sweep::Scrambling::Random, *seed))]
         }
@@ -228,7 +237,7 @@ pub fn resolved_toml(sweep: &Sweep, design: &DesignRecord) -> Result<String> {
             f.design.adapt.seed = *seed;
         }
     }
-    let body = toml::to_string(&f).map_err(|e| Error::internal(format!("resolved sweep: {e}")))?;
+    let body = toml::to_string(&f).map_err(|e| RunError::Resolve(e.to_string()))?;
     Ok(format!(
         "# The sweep as resolved by demsweep {} (resolved-sweep format {}).\n{body}",
         env!("CARGO_PKG_VERSION"),
@@ -239,9 +248,8 @@ pub fn resolved_toml(sweep: &Sweep, design: &DesignRecord) -> Result<String> {
 /// Whether `out` can be a sweep directory: an existing directory we may write in, or a path
 /// whose nearest existing ancestor is one. Checked before anything is written or run; the
 /// message names the path and what is wrong with it.
-pub fn check_out_dir(out: &Path) -> Result<()> {
-    let d = out.display();
-    let bad = |what: String| Err(Error::input(format!("{d}: {what}; choose another --out")));
+pub fn check_out_dir(out: &Path) -> Result<(), RunError> {
+    let bad = |why: String| Err(RunError::OutDir { dir: out.to_path_buf(), why });
     match std::fs::metadata(out) {
         Ok(m) if !m.is_dir() => bad("exists and is not a directory".into()),
         Ok(_) => match writable(out) {
@@ -249,7 +257,8 @@ pub fn check_out_dir(out: &Path) -> Result<()> {
             Err(e) => bad(format!("cannot write in it ({})", plain_io(&e))),
         },
         Err(e) if matches!(e.kind(), std::io::ErrorKind::NotFound | std::io::ErrorKind::NotADirectory) => {
-            let abs = std::path::absolute(out).map_err(|e| Error::input(format!("{d}: {e}")))?;
+            let abs = std::path::absolute(out)
+                .map_err(|e| RunError::Dir { path: out.to_path_buf(), why: e.to_string() })?;
             let mut up = abs.parent();
             while let Some(p) = up {
                 match std::fs::metadata(p) {
@@ -323,38 +332,36 @@ pub(super) fn check_extension(
         Some(v)
     };
     if std::mem::discriminant(&old.design) != std::mem::discriminant(&new.design) {
-        return Err(Error::input(format!(
-            "{d}: holds a {} sweep, not a {} one; choose another --out",
-            design_kind(&old.design),
-            design_kind(&new.design)
-        )));
+        let why =
+            format!("holds a {} sweep, not a {} one", design_kind(&old.design), design_kind(&new.design));
+        return Err(RunError::OutDir { dir: dir.to_path_buf(), why }.into());
     }
     if without_design(old_toml) != without_design(new_toml) {
-        return Err(Error::input(format!(
-            "{d}: holds sweep `{}` made from a different sweep file (compare {d}/sweep.toml); \
-             choose another --out",
-            old.name
-        )));
+        let why =
+            format!("holds sweep `{}` made from a different sweep file (compare {d}/sweep.toml)", old.name);
+        return Err(RunError::OutDir { dir: dir.to_path_buf(), why }.into());
     }
     let diff = identity_diff(&old.identity, &new.identity);
     if !diff.is_empty() {
-        return Err(Error::input(format!(
-            "{d}: the engine or templates changed since it was made ({}); choose another --out, \
+        let why = format!(
+            "the engine or templates changed since it was made ({}); choose another --out, \
              or `sweep resume {d} --force` to re-run its points",
             diff.join("; ")
-        )));
+        );
+        return Err(RunError::Dir { path: dir.to_path_buf(), why }.into());
     }
     // An adaptive design is planned a batch at a time: its first batch starts the points
     // already there.
     let grows = old.points.len() <= new.points.len() || matches!(new.design, DesignRecord::Adapt { .. });
     let prefix = grows && old.points.iter().zip(&new.points).all(|(a, b)| a.hash == b.hash);
     if !prefix {
-        return Err(Error::input(format!(
-            "{d}: its {} points are not the first points of this design ({}); a design can \
-             only be extended (larger --max, more levels); choose another --out",
+        let why = format!(
+            "its {} points are not the first points of this design ({}); a design can \
+             only be extended (larger --max, more levels)",
             old.points.len(),
             design_label(&new.design)
-        )));
+        );
+        return Err(RunError::OutDir { dir: dir.to_path_buf(), why }.into());
     }
     Ok(())
 }
@@ -442,14 +449,14 @@ pub fn load_dir_sweep(dir: &Path) -> Result<Sweep> {
 /// The manifest's `parameters` are the swept parameters of the directory's `sweep.toml`.
 pub(super) fn check_parameters(dir: &Path, manifest: &Manifest, sweep: &Sweep) -> Result<()> {
     if sweep.names() != manifest.parameters {
-        return Err(Error::input(format!(
-            "{}: parameters [{}] are not the swept parameters of {} [{}]; the manifest or the \
+        let why = format!(
+            "parameters [{}] are not the swept parameters of {} [{}]; the manifest or the \
              sweep file was edited",
-            Store::manifest_path(dir).display(),
             manifest.parameters.join(", "),
             dir.join("sweep.toml").display(),
             sweep.names().join(", ")
-        )));
+        );
+        return Err(RunError::Dir { path: Store::manifest_path(dir), why }.into());
     }
     Ok(())
 }

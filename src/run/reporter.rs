@@ -6,11 +6,12 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::time::Instant;
 
 use super::Summary;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::outcome::RunOutcome;
 use crate::run::pool::{Event, Flow};
 use crate::run::progress::{Counts, Progress, ProgressMode};
 use crate::run::screen::{Screen, Verdict};
+use crate::run::RunError;
 use crate::store::{self, Manifest, PointRecord, PointStatus, SpaceRecord, Store};
 
 use crate::analysis::convergence::{judge, space_values, Criteria, SpaceStats};
@@ -316,14 +317,8 @@ impl<'a> Reporter<'a> {
         self.write_results();
         self.progress.finish(&self.counts);
         if let Some(e) = self.errors.first() {
-            let more = match self.errors.len() {
-                1 => String::new(),
-                n => format!(" ({n} write errors in all)"),
-            };
-            return Err(Error::internal(format!(
-                "{e}{more}; started no run after it; once that is fixed, `sweep resume {}` finishes the sweep",
-                self.store.dir().display()
-            )));
+            let (first, count, dir) = (e.to_string(), self.errors.len(), self.store.dir().to_path_buf());
+            return Err(RunError::Writes { first, count, dir }.into());
         }
         let c = self.counts;
         let judged = self.screen.judge(&self.manifest.points, &self.status, &self.sample, &BTreeSet::new());

@@ -251,7 +251,7 @@ pub fn preview(sweep: &Sweep, values: &[Vec<f64>]) -> crate::Result<Vec<&'static
             let closed = closes && {
                 let parameters = crate::point::resolve(sweep, v);
                 crate::scenes::build(&parameters, &sweep.file.scene)
-                    .map_err(|e| crate::Error::input(format!("{}: {e}", sweep.path.display())))?
+                    .map_err(|source| crate::point::PointError::Scene { path: sweep.path.clone(), source })?
                     .nothing_passes()
             };
             Ok(PointRecord { index, values: v.clone(), hash: String::new(), closed })

@@ -19,12 +19,12 @@ use std::path::Path;
 
 use sha2::{Digest, Sha256};
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::outcome::{RunOutcome, RunResult, RESULT_FORMAT, VX_LAYERS};
 use crate::point::deck::Template;
-use crate::point::{resolve, RESULT};
+use crate::point::{resolve, PointError, RESULT};
 use crate::run::pool::Executor;
-use crate::sweep::Sweep;
+use crate::sweep::{Sweep, SweepError};
 use crate::sys::atomic::write_json;
 use crate::sys::process::CancelToken;
 
@@ -58,9 +58,12 @@ impl StandIn {
     /// template that does not load. (Each point's bounds are checked as it is prepared.)
     pub fn new(sweep: Sweep) -> Result<StandIn> {
         if let Some(path) = sweep.template_path() {
-            let layout = crate::scenes::of(&sweep.file.scene).map_err(|e| Error::input(e.to_string()))?;
-            Template::load(Some(&path), layout)
-                .map_err(|e| Error::input(format!("{}: scene.template: {e}", sweep.path.display())))?;
+            let layout = crate::scenes::of(&sweep.file.scene).map_err(PointError::Layout)?;
+            Template::load(Some(&path), layout).map_err(|e| SweepError::Key {
+                path: sweep.path.clone(),
+                key: "scene.template".into(),
+                why: e.to_string(),
+            })?;
         }
         Ok(StandIn { sweep })
     }
@@ -77,7 +80,7 @@ impl Executor for StandIn {
         let parameters = resolve(&self.sweep, swept);
         // The scene's bounds and unit slips, as a LIGGGHTS point is refused.
         crate::scenes::build(&parameters, &self.sweep.file.scene)
-            .map_err(|e| Error::input(format!("{}: {e}", self.sweep.path.display())))?;
+            .map_err(|source| PointError::Scene { path: self.sweep.path.clone(), source })?;
         let mut h = Sha256::new();
         h.update(format!("{NAME} {MODEL_VERSION}\n"));
         for (k, v) in &parameters {

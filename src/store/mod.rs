@@ -76,11 +76,13 @@ pub enum StoreError {
     NotASweep { path: PathBuf, reason: String },
 }
 
+/// A write that failed is internal (exit 4; a full disk says so); a directory that is not a
+/// sweep's is bad input (exit 2).
 impl From<StoreError> for crate::Error {
     fn from(e: StoreError) -> Self {
         match e {
-            StoreError::Io { .. } => crate::Error::internal(e.to_string()),
-            StoreError::NotASweep { .. } => crate::Error::input(e.to_string()),
+            StoreError::Io { .. } => crate::Error::Internal(Box::new(e)),
+            StoreError::NotASweep { .. } => crate::Error::Input(Box::new(e)),
         }
     }
 }

@@ -5,6 +5,7 @@
 //! key. Not responsible for the physics meaning of parameters: that is the scene's catalogue
 //! ([`crate::scene::params`]), which this module consults for names and units.
 
+mod error;
 mod file;
 pub mod space;
 mod validate;
@@ -12,6 +13,7 @@ mod validate;
 pub use crate::analysis::convergence::ConvergenceSettings;
 pub use crate::design::halton::Scrambling;
 pub use crate::scene::settings::{SceneSettings, SizeDistributionSpec, FIDELITIES, KNOBS};
+pub use error::SweepError;
 pub use file::{
     AdaptSettings, DesignSettings, LdsSettings, RunSettings, Scale, SweepFile, DEFAULT_SEED, SWEEP_FORMAT,
 };
@@ -20,8 +22,6 @@ use validate::{io_reason, toml_error, validate};
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
-
-use crate::error::{Error, Result};
 
 /// One parameter after validation.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -49,21 +49,17 @@ pub struct Sweep {
 }
 
 impl Sweep {
-    pub fn load(path: &Path) -> Result<Sweep> {
+    pub fn load(path: &Path) -> Result<Sweep, SweepError> {
+        let unreadable = |why: String| SweepError::Read { path: path.to_path_buf(), why };
         if path.is_dir() {
-            return Err(Error::input(format!(
-                "cannot read sweep file {}: it is a directory",
-                path.display()
-            )));
+            return Err(unreadable("it is a directory".into()));
         }
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            Error::input(format!("cannot read sweep file {}: {}", path.display(), io_reason(&e)))
-        })?;
+        let text = std::fs::read_to_string(path).map_err(|e| unreadable(io_reason(&e)))?;
         Sweep::parse(&text, path)
     }
 
     /// Parse and validate; `path` is only used in messages and to resolve relative paths.
-    pub fn parse(text: &str, path: &Path) -> Result<Sweep> {
+    pub fn parse(text: &str, path: &Path) -> Result<Sweep, SweepError> {
         let mut file: SweepFile = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
         // The preset fills the knobs the file leaves out (the file parsed, so this parses too).
         let raw: toml::Table = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
@@ -72,16 +68,17 @@ impl Sweep {
             .and_then(|v| v.as_table())
             .map(|t| t.keys().cloned().collect())
             .unwrap_or_default();
-        file.scene = file
-            .scene
-            .resolve_preset(&written)
-            .map_err(|e| Error::input(format!("{}: scene.fidelity: {e}", path.display())))?;
+        file.scene = file.scene.resolve_preset(&written).map_err(|e| SweepError::Key {
+            path: path.to_path_buf(),
+            key: "scene.fidelity".into(),
+            why: e,
+        })?;
         let (swept, fixed) = validate(&file, path)?;
         Ok(Sweep { path: path.to_path_buf(), file, swept, fixed })
     }
 
     /// This sweep with other scene settings, validated as if they had been written in the file.
-    pub fn with_scene(&self, scene: SceneSettings) -> Result<Sweep> {
+    pub fn with_scene(&self, scene: SceneSettings) -> Result<Sweep, SweepError> {
         let mut file = self.file.clone();
         file.scene = scene;
         let (swept, fixed) = validate(&file, &self.path)?;
@@ -113,7 +110,7 @@ impl Sweep {
 mod preset_tests {
     use super::*;
 
-    fn scene_of(scene: &str) -> Result<SceneSettings> {
+    fn scene_of(scene: &str) -> Result<SceneSettings, SweepError> {
         let text = format!("name = \"t\"\n[parameters]\ngap = {{ lo = 1.0, hi = 2.0 }}\n[scene]\n{scene}\n");
         Sweep::parse(&text, Path::new("t.toml")).map(|s| s.file.scene)
     }

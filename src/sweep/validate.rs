@@ -4,8 +4,9 @@
 use std::path::Path;
 
 use super::file::*;
+use super::SweepError;
 use super::{ParamKind, Parameter};
-use crate::error::{hint, Error, Result};
+use crate::error::hint;
 use crate::scene::params::{self, ParamInfo};
 use crate::scene::settings::{quoted, SizeDistributionSpec, FIDELITIES};
 
@@ -19,7 +20,7 @@ pub(super) fn io_reason(e: &std::io::Error) -> String {
 
 /// Turn a (multi-line) toml error into one line:
 /// `file:line: key.path: message (did you mean ..?)`.
-pub(super) fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> Error {
+pub(super) fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> SweepError {
     let start = e.span().map(|s| s.start.min(text.len()));
     let line = start.map(|s| text[..s].matches('\n').count() + 1);
     let msg = e
@@ -32,13 +33,11 @@ pub(super) fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> Error 
     let mut extra = String::new();
     // serde's message: "unknown field `frction`, expected one of `a`, `b`".
     if msg.starts_with("unknown field `heap_diameters`") {
-        let at = line.map(|l| format!(":{l}")).unwrap_or_default();
-        return Error::input(format!(
-            "{}{at}: scene.heap_diameters: replaced by the parameter heap_height, the heap's height above the \
+        let why = "replaced by the parameter heap_height, the heap's height above the \
              blade tip in mm (e.g. `heap_height = 20` under [parameters]); heap_diameters × D keeps today's \
-             heap at that D: 10 at D = 2 mm is heap_height = 20",
-            path.display()
-        ));
+             heap at that D: 10 at D = 2 mm is heap_height = 20";
+        let key = Some("scene.heap_diameters".to_string());
+        return SweepError::Syntax { path: path.to_path_buf(), line, key, why: why.into() };
     }
     if let Some(rest) = msg.strip_prefix("unknown field `") {
         if let Some((word, tail)) = rest.split_once('`') {
@@ -46,9 +45,8 @@ pub(super) fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> Error 
             extra = hint(word, candidates);
         }
     }
-    let at = line.map(|l| format!(":{l}")).unwrap_or_default();
-    let key = start.and_then(|s| key_at(text, s)).map(|k| format!(" {k}:")).unwrap_or_default();
-    Error::input(format!("{}{at}:{key} {msg}{extra}", path.display()))
+    let key = start.and_then(|s| key_at(text, s));
+    SweepError::Syntax { path: path.to_path_buf(), line, key, why: format!("{msg}{extra}") }
 }
 
 /// The dotted key whose `key = value` line holds byte `offset` of `text`, prefixed with the
@@ -72,9 +70,10 @@ fn key_at(text: &str, offset: usize) -> Option<String> {
     })
 }
 
-pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>, Vec<Parameter>)> {
-    let p = path.display();
-    let bad = |key: &str, what: String| Error::input(format!("{p}: {key}: {what}"));
+type Params = (Vec<Parameter>, Vec<Parameter>);
+
+pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<Params, SweepError> {
+    let bad = |key: &str, why: String| SweepError::Key { path: path.to_path_buf(), key: key.into(), why };
     if file.name.trim().is_empty() || file.name.contains(['/', '\\']) || file.name.starts_with('.') {
         return Err(bad("name", "expected a non-empty name without slashes".into()));
     }
@@ -157,7 +156,7 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<(Vec<Parameter>,
                 ));
             }
         }
-        let check = |k: &str, v: f64| -> Result<f64> {
+        let check = |k: &str, v: f64| -> Result<f64, SweepError> {
             if !v.is_finite() {
                 return Err(bad(&format!("{key}.{k}"), format!("{v} is not a finite number")));
             }
