@@ -108,6 +108,23 @@ pub type Res<T> = std::result::Result<T, Box<dyn std::error::Error>>;
 
 #[cfg(test)]
 mod tests {
+    use super::{exit, Error};
+
+    #[test]
+    fn each_kind_of_failure_ends_with_its_documented_exit_code() {
+        let io = || std::io::Error::other("disk on fire");
+        assert_eq!(Error::Input("a flag".into()).code(), exit::BAD_INPUT);
+        assert_eq!(Error::Engine("no LIGGGHTS".into()).code(), exit::ENGINE);
+        assert_eq!(Error::from(io()).code(), exit::INTERNAL);
+        assert_eq!(Error::RunsFailed { failed: 2, total: 9 }.code(), exit::RUNS_FAILED);
+        // The folder's error is the message, unchanged.
+        assert_eq!(Error::from(io()).to_string(), "disk on fire");
+        // Failed runs and a stopped sweep were reported where they happened; the rest is not.
+        assert!(Error::RunsFailed { failed: 2, total: 9 }.told());
+        assert!(Error::SweepInterrupted { finished: 3, total: 9 }.told());
+        assert!(!Error::Interrupted.told() && !Error::from(io()).told());
+    }
+
     #[test]
     fn swapped_letters_of_a_short_name_get_a_suggestion() {
         assert_eq!(super::did_you_mean("gpa", ["gap", "diameter"]), Some("gap"));
