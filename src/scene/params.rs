@@ -107,8 +107,7 @@ pub const CATALOGUE: &[ParamInfo] = &[
         default: 20.0,
         min: Bound::Open(0.0),
         max: Bound::None,
-        description:
-            "height of the heap in front of the blade above its tip (conveyor: held; gated: the dose's)",
+        description: "height of the heap held in front of the blade above its tip (conveyor layout)",
     },
     ParamInfo {
         name: "blade_speed",
