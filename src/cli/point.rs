@@ -232,7 +232,7 @@ pub(super) fn run_one(a: RunArgs) -> Result<(), Error> {
                 println!("{}", serde_json::to_string_pretty(&r).map_err(CliError::Json)?);
             } else {
                 println!("{}", used_line(&file_sweep, &a.set, &r));
-                print_result(&r, &scene);
+                print_result(&r, &scene, ctx.as_ref().and_then(|c| c.layout.result_lines(&r)));
             }
             if a.vtk {
                 eprintln!("ParaView: open {}/particles_*.vtk and blade_*.vtk", dir.display());
@@ -299,7 +299,30 @@ fn used_line(file_sweep: &Sweep, set: &[String], r: &demsweep::outcome::RunResul
 }
 
 /// A finished point for the terminal: MFR with its standard error, v_x by height, the run.
-fn print_result(r: &demsweep::outcome::RunResult, scene: &demsweep::scene::Scene) {
+fn print_result(r: &demsweep::outcome::RunResult, scene: &demsweep::scene::Scene, own: Option<Vec<String>>) {
+    own.iter().flatten().for_each(|line| println!("{line}"));
+    if own.is_none() {
+        print_flow(r, scene);
+    }
+    println!(
+        "particles  {}   steps {}   simulated {:.4} s   wall {:.1} s",
+        r.particles, r.steps, r.simulated_time, r.wall_time
+    );
+    let mut notes: Vec<&str> = Vec::new();
+    for w in &r.warnings {
+        match demsweep::engine::chatter(w) {
+            Some(note) if !notes.contains(&note) => notes.push(note),
+            Some(_) => {}
+            None => println!("warning    {w}"),
+        }
+    }
+    for n in notes {
+        println!("note       {n}");
+    }
+}
+
+/// MFR and the v_x profile of a spreading layout's result.
+fn print_flow(r: &demsweep::outcome::RunResult, scene: &demsweep::scene::Scene) {
     let se = r.mfr_se.map_or(String::new(), |se| format!(" ± {se:.4} (SE)"));
     println!(
         "MFR        {:.4}{se}  ({} particles; flux cross-check {:.4}, {})",
@@ -316,19 +339,4 @@ fn print_result(r: &demsweep::outcome::RunResult, scene: &demsweep::scene::Scene
     println!("v_x in front of the blade, layer k at z = gap + k·D/2 above the plate:");
     println!("  z (mm)     {}", heights.join(" "));
     println!("  v_x (m/s)  {}", vx.join(" "));
-    println!(
-        "particles  {}   steps {}   simulated {:.4} s   wall {:.1} s",
-        r.particles, r.steps, r.simulated_time, r.wall_time
-    );
-    let mut notes: Vec<&str> = Vec::new();
-    for w in &r.warnings {
-        match demsweep::engine::chatter(w) {
-            Some(note) if !notes.contains(&note) => notes.push(note),
-            Some(_) => {}
-            None => println!("warning    {w}"),
-        }
-    }
-    for n in notes {
-        println!("note       {n}");
-    }
 }

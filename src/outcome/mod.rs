@@ -3,6 +3,7 @@
 //! These are the records the pool, the store and the reports exchange. A failure is never turned
 //! into a number: it carries its class (which decides the retry policy) and a one-line reason.
 
+pub mod heap;
 pub mod layer;
 pub mod steady;
 
@@ -24,9 +25,12 @@ pub struct RunResult {
     pub hash: String,
     /// Every scene parameter, swept and fixed, in the sweep file's units.
     pub parameters: BTreeMap<String, f64>,
-    /// Mass flow ratio from the deposited layer (docs/scene.md "Metrics", thesis Eq. 15–17), dimensionless.
+    /// Mass flow ratio from the deposited layer (docs/scene.md "Metrics", thesis Eq. 15–17),
+    /// dimensionless. NaN, and absent from the file, where the scene measures no flow (a pour).
+    #[serde(default = "not_measured", skip_serializing_if = "is_not_measured")]
     pub mfr: f64,
     /// The same from the flux of particles past the blade's front face (cross-check).
+    #[serde(default = "not_measured", skip_serializing_if = "is_not_measured")]
     pub mfr_flux: f64,
     /// Particles counted in `mfr`: its counting noise is about 1/√n relative.
     pub mfr_particles: usize,
@@ -40,7 +44,9 @@ pub struct RunResult {
     pub mfr_windows: Vec<f64>,
     /// False when the sub-window MFRs show the flow had not reached a steady state.
     pub steady: bool,
-    /// Two-sided p-value of the steadiness test (the window's halves, counting noise).
+    /// Two-sided p-value of the steadiness test (the window's halves, counting noise); NaN and
+    /// absent where nothing flows.
+    #[serde(default = "not_measured", skip_serializing_if = "is_not_measured")]
     pub steady_p: f64,
     /// Mean v_x (m/s) per layer k = 1..12 at z = gap + k·D/2; `None` for an empty layer.
     pub vx: Vec<Option<f64>>,
@@ -64,6 +70,9 @@ pub struct RunResult {
     /// Its standard error (MFR's, scaled alike).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub layer_packing_se: Option<f64>,
+    /// The heap a pour left at rest: its angle of repose and packing (absent elsewhere).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub heap: Option<crate::outcome::heap::Heap>,
     /// Timesteps of the settle (until at rest, or the fixed settle of the thesis layout).
     pub settle_steps: u64,
     /// Timesteps run in all: settle and spread.
@@ -102,6 +111,7 @@ impl Default for RunResult {
             layer_thickness: None,
             layer_packing: None,
             layer_packing_se: None,
+            heap: None,
             settle_steps: 0,
             steps: 0,
             simulated_time: 0.0,
@@ -111,6 +121,15 @@ impl Default for RunResult {
             warnings: Vec::new(),
         }
     }
+}
+
+/// A number the scene does not measure: NaN in memory, absent from `result.json`.
+fn not_measured() -> f64 {
+    f64::NAN
+}
+
+fn is_not_measured(v: &f64) -> bool {
+    v.is_nan()
 }
 
 /// Why a run failed. The class decides whether the pool retries it.

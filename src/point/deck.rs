@@ -7,7 +7,7 @@ use std::path::Path;
 
 use sha2::{Digest, Sha256};
 
-use crate::scene::{mesh, pile, Scene};
+use crate::scene::{pile, Scene};
 use crate::scenes::Layout;
 use crate::sys::hex;
 
@@ -97,10 +97,15 @@ impl Deck {
     pub const INPUT: &'static str = "in.liggghts";
     pub const MESH: &'static str = "blade.stl";
 
-    pub fn new(template: &Template, scene: &Scene, engine_identity: &str) -> Result<Deck, DeckError> {
+    pub fn new(
+        template: &Template,
+        layout: &dyn Layout,
+        scene: &Scene,
+        engine_identity: &str,
+    ) -> Result<Deck, DeckError> {
         let input = template.render(scene)?;
-        let mesh = mesh::blade_stl(scene);
-        let pile = pile::pile_data(scene);
+        let mesh = layout.mesh(scene);
+        let pile = layout.pile(scene);
         let mut h = Sha256::new();
         for part in [input.as_bytes(), mesh.as_bytes(), pile.as_bytes(), engine_identity.as_bytes()] {
             // Length-prefix each part so no two different sets of parts hash alike.
@@ -122,6 +127,7 @@ impl Deck {
 mod tests {
     use super::*;
     use crate::scene::settings::{SceneSettings, SizeDistributionSpec};
+    use crate::scenes::moving_blade::GATED;
     use std::collections::BTreeMap;
 
     fn scene(settings: &SceneSettings, pairs: &[(&str, f64)]) -> Scene {
@@ -176,10 +182,10 @@ mod tests {
     fn the_hash_changes_with_deck_mesh_and_engine() {
         let t = Template::load(None, &crate::scenes::moving_blade::GATED).unwrap();
         let s = scene(&SceneSettings::gated(), &[]);
-        let a = Deck::new(&t, &s, "liggghts 3.8").unwrap();
-        assert_eq!(a.hash, Deck::new(&t, &s, "liggghts 3.8").unwrap().hash);
-        assert_ne!(a.hash, Deck::new(&t, &s, "liggghts 3.9").unwrap().hash);
+        let a = Deck::new(&t, &GATED, &s, "liggghts 3.8").unwrap();
+        assert_eq!(a.hash, Deck::new(&t, &GATED, &s, "liggghts 3.8").unwrap().hash);
+        assert_ne!(a.hash, Deck::new(&t, &GATED, &s, "liggghts 3.9").unwrap().hash);
         let s2 = scene(&SceneSettings::gated(), &[("gap", 3.5)]);
-        assert_ne!(a.hash, Deck::new(&t, &s2, "liggghts 3.8").unwrap().hash);
+        assert_ne!(a.hash, Deck::new(&t, &GATED, &s2, "liggghts 3.8").unwrap().hash);
     }
 }

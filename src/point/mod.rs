@@ -212,7 +212,7 @@ pub fn prepare(ctx: &PointContext, swept_values: &[f64]) -> Result<Prepared, Poi
     let parameters = resolve(&ctx.sweep, swept_values);
     let scene = crate::scenes::build(&parameters, &ctx.sweep.file.scene)
         .map_err(|source| PointError::Scene { path: ctx.sweep.path.clone(), source })?;
-    let mut deck = Deck::new(&ctx.template, &scene, &ctx.engine.identity())?;
+    let mut deck = Deck::new(&ctx.template, ctx.layout, &scene, &ctx.engine.identity())?;
     deck.header = header(&parameters, &deck.hash);
     Ok(Prepared { hash: deck.hash.clone(), parameters, scene, deck })
 }

@@ -99,6 +99,11 @@ pub enum SweepJob {
 impl SweepExecutor {
     /// The stand-in when the sweep selects it, else LIGGGHTS (found and identified here).
     pub fn for_sweep(sweep: &Sweep) -> Result<SweepExecutor> {
+        let layout = &sweep.file.scene.layout;
+        if let Some(why) = crate::scenes::lookup(layout).and_then(|l| l.refuses_sweeps()) {
+            let why = format!("scene.layout \"{layout}\": {why}");
+            return Err(crate::run::error::RunError::Dir { path: sweep.path.clone(), why }.into());
+        }
         if standin::selected(sweep) {
             Ok(SweepExecutor::StandIn(Box::new(StandIn::new(sweep.clone())?)))
         } else {

@@ -8,6 +8,7 @@
 
 pub mod conveyor;
 pub mod moving_blade;
+pub mod pour;
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -18,7 +19,8 @@ use crate::scene::settings::SceneSettings;
 use crate::scene::{plausible, Base, Scene, SceneError};
 
 /// Every layout, in the order `scene.layout`'s error lists them.
-pub const LAYOUTS: &[&dyn Layout] = &[&moving_blade::GATED, &moving_blade::THESIS, &conveyor::Conveyor];
+pub const LAYOUTS: &[&dyn Layout] =
+    &[&moving_blade::GATED, &moving_blade::THESIS, &conveyor::Conveyor, &pour::Pour];
 
 /// The layout named `name`.
 pub fn lookup(name: &str) -> Option<&'static dyn Layout> {
@@ -122,6 +124,28 @@ pub trait Layout: Sync {
 
     /// The heap it holds in front of the blade, if it holds one.
     fn held_heap(&self, _scene: &Scene) -> Option<HeldHeap> {
+        None
+    }
+
+    /// The deck's wall mesh (`blade.stl`): the blade, unless the layout moves another wall.
+    fn mesh(&self, scene: &Scene) -> String {
+        crate::scene::mesh::blade_stl(scene)
+    }
+
+    /// The deck's particle file (`pile.data`): the box, the dose and the substrate.
+    fn pile(&self, scene: &Scene) -> String {
+        crate::scene::pile::pile_data(scene)
+    }
+
+    /// Why a sweep (`sweep lds`, `sweep lattice`) of this layout is refused, if it is: the
+    /// sweep's statistics, report and emulator read MFR.
+    fn refuses_sweeps(&self) -> Option<&'static str> {
+        None
+    }
+
+    /// What `sweep run` prints of a result above its particles, steps and times, if not MFR
+    /// and v_x.
+    fn result_lines(&self, _r: &RunResult) -> Option<Vec<String>> {
         None
     }
 }

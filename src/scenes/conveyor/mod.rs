@@ -263,6 +263,7 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         layer_thickness: Some(scene.layer_thickness()),
         layer_packing: Some(scene.layer_packing(st.mfr)),
         layer_packing_se: Some(scene.layer_packing(st.mfr_se)),
+        heap: None,
         settle_steps: 0,
         steps,
         simulated_time: steps as f64 * scene.timestep,

@@ -359,6 +359,7 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         layer_thickness: Some(scene.layer_thickness()),
         layer_packing: Some(scene.layer_packing(m.mfr)),
         layer_packing_se: None,
+        heap: None,
         settle_steps,
         steps,
         simulated_time: steps as f64 * scene.timestep,

@@ -1,0 +1,292 @@
+//! The pour layout: the angle of repose of the sweep file's powder by the lifted-cylinder test
+//! (a hollow cylinder filled with powder on a plate is raised and the powder slumps into a
+//! heap; Roessler & Katterfeld 2018, Powder Technol. 330, 58–66, study this test for DEM
+//! calibration).
+//!
+//! The run: a column of `particles` spheres on a jittered lattice inside a cylinder
+//! [`CYLINDER_RADIUS_D`] mean diameters in radius settles for a fixed time, the cylinder rises
+//! at [`LIFT_SPEED`] × √(g·D) until its rim clears the column, and the heap settles until its
+//! kinetic energy is below the rest criterion (`scene.rest_speed`, as the gated layout's). Its
+//! angle and packing are measured from the particles at rest ([`heap`]). Plate and cylinder are
+//! of the powder's material (sliding and rolling friction with the powder's coefficients).
+//!
+//! The pour fills the common [`Scene`] as follows: `pile_x0..pile_x1` span the cylinder's
+//! diameter and `pile_n[2]` its lattice layers, `blade_top` is the cylinder's height and
+//! `blade_speed` its lift speed, `settle_steps` the column's settle, `approach_steps` the lift,
+//! `window_length_steps` the least settle of the heap before the rest criterion is checked.
+//! There is no blade, so no gap: `gap` is infinite (nothing is ever "closed").
+
+pub mod geometry;
+pub mod heap;
+
+use crate::engine::dump::read_dump;
+use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT};
+use crate::scene::plausible::short;
+use crate::scene::settings::SceneSettings;
+use crate::scene::{Base, Conveyor, Scene, GRAVITY, LAYER_FRACTION_MAX, ROLLING_MODEL};
+use crate::scenes::{BadSetting, BuiltinTemplate, Finished, Layout, Rejected, SetupRows};
+
+/// The pour layout (registered in [`crate::scenes::LAYOUTS`]).
+pub struct Pour;
+
+/// Inner radius of the cylinder, in mean diameters: 12 D across.
+pub const CYLINDER_RADIUS_D: f64 = 6.0;
+/// Particles in the column: a heap about 30 D across, a CPU minute at D = 2 mm.
+pub const PARTICLES: usize = 2000;
+/// Lift speed of the cylinder, in √(g·D) (14 mm/s at D = 2 mm). The heap depends on it: a
+/// faster lift lets the column run out as a collapse. At friction 0.3 and rolling friction
+/// 0.175 (D = 2 mm) the heap stood 8.4, 9.7 and 13.5 mm tall after lifts at 0.6, 0.3 and 0.1
+/// √(g·D), and 7.3 mm when the cylinder vanished at once (docs/scene.md "Pour").
+pub const LIFT_SPEED: f64 = 0.1;
+/// Half-width of the box over the foot radius of a heap of the column's powder at 10° and a
+/// packing of 0.6: the walls stay out of reach of all but the longest run-out.
+const BOX_MARGIN: f64 = 1.5;
+/// Lattice spacing of the column over the largest diameter.
+const LATTICE_CLEARANCE: f64 = 1.05;
+/// Packing of the column settled in the cylinder, a lower bound: sets how far the cylinder rises.
+const SETTLED_PACKING: f64 = 0.45;
+/// Simulated time between checks of the rest criterion, s.
+const SETTLE_CHECK_S: f64 = 0.005;
+
+/// The heap's particles at rest, in the run directory.
+pub const HEAP_DUMP: &str = "dump.heap";
+
+const REFUSED: &str = "a pour measures an angle of repose, not a mass flow rate, and a sweep's \
+     statistics and report read MFR; run its points one at a time with `sweep run` (each prints \
+     the angle with its standard error)";
+
+impl Layout for Pour {
+    fn name(&self) -> &'static str {
+        "pour"
+    }
+
+    fn template(&self) -> BuiltinTemplate {
+        BuiltinTemplate {
+            name: "pour.liggghts.tera",
+            source: include_str!("../../../templates/pour.liggghts.tera"),
+        }
+    }
+
+    fn check_settings(&self, s: &SceneSettings) -> Result<(), BadSetting> {
+        for (key, v) in [("scene.rest_speed", s.rest_speed), ("scene.settle_max_s", s.settle_max_s)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(BadSetting { key, why: format!("{v}: expected a positive number") });
+            }
+        }
+        Ok(())
+    }
+
+    fn derive(&self, base: Base, settings: &SceneSettings) -> Scene {
+        derive(base, settings)
+    }
+
+    fn atoms_kept(&self, scene: &Scene) -> Option<u64> {
+        // A closed box: nothing leaves.
+        Some(scene.particles as u64)
+    }
+
+    fn measure(&self, run: &Finished) -> Result<RunResult, Rejected> {
+        measure(run)
+    }
+
+    fn what_runs(&self, s: &Scene) -> String {
+        format!(
+            "{} particles poured from a {:.1} mm cylinder lifted at {:.3} m/s, settled until at rest",
+            s.particles,
+            2e3 * geometry::cylinder_radius(s),
+            s.blade_speed
+        )
+    }
+
+    fn setup_rows(&self, s: &SceneSettings) -> SetupRows {
+        SetupRows {
+            head: vec![("cylinder diameter (D)", short(2.0 * CYLINDER_RADIUS_D))],
+            tail: vec![("rest speed (× √(g·D))", short(s.rest_speed))],
+        }
+    }
+
+    fn mesh(&self, scene: &Scene) -> String {
+        geometry::tube_stl(scene)
+    }
+
+    fn pile(&self, scene: &Scene) -> String {
+        geometry::column_data(scene)
+    }
+
+    fn refuses_sweeps(&self) -> Option<&'static str> {
+        Some(REFUSED)
+    }
+
+    fn result_lines(&self, r: &RunResult) -> Option<Vec<String>> {
+        let h = r.heap.as_ref()?;
+        let sectors: Vec<String> = h.sector_angles_deg.iter().map(|a| format!("{a:.1}")).collect();
+        Some(vec![
+            format!(
+                "angle of repose  {:.2} ± {:.2}° (SE over {} sectors: {})",
+                h.angle_deg,
+                h.angle_se_deg,
+                sectors.len(),
+                sectors.join(" ")
+            ),
+            format!(
+                "heap             {:.1} mm tall, foot radius {:.1} mm, packing {:.3}; {} run out",
+                h.height_mm, h.base_radius_mm, h.packing, h.particles_run_out
+            ),
+        ])
+    }
+}
+
+/// The pour's scene from the point's common part.
+fn derive(base: Base, settings: &SceneSettings) -> Scene {
+    let Base { psd, d, d_min, density, youngs, poisson, rayleigh_time, timestep, .. } = base.clone();
+    let spacing = LATTICE_CLEARANCE * psd.max_diameter();
+    let radius = CYLINDER_RADIUS_D * d;
+    let per_layer = geometry::layer_sites(radius, spacing).len().max(1);
+    let layers = PARTICLES.div_ceil(per_layer);
+    let column = layers as f64 * spacing;
+    // The cylinder stands a diameter above the lattice, and rises until its rim is two
+    // diameters above the settled column (at a packing of 0.45, looser than any measured: 0.51
+    // for 2,000 spheres of 2 mm).
+    let cylinder_height = column + d;
+    let solid = PARTICLES as f64 * psd.mean_volume();
+    let lift = solid / (SETTLED_PACKING * std::f64::consts::PI * radius * radius) + 2.0 * d;
+    let speed = LIFT_SPEED * (GRAVITY * d).sqrt();
+    let foot_10deg =
+        (3.0 * solid / (LAYER_FRACTION_MAX * std::f64::consts::PI * 10f64.to_radians().tan())).cbrt();
+    let width = 2.0 * (BOX_MARGIN * foot_10deg).max(radius + 2.0 * d);
+    let z_hi = cylinder_height + lift + 2.0 * d;
+    let steps = |t: f64| ((t / timestep).ceil() as u64).max(1);
+    // The column falls a little as its lattice collapses: a free fall of its height and as long
+    // again.
+    let fall_time = 2.0 * (2.0 * column / GRAVITY).sqrt();
+    let mass = PARTICLES as f64 * density * psd.mean_volume();
+    let rest_speed = settings.rest_speed * (GRAVITY * d).sqrt();
+    let check = steps(SETTLE_CHECK_S);
+    let settle_least = fall_time;
+    let max_checks =
+        ((settings.settle_max_s - settle_least).max(0.0) / SETTLE_CHECK_S).ceil().max(1.0) as u64;
+    let v_ref = (2.0 * GRAVITY * z_hi).sqrt();
+    Scene {
+        density,
+        youngs_modulus: youngs,
+        poisson,
+        restitution: base.restitution,
+        friction: base.friction,
+        rolling_friction: base.rolling_friction,
+        rolling_model: ROLLING_MODEL,
+        layout: settings.layout.clone(),
+        blade_fixed: false,
+        size_classes: psd.classes.clone(),
+        seed: settings.seed,
+        particles: PARTICLES,
+        diameter: d,
+        profile_diameter: d,
+        gap: f64::INFINITY,
+        blade_speed: speed,
+        blade_thickness: 0.0,
+        blade_x0: 0.0,
+        blade_top: cylinder_height,
+        blade_y_inset: 0.0,
+        x_hi: width,
+        depth: width,
+        z_hi,
+        z_lo: 0.0,
+        substrate_particles: 0,
+        substrate_diameter: 0.0,
+        substrate_spacing: 0.0,
+        substrate_n: [0, 0],
+        gate_x: 0.0,
+        pile_x0: 0.5 * width - radius,
+        pile_x1: 0.5 * width + radius,
+        pile_z1: column,
+        pile_spacing: spacing,
+        pile_n: [0, 0, layers],
+        rayleigh_time,
+        timestep,
+        skin: settings.skin_diameters * d_min,
+        settle_steps: steps(fall_time),
+        rest_ke: 0.5 * mass * rest_speed * rest_speed,
+        rest_speed,
+        settle_check_steps: check,
+        settle_max_checks: max_checks,
+        approach_steps: steps(lift / speed),
+        ramp_steps: 1,
+        dump_every: 0,
+        window_length_steps: steps(settle_least),
+        traverse_steps: 0,
+        full_dump_every: 0,
+        vtk_every: if settings.vtk {
+            (crate::scene::VTK_EVERY_S / timestep).round().max(1.0) as u64
+        } else {
+            0
+        },
+        mesh_cell: d,
+        thermo_every: check.min(200),
+        vx_band: 0.0,
+        vx_length: 0.0,
+        ke_limit: 0.5 * mass * (10.0 * v_ref).powi(2),
+        conveyor: Conveyor::default(),
+    }
+}
+
+/// The heap at rest from `dump.heap`: its angle, SE and packing. Nothing flows in a pour, so
+/// every MFR field is NaN (absent from `result.json`).
+fn measure(run: &Finished) -> Result<RunResult, Rejected> {
+    let scene = run.scene;
+    let steps =
+        crate::engine::settled_at(&run.run.log).map_err(|(class, reason)| Rejected::new(class, reason))?;
+    let snaps = read_dump(run.run_dir.join(HEAP_DUMP), &["x", "y", "z", "radius"])
+        .map_err(|e| Rejected::new(FailureClass::Unparsable, e.to_string()))?;
+    let Some(last) = snaps.last() else {
+        return Err(Rejected::new(FailureClass::Unparsable, format!("{HEAP_DUMP}: no snapshot")));
+    };
+    let col = |name| last.column(name).expect("required column");
+    let (x, y, z, r) = (col("x"), col("y"), col("z"), col("radius"));
+    let grains: Vec<heap::Grain> = (0..last.len())
+        .map(|i| heap::Grain { x: last.get(i, x), y: last.get(i, y), z: last.get(i, z), r: last.get(i, r) })
+        .collect();
+    if grains.len() != scene.particles {
+        return Err(Rejected::new(
+            FailureClass::Unparsable,
+            format!("{HEAP_DUMP}: {} particles, expected {}", grains.len(), scene.particles),
+        ));
+    }
+    let heap = heap::measure(&grains, geometry::axis(scene), scene.diameter)
+        .map_err(|e| Rejected::new(FailureClass::Implausible, format!("no heap to measure: {e}")))?;
+    if !(heap.packing > 0.0 && heap.packing < 0.75) {
+        return Err(Rejected::new(
+            FailureClass::Implausible,
+            format!(
+                "heap packing {:.3}: outside (0, 0.75), beyond the densest packing of spheres",
+                heap.packing
+            ),
+        ));
+    }
+    Ok(RunResult {
+        format: RESULT_FORMAT,
+        hash: run.hash.to_string(),
+        parameters: run.parameters.clone(),
+        mfr: f64::NAN,
+        mfr_flux: f64::NAN,
+        mfr_particles: 0,
+        mfr_se: None,
+        steady_state: None,
+        mfr_windows: Vec::new(),
+        // The heap came to rest (a heap still moving fails as not-settled).
+        steady: true,
+        steady_p: f64::NAN,
+        vx: Vec::new(),
+        vx_se: Vec::new(),
+        particles: scene.particles,
+        layer: None,
+        heap: Some(heap),
+        settle_steps: steps,
+        steps,
+        simulated_time: steps as f64 * scene.timestep,
+        wall_time: run.run.wall_time,
+        cpu_time: run.run.cpu_time,
+        engine_version: run.engine_version.to_string(),
+        warnings: run.run.warnings.clone(),
+        ..RunResult::default()
+    })
+}
