@@ -30,6 +30,7 @@ mod contact;
 mod dump;
 mod fidelity;
 mod point;
+mod pour;
 mod recoater;
 mod stability;
 mod steady;

@@ -1,11 +1,10 @@
-//! The pour layout: a real LIGGGHTS lifted-cylinder test, and the refusal of a sweep of it.
-
-mod common;
+//! The pour layout: a rendered lifted-cylinder test, a real LIGGGHTS one, and the refusal of a
+//! sweep of it.
 
 use std::path::Path;
 use std::process::Output;
 
-use common::{require_liggghts, stderr, sweep_bin};
+use crate::support::{self, stderr, sweep_bin};
 
 const POUR: &str = "sweeps/pour.toml";
 
@@ -21,9 +20,11 @@ fn pour(rolling: f64, out: &Path) -> (Output, serde_json::Value) {
     (o, serde_json::from_str(&text).unwrap())
 }
 
+// Two pours of a few CPU minutes each: run with `--ignored`.
 #[test]
+#[ignore = "two LIGGGHTS pours, several CPU minutes"]
 fn more_rolling_friction_gives_a_steeper_heap_with_a_small_standard_error() {
-    require_liggghts!("more_rolling_friction_gives_a_steeper_heap_with_a_small_standard_error");
+    support::require_liggghts!("more_rolling_friction_gives_a_steeper_heap_with_a_small_standard_error");
     let dir = tempfile::tempdir().unwrap();
     let (low, high) = std::thread::scope(|s| {
         let low = s.spawn(|| pour(0.1, &dir.path().join("low")));
