@@ -33,7 +33,10 @@ pub(super) enum OnlyArg {
 /// left; and a job after the array (afterany) that runs `sweep report DIR`. An LDS sweep goes
 /// batch by batch (design.lds.step points per array): the job after each batch writes the
 /// report and submits the next batch only if the convergence rule has not held, so the chain
-/// stops where a local `sweep lds` would (--all-at-once: one array of every point). DIR must be
+/// stops where a local `sweep lds` would (--all-at-once: one array of every point). An adaptive
+/// sweep (`sweep adapt --plan`) goes the same way, batch by batch (design.adapt.batch points,
+/// the first design.adapt.first), the job after each batch planning the next from the results
+/// as a local `sweep adapt` would. DIR must be
 /// on a file system every node sees. Submitting again is the cluster's resume: only the indices
 /// whose points are unfinished are submitted (e.g. --array=3,17-19).
 #[derive(Args)]
@@ -81,7 +84,8 @@ pub(super) struct SubmitArgs {
     #[arg(long)]
     dry_run: bool,
     /// An LDS sweep: submit every point as one array, instead of one batch (design.lds.step
-    /// points) at a time with a job after each that stops the chain once the rule holds.
+    /// points) at a time with a job after each that stops the chain once the rule holds. Not
+    /// for an adaptive sweep, whose batches are planned from the results.
     #[arg(long)]
     all_at_once: bool,
     /// The job after a batch: the batch ended points below N; submit the next batch only if
@@ -161,23 +165,21 @@ pub(super) fn submit(a: SubmitArgs) -> Result<(), Error> {
         chain: None,
     };
     let (manifest, _) = demsweep::store::Store::read_manifest(&a.dir)?;
-    if let demsweep::store::DesignRecord::Adapt { .. } = manifest.design {
+    let adaptive = matches!(manifest.design, demsweep::store::DesignRecord::Adapt { .. });
+    if adaptive && a.all_at_once {
         return Err(flag(
-            a.dir.display().to_string(),
-            format!(
-                "an adaptive sweep plans each batch from the last one's results, which an array \
-                 job cannot do; run `sweep resume {}` inside one job instead",
-                a.dir.display()
-            ),
+            "--all-at-once",
+            "an adaptive sweep plans each batch from the results of the last one; it is submitted batch by batch",
         ));
     }
     let step = match manifest.design {
         demsweep::store::DesignRecord::Lds { step, .. } if !a.all_at_once => Some(step),
+        demsweep::store::DesignRecord::Adapt { batch, .. } => Some(batch),
         _ => None,
     };
     let mut opts = opts;
     if let Some(step) = step {
-        if chain_stops(&a.dir, a.after_batch)? {
+        if chain_stops(&a.dir, a.after_batch)? || adaptive && !next_adaptive_batch(&a.dir)? {
             return Ok(());
         }
         opts.chain = Some(cluster::Chain { step, next: next_command(&a.dir, &opts)? });
@@ -253,7 +255,7 @@ pub(super) fn submit(a: SubmitArgs) -> Result<(), Error> {
     Ok(())
 }
 
-/// Whether an LDS chain ends here: the MFR statistics converged (say so, submit nothing), or,
+/// Whether a chain (LDS or adaptive) ends here: the MFR statistics converged (say so, submit nothing), or,
 /// for the job after a batch, the batch left points unfinished (cut off: a re-submission by
 /// hand decides).
 fn chain_stops(dir: &std::path::Path, after_batch: Option<usize>) -> Result<bool, Error> {
@@ -282,6 +284,48 @@ fn chain_stops(dir: &std::path::Path, after_batch: Option<usize>) -> Result<bool
         }
     }
     Ok(false)
+}
+
+/// An adaptive chain between two arrays: judge the finished batches (as `sweep adapt` does) and,
+/// once every planned point is finished and the rule has not held, plan the next batch into the
+/// manifest (also under `--dry-run`: the batch is what a local `sweep adapt` would plan next,
+/// and its scripts are then written). `false` (said) when there is nothing to submit: converged,
+/// or `max` points planned.
+fn next_adaptive_batch(dir: &std::path::Path) -> Result<bool, Error> {
+    use demsweep::analysis::convergence::Criteria;
+    use demsweep::run::adapt::{self, AdaptWatch, Standing};
+    let sweep = demsweep::run::load_dir_sweep(dir)?;
+    let mut watch = AdaptWatch::new(dir, &sweep, Criteria::from_settings(&sweep.file.convergence));
+    let (manifest, _) = demsweep::store::Store::read_manifest(dir)?;
+    let n = manifest.points.len();
+    match adapt::standing(dir, &mut watch)? {
+        Standing::Unfinished(_) => Ok(true),
+        Standing::Converged { label, points } => {
+            eprintln!("nothing to submit: converged after {label} ({points} points)");
+            Ok(false)
+        }
+        Standing::Open => {
+            let exec = demsweep::run::SweepExecutor::for_sweep(&sweep)?;
+            if adapt::plan_after(dir, &exec, &watch)? {
+                let (now, _) = demsweep::store::Store::read_manifest(dir)?;
+                eprintln!(
+                    "the rule has not held after {n} points: planned the next batch, points {n}-{} \
+                     ({}, batches.csv says why)",
+                    now.points.len() - 1,
+                    now.spaces.last().map_or("", |s| s.label.as_str())
+                );
+                Ok(true)
+            } else {
+                eprintln!(
+                    "nothing to submit: the rule has not held by design.adapt.max ({n} points); \
+                     `sweep adapt {}/sweep.toml --max M --out {}` raises it",
+                    dir.display(),
+                    dir.display()
+                );
+                Ok(false)
+            }
+        }
+    }
 }
 
 /// The command the job after a batch runs: this submission again, as the judge of the batch.

@@ -72,6 +72,12 @@ enum Command {
     /// posterior variance, each over its scale (docs/statistics.md "Adaptive design");
     /// DIR/batches.csv says why each point was chosen. A seeded adapt with the same results
     /// plans the same points; `sweep resume DIR` continues it. Ends by writing the report.
+    /// On a cluster: `--plan`, then `sweep submit DIR` runs each batch as an array job and
+    /// plans the next in a job after it.
+    #[command(
+        after_help = "Examples:\n  sweep adapt sweeps/thesis-lds.toml --max 240 --out runs/ad   # here, batches of --jobs
+  sweep adapt my.toml --out /scratch/me/ad --plan  # the first batch, for `sweep submit`"
+    )]
     Adapt(sweep::AdaptArgs),
     /// Finish an interrupted sweep; every completed run is reused.
     ///

@@ -87,6 +87,11 @@ pub(super) struct AdaptArgs {
     convergence: ConvergenceArgs,
     #[command(flatten)]
     pool: PoolArgs,
+    /// Write the sweep directory with its first batch (manifest.json, sweep.toml, results.csv
+    /// with every point pending) and run nothing: for `sweep submit` on a cluster, which plans
+    /// each later batch between the arrays, or `sweep resume` later.
+    #[arg(long)]
+    plan: bool,
     #[arg(long, help = super::point::FORCE_HELP)]
     force: bool,
 }
@@ -264,6 +269,9 @@ pub(super) fn adapt(a: AdaptArgs) -> Result<(), Error> {
     driver::check_out_dir(&out)?;
     sweep.file.convergence.min_points = driver::judge_from(&out, &sweep, &design)?;
     demsweep::sys::process::install_interrupt_handler();
+    if a.plan {
+        return plan(&sweep, design, &out, &opts);
+    }
     let mut watch = AdaptWatch::new(&out, &sweep, Criteria::from_settings(&sweep.file.convergence));
     let cancel = CancelToken::new();
     let exec = driver::SweepExecutor::for_sweep(&sweep)?;

@@ -10,6 +10,10 @@
 //! stop if the rule holds, the sweep was interrupted, a point is still unfinished, or `max`
 //! points are planned; else plan the next batch and go round.
 //!
+//! On a cluster the loop is split between jobs: the array tasks run a batch, and the job after
+//! them judges it ([`standing`]) and plans the next ([`plan_after`]) before the next array is
+//! submitted ([`crate::run::cluster`]); the batches are those a local run plans.
+//!
 //! Several processes may share one directory. A batch is a pure function of the points and
 //! results before it, so two processes that finish a batch plan the same next one; the first
 //! to take the directory's lock appends it, and the other finds it there and runs its share of
@@ -239,6 +243,48 @@ pub fn run<E: Executor>(
         s.reused = reused_first;
         before = Some(s);
     }
+}
+
+/// Where an adaptive sweep directory stands, judged from its finished batches alone.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Standing {
+    /// The rule held after the batch that ends the space `label` (`points` points).
+    Converged { label: String, points: usize },
+    /// This many planned points are not finished (not yet run, cut off, or held by a claim).
+    Unfinished(usize),
+    /// Every planned point is finished and the rule has not held: the next batch is due.
+    Open,
+}
+
+/// Judge the finished batches of the adaptive sweep in `dir` as [`run`] does, without running
+/// anything: the step of a cluster chain between two arrays, where the runs are the array
+/// tasks' ([`crate::run::cluster`]). `watch` then holds the last batch's emulator for
+/// [`plan_after`].
+pub fn standing(dir: &Path, watch: &mut AdaptWatch) -> Result<Standing> {
+    let (manifest, toml) = Store::read_manifest(dir)?;
+    let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
+    let (status, _, _) = crate::run::screen::Screen::of(&sweep).statuses(&Store::open(dir), &manifest);
+    for space in &manifest.spaces {
+        if space.points.iter().any(|&i| !status[i].is_finished()) {
+            break;
+        }
+        let rows: Vec<(&PointRecord, &PointStatus)> =
+            space.points.iter().map(|&i| (&manifest.points[i], &status[i])).collect();
+        if watch.space_complete(space, &rows) == Flow::Drain {
+            return Ok(Standing::Converged { label: space.label.clone(), points: rows.len() });
+        }
+    }
+    match status.iter().filter(|s| !s.is_finished()).count() {
+        0 => Ok(Standing::Open),
+        n => Ok(Standing::Unfinished(n)),
+    }
+}
+
+/// After [`standing`] said [`Standing::Open`]: append the next batch to the manifest, as [`run`]
+/// would. `false` when `max` points are planned already.
+pub fn plan_after<E: Executor>(dir: &Path, exec: &E, watch: &AdaptWatch) -> Result<bool> {
+    let (manifest, _) = Store::read_manifest(dir)?;
+    plan_next(dir, exec, watch, manifest.points.len())
 }
 
 /// Append the next batch to the manifest, planned from `watch`'s last emulator (`ran`: the

@@ -113,12 +113,15 @@ pub struct SubmitOptions {
     pub chain: Option<Chain>,
 }
 
-/// An LDS sweep on a cluster, batch by batch: the array runs the first batch (nested space)
-/// with unfinished points, and the job after it writes the report and runs `next`, which
-/// judges convergence and submits the following batch only if the rule has not held.
+/// An LDS or adaptive sweep on a cluster, batch by batch: the array runs the first batch
+/// (nested space) with unfinished points, and the job after it writes the report and runs
+/// `next`, which judges convergence and submits the following batch only if the rule has not
+/// held (an adaptive sweep's next batch is planned there, [`crate::run::adapt::plan_after`]).
 #[derive(Debug, Clone)]
 pub struct Chain {
-    /// Points per batch (`design.lds.step`): the layout gives each batch `--tasks` tasks.
+    /// Points per batch (`design.lds.step`, `design.adapt.batch`): the layout gives each batch
+    /// `--tasks` tasks (an adaptive sweep's first batch, `design.adapt.first` points, as many
+    /// as its points need at the same points per task).
     pub step: usize,
     /// The shell command the job after the array runs once the report is written; it ends
     /// with `--after-batch`, to which the end of the batch's points is appended.

@@ -285,7 +285,7 @@ fn bad_adapt_sizes_are_refused_before_anything_is_written() {
         assert_eq!(err.trim().lines().count(), 1, "{err}");
         assert!(!out.exists(), "{args:?} wrote {}", out.display());
     }
-    // A submit of an adaptive directory says why not.
+    // An adaptive sweep on a cluster goes batch by batch: all at once is refused.
     let made = tmp.path().join("made");
     let o = common::sweep_bin()
         .args(["adapt", file.to_str().unwrap(), "-q", "--max", "20", "--out"])
@@ -296,9 +296,26 @@ fn bad_adapt_sizes_are_refused_before_anything_is_written() {
     let o = common::sweep_bin()
         .args(["submit"])
         .arg(&made)
+        .args(["--scheduler", "slurm", "--tasks", "2", "--all-at-once", "--dry-run"])
+        .output()
+        .unwrap();
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--all-at-once") && err.contains("batch by batch"), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(!made.join("cluster").exists());
+    // At its max with the rule not held, there is nothing to submit, and it says how to go on.
+    let o = common::sweep_bin()
+        .args(["submit"])
+        .arg(&made)
         .args(["--scheduler", "slurm", "--tasks", "2", "--dry-run"])
         .output()
         .unwrap();
-    assert_eq!(o.status.code(), Some(2));
-    assert!(common::stderr(&o).contains("adaptive sweep"), "{}", common::stderr(&o));
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains("nothing to submit: the rule has not held by design.adapt.max (20 points)"),
+        "{err}"
+    );
+    assert!(err.contains("--max M"), "{err}");
 }

@@ -257,6 +257,124 @@ fn an_lds_chain_on_slurm_stops_at_the_verdict() {
     );
 }
 
+/// An adaptive stand-in sweep whose rule holds at its second batch (`adapt 12`): its first
+/// batch of 8 points, then batches of 4.
+const ADAPT: &str = "name = \"achain\"\n[parameters]\ngap = { lo = 2.0, hi = 4.0 }\nblade_speed = { lo = 1.2, hi = 1.6 }\n\
+                     [design.adapt]\nfirst = 8\nbatch = 4\nmax = 24\n[convergence]\ntolerance = 2.0\nfloor = 2.0\nhold = 1\n\
+                     [run]\nengine = \"stand-in\"\n";
+
+/// `sweep adapt --plan` of [`ADAPT`] into `root/planned`, and a local `sweep adapt` of it into
+/// `root/local`, to compare the chain with.
+fn adapt_pair(root: &Path) -> (PathBuf, PathBuf) {
+    std::fs::write(root.join("s.toml"), ADAPT).unwrap();
+    for args in [&["--out", "planned", "--plan"][..], &["--out", "local", "-q"][..]] {
+        let o = output(sweep_bin().args(["adapt", "s.toml"]).args(args).current_dir(root));
+        assert!(o.status.success(), "{args:?}: {}", text(&o.stderr));
+    }
+    (root.join("planned"), root.join("local"))
+}
+
+/// The chain has planned and run the batches a local `sweep adapt` plans, and stopped where it
+/// stopped.
+fn assert_same_as_local_adapt(dir: &Path, local: &Path) {
+    let (got, want) = (Store::read_manifest(dir).unwrap().0, Store::read_manifest(local).unwrap().0);
+    assert_eq!(got.points, want.points, "the chain planned other points than a local adapt");
+    assert_eq!(got.spaces, want.spaces);
+    assert_eq!(results(dir), results(local));
+    assert_eq!(results(dir).len(), 12);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["verdict"]["status"], "converged", "{summary}");
+    assert_eq!(summary["verdict"]["n"], 12, "{summary}");
+    assert_finished_once(dir);
+}
+
+/// Array indices of a rendered Slurm script (`#SBATCH --array=4-5`).
+fn slurm_indices(script: &str) -> Vec<usize> {
+    let spec = script.lines().find_map(|l| l.strip_prefix("#SBATCH --array=")).expect("an array line");
+    spec.split(',')
+        .flat_map(|r| match r.split_once('-') {
+            Some((a, b)) => (a.parse().unwrap()..=b.parse().unwrap()).collect::<Vec<usize>>(),
+            None => vec![r.parse().unwrap()],
+        })
+        .collect()
+}
+
+/// The adaptive chain by hand, with no scheduler: each `submit --dry-run` renders one batch's
+/// array, its tasks run as Slurm would run them (the script, under `SLURM_ARRAY_TASK_ID`), and
+/// the next `submit` (the job after the batch) plans the next batch. The batches are those of a
+/// local `sweep adapt`, and the chain ends at its verdict.
+#[test]
+fn an_adaptive_chain_run_by_hand_plans_the_batches_of_a_local_adapt() {
+    let root = tempfile::Builder::new().prefix("cluster-adapt-").tempdir().unwrap();
+    let (dir, local) = adapt_pair(root.path());
+    let d = dir.to_str().unwrap();
+    let mut arrays = Vec::new();
+    let mut first = true;
+    loop {
+        let tasks: &[&str] = if first { &["--tasks", "2"] } else { &[] };
+        let o = output(sweep_bin().args(["submit", d, "--scheduler", "slurm", "--dry-run"]).args(tasks));
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        if text(&o.stderr).contains("nothing to submit") {
+            assert!(text(&o.stderr).contains("nothing to submit: converged"), "{}", text(&o.stderr));
+            break;
+        }
+        first = false;
+        let script = std::fs::read_to_string(dir.join("cluster/array.slurm")).unwrap();
+        let indices = slurm_indices(&script);
+        for &i in &indices {
+            let o = output(
+                Command::new("bash")
+                    .arg(dir.join("cluster/array.slurm"))
+                    .env("SLURM_ARRAY_TASK_ID", i.to_string()),
+            );
+            assert!(o.status.success(), "task {i}: {}", text(&o.stderr));
+        }
+        let report = std::fs::read_to_string(dir.join("cluster/report.slurm")).unwrap();
+        assert!(report.contains(" submit ") && report.contains("--after-batch"), "{report}");
+        arrays.push(indices);
+        assert!(arrays.len() <= 6, "the chain does not stop: {arrays:?}");
+    }
+    // The first batch (8 points at 2 per task: --tasks 2 of a batch of 4) on 4 tasks, the
+    // second on the next 2.
+    assert_eq!(arrays, [vec![0, 1, 2, 3], vec![4, 5]]);
+    let o = output(sweep_bin().args(["report", d]));
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert_same_as_local_adapt(&dir, &local);
+    let batches = std::fs::read_to_string(dir.join("batches.csv")).unwrap();
+    assert_eq!(batches, std::fs::read_to_string(local.join("batches.csv")).unwrap());
+}
+
+/// The same adaptive chain on the local Slurm: each batch one array, the job after it planning
+/// and submitting the next, until the rule holds.
+#[test]
+fn an_adaptive_chain_on_slurm_plans_each_batch_and_stops_at_the_verdict() {
+    let Some(conf) = local_slurm() else { return };
+    let root = tempfile::Builder::new().prefix("cluster-adapt-slurm-").tempdir().unwrap();
+    let (dir, local) = adapt_pair(root.path());
+    let (_job, msg) = submit(&conf, &dir, &["--tasks", "2"]);
+    assert!(msg.contains("8 points of the batch adapt 8 as array tasks 0-3 (2 per task)"), "{msg}");
+    let judges = || -> Vec<String> {
+        std::fs::read_dir(dir.join("cluster/logs"))
+            .unwrap()
+            .flatten()
+            .filter(|e| e.file_name().to_string_lossy().starts_with("report-"))
+            .map(|e| std::fs::read_to_string(e.path()).unwrap_or_default())
+            .collect()
+    };
+    wait_until("the chain to stop at the verdict", Duration::from_secs(600), || {
+        judges().iter().any(|l| l.contains("nothing to submit: converged"))
+    });
+    assert!(
+        judges().iter().any(|l| l.contains("planned the next batch, points 8-11 (adapt 12")),
+        "{:?}",
+        judges()
+    );
+    let subs = std::fs::read_to_string(dir.join("cluster/submissions.tsv")).unwrap();
+    assert_eq!(subs.lines().count(), 2, "two batches submitted: {subs}");
+    assert_same_as_local_adapt(&dir, &local);
+}
+
 // ---------------------------------------------------------------------------------------------
 // PBS
 
