@@ -298,7 +298,11 @@ fn next_adaptive_batch(dir: &std::path::Path) -> Result<bool, Error> {
     let mut watch = AdaptWatch::new(dir, &sweep, Criteria::from_settings(&sweep.file.convergence));
     let (manifest, _) = demsweep::store::Store::read_manifest(dir)?;
     let n = manifest.points.len();
-    match adapt::standing(dir, &mut watch)? {
+    let standing = adapt::standing(dir, &mut watch)?;
+    for line in watch.take_lines() {
+        eprintln!("{line}");
+    }
+    match standing {
         Standing::Unfinished(_) => Ok(true),
         Standing::Converged { label, points } => {
             eprintln!("nothing to submit: converged after {label} ({points} points)");

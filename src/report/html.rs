@@ -456,28 +456,59 @@ fn measured_sections(a: &Analysis, figures: &[Figure]) -> String {
             &format!(" Spaces below {} points are not judged (an extended sweep).", a.criteria.min_points),
         );
     }
-    push(
-        &mut h,
-        " Each cell: the statistic of MFR (–), its 95% percentile bootstrap interval (1,000 resamples) and its change from \
-         the previous space (✓: within the rule). †: the interval misses the estimate, which a percentile \
-         bootstrap interval of a skewed or bounded statistic can do on few points (the resamples' statistic is \
-         biased against the sample's).</p>\n<div class=\"wide\"><table><tr><th class=\"l\">space</th><th>N</th><th>done</th><th>failed</th>",
-    );
+    // An adaptive sweep's spaces are its batches: the table says what each batch left known.
+    let adaptive = a.spaces.first().is_some_and(|s| s.weights == super::adaptive::WEIGHTS);
+    if adaptive {
+        push(
+            &mut h,
+            " One row per batch of the adaptive design, judged once its last run finished (batches.csv says \
+             where each of its points went and why). Each cell: the statistic of MFR over the whole space from the \
+             emulator fitted to the runs so far (–), its 95% interval from the emulator's posterior, and its change \
+             from the previous batch (✓: within the rule); the sweep stops at the first batch where the rule has \
+             held as often in a row as it asks.</p>\n<div class=\"wide\"><table><tr><th class=\"l\">batch</th>\
+             <th>points</th><th>new</th><th>failed</th>",
+        );
+    } else {
+        push(
+            &mut h,
+            " Each cell: the statistic of MFR (–), its 95% percentile bootstrap interval (1,000 resamples) and its change from \
+             the previous space (✓: within the rule). †: the interval misses the estimate, which a percentile \
+             bootstrap interval of a skewed or bounded statistic can do on few points (the resamples' statistic is \
+             biased against the sample's).</p>\n<div class=\"wide\"><table><tr><th class=\"l\">space</th><th>N</th><th>done</th><th>failed</th>",
+        );
+    }
     for s in STATISTICS {
         push(&mut h, &format!("<th>{} (–)</th>", s.name()));
     }
-    push(&mut h, "<th>rule holds</th><th>converged</th></tr>\n");
-    for s in &a.spaces {
-        push(
-            &mut h,
-            &format!(
+    push(
+        &mut h,
+        if adaptive {
+            "<th>rule holds</th><th>stop</th></tr>\n"
+        } else {
+            "<th>rule holds</th><th>converged</th></tr>\n"
+        },
+    );
+    for (k, s) in a.spaces.iter().enumerate() {
+        let row = if adaptive {
+            let before = k.checked_sub(1).map_or(0, |i| a.spaces[i].n);
+            format!(
+                "<tr><td class=\"l\">{} ({})</td><td>{}</td><td>{}</td><td>{}</td>",
+                k + 1,
+                esc(&s.label),
+                s.n,
+                s.n.saturating_sub(before),
+                s.failed
+            )
+        } else {
+            format!(
                 "<tr><td class=\"l\">{}</td><td>{}</td><td>{}</td><td>{}</td>",
                 esc(&s.label),
                 s.n,
                 s.done,
                 s.failed
-            ),
-        );
+            )
+        };
+        push(&mut h, &row);
         for st in STATISTICS {
             let iv = s.intervals[st.name()];
             let ch = s.changes.as_ref().map(|c| &c[st.name()]);

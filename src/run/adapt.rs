@@ -148,6 +148,8 @@ pub struct AdaptWatch {
     /// The last judged space's label, its emulator if this process fitted it, and the points
     /// it is fitted to.
     last: Option<(String, Option<Emulator>, Fit)>,
+    /// A line per batch judged since [`AdaptWatch::take_lines`] was last called ([`batch_line`]).
+    lines: Vec<String>,
 }
 
 /// Unit points, MFR and SE of the points an emulator is fitted to.
@@ -164,8 +166,48 @@ impl AdaptWatch {
             labels: Vec::new(),
             converged_at: None,
             last: None,
+            lines: Vec::new(),
         }
     }
+
+    /// The lines of the batches judged since the last call, for the terminal: each batch's
+    /// statistics with their intervals and what the rule made of them.
+    pub fn take_lines(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.lines)
+    }
+}
+
+/// One judged batch in words: `batch 2 (adapt 12, 12 points): mean 0.0465 [0.0447, 0.0486],
+/// ...; the rule holds (1 in a row of 1): converged`.
+pub fn batch_line(
+    batch: usize,
+    label: &str,
+    st: &SpaceStats,
+    iv: &[Interval; 4],
+    j: &crate::analysis::convergence::Judgement,
+    hold: usize,
+) -> String {
+    let num = |v: Option<f64>| v.map_or("undefined".to_string(), |v| format!("{v:.4}"));
+    let stats: Vec<String> = crate::analysis::stats::STATISTICS
+        .iter()
+        .zip(iv)
+        .map(|(s, i)| format!("{} {} [{}, {}]", s.name(), num(s.of(&st.moments)), num(i.lo), num(i.hi)))
+        .collect();
+    let verdict = match &j.changes {
+        None => "the first batch, nothing to compare with yet".to_string(),
+        Some(_) if j.converged => format!("the rule holds ({} in a row of {hold}): converged", j.streak),
+        Some(_) if j.holds => format!("the rule holds ({} in a row of {hold})", j.streak),
+        Some(ch) => {
+            let off: Vec<&str> = crate::analysis::stats::STATISTICS
+                .iter()
+                .zip(ch)
+                .filter(|(_, c)| !c.within)
+                .map(|(s, _)| s.name())
+                .collect();
+            format!("the rule does not hold ({} not within it)", off.join(", "))
+        }
+    };
+    format!("batch {batch} ({label}, {} points): {}; {verdict}", st.n, stats.join(", "))
 }
 
 impl SpaceHook for AdaptWatch {
@@ -176,11 +218,16 @@ impl SpaceHook for AdaptWatch {
             Some(k) => k,
             None => {
                 let (x, y, se) = fit_data(&self.sweep, points);
-                let (st, _, em) = space_statistics(&self.dir, &space.label, points.len(), &x, &y, &se);
+                let (st, iv, em) = space_statistics(&self.dir, &space.label, points.len(), &x, &y, &se);
                 self.spaces.push(st);
                 self.labels.push(space.label.clone());
                 self.last = Some((space.label.clone(), em, (x, y, se)));
-                self.spaces.len() - 1
+                let k = self.spaces.len() - 1;
+                if let Some(j) = judge(&self.spaces, &self.criteria).last() {
+                    let line = batch_line(k + 1, &space.label, &self.spaces[k], &iv, j, self.criteria.hold);
+                    self.lines.push(line);
+                }
+                k
             }
         };
         match judge(&self.spaces[..=k], &self.criteria).last() {
@@ -231,6 +278,11 @@ pub fn run<E: Executor>(
             r => r?,
         };
         ran += s.ran;
+        if opts.progress != crate::run::progress::ProgressMode::Quiet {
+            for line in watch.take_lines() {
+                eprintln!("{line}");
+            }
+        }
         let reused_first = *reused.get_or_insert(s.reused);
         let stop =
             s.interrupted || s.stopped_after.is_some() || s.pending > 0 || watch.converged_at.is_some();

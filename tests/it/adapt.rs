@@ -319,3 +319,56 @@ fn bad_adapt_sizes_are_refused_before_anything_is_written() {
     );
     assert!(err.contains("--max M"), "{err}");
 }
+
+/// The terminal says each batch as it is judged (its statistics with their intervals and the
+/// rule's verdict), and the report's convergence table is the table of batches, with the same
+/// numbers as summary.json.
+#[test]
+fn each_batch_is_said_on_the_terminal_and_tabled_in_the_report() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = common::write_file(
+        &tmp.path().join("s.toml"),
+        "name = \"b\"\n[parameters]\ngap = { lo = 2.0, hi = 4.0 }\nblade_speed = { lo = 1.2, hi = 1.6 }\n\
+         [design.adapt]\nfirst = 8\nbatch = 4\nmax = 24\n[convergence]\ntolerance = 2.0\nfloor = 2.0\nhold = 1\n\
+         [run]\nengine = \"stand-in\"\n",
+    );
+    let out = tmp.path().join("out");
+    let o = common::sweep_bin()
+        .args(["adapt", file.to_str().unwrap(), "--jobs", "2", "--out"])
+        .arg(&out)
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let spaces = summary["spaces"].as_array().unwrap();
+    assert_eq!(spaces.len(), 2, "{summary}");
+    for (k, s) in spaces.iter().enumerate() {
+        let label = s["label"].as_str().unwrap();
+        let line = err
+            .lines()
+            .find(|l| l.starts_with(&format!("batch {} ({label}, {} points): ", k + 1, s["n"])))
+            .unwrap_or_else(|| panic!("no line for {label}: {err}"));
+        for stat in ["mean", "std", "skewness", "kurtosis"] {
+            let (v, iv) = (&s["statistics"][stat], &s["intervals"][stat]);
+            let said = format!(
+                "{stat} {:.4} [{:.4}, {:.4}]",
+                v.as_f64().unwrap(),
+                iv["lo"].as_f64().unwrap(),
+                iv["hi"].as_f64().unwrap()
+            );
+            assert!(line.contains(&said), "{said} not in {line}");
+        }
+        let converged = s["converged"].as_bool().unwrap();
+        assert_eq!(line.ends_with("converged"), converged, "{line}");
+    }
+    assert!(
+        err.contains("batch 1 (adapt 8, 8 points)") && err.contains("nothing to compare with yet"),
+        "{err}"
+    );
+    let html = std::fs::read_to_string(out.join("report/report.html")).unwrap();
+    assert!(html.contains("<th class=\"l\">batch</th><th>points</th><th>new</th>"), "no batch table");
+    assert!(html.contains("<td class=\"l\">2 (adapt 12)</td><td>12</td><td>4</td>"), "no row of batch 2");
+}
