@@ -47,13 +47,15 @@ pub struct SceneSettings {
     /// Conveyor layout: substrate travel per block of the deposit series, in diameters.
     pub block_diameters: f64,
     /// Conveyor layout: simulated time before the precision target is first checked, s (at
-    /// least 10 D of travel). The heap's start-up transient is a time, not a travel: MSER sees
-    /// 0.10–0.14 s at 0.1, 0.4 and 1.4 m/s, but the mean MFR over 8 points of the thesis space
-    /// still falls by 9 % from 0.15 s to 0.3 s and not from 0.3 s to 0.6 s (docs/study/steady),
-    /// so 0.3 s. The blocks after it are judged by the stop rule's MSER truncation.
+    /// least 10 D of travel). The start-up transient is a time, not a travel: run long, MFR
+    /// settles by 0.1, 0.15 and 0.3 s at 0.1, 0.4 and 1.4 m/s (10, 60 and 420 mm of travel) for
+    /// D 1–3 mm and heaps of 8–40 mm (docs/study/recoater), and 0.15 s leaves it 7–11 % high at
+    /// 1.4 m/s with heaps of 20–40 mm; so 0.3 s. The blocks after it are judged by the stop
+    /// rule's MSER truncation.
     pub warmup_s: f64,
-    /// Conveyor layout: the most travel, warm-up included, in diameters: where it ends the run
-    /// before the precision target is met, the point says so (`stop = "cap"`).
+    /// Conveyor layout: the most travel after the warm-up, in diameters (the window's precision
+    /// is a number of blocks): where it ends the run before the precision target is met, the
+    /// point says so (`stop = "cap"`). The warm-up is never cut short by it.
     pub window_cap_diameters: f64,
     /// Conveyor layout: the window runs until the standard error of MFR is at most this
     /// fraction of MFR ...

@@ -23,12 +23,18 @@ def mser(y):
             best, best_v = d, v
     return best
 
+def case_key(path):
+    """(D, v, heap) from a case's name, D*-v* or D*-v*-h*."""
+    parts = os.path.basename(path.rstrip("/")).split("-")
+    d, v = float(parts[0][1:]), float(parts[1][1:])
+    return (d, v, float(parts[2][1:]) if len(parts) > 2 else 20.0)
+
 def main():
     runs = sys.argv[1]
-    print("| D mm | v m/s | blocks | MSER cut (blocks) | travel mm | travel D | heap lengths | time s | MFR ± SE (after the cut) | layer packing | CPU s |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| D mm | v m/s | heap mm | blocks | MSER cut (blocks) | travel mm | travel D | heap lengths | time s | MFR ± SE (after the cut) | layer packing | CPU s |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     cases = [c for c in glob.glob(os.path.join(runs, "D*-v*")) if os.path.isdir(c)]
-    for case in sorted(cases, key=lambda p: (float(p.split("/D")[-1].split("-v")[0]), float(p.split("-v")[-1]))):
+    for case in sorted(cases, key=case_key):
         f = os.path.join(case, "result.json")
         status = "done"
         if not os.path.exists(f):
@@ -55,7 +61,7 @@ def main():
         se = statistics.stdev(w) / math.sqrt(len(w))
         packing = r.get("layer_packing")
         ratio = packing / r["mfr"] if packing and r["mfr"] else float("nan")
-        print(f"| {d} | {v} | {len(y)} | {cut} | {travel:.0f} | {travel / d:.0f} | {travel / heap_len:.2f} | {travel / 1e3 / v:.3f} | "
+        print(f"| {d} | {v} | {heap:g} | {len(y)} | {cut} | {travel:.0f} | {travel / d:.0f} | {travel / heap_len:.2f} | {travel / 1e3 / v:.3f} | "
               f"{mean:.4f} ± {se:.4f} | {mean * ratio:.4f} | {r.get('cpu_time') or float('nan'):.0f} |")
 
 if __name__ == "__main__":

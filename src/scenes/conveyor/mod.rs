@@ -107,7 +107,7 @@ impl Layout for Conveyor {
                     format!("{} × MFR or {}", short(sc.mfr_rel_se), short(sc.mfr_abs_se)),
                 ),
                 ("least window (blocks)", sc.min_window_blocks.to_string()),
-                ("window cap, travel (D)", short(sc.window_cap_diameters)),
+                ("window cap, travel after the warm-up (D)", short(sc.window_cap_diameters)),
             ],
             tail: Vec::new(),
         }
@@ -152,7 +152,8 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let x_hi = n_x as f64 * spacing;
     let block_steps = ((settings.block_diameters * d / (v * dt)).ceil() as u64).max(1);
     let blocks = |travel: f64| (travel / settings.block_diameters).ceil() as u64;
-    let max_blocks = blocks(settings.window_cap_diameters);
+    let warmup_blocks = blocks((settings.warmup_s * v).max(10.0 * d) / d);
+    let max_blocks = warmup_blocks + blocks(settings.window_cap_diameters);
     let blade_top = 2.0 * heap_height + 2.0 * d;
     let mean_volume = psd.mean_volume();
     let mass = heap_particles as f64 * s.density * mean_volume;
@@ -175,9 +176,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         delete_x1: blade_x0 - 10.0 * d,
         block_steps,
         insert_every: (block_steps / 5).max(1),
-        // Never more than the cap leaves room for: the cap wins, and the point says so.
-        warmup_blocks: blocks((settings.warmup_s * v).max(10.0 * d) / d)
-            .min(max_blocks.saturating_sub(settings.min_window_blocks as u64)),
+        warmup_blocks,
         min_window_blocks: settings.min_window_blocks as u64,
         max_blocks,
         ideal_block_mass: s.density * s.depth * gap * v * dt * block_steps as f64,
@@ -276,4 +275,29 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         return Err(Rejected::measured(FailureClass::Unsteady, format!("MFR not steady: {why}"), result));
     }
     moving_blade::check_result(scene, result)
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::BTreeMap;
+
+    use crate::scene::settings::SceneSettings;
+
+    #[test]
+    fn the_warm_up_is_whole_however_fine_the_powder_and_the_cap_counts_after_it() {
+        // D 0.5 mm at 1.4 m/s: 0.3 s is 420 mm of travel, 840 D, past a cap of 600 D counted
+        // from the start; the warm-up keeps its 0.3 s and the window its 600 D after it.
+        let values: BTreeMap<String, f64> = [("diameter", 0.5), ("gap", 1.25), ("blade_speed", 1.4)]
+            .iter()
+            .map(|(k, v)| (k.to_string(), *v))
+            .collect();
+        let settings = SceneSettings::default();
+        let scene = crate::scenes::build(&values, &settings).unwrap();
+        let c = &scene.conveyor;
+        let block_s = c.block_steps as f64 * scene.timestep;
+        let warmup_s = c.warmup_blocks as f64 * block_s;
+        assert!((0.3..0.3 + block_s).contains(&warmup_s), "warm-up {warmup_s} s");
+        let after = (c.max_blocks - c.warmup_blocks) as f64 * settings.block_diameters;
+        assert!((600.0..600.0 + settings.block_diameters).contains(&after), "{after} D after the warm-up");
+    }
 }
