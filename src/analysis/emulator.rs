@@ -23,6 +23,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
+use crate::analysis::simplex::minimise;
 use crate::analysis::stats::{percentile_sorted, Interval, Moments, STATISTICS};
 
 /// Most points the hyperparameters are fitted on (the likelihood costs N³/3 per evaluation).
@@ -197,58 +198,6 @@ fn clamp_params(p: &mut [f64], d: usize) {
     }
 }
 
-/// Nelder–Mead minimisation of `f` from `start` (steps of `step` in every coordinate).
-fn nelder_mead(f: &dyn Fn(&[f64]) -> f64, start: &[f64], step: f64, iters: usize, d: usize) -> Vec<f64> {
-    let m = start.len();
-    let mut simplex: Vec<(Vec<f64>, f64)> = (0..=m)
-        .map(|i| {
-            let mut p = start.to_vec();
-            if i > 0 {
-                p[i - 1] += step;
-            }
-            clamp_params(&mut p, d);
-            let v = f(&p);
-            (p, v)
-        })
-        .collect();
-    for _ in 0..iters {
-        simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
-        if (simplex[m].1 - simplex[0].1).abs() < 1e-6 {
-            break;
-        }
-        let centroid: Vec<f64> =
-            (0..m).map(|j| simplex[..m].iter().map(|s| s.0[j]).sum::<f64>() / m as f64).collect();
-        let along = |t: f64| {
-            let mut p: Vec<f64> = centroid.iter().zip(&simplex[m].0).map(|(c, w)| c + t * (c - w)).collect();
-            clamp_params(&mut p, d);
-            let v = f(&p);
-            (p, v)
-        };
-        let r = along(1.0);
-        if r.1 < simplex[0].1 {
-            let e = along(2.0);
-            simplex[m] = if e.1 < r.1 { e } else { r };
-        } else if r.1 < simplex[m - 1].1 {
-            simplex[m] = r;
-        } else {
-            let c = along(-0.5);
-            if c.1 < simplex[m].1 {
-                simplex[m] = c;
-            } else {
-                let best = simplex[0].0.clone();
-                for s in simplex.iter_mut().skip(1) {
-                    let mut p: Vec<f64> = best.iter().zip(&s.0).map(|(b, q)| b + 0.5 * (q - b)).collect();
-                    clamp_params(&mut p, d);
-                    let v = f(&p);
-                    *s = (p, v);
-                }
-            }
-        }
-    }
-    simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
-    simplex.swap_remove(0).0
-}
-
 impl Emulator {
     /// Fit to points `x` (unit coordinates), values `y` and their standard errors `se` (`None`:
     /// not recorded). `None` when there are fewer than [`MIN_POINTS`] points, y has no spread, or
@@ -282,9 +231,9 @@ impl Emulator {
         let f = |p: &[f64]| nll(&fx, &fz, &fs, p);
         let mut start = vec![0.3f64.ln(); d];
         start.extend([0.0, 1e-3f64.ln()]);
-        let mut best = nelder_mead(&f, &start, 1.0, 300 * (d + 2), d);
+        let mut best = minimise(&f, &start, 1.0, 300 * (d + 2), &|p| clamp_params(p, d));
         // A restart from the optimum escapes an early collapse of the simplex.
-        best = nelder_mead(&f, &best, 0.5, 150 * (d + 2), d);
+        best = minimise(&f, &best, 0.5, 150 * (d + 2), &|p| clamp_params(p, d));
         let theta: Vec<f64> = best[..d].iter().map(|v| v.exp()).collect();
         let (sigma2, mut nugget) = (best[d].exp(), best[d + 1].exp());
         // All points: add jitter until the factorisation succeeds.

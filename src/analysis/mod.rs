@@ -9,5 +9,6 @@ pub mod convergence;
 pub mod emulator;
 pub mod noise;
 pub mod sensitivity;
+pub mod simplex;
 pub mod stats;
 pub mod weights;

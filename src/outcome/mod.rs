@@ -73,6 +73,9 @@ pub struct RunResult {
     /// The heap a pour left at rest: its angle of repose and packing (absent elsewhere).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub heap: Option<crate::outcome::heap::Heap>,
+    /// The powder's sizes, for a size distribution (absent for one size).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sizes: Option<SizeSummary>,
     /// Timesteps of the settle (until at rest, or the fixed settle of the thesis layout).
     pub settle_steps: u64,
     /// Timesteps run in all: settle and spread.
@@ -112,6 +115,7 @@ impl Default for RunResult {
             layer_packing: None,
             layer_packing_se: None,
             heap: None,
+            sizes: None,
             settle_steps: 0,
             steps: 0,
             simulated_time: 0.0,
@@ -121,6 +125,24 @@ impl Default for RunResult {
             warnings: Vec::new(),
         }
     }
+}
+
+/// A size distribution in a few numbers, m: what a datasheet states, of what the run used.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SizeSummary {
+    /// Number-mean diameter (the scene's unit of length).
+    pub mean_diameter: f64,
+    /// D10, D50 and D90 by volume, as laser diffraction reports them.
+    pub d10: f64,
+    pub d50: f64,
+    pub d90: f64,
+    /// (D90 − D10) / D50.
+    pub span: f64,
+    /// Size classes the engine inserts.
+    pub classes: usize,
+    /// The lognormal's largest relative miss of the datasheet's D10/D50/D90.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fit_residual: Option<f64>,
 }
 
 /// A number the scene does not measure: NaN in memory, absent from `result.json`.

@@ -9,6 +9,8 @@
 //! plausibility bounds, and [`Scene`], the numbers a deck is rendered from. Each layout derives
 //! its [`Scene`] from the common [`Base`] ([`crate::scenes`]).
 
+pub mod bed;
+pub mod cohesion;
 pub mod mesh;
 pub mod params;
 pub mod passage;
@@ -22,11 +24,14 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
+use crate::outcome::SizeSummary;
 use crate::scene::settings::SceneSettings;
 use psd::SizeDistribution;
 
 /// Simulated time between the VTK files of `sweep run --vtk`, s.
 pub const VTK_EVERY_S: f64 = 0.02;
+/// LIGGGHTS's least particle volume by default (`fix particletemplate/sphere`, volume_limit), m³.
+pub const ENGINE_VOLUME_LIMIT: f64 = 1e-12;
 /// Standard gravity, m/s².
 pub const GRAVITY: f64 = 9.81;
 /// Number of equal sub-windows of the measurement window (steadiness check, dump cadence).
@@ -88,12 +93,16 @@ pub struct Scene {
     pub rolling_friction: f64,
     /// LIGGGHTS rolling-friction model (used when `rolling_friction` > 0).
     pub rolling_model: &'static str,
+    /// SJKR cohesion energy density, J/m³ ([`cohesion`]); 0: no cohesion.
+    pub cohesion_energy_density: f64,
     /// The layout's name (see [`crate::scenes`]).
     pub layout: String,
     /// The blade stands still (the substrate moves under it) instead of travelling.
     pub blade_fixed: bool,
     // Particles.
     pub size_classes: Vec<psd::SizeClass>,
+    /// The distribution in a few numbers (mean, D10/D50/D90 by volume, span, classes).
+    pub sizes: SizeSummary,
     /// Seed of the pile's diameters and jitter.
     pub seed: u64,
     pub particles: usize,
@@ -122,6 +131,9 @@ pub struct Scene {
     pub substrate_diameter: f64,
     pub substrate_spacing: f64,
     pub substrate_n: [usize; 2],
+    /// A bed of the powder in place of the lattice (conveyor, `substrate = "powder"`).
+    #[serde(skip)]
+    pub substrate_bed: Option<bed::Bed>,
     /// x of the gate closing the dose's region during the settle; 0: no gate.
     pub gate_x: f64,
     // The initial pile: a jittered simple-cubic block nx × ny × nz with this spacing, from x0.
@@ -200,8 +212,16 @@ pub struct Conveyor {
     pub ideal_block_mass: f64,
     pub mfr_rel_se: f64,
     pub mfr_abs_se: f64,
+    /// The substrate is a bed of the powder: its spheres reach above the deposit regions' floor,
+    /// so the deck deletes only powder from the delete region.
+    pub powder_bed: bool,
+    /// Bottom of the deposit strip and the delete region, m.
+    pub regions_z0: f64,
     /// Particle templates of the feed: diameter, mass fraction, prime seed.
     pub feed: Vec<FeedClass>,
+    /// The least particle volume the feed's templates accept, m³ (0: the engine's default,
+    /// 1e-12 m³, which refuses every sphere below 124 µm).
+    pub volume_limit: f64,
     /// Prime seeds of the feed's distribution and insertion.
     pub distribution_seed: u64,
     pub insert_seed: u64,
@@ -239,6 +259,8 @@ pub struct Base {
     pub restitution: f64,
     pub friction: f64,
     pub rolling_friction: f64,
+    /// SJKR cohesion energy density from the surface energy ([`cohesion`]), J/m³.
+    pub cohesion_energy_density: f64,
     pub rayleigh_time: f64,
     pub timestep: f64,
 }
@@ -280,6 +302,14 @@ impl Base {
         let youngs = (get("youngs_modulus") * settings.stiffness_factor).max(MIN_YOUNGS_MPA) * 1e6;
         let poisson = get("poisson");
 
+        let surface_energy = cohesion::scaled_surface_energy(
+            get("surface_energy"),
+            settings.cohesion_scaling,
+            youngs,
+            settings.material_youngs_gpa * 1e9,
+        );
+        let cohesion_energy_density = cohesion::sjkr_energy_density(surface_energy, d, youngs, poisson);
+
         let rayleigh_time = rayleigh_time(d_min / 2.0, density, youngs, poisson);
         let timestep = if settings.timestep_s > 0.0 {
             settings.timestep_s
@@ -305,6 +335,7 @@ impl Base {
             restitution: get("restitution"),
             friction: get("friction"),
             rolling_friction: get("rolling_friction"),
+            cohesion_energy_density,
             rayleigh_time,
             timestep,
         })
@@ -324,12 +355,20 @@ impl Scene {
         if self.substrate_particles == 0 {
             return 0.0;
         }
+        if let Some(bed) = &self.substrate_bed {
+            return bed.open_depth(self.min_diameter());
+        }
         pockets::open_depth(self.substrate_spacing, self.substrate_diameter, self.min_diameter())
     }
 
     /// The deposit's packing over the layer's thickness, for an MFR (mass over ρ·w·gap·v).
     pub fn layer_packing(&self, mfr: f64) -> f64 {
         mfr * self.gap / self.layer_thickness()
+    }
+
+    /// The sizes for result.json: `None` for one size.
+    pub fn sizes_of_a_distribution(&self) -> Option<SizeSummary> {
+        (self.size_classes.len() > 1).then(|| self.sizes.clone())
     }
 
     /// Particles of powder in the scene: the dose, or the held heap's target count.

@@ -143,6 +143,15 @@ pub const CATALOGUE: &[ParamInfo] = &[
         description: "Poisson's ratio",
     },
     ParamInfo {
+        name: "surface_energy",
+        unit: "J/m2",
+        // Non-cohesive, as every scene before it. Ti-6Al-4V: about 1e-4 (docs/powders.md).
+        default: 0.0,
+        min: Bound::Closed(0.0),
+        max: Bound::None,
+        description: "surface energy per surface (JKR); the deck's SJKR cohesion (docs/powders.md); 0: none",
+    },
+    ParamInfo {
         name: "weibull_shape",
         unit: "-",
         default: 4.0,

@@ -41,6 +41,9 @@ impl Scene {
         if self.substrate_particles == 0 {
             return 2.0 * r;
         }
+        if let Some(bed) = &self.substrate_bed {
+            return bed.lowest_top(2.0 * r);
+        }
         let big_r = 0.5 * self.substrate_diameter;
         let s = self.substrate_spacing;
         // Squared distance from the pocket's axis to each of the four centres, horizontally.
@@ -143,6 +146,7 @@ mod tests {
             size_distribution: SizeDistributionSpec::Classes {
                 classes: vec![[0.5, 0.3], [1.0, 0.4], [1.5, 0.3]],
                 relative: true,
+                basis: Default::default(),
             },
             ..SceneSettings::default()
         };

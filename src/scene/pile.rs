@@ -83,6 +83,12 @@ pub fn pile_data(s: &Scene) -> String {
             }
         }
     }
+    if let Some(bed) = &s.substrate_bed {
+        for &[x, y, z, d] in &bed.spheres {
+            id += 1;
+            let _ = writeln!(out, "{id} 3 {d} {} {x:.9e} {y:.9e} {z:.9e}", s.density);
+        }
+    }
     let [sx, sy] = s.substrate_n;
     let h = s.substrate_spacing;
     for i in 0..sx {

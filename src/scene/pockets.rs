@@ -69,6 +69,24 @@ fn unit_open_depth(s: f64, dp: f64) -> f64 {
             f[i * n + j] = if p2 < reach * reach { -big_r + (reach * reach - p2).sqrt() } else { plate + r };
         }
     }
+    let top: Vec<f64> = (0..n * n)
+        .map(|k| {
+            let p2 = rho2((k / n) as isize, (k % n) as isize);
+            if p2 < big_r * big_r {
+                -big_r + (big_r * big_r - p2).sqrt()
+            } else {
+                plate
+            }
+        })
+        .collect();
+    reachable_depth(&f, &top, n, n, h, r)
+}
+
+/// The open depth below z = 0 over a periodic grid of `nx` × `ny` square cells of side `h`
+/// (row-major in x), given over each cell the lowest centre height `centres` a sphere of radius
+/// `r` can reach and the substrate's top `tops`: the mean over the cells of the column from
+/// max(lowest point of any such sphere's body over the cell, the top) up to 0.
+pub fn reachable_depth(centres: &[f64], tops: &[f64], nx: usize, ny: usize, h: f64, r: f64) -> f64 {
     // The rolled sphere's stencil: offsets within r, and how far its bottom lies below its centre.
     let k = (r / h).ceil() as isize;
     let mut stencil = Vec::new();
@@ -81,22 +99,23 @@ fn unit_open_depth(s: f64, dp: f64) -> f64 {
         }
     }
     let mut total = 0.0;
-    for i in 0..n as isize {
-        for j in 0..n as isize {
+    for i in 0..nx as isize {
+        for j in 0..ny as isize {
             let g = stencil
                 .iter()
                 .map(|&(di, dj, below)| {
-                    let (u, v) =
-                        ((i + di).rem_euclid(n as isize) as usize, (j + dj).rem_euclid(n as isize) as usize);
-                    f[u * n + v] - below
+                    let (u, v) = (
+                        (i + di).rem_euclid(nx as isize) as usize,
+                        (j + dj).rem_euclid(ny as isize) as usize,
+                    );
+                    centres[u * ny + v] - below
                 })
                 .fold(f64::INFINITY, f64::min);
-            let p2 = rho2(i, j);
-            let top = if p2 < big_r * big_r { -big_r + (big_r * big_r - p2).sqrt() } else { plate };
+            let top = tops[i as usize * ny + j as usize];
             total += (0.0 - g.max(top)).max(0.0);
         }
     }
-    total / (n * n) as f64
+    total / (nx * ny) as f64
 }
 
 #[cfg(test)]

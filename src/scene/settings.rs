@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 
 use crate::error::hint;
+use crate::scene::cohesion::CohesionScaling;
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
@@ -83,6 +84,11 @@ pub struct SceneSettings {
     pub supply_factor: f64,
     /// Size distribution of the particles.
     pub size_distribution: SizeDistributionSpec,
+    /// How the `surface_energy` parameter is carried to the deck's softened contact
+    /// ([`crate::scene::cohesion`]): `"pull-off"` (default) or `"haervig"`.
+    pub cohesion_scaling: CohesionScaling,
+    /// The powder's real Young's modulus, GPa (for `cohesion_scaling = "haervig"`; 0: not given).
+    pub material_youngs_gpa: f64,
     /// Half-height of each v_x layer, in diameters (0.25 = ±D/4); `thesis_band` overrides it
     /// with the thesis's fixed ±1 mm.
     pub vx_band_diameters: f64,
@@ -195,6 +201,8 @@ impl SceneSettings {
         s.window_start_diameters = self.window_start_diameters;
         s.supply_factor = self.supply_factor;
         s.size_distribution = self.size_distribution.clone();
+        s.cohesion_scaling = self.cohesion_scaling;
+        s.material_youngs_gpa = self.material_youngs_gpa;
         s.vx_band_diameters = self.vx_band_diameters;
         s.thesis_band = self.thesis_band;
         s.seed = self.seed;
@@ -272,6 +280,8 @@ impl Default for SceneSettings {
             window_start_diameters: 30.0,
             supply_factor: 1.0,
             size_distribution: SizeDistributionSpec::default(),
+            cohesion_scaling: CohesionScaling::PullOff,
+            material_youngs_gpa: 0.0,
             vx_band_diameters: 0.25,
             thesis_band: false,
             seed: 12345,
@@ -289,11 +299,14 @@ pub enum SizeDistributionSpec {
     #[default]
     Mono,
     /// Discrete classes: `classes = [[d, fraction], ...]`; `d` in mm, or in multiples of the
-    /// `diameter` parameter when `relative = true` (thesis Tables 3.2–3.3).
+    /// `diameter` parameter when `relative = true` (thesis Tables 3.2–3.3); fractions by number,
+    /// or by volume (`basis = "volume"`, as laser diffraction reports a measured table).
     Classes {
         classes: Vec<[f64; 2]>,
         #[serde(default)]
         relative: bool,
+        #[serde(default, skip_serializing_if = "Basis::is_number")]
+        basis: Basis,
     },
     /// Two-parameter Weibull in diameter, from the `weibull_shape` and `weibull_scale`
     /// parameters, discretised into `bins` classes of equal probability width.
@@ -301,8 +314,50 @@ pub enum SizeDistributionSpec {
         #[serde(default = "default_bins")]
         bins: usize,
     },
+    /// A lognormal fitted to a datasheet's D10, D50 and D90 (µm; by volume unless
+    /// `basis = "number"`), truncated to `cut_um = [lo, hi]` (the sieve cut), discretised into
+    /// `bins` classes of equal width in ln D. `relative = true` scales every size by
+    /// `diameter` / D50, so the `diameter` parameter sweeps the powder's size at its shape.
+    Lognormal {
+        d10_um: f64,
+        d50_um: f64,
+        d90_um: f64,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        cut_um: Option<[f64; 2]>,
+        #[serde(default = "volume_basis")]
+        basis: Basis,
+        #[serde(default = "default_lognormal_bins")]
+        bins: usize,
+        #[serde(default)]
+        relative: bool,
+    },
+}
+
+/// What the fractions of a size distribution count.
+#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum Basis {
+    /// Fractions of the particles (what the engine inserts by).
+    #[default]
+    Number,
+    /// Fractions of the volume (laser diffraction, every powder datasheet).
+    Volume,
+}
+
+impl Basis {
+    fn is_number(&self) -> bool {
+        *self == Basis::Number
+    }
+}
+
+fn volume_basis() -> Basis {
+    Basis::Volume
 }
 
 fn default_bins() -> usize {
     5
+}
+
+fn default_lognormal_bins() -> usize {
+    10
 }

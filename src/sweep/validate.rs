@@ -7,6 +7,7 @@ use super::file::*;
 use super::SweepError;
 use super::{ParamKind, Parameter};
 use crate::error::hint;
+use crate::scene::cohesion::CohesionScaling;
 use crate::scene::params::{self, ParamInfo};
 use crate::scene::settings::{quoted, SizeDistributionSpec, FIDELITIES};
 
@@ -247,8 +248,11 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<Params, SweepErr
     if let Err(e) = layout.check_settings(s) {
         return Err(bad(e.key, e.why));
     }
-    if s.substrate != "rough" && s.substrate != "smooth" {
-        return Err(bad("scene.substrate", format!("\"{}\": expected \"rough\" or \"smooth\"", s.substrate)));
+    if !["rough", "smooth", "powder"].contains(&s.substrate.as_str()) {
+        return Err(bad(
+            "scene.substrate",
+            format!("\"{}\": expected \"rough\", \"smooth\" or \"powder\"", s.substrate),
+        ));
     }
     for (k, v) in [
         ("scene.rest_speed", s.rest_speed),
@@ -304,6 +308,24 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<Params, SweepErr
                 return Err(bad("scene.size_distribution.bins", "expected at least 1".into()));
             }
         }
+        SizeDistributionSpec::Lognormal { d10_um, d50_um, d90_um, cut_um, bins, .. } => {
+            check_lognormal([*d10_um, *d50_um, *d90_um], *cut_um, *bins).map_err(|(k, why)| bad(k, why))?;
+        }
+    }
+    if !(s.material_youngs_gpa.is_finite() && s.material_youngs_gpa >= 0.0) {
+        return Err(bad(
+            "scene.material_youngs_gpa",
+            format!(
+                "{}: expected the powder's Young's modulus in GPa (e.g. 110 for Ti-6Al-4V)",
+                s.material_youngs_gpa
+            ),
+        ));
+    }
+    if s.cohesion_scaling == CohesionScaling::Haervig && s.material_youngs_gpa == 0.0 {
+        return Err(bad(
+            "scene.material_youngs_gpa",
+            "not given: cohesion_scaling = \"haervig\" scales the surface energy by the deck's modulus over the powder's (e.g. 110 GPa for Ti-6Al-4V)".into(),
+        ));
     }
     if !(file.run.timeout_s.is_finite() && file.run.timeout_s > 0.0) {
         return Err(bad("run.timeout_s", format!("{}: expected seconds > 0", file.run.timeout_s)));
@@ -383,3 +405,43 @@ fn as_f64(v: &toml::Value) -> Option<f64> {
         _ => None,
     }
 }
+
+/// A lognormal's datasheet values in order, its cut around its D50, and a fit that reproduces
+/// them (a powder that is not lognormal is given as its measured table instead).
+fn check_lognormal(q: [f64; 3], cut: Option<[f64; 2]>, bins: usize) -> Result<(), (&'static str, String)> {
+    let [d10, d50, d90] = q;
+    if !(q.iter().all(|d| d.is_finite() && *d > 0.0) && d10 < d50 && d50 < d90) {
+        return Err((
+            "scene.size_distribution",
+            format!("d10_um {d10}, d50_um {d50}, d90_um {d90}: expected sizes in µm with D10 < D50 < D90"),
+        ));
+    }
+    if let Some([lo, hi]) = cut {
+        if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo < d50 && d50 < hi) {
+            return Err((
+                "scene.size_distribution.cut_um",
+                format!("[{lo}, {hi}]: expected the sieve cut in µm, below and above D50 {d50}"),
+            ));
+        }
+    }
+    if bins < 2 {
+        return Err(("scene.size_distribution.bins", format!("{bins}: expected at least 2")));
+    }
+    let fit = crate::scene::psd::Lognormal::fit(q.map(|d| d * 1e-6), cut.map(|c| c.map(|d| d * 1e-6)));
+    if fit.residual > MAX_FIT_MISS {
+        return Err((
+            "scene.size_distribution",
+            format!(
+                "D10/D50/D90 {d10}/{d50}/{d90} µm: no lognormal{} within {:.0} % (its best misses by {:.1} %); \
+                 give the measured table as `kind = \"classes\"` with `basis = \"volume\"`",
+                cut.map(|[lo, hi]| format!(" cut at {lo}–{hi} µm")).unwrap_or_default(),
+                MAX_FIT_MISS * 100.0,
+                fit.residual * 100.0
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The largest relative miss of D10/D50/D90 a lognormal fit may leave.
+const MAX_FIT_MISS: f64 = 0.05;

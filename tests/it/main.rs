@@ -31,6 +31,7 @@ mod dump;
 mod fidelity;
 mod point;
 mod pour;
+mod powders;
 mod recoater;
 mod stability;
 mod steady;

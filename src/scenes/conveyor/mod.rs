@@ -8,16 +8,25 @@ use crate::measure::{layer, steady};
 use crate::outcome::layer::Layer;
 use crate::outcome::steady::SteadyState;
 use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT};
+use crate::scene::bed::Bed;
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
 use crate::scene::{
-    prime_seed, Base, Conveyor as Held, FeedClass, Scene, GRAVITY, LAYER_FRACTION_MAX, REPOSE_DEG,
+    prime_seed, Base, Conveyor as Held, FeedClass, Scene, ENGINE_VOLUME_LIMIT, GRAVITY, LAYER_FRACTION_MAX,
+    REPOSE_DEG,
 };
 use crate::scenes::moving_blade::{self, Dose};
 use crate::scenes::{BadSetting, BuiltinTemplate, Finished, HeldHeap, Layout, Rejected, SetupRows};
 
 /// The conveyor layout (registered in [`crate::scenes::LAYOUTS`]).
 pub struct Conveyor;
+
+/// Depth of a powder bed's solid, in diameters (at a packing of 0.55: about 2.6 D deep).
+const BED_THICKNESS: f64 = 2.0;
+
+/// The least heap box the deck inserts into, shrunk by the largest radius, m³: LIGGGHTS's floor
+/// of 1e-10 m³ with a margin for its Monte-Carlo estimate of the volume.
+const MIN_INSERT_VOLUME: f64 = 1.2e-10;
 
 /// The conveyor's one snapshot of the deposit behind the blade at the end.
 pub const STRIP_DUMP: &str = "dump.strip";
@@ -134,11 +143,21 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let heap_above = base.heap_height;
     // A smooth substrate: no spheres; the plate moves, sheared at −v (the deck's `shear x`).
     let rough = settings.substrate == "rough";
+    let powder_bed = settings.substrate == "powder";
     let mut s = moving_blade::derive(base, settings, Dose::Free);
     let d = s.diameter;
     let (gap, v, dt) = (s.gap, s.blade_speed, s.timestep);
     let heap_height = gap + heap_above;
     let heap_base = heap_height / REPOSE_DEG.to_radians().tan();
+    // LIGGGHTS refuses to insert into a region under 1e-10 m³ (region.cpp, volume_mc, an
+    // absolute floor in SI) once it is shrunk by the largest radius on every side: a heap of
+    // fine powder gets the depth its box needs.
+    let d_max = psd.max_diameter();
+    let heap_box = (heap_base + 3.0 * d - d_max) * (1.6 * heap_height - d_max);
+    if heap_box * (s.depth - d_max) < MIN_INSERT_VOLUME {
+        s.depth = d_max + MIN_INSERT_VOLUME / heap_box;
+        s.mesh_cell = s.depth / settings.mesh_cells_across as f64;
+    }
     let heap_particles =
         (LAYER_FRACTION_MAX * 0.5 * heap_height * heap_base * s.depth / psd.mean_volume()).ceil() as usize;
     // Behind the blade: 10 D of deposit strip, then the delete region (6 D).
@@ -149,7 +168,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let n_y = ((s.depth / d).floor() as usize).max(1);
     let spacing = s.depth / n_y as f64;
     let n_x = ((heap_x1 + 2.0 * d) / spacing).ceil() as usize;
-    let x_hi = n_x as f64 * spacing;
+    let x_hi = if powder_bed { heap_x1 + 2.0 * d } else { n_x as f64 * spacing };
     let block_steps = ((settings.block_diameters * d / (v * dt)).ceil() as u64).max(1);
     let blocks = |travel: f64| (travel / settings.block_diameters).ceil() as u64;
     let warmup_blocks = blocks((settings.warmup_s * v).max(10.0 * d) / d);
@@ -182,7 +201,19 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         ideal_block_mass: s.density * s.depth * gap * v * dt * block_steps as f64,
         mfr_rel_se: settings.mfr_rel_se,
         mfr_abs_se: settings.mfr_abs_se,
+        powder_bed: false,
+        regions_z0: 0.0,
         feed,
+        // Below ten times the engine's default least volume, the deck sets its own: a thousandth
+        // of the smallest sphere's (above it, the deck stays as it was).
+        volume_limit: {
+            let smallest = std::f64::consts::PI / 6.0 * psd.min_diameter().powi(3);
+            if smallest < 10.0 * ENGINE_VOLUME_LIMIT {
+                1e-3 * smallest
+            } else {
+                0.0
+            }
+        },
         distribution_seed: prime_seed(s.seed, 0),
         insert_seed: prime_seed(s.seed, 1),
     };
@@ -193,11 +224,22 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     s.blade_top = blade_top;
     s.x_hi = x_hi;
     s.z_hi = blade_top + 2.0 * d + v * v / GRAVITY;
-    s.z_lo = if rough { -d } else { 0.0 };
+    s.substrate_bed = powder_bed
+        .then(|| Bed::deposit(&psd.classes, x_hi, s.depth, BED_THICKNESS * d, prime_seed(s.seed, 3)));
+    s.z_lo = match &s.substrate_bed {
+        Some(bed) => bed.floor,
+        None if rough => -d,
+        None => 0.0,
+    };
     s.substrate_n = if rough { [n_x, n_y] } else { [0, 0] };
     s.substrate_spacing = if rough { spacing } else { 0.0 };
-    s.substrate_diameter = if rough { d } else { 0.0 };
-    s.substrate_particles = s.substrate_n[0] * s.substrate_n[1];
+    s.substrate_diameter = if rough || powder_bed { d } else { 0.0 };
+    s.substrate_particles =
+        s.substrate_bed.as_ref().map_or(s.substrate_n[0] * s.substrate_n[1], |bed| bed.spheres.len());
+    // Above the lattice's centres (a delete region takes every atom in it); a bed's deposit sits
+    // in pockets down to its floor, and the deck deletes only the powder there.
+    s.conveyor.powder_bed = powder_bed;
+    s.conveyor.regions_z0 = if powder_bed { s.z_lo } else { -0.2 * d };
     s.gate_x = 0.0;
     s.rest_ke = 0.0;
     s.settle_steps = 0;
@@ -263,6 +305,7 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         layer_packing: Some(scene.layer_packing(st.mfr)),
         layer_packing_se: Some(scene.layer_packing(st.mfr_se)),
         heap: None,
+        sizes: scene.sizes_of_a_distribution(),
         settle_steps: 0,
         steps,
         simulated_time: steps as f64 * scene.timestep,

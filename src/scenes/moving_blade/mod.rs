@@ -76,7 +76,13 @@ impl Layout for MovingBlade {
         TEMPLATE
     }
 
-    fn check_settings(&self, _settings: &SceneSettings) -> Result<(), BadSetting> {
+    fn check_settings(&self, settings: &SceneSettings) -> Result<(), BadSetting> {
+        if settings.substrate == "powder" {
+            return Err(BadSetting {
+                key: "scene.substrate",
+                why: "\"powder\": a bed of the powder is the conveyor layout's; expected \"rough\" or \"smooth\"".into(),
+            });
+        }
         Ok(())
     }
 
@@ -262,9 +268,11 @@ pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
         friction: base.friction,
         rolling_friction: base.rolling_friction,
         rolling_model: ROLLING_MODEL,
+        cohesion_energy_density: base.cohesion_energy_density,
         layout: settings.layout.clone(),
         blade_fixed: false,
         size_classes: psd.classes.clone(),
+        sizes: psd.summary(),
         seed: settings.seed,
         particles,
         diameter: d,
@@ -283,6 +291,7 @@ pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
         substrate_diameter: if rough { d } else { 0.0 },
         substrate_spacing,
         substrate_n,
+        substrate_bed: None,
         gate_x: if gated { pile_x1 } else { 0.0 },
         pile_x0,
         pile_x1,
@@ -360,6 +369,7 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         layer_packing: Some(scene.layer_packing(m.mfr)),
         layer_packing_se: None,
         heap: None,
+        sizes: scene.sizes_of_a_distribution(),
         settle_steps,
         steps,
         simulated_time: steps as f64 * scene.timestep,
