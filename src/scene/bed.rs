@@ -77,6 +77,17 @@ impl Bed {
         nx * ny
     }
 
+    /// The bed's spheres in columns wide enough for a sphere of `probe` diameter to touch only
+    /// its own and the neighbouring ones.
+    fn columns(&self, probe: f64) -> Columns {
+        let d_max = self.spheres.iter().map(|s| s[3]).fold(probe, f64::max);
+        let mut grid = Columns::new(self.length, self.width, d_max);
+        for (i, s) in self.spheres.iter().enumerate() {
+            grid.add(s[0], s[1], i);
+        }
+        grid
+    }
+
     /// The centre height where a sphere of radius `r` dropped at (x, y) first touches the floor
     /// or a sphere of the bed.
     fn landing(&self, grid: &Columns, x: f64, y: f64, r: f64) -> f64 {
@@ -110,11 +121,7 @@ impl Bed {
     }
 
     fn over_grid(&self, cell: f64, f: impl Fn(f64, f64, &Columns) -> f64) -> Vec<f64> {
-        let d_max = self.spheres.iter().map(|s| s[3]).fold(0.0, f64::max);
-        let mut grid = Columns::new(self.length, self.width, d_max);
-        for (i, s) in self.spheres.iter().enumerate() {
-            grid.add(s[0], s[1], i);
-        }
+        let grid = self.columns(0.0);
         let (nx, ny) = self.grid_n(cell);
         let (hx, hy) = (self.length / nx as f64, self.width / ny as f64);
         let mut out = Vec::with_capacity(nx * ny);
@@ -132,11 +139,7 @@ impl Bed {
     pub fn open_depth(&self, powder_diameter: f64) -> f64 {
         let r = 0.5 * powder_diameter;
         let cell = powder_diameter / CELLS_PER_D;
-        let d_max = self.spheres.iter().map(|s| s[3]).fold(0.0, f64::max).max(powder_diameter);
-        let mut grid = Columns::new(self.length, self.width, d_max);
-        for (i, s) in self.spheres.iter().enumerate() {
-            grid.add(s[0], s[1], i);
-        }
+        let grid = self.columns(powder_diameter);
         let centres = self.over_grid(cell, |x, y, _| self.landing(&grid, x, y, r));
         let tops = self.surface(cell);
         let (nx, ny) = self.grid_n(cell);
@@ -146,11 +149,7 @@ impl Bed {
     /// Height of the top of a sphere of `powder_diameter` resting as low as it can on the bed, m.
     pub fn lowest_top(&self, powder_diameter: f64) -> f64 {
         let r = 0.5 * powder_diameter;
-        let d_max = self.spheres.iter().map(|s| s[3]).fold(0.0, f64::max).max(powder_diameter);
-        let mut grid = Columns::new(self.length, self.width, d_max);
-        for (i, s) in self.spheres.iter().enumerate() {
-            grid.add(s[0], s[1], i);
-        }
+        let grid = self.columns(powder_diameter);
         self.over_grid(powder_diameter / CELLS_PER_D, |x, y, _| self.landing(&grid, x, y, r))
             .into_iter()
             .fold(f64::INFINITY, f64::min)
