@@ -308,6 +308,21 @@ fn print_result(r: &demsweep::outcome::RunResult, scene: &demsweep::scene::Scene
         "particles  {}   steps {}   simulated {:.4} s   wall {:.1} s",
         r.particles, r.steps, r.simulated_time, r.wall_time
     );
+    if let Some(z) = &r.sizes {
+        let um = |m: f64| format!("{:.1}", m * 1e6);
+        let fit = z
+            .fit_residual
+            .map_or(String::new(), |f| format!("; the lognormal misses the datasheet by {:.1} %", f * 100.0));
+        println!(
+            "sizes      D10/D50/D90 {}/{}/{} µm by volume, mean {} µm by number, span {:.2}, {} classes{fit}",
+            um(z.d10),
+            um(z.d50),
+            um(z.d90),
+            um(z.mean_diameter),
+            z.span,
+            z.classes
+        );
+    }
     let mut notes: Vec<&str> = Vec::new();
     for w in &r.warnings {
         match demsweep::engine::chatter(w) {

@@ -33,3 +33,5 @@ for v in 0.1 0.05 0.01; do
     point "shaheen-v$v-mu$1-mur$2" "$sh" "blade_speed=$v,friction=$1,rolling_friction=$2"
   done
 done
+# The cohesive machine point on a bed of the powder.
+point ti64-bed-v0.1-coh "$here/ti64-bed.toml" blade_speed=0.1,surface_energy=1e-4
