@@ -8,8 +8,8 @@ deposited per width and travel over ρ is φ·t (t the layer's thickness: the ga
 plate); a Beverloo-like law says it is c·(gap − k·D): the powder flows through the gap less a
 boundary band of k diameters, at packing c. Fitted by weighted least squares over the points
 with gap ≥ MIN_GAP_D·D (2: where more than one layer fits), with 95 % intervals of c and k from
-the fit's covariance (k by the delta method), and the fit's χ²/dof. Points below 1.8 D are
-judged against the monolayer's ceiling, a hexagonal layer π/(3√3)·D/gap = 0.6046·D/gap.
+the fit's covariance (k by the delta method), and the fit's χ²/dof. Points below 1.8 D
+on the smooth plate are judged against the monolayer's ceiling, a hexagonal layer π/(3√3)·D/gap = 0.6046·D/gap.
 """
 import glob, json, math, os, sys
 
@@ -22,8 +22,9 @@ def points(runs):
         r = json.load(open(f))
         p = r["parameters"]
         t = r["layer_thickness"] * 1e3
-        out.append((p["diameter"], p["gap"], p["blade_speed"], r["layer_packing"], r["layer_packing_se"], t,
-                    r["mfr"], r["mfr_se"], r.get("cpu_time") or float("nan")))
+        substrate = os.path.basename(case).split("-")[0]
+        out.append((substrate, p["diameter"], p["blade_speed"], p["gap"], r["layer_packing"], r["layer_packing_se"],
+                    t, r["mfr"], r["mfr_se"], r.get("cpu_time") or float("nan")))
     return sorted(out)
 
 def fit(xs, ys, ses):
@@ -45,25 +46,25 @@ def main():
     min_gap = float(sys.argv[2]) if len(sys.argv) > 2 else 2.0
     pts = points(runs)
     ceiling = math.pi / (3 * math.sqrt(3))   # a hexagonal layer of spheres: 0.6046·D of solid per area
-    print("| D mm | gap mm | gap/D | v m/s | MFR ± SE | layer mm | packing ± SE | packing·layer mm | monolayer ceiling | CPU s |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
-    for d, g, v, phi, se, t, m, mse, cpu in pts:
-        ceil = f"{ceiling * d / g:.3f} ({'under' if phi <= ceiling * d / g + 2 * se else 'OVER'})" if g < 1.8 * d else "–"
-        print(f"| {d:g} | {g:g} | {g / d:.2f} | {v:g} | {m:.4f} ± {mse:.4f} | {t:.3f} | {phi:.4f} ± {se:.4f} | {phi * t:.4f} | {ceil} | {cpu:.0f} |")
-    for d in sorted({p[0] for p in pts}):
-        sel = [p for p in pts if p[0] == d and p[1] >= min_gap * d]
+    print("| substrate | D mm | v m/s | gap mm | gap/D | MFR ± SE | layer mm | packing ± SE | packing·layer mm | monolayer ceiling | CPU s |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for sub, d, v, g, phi, se, t, m, mse, cpu in pts:
+        ceil = f"{ceiling * d / g:.3f} ({'under' if phi <= ceiling * d / g + 2 * se else 'OVER'})" if g < 1.8 * d and sub == "smooth" else "–"
+        print(f"| {sub} | {d:g} | {v:g} | {g:g} | {g / d:.2f} | {m:.4f} ± {mse:.4f} | {t:.3f} | {phi:.4f} ± {se:.4f} | {phi * t:.4f} | {ceil} | {cpu:.0f} |")
+    for sub, d, v in sorted({p[:3] for p in pts}):
+        sel = [p for p in pts if p[:3] == (sub, d, v) and p[3] >= min_gap * d]
         if len(sel) < 3:
             continue
-        xs = [p[5] for p in sel]                      # layer thickness, mm
-        ys = [p[3] * p[5] for p in sel]               # packing × thickness, mm
-        ses = [p[4] * p[5] for p in sel]
+        xs = [p[6] for p in sel]                      # layer thickness, mm
+        ys = [p[4] * p[6] for p in sel]               # packing × thickness, mm
+        ses = [p[5] * p[6] for p in sel]
         a, b, cov, chi = fit(xs, ys, ses)
         k = -b / (a * d)
         # k = -b / (a·D): gradient (b/(a²D), -1/(aD))
         ga, gb = b / (a * a * d), -1 / (a * d)
         var_k = ga * ga * cov[0][0] + 2 * ga * gb * cov[0][1] + gb * gb * cov[1][1]
         z = 1.96
-        print(f"\nD {d:g} mm, {len(sel)} points with gap ≥ {min_gap:g} D: packing·layer = c·(layer − k·D), "
+        print(f"\n{sub}, D {d:g} mm, {v:g} m/s, {len(sel)} points with gap ≥ {min_gap:g} D: packing·layer = c·(layer − k·D), "
               f"c = {a:.3f} ± {z * math.sqrt(cov[0][0]):.3f}, k = {k:.2f} ± {z * math.sqrt(var_k):.2f} (95 %), "
               f"χ²/dof {chi:.2f}")
 
