@@ -285,20 +285,12 @@ pub fn adapt(s: &dyn Surface, names: &[String], seed: u64, p: &Plan) -> Vec<Row>
         if size == 0 {
             return rows;
         }
-        let cands = criterion::candidates(d, k, seed);
+        let cands = criterion::batch_candidates(d, k, seed, em.as_ref(), &x);
         let chosen: Vec<Vec<f64>> = em
             .as_ref()
             .and_then(|em| {
                 let noise = criterion::new_run_noise(em, &se);
-                criterion::next_batch(
-                    em,
-                    noise,
-                    &cands,
-                    &refs,
-                    &x,
-                    size,
-                    criterion::explore_count(size, explore),
-                )
+                criterion::next_batch(em, noise, &cands, &refs, &x, size, criterion::Split::of(size, explore))
             })
             .map_or_else(|| cands[..size].to_vec(), |(c, _)| c.into_iter().map(|c| c.point).collect());
         let (ny, nse) = run_all(s, &chosen);

@@ -370,7 +370,7 @@ fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &AdaptWatch, ran: usize) 
         return Ok(false);
     }
     let k = manifest.spaces.len() - 1;
-    let cands = criterion::candidates(sweep.dim(), k, seed);
+    let cands = criterion::batch_candidates(sweep.dim(), k, seed, em, x);
     let (chosen, j_before) = match em.and_then(|em| {
         let noise = criterion::new_run_noise(em, se);
         let refs = criterion::reference(sweep.dim(), seed);
@@ -381,7 +381,7 @@ fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &AdaptWatch, ran: usize) 
             &refs,
             x,
             size,
-            criterion::explore_count(size, criterion::EXPLORE),
+            criterion::Split::of(size, criterion::EXPLORE),
         )
     }) {
         Some(c) => c,

@@ -546,14 +546,17 @@ fn sweep_show_prints_the_standard_error_and_the_height_of_each_layer() {
 }
 
 #[test]
-fn the_readme_verdict_is_worded_as_the_default_rule_says() {
-    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).unwrap();
+fn the_documented_verdict_is_worded_as_the_default_rule_says() {
+    let read = |f: &str| std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(f)).unwrap();
+    let usage = read("docs/usage.md");
     let rule = demsweep::analysis::convergence::Criteria::from_settings(&Default::default()).describe();
     assert!(
-        readme.contains(&format!("by {rule}")),
-        "README's verdict example is not the default rule's: {rule}"
+        usage.contains(&format!("by {rule}")),
+        "docs/usage.md's verdict example is not the default rule's: {rule}"
     );
-    assert!(!readme.contains("mass flow rate"), "MFR is the mass flow ratio");
+    for f in ["README.md", "docs/usage.md"] {
+        assert!(!read(f).contains("mass flow rate"), "{f}: MFR is the mass flow ratio");
+    }
 }
 
 #[test]

@@ -15,8 +15,13 @@ pub const SECTORS: usize = 8;
 /// The profile's band fitted by a line, as fractions of the heap's height.
 const FIT_TOP: f64 = 0.8;
 const FIT_FOOT: f64 = 0.2;
-/// Radius of the packing's cylinder, as a fraction of the foot's radius.
+/// Radius of the packing's cylinder, as a fraction of the foot's radius: at most this, and at
+/// most where the surface is [`CORE_MIN_TOP`] diameters above the plate (the cylinder then
+/// spans 2 diameters between 1 above the plate and 1 under the surface); at least
+/// [`CORE_MIN_RADIUS`] diameters.
 const CORE_FRACTION: f64 = 0.4;
+const CORE_MIN_TOP: f64 = 4.0;
+const CORE_MIN_RADIUS: f64 = 2.0;
 
 /// A particle at rest: centre (m) and radius (m).
 #[derive(Debug, Clone, Copy)]
@@ -77,16 +82,19 @@ pub fn measure(grains: &[Grain], axis: [f64; 2], ring: f64) -> Result<Heap, Stri
     let angle = angles.iter().sum::<f64>() / n;
     let sd = (angles.iter().map(|a| (a - angle).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
     let foot = feet.iter().sum::<f64>() / n;
-    // The packing's cylinder: under the lowest sector line at its rim, a diameter below it.
-    let core = CORE_FRACTION * foot;
-    let z_top = lines.iter().map(|(a, b)| a + b * core).fold(height, f64::min) - ring;
-    let (z_bottom, cylinder) = (ring, std::f64::consts::PI * core * core * (z_top - ring));
-    if z_top - z_bottom < 2.0 * ring {
+    // The packing's cylinder: under the lowest sector line at its rim, a diameter below it, and
+    // at least 2 diameters tall; a low heap's is narrower than CORE_FRACTION of the foot.
+    let tall_enough = lines.iter().map(|(a, b)| (a - CORE_MIN_TOP * ring) / -b).fold(f64::INFINITY, f64::min);
+    let core = (CORE_FRACTION * foot).min(tall_enough);
+    if core < CORE_MIN_RADIUS * ring {
         return Err(format!(
-            "the heap's core is {:.2} mm tall, under 2 diameters: no packing to measure",
-            (z_top - z_bottom).max(0.0) * 1e3
+            "the heap stands {:.2} mm tall: its core is under 2 diameters wide where it is {CORE_MIN_TOP} \
+             diameters tall, no packing to measure",
+            height * 1e3
         ));
     }
+    let z_top = lines.iter().map(|(a, b)| a + b * core).fold(height, f64::min) - ring;
+    let (z_bottom, cylinder) = (ring, std::f64::consts::PI * core * core * (z_top - ring));
     let solid: f64 = grains
         .iter()
         .filter(|g| polar(g).0 < core && g.z >= z_bottom && g.z < z_top)
@@ -155,6 +163,18 @@ mod tests {
             assert!((heap.packing - std::f64::consts::PI / 6.0).abs() < 0.03, "{heap:?}");
             assert_eq!(heap.particles_run_out, 0);
         }
+    }
+
+    #[test]
+    fn a_low_heap_measures_its_packing_in_a_narrower_core() {
+        // 18° and 5.5 D tall: at 0.4 of the foot the surface is 3.3 D up, too low for a core
+        // 2 D tall; the core narrows to where the surface is 4 D up.
+        let d = 1e-3;
+        let heap = measure(&cone(18.0, 5.5e-3, d, 0.0), [0.1, -0.2], d).unwrap();
+        assert!((heap.angle_deg - 18.0).abs() < 3.0, "{heap:?}");
+        // A core about 3 D across holds a few dozen lattice sites per layer, so counting
+        // centres misses π/6 by up to ~0.1 on a lattice (a random packing has no such bias).
+        assert!((heap.packing - std::f64::consts::PI / 6.0).abs() < 0.1, "{heap:?}");
     }
 
     #[test]
