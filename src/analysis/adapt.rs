@@ -416,6 +416,33 @@ mod tests {
     }
 
     #[test]
+    fn one_run_goes_where_the_upper_bound_is_highest_among_candidates_near_the_best_run() {
+        assert_eq!(Split::of(20, 0.5), Split { explore: 10, exploit: 1 });
+        assert_eq!(Split::of(2, 0.5), Split { explore: 1, exploit: 1 });
+        assert_eq!(Split::of(1, 0.5), Split { explore: 0, exploit: 0 });
+        let (x, e) = fitted(20);
+        let c = batch_candidates(2, 0, 14, Some(&e), &x);
+        assert_eq!(c.len(), CANDIDATES + NEAR);
+        assert_eq!(batch_candidates(2, 0, 14, None, &x).len(), CANDIDATES);
+        let best = &x[e.rank(&x)[0].0];
+        for u in &c[CANDIDATES..] {
+            for (a, b) in u.iter().zip(best) {
+                assert!((a - b).abs() <= NEAR_REACH + 1e-12 && (0.0..=1.0).contains(a), "{u:?} {best:?}");
+            }
+        }
+        let r = reference(2, 14);
+        let (batch, _) = next_batch(&e, 1e-4, &c, &r, &x, 3, Split { explore: 0, exploit: 1 }).unwrap();
+        let ucb = |u: &[f64]| {
+            let (m, sd) = e.predict(u);
+            m + sd
+        };
+        let top = c.iter().map(|u| ucb(u)).fold(f64::MIN, f64::max);
+        assert!((ucb(&batch[0].point) - top).abs() < 1e-9 * top.abs().max(1.0), "{batch:?}");
+        // The kinked surface is highest in the corner u = (1, 1).
+        assert!(batch[0].point[0] + 0.5 * batch[0].point[1] > 1.2, "{batch:?}");
+    }
+
+    #[test]
     fn the_criterion_shrinks_when_the_chosen_runs_are_added() {
         // Run the chosen batch for real and refit: J falls by more than it would for as many
         // candidates taken in stream order (a space-filling batch of the same size).
