@@ -103,3 +103,44 @@ fn a_datasheet_no_lognormal_reproduces_is_refused_in_one_line() {
     );
     assert_eq!(out.status.code(), Some(0), "{}", support::stderr(&out));
 }
+
+#[test]
+fn sweeping_the_diameter_of_absolute_sizes_is_refused_and_relative_ones_follow_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = |relative: bool| {
+        support::write_file(
+            &dir.path().join("d.toml"),
+            &format!(
+                "name = \"d\"\n[parameters]\ndiameter = {{ lo = 0.02, hi = 0.04, unit = \"mm\" }}\ngap = 0.1\nheap_height = 0.5\n\
+                 [scene.size_distribution]\nkind = \"lognormal\"\nd10_um = 20.0\nd50_um = 31.0\nd90_um = 42.0\n\
+                 relative = {relative}\n"
+            ),
+        )
+    };
+    let out = support::points(&file(false), &["--lds", "2"]);
+    let err = support::stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("parameters.diameter") && err.contains("relative = true"), "{err}");
+    // Relative sizes scale with it: a point at D50 = 40 µm renders classes twice those at 20 µm.
+    let sweep = file(true);
+    let classes = |d: &str| -> Vec<f64> {
+        let out = dir.path().join(format!("r{d}"));
+        support::ok(
+            dir.path(),
+            &["render", support::p(&sweep), "--set", &format!("diameter={d}"), "--out", support::p(&out)],
+        );
+        std::fs::read_to_string(out.join("in.liggghts"))
+            .unwrap()
+            .lines()
+            .filter(|l| l.contains("particletemplate/sphere"))
+            .filter_map(|l| {
+                l.split_whitespace().skip_while(|w| *w != "constant").nth(4).and_then(|r| r.parse().ok())
+            })
+            .collect()
+    };
+    let (small, large) = (classes("0.02"), classes("0.04"));
+    assert_eq!(small.len(), 10);
+    for (a, b) in small.iter().zip(&large) {
+        assert!((b / a - 2.0).abs() < 1e-9, "{a} {b}");
+    }
+}
