@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""The real-powder study's table: one row per point in points/*.json (docs/study/powders.md)."""
+"""The real-powder study's tables (docs/study/powders.md): one row per point in points/*.json, or
+with `shaheen`, the layer packing over Shaheen et al.'s friction grid by blade speed."""
 import glob, json, os, sys
 
 here = os.path.dirname(os.path.abspath(__file__))
@@ -15,6 +16,21 @@ for path in sorted(glob.glob(os.path.join(here, "points", "*.json"))):
     p = m.get("parameters", {})
     st = m.get("steady_state") or {}
     rows.append((name, p, m, st, fail))
+if sys.argv[1:] == ["shaheen"]:
+    print("| sliding μ | rolling μ_r | 100 mm/s | 50 mm/s | 10 mm/s |")
+    print("|---|---|---|---|---|")
+    for mu, mur in [("0.05", "0.005"), ("0.05", "0.4"), ("0.5", "0.005"), ("0.5", "0.4"), ("0.275", "0.2")]:
+        cells = []
+        for v in ["0.1", "0.05", "0.01"]:
+            found = [r for r in rows if r[0] == f"shaheen-v{v}-mu{mu}-mur{mur}"]
+            if not found:
+                cells.append("not run yet")
+                continue
+            _, _, m, _, fail = found[0]
+            cell = "{:.3f} ± {:.3f}".format(m.get("layer_packing", float("nan")), m.get("layer_packing_se", float("nan")))
+            cells.append(cell + (f" ({fail})" if fail else ""))
+        print(f"| {mu} | {mur} | " + " | ".join(cells) + " |")
+    sys.exit(0)
 print("| point | mean D mm | gap mm | v m/s | γ J/m² | layer packing ± SE | MFR ± SE | particles | steps | CPU s | stop |")
 print("|---|---|---|---|---|---|---|---|---|---|---|")
 for name, p, m, st, fail in rows:
