@@ -7,7 +7,7 @@
 //! bad input, the engine, or internal — and keeping the folder's error as the source. What a
 //! kind means to the shell is decided here, once, in [`Error::code`].
 
-/// Exit codes, documented in `sweep --help` and the README.
+/// Exit codes, documented in `sweep --help` and docs/results.md "Exit codes".
 pub mod exit {
     /// Everything asked for was done.
     pub const SUCCESS: i32 = 0;

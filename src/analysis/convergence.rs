@@ -1,4 +1,4 @@
-//! Convergence of the MFR statistics across nested spaces (thesis §3.3; README "Convergence and the report").
+//! Convergence of the MFR statistics across nested spaces (thesis §3.3; docs/statistics.md "The convergence rules").
 //!
 //! A sweep's spaces (lattice levels, LDS prefixes) each have [`SpaceStats`]: the statistics and
 //! the half-width of each one's 95 % bootstrap interval (its noise at that N). This module

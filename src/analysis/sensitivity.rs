@@ -1,4 +1,4 @@
-//! First-order sensitivity indices from the sample a sweep already has (README "Convergence and the report"): which
+//! First-order sensitivity indices from the sample a sweep already has (docs/statistics.md "Sensitivity indices"): which
 //! parameter the MFR depends on most, with no extra runs.
 //!
 //! The estimator is the binned correlation ratio (Pearson's η², the given-data form of Sobol's

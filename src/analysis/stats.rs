@@ -1,4 +1,4 @@
-//! The statistics of a set of numbers (thesis Eq. 18–21; README "Convergence and the report") and their bootstrap
+//! The statistics of a set of numbers (thesis Eq. 18–21; docs/statistics.md "The statistics of a space") and their bootstrap
 //! intervals.
 //!
 //! Pure functions of `&[f64]`: no files, no sweeps. A statistic that a set cannot define (the

@@ -15,7 +15,7 @@
 //! The thresholds were read off LIGGGHTS profiles of `sweeps/quick.toml` on the scene before the
 //! gated-dose rework (a smooth profile there had J ≈ 0.003 and R from 0.05 at gap 1.3 D to 0.1
 //! at 2 D). On the gated scene v_x is within a few % of the blade speed in every layer, so its
-//! points classify as inefficient (README "Spreading quality").
+//! points classify as inefficient (docs/statistics.md "Spreading quality").
 
 use serde::Serialize;
 

@@ -1,5 +1,5 @@
 //! The report of a sweep directory: `convergence.csv`, `summary.json` and `report/` (plots as
-//! SVG and PNG, and a self-contained `report.html`); README "Convergence and the report".
+//! SVG and PNG, and a self-contained `report.html`); docs/statistics.md "The report".
 //!
 //! [`analyse`] reads the directory (manifest, run dirs, joblog) and computes everything: the
 //! statistics of each complete space with bootstrap intervals, the convergence verdict, counts,

@@ -2,7 +2,7 @@
 //! sweep logic: `[run] engine = "stand-in"` in a sweep file.
 //!
 //! It runs no physics. Each point's MFR and v_x profile come from a closed-form model shaped like
-//! the real scene's measurements (README "One point", thesis §4.1–4.5), plus noise drawn from the
+//! the real scene's measurements (thesis §4.1–4.5; docs/statistics.md "The stand-in engine"), plus noise drawn from the
 //! point's own parameters, so the same point gives the same numbers on every machine:
 //!
 //! - MFR is 0 while the gap is below [`JAM_RATIO`] diameters, then rises with gap/D towards
@@ -218,7 +218,7 @@ mod tests {
         assert_eq!(pt(0.2, 3.0, 3.5, 1.4).mean_mfr(), 0.0, "gap 1.17 D");
         let m: Vec<f64> = [1.5, 2.0, 3.0, 5.0].iter().map(|g| pt(0.2, 1.0, *g, 1.4).mean_mfr()).collect();
         assert!(m.windows(2).all(|w| w[1] > w[0]), "{m:?}");
-        // The real scene's corners (README): 0.093 at D 3, gap 5; 0.219 at D 1, gap 5 (μ 0.3, v 1.6).
+        // The real scene's corners (thesis layout, measured when the stand-in was made): 0.093 at D 3, gap 5; 0.219 at D 1, gap 5 (μ 0.3, v 1.6).
         let corner = pt(0.3, 3.0, 5.0, 1.6).mean_mfr();
         assert!((0.04..0.12).contains(&corner), "{corner}");
         let corner = pt(0.3, 1.0, 5.0, 1.6).mean_mfr();
