@@ -221,17 +221,7 @@ fn an_lds_chain_on_slurm_stops_at_the_verdict() {
     assert!(msg.contains("then the next batch unless the rule has held"), "{msg}");
 
     // The chain: batch lds 4, its judge submits lds 8, whose judge finds the rule held.
-    let judges = || -> Vec<String> {
-        std::fs::read_dir(dir.join("cluster/logs"))
-            .unwrap()
-            .flatten()
-            .filter(|e| e.file_name().to_string_lossy().starts_with("report-"))
-            .map(|e| std::fs::read_to_string(e.path()).unwrap_or_default())
-            .collect()
-    };
-    wait_until("the chain to stop at the verdict", Duration::from_secs(600), || {
-        judges().iter().any(|l| l.contains("nothing to submit: converged"))
-    });
+    wait_for_the_verdict(&dir);
     let subs = std::fs::read_to_string(dir.join("cluster/submissions.tsv")).unwrap();
     assert_eq!(subs.lines().count(), 2, "two batches submitted: {subs}");
     let rows = results(&dir);
@@ -354,21 +344,11 @@ fn an_adaptive_chain_on_slurm_plans_each_batch_and_stops_at_the_verdict() {
     let (dir, local) = adapt_pair(root.path());
     let (_job, msg) = submit(&conf, &dir, &["--tasks", "2"]);
     assert!(msg.contains("8 points of the batch adapt 8 as array tasks 0-3 (2 per task)"), "{msg}");
-    let judges = || -> Vec<String> {
-        std::fs::read_dir(dir.join("cluster/logs"))
-            .unwrap()
-            .flatten()
-            .filter(|e| e.file_name().to_string_lossy().starts_with("report-"))
-            .map(|e| std::fs::read_to_string(e.path()).unwrap_or_default())
-            .collect()
-    };
-    wait_until("the chain to stop at the verdict", Duration::from_secs(600), || {
-        judges().iter().any(|l| l.contains("nothing to submit: converged"))
-    });
+    wait_for_the_verdict(&dir);
     assert!(
-        judges().iter().any(|l| l.contains("planned the next batch, points 8-11 (adapt 12")),
+        judge_logs(&dir).iter().any(|l| l.contains("planned the next batch, points 8-11 (adapt 12")),
         "{:?}",
-        judges()
+        judge_logs(&dir)
     );
     let subs = std::fs::read_to_string(dir.join("cluster/submissions.tsv")).unwrap();
     assert_eq!(subs.lines().count(), 2, "two batches submitted: {subs}");
@@ -755,4 +735,21 @@ fn a_frozen_task_is_taken_over_after_its_lease_and_a_live_one_is_not() {
     assert_eq!(last.0, "node-b", "{lines:?}");
     assert!(!lines.iter().any(|(h, s)| h == "node-a" && (s == "done" || s == "failed")), "{lines:?}");
     assert_eq!(results(&dir)[k], want[k]);
+}
+
+/// The logs of a chain's judge jobs (`cluster/logs/report-*`).
+fn judge_logs(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir.join("cluster/logs"))
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().starts_with("report-"))
+        .map(|e| std::fs::read_to_string(e.path()).unwrap_or_default())
+        .collect()
+}
+
+/// Wait until a judge of the chain in `dir` finds the rule held and submits nothing more.
+fn wait_for_the_verdict(dir: &Path) {
+    wait_until("the chain to stop at the verdict", Duration::from_secs(600), || {
+        judge_logs(dir).iter().any(|l| l.contains("nothing to submit: converged"))
+    });
 }
