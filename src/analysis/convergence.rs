@@ -111,6 +111,16 @@ pub struct Criteria {
 }
 
 impl Criteria {
+    /// These criteria for a design that is a lattice or not: only a lattice's points are a
+    /// quadrature's (a one-parameter LDS also has one point per distinct value, but its extremes
+    /// are no faces of the box), so any other design weighs every point alike.
+    pub fn for_design(mut self, lattice: bool) -> Criteria {
+        if !lattice {
+            self.lattice_weights = LatticeWeights::Equal;
+        }
+        self
+    }
+
     /// From a validated sweep file's `[convergence]` (the sweep module checks the names).
     pub fn from_settings(c: &ConvergenceSettings) -> Criteria {
         Criteria {

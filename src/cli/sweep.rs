@@ -295,7 +295,8 @@ pub(super) fn start(
     if plan_only {
         return plan(&sweep, design, &out, &opts);
     }
-    let mut watch = Watch::new(Criteria::from_settings(&sweep.file.convergence));
+    let lattice = matches!(design, DesignRecord::Lattice { .. });
+    let mut watch = Watch::new(Criteria::from_settings(&sweep.file.convergence).for_design(lattice));
     let cancel = CancelToken::new();
     let exec = driver::SweepExecutor::for_sweep(&sweep)?;
     let summary = driver::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?;
@@ -335,7 +336,8 @@ pub(super) fn resume(a: ResumeArgs) -> Result<(), Error> {
         let mut watch = AdaptWatch::new(&a.dir, &sweep, criteria);
         driver::adapt::run(&a.dir, &exec, &opts, &mut watch, &cancel)?
     } else {
-        let mut watch = Watch::new(criteria);
+        let lattice = matches!(manifest.design, DesignRecord::Lattice { .. });
+        let mut watch = Watch::new(criteria.for_design(lattice));
         driver::resume(&a.dir, &exec, &opts, &mut watch, &cancel)?
     };
     finish(&summary, &sweep)

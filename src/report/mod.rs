@@ -458,7 +458,8 @@ fn judge_spaces(
         }
         let values: Vec<&[f64]> = members.iter().map(|p| p.values.as_slice()).collect();
         let all_mfr: Vec<Option<f64>> = members.iter().map(|p| p.mfr()).collect();
-        let (mfr, w) = convergence::space_values(&values, &all_mfr, c.lattice_weights);
+        let lattice = matches!(manifest.design, DesignRecord::Lattice { .. });
+        let (mfr, w) = convergence::space_values(&values, &all_mfr, c.for_design(lattice).lattice_weights);
         let se: Vec<Option<f64>> = members.iter().filter(|p| p.mfr().is_some()).map(|p| p.mfr_se).collect();
         let noise = crate::analysis::noise::split(&mfr, &se, w.as_deref());
         let (st, iv) = if adaptive {

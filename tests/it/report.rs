@@ -628,3 +628,21 @@ screen = false
         assert_all_finite(f, &std::fs::read_to_string(d.join(f)).unwrap());
     }
 }
+
+#[test]
+fn a_one_parameter_lds_weighs_every_point_alike() {
+    // Four scrambled-Halton values of one parameter are four distinct values, one point each, as
+    // a lattice's would be; but its two extremes are no faces of the box: no trapezoid weights.
+    let root = tempfile::tempdir().unwrap();
+    let file = support::write_file(
+        &root.path().join("one.toml"),
+        "name = \"one\"\n[parameters]\nblade_speed = { lo = 1.2, hi = 1.6, unit = \"m/s\" }\n\
+         [design.lds]\nstep = 4\nmax = 4\n[run]\nengine = \"stand-in\"\n",
+    );
+    let out = root.path().join("one");
+    let o = sweep(&["lds", p(&file), "--out", p(&out), "-q"]);
+    assert!(matches!(o.status.code(), Some(0) | Some(1)), "{}", stderr(&o));
+    let s = summary(&out);
+    assert_eq!(s["spaces"][0]["weights"], "equal", "{}", s["spaces"][0]);
+    assert!(s["spaces"][0]["equal_weights"].is_null(), "{}", s["spaces"][0]);
+}
