@@ -5,11 +5,10 @@
 use std::f64::consts::PI;
 use std::fmt::Write;
 
-use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::scene::pile::class_counts;
+use crate::scene::pile::shuffled_diameters;
 use crate::scene::Scene;
 
 /// Flat faces around the tube: the inscribed polygon's flats lie within 0.2 % of the radius.
@@ -48,13 +47,7 @@ pub fn layer_sites(radius: f64, spacing: f64) -> Vec<[f64; 2]> {
 /// the size classes' number fractions and shuffled (seeded, reproducible).
 pub fn column_data(s: &Scene) -> String {
     let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
-    let fractions: Vec<f64> = s.size_classes.iter().map(|c| c.fraction).collect();
-    let mut diameters: Vec<f64> = class_counts(&fractions, s.particles)
-        .iter()
-        .zip(&s.size_classes)
-        .flat_map(|(&n, c)| std::iter::repeat_n(c.diameter, n))
-        .collect();
-    diameters.shuffle(&mut rng);
+    let diameters = shuffled_diameters(s, &mut rng);
     let d_max = s.size_classes.iter().map(|c| c.diameter).fold(0.0, f64::max);
     let jitter = 0.45 * (s.pile_spacing - d_max);
     let sites = layer_sites(cylinder_radius(s), s.pile_spacing);
