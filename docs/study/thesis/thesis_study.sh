@@ -2,7 +2,7 @@
 # The thesis's study on real LIGGGHTS (docs/study/thesis/README.md): the 4-D LDS sweep to 2,400 points,
 # the 4-D lattice at levels 5, 6, 7, and an LDS over the blade speeds real machines use.
 #
-#   bash docs/study/thesis/thesis_study.sh [lds|lattice|slow|lds-0.3|slow-heap20 ...]   (default: lds lattice slow)
+#   bash docs/study/thesis/thesis_study.sh [lds|lattice|slow|lds-0.3|slow-heap20|lds-heap20 ...]   (default: lds lattice slow)
 #
 # It takes hours on two cores and is meant to be cut off and started again: each sweep runs in
 # WORK/<name> (default WORK=/tmp/thesis-study) with `sweep lds|lattice`, which continues a
@@ -115,6 +115,8 @@ for s in "${order[@]}"; do
     # The machine-speed LDS again on the recoater's definitions: a 20 mm heap at every D, the
     # layer packing over the gap plus the pockets' open depth.
     slow-heap20) run_sweep slow-heap20 lds "$record/machine-speeds.toml" --hold 1000 ;;
-    *) echo "study: unknown sweep '$s' (expected lds, lattice, slow, lds-0.3 or slow-heap20)" >&2; exit 2 ;;
+    # The thesis's 4-D LDS at one fixed heap (20 mm above the tip at every D): D's own index.
+    lds-heap20) run_sweep lds-heap20 lds sweeps/thesis-lds.toml --max 400 --hold 1000 ;;
+    *) echo "study: unknown sweep '$s' (expected lds, lattice, slow, lds-0.3, slow-heap20 or lds-heap20)" >&2; exit 2 ;;
   esac
 done
