@@ -5,6 +5,7 @@
 //! a sweep directory.
 
 pub mod adapt;
+pub mod calibration;
 pub mod convergence;
 pub mod emulator;
 pub mod noise;

@@ -128,6 +128,13 @@ pub(super) struct WorkArgs {
 
 pub(super) fn submit(a: SubmitArgs) -> Result<(), Error> {
     use demsweep::run::cluster::{self, Only, Scheduler, SubmitOptions};
+    if demsweep::run::calibrate::settings(&a.dir).is_some() {
+        let dir = a.dir.display();
+        return Err(flag(
+            format!("sweep submit {dir}"),
+            format!("a calibration plans each batch from the last on one machine; run it with `sweep resume {dir}`"),
+        ));
+    }
     if a.jobs_per_task == 0 {
         return Err(flag("--jobs-per-task 0", "expected at least 1"));
     }

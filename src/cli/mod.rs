@@ -3,6 +3,7 @@
 //! of the library and prints what they return.
 
 mod bench;
+mod calibrate;
 mod cluster;
 mod contact;
 mod error;
@@ -79,6 +80,21 @@ enum Command {
   sweep adapt my.toml --out /scratch/me/ad --plan  # the first batch, for `sweep submit`"
     )]
     Adapt(sweep::AdaptArgs),
+    /// Fit the sweep file's free parameters (its ranges) to measured targets, e.g. a powder's
+    /// angle of repose: the posterior of each parameter with its credible interval.
+    ///
+    /// A scrambled-Halton first batch, then batches placed by one emulator per target where the
+    /// posterior is least known (the variance of its density), until no credible interval moves
+    /// by more than --tolerance of its width for --hold batches, or --max points. Writes
+    /// DIR/posterior.json, DIR/calibrated.toml (the parameters as values, for a spreading sweep's
+    /// `include`), DIR/calibrated-ranges.toml (the credible intervals as ranges) and
+    /// DIR/report/report.html with the posterior maps. `sweep resume DIR` continues it.
+    /// docs/calibration.md.
+    #[command(
+        after_help = "Examples:\n  sweep calibrate sweeps/calibrate-pour.toml --target angle_of_repose=34.0±1.0
+  sweep calibrate my.toml --target angle_of_repose=34+-1 --target bulk_packing=0.58+-0.01 --max 60"
+    )]
+    Calibrate(calibrate::CalibrateArgs),
     /// Finish an interrupted sweep; every completed run is reused.
     ///
     /// Keeps the convergence rule and verdict of DIR/sweep.toml: a converged sweep runs nothing
@@ -228,6 +244,7 @@ pub fn run(cli: Cli) -> Result<(), Error> {
         Command::Lattice(a) => sweep::lattice(a),
         Command::Lds(a) => sweep::lds(a),
         Command::Adapt(a) => sweep::adapt(a),
+        Command::Calibrate(a) => calibrate::calibrate(a),
         Command::Resume(a) => sweep::resume(a),
         Command::Status(a) => sweep::status(a),
         Command::Unclaim(a) => sweep::unclaim(a),

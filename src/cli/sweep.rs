@@ -323,6 +323,9 @@ fn plan(
 
 pub(super) fn resume(a: ResumeArgs) -> Result<(), Error> {
     let opts = run_options(&a.pool, a.retry_failed, a.force)?;
+    if let Some(settings) = driver::calibrate::settings(&a.dir) {
+        return super::calibrate::resume(&a.dir, &opts, settings);
+    }
     let mut sweep = driver::load_dir_sweep(&a.dir)?;
     sweep.file.scene.force_bounds = a.force;
     demsweep::sys::process::install_interrupt_handler();
@@ -416,6 +419,9 @@ pub(super) fn unclaim(a: UnclaimArgs) -> Result<(), Error> {
 }
 
 pub(super) fn report(a: ReportArgs) -> Result<(), Error> {
+    if driver::calibrate::settings(&a.dir).is_some() {
+        return super::calibrate::report(&a.dir, a.json);
+    }
     let sweep = driver::load_dir_sweep(&a.dir)?;
     let mut settings = sweep.file.convergence.clone();
     a.convergence.overrides().apply(&mut settings)?;

@@ -38,7 +38,7 @@ const ZERO: RGBColor = RGBColor(200, 200, 200);
 const FAILED: RGBColor = RGBColor(215, 25, 28);
 
 /// Viridis, by linear interpolation between five of its colours; `t` in [0, 1].
-fn viridis(t: f64) -> RGBColor {
+pub(super) fn viridis(t: f64) -> RGBColor {
     const C: [(f64, f64, f64); 5] =
         [(68., 1., 84.), (59., 82., 139.), (33., 145., 140.), (94., 201., 98.), (253., 231., 37.)];
     let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 } * 4.0;

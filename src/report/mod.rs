@@ -12,6 +12,8 @@
 mod adaptive;
 mod advice;
 pub mod answer;
+pub mod calibration;
+mod calibration_map;
 pub mod emulation;
 mod error;
 mod gallery;

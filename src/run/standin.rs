@@ -12,6 +12,10 @@
 //!   2:1 match), flattens for larger gaps and faster blades ("inefficient"), and fluctuates from
 //!   layer to layer for coarse particles and high friction ("unstable").
 //!
+//! - In the pour layout, a heap: its angle of repose and packing from a closed form in sliding
+//!   and rolling friction and surface energy ([`PourPoint`]), with noise of known SD, so that a
+//!   calibration can be checked against the parameters that made its targets.
+//!
 //! Not a substitute for LIGGGHTS in any result that is about powder: its numbers are made up.
 
 use std::collections::BTreeMap;
@@ -96,6 +100,26 @@ impl Executor for StandIn {
 
     fn execute(&self, job: &StandInJob, run_dir: &Path, _cancel: &CancelToken) -> RunOutcome {
         let p = |k: &str| job.parameters.get(k).copied().unwrap_or(f64::NAN);
+        if self.sweep.file.scene.layout == "pour" {
+            let pour = PourPoint {
+                friction: p("friction"),
+                rolling_friction: p("rolling_friction"),
+                surface_energy: p("surface_energy"),
+                diameter: p("diameter"),
+            };
+            let r = RunResult {
+                hash: job.hash.clone(),
+                parameters: job.parameters.clone(),
+                mfr: f64::NAN,
+                mfr_flux: f64::NAN,
+                heap: Some(pour.model(&mut Noise::new(&job.hash))),
+                vx: vec![None; VX_LAYERS],
+                engine_version: format!("{NAME} {MODEL_VERSION}"),
+                warnings: vec![format!("{NAME}: a made-up model, not LIGGGHTS")],
+                ..RunResult::default()
+            };
+            return write_result(job, run_dir, r);
+        }
         let point = Point {
             friction: p("friction"),
             diameter: p("diameter"),
@@ -117,18 +141,22 @@ impl Executor for StandIn {
             warnings: vec![format!("{NAME}: a made-up model, not LIGGGHTS")],
             ..RunResult::default()
         };
-        match write_json(&run_dir.join(RESULT), &r) {
-            Ok(()) => RunOutcome::Done(r),
-            Err(e) => RunOutcome::Failed(crate::outcome::RunFailure {
-                format: RESULT_FORMAT,
-                hash: job.hash.clone(),
-                class: crate::outcome::FailureClass::CouldNotStart,
-                reason: format!("cannot write {}: {e}", run_dir.join(RESULT).display()),
-                log_tail: String::new(),
-                wall_time: 0.0,
-                measured: None,
-            }),
-        }
+        write_result(job, run_dir, r)
+    }
+}
+
+fn write_result(job: &StandInJob, run_dir: &Path, r: RunResult) -> RunOutcome {
+    match write_json(&run_dir.join(RESULT), &r) {
+        Ok(()) => RunOutcome::Done(r),
+        Err(e) => RunOutcome::Failed(crate::outcome::RunFailure {
+            format: RESULT_FORMAT,
+            hash: job.hash.clone(),
+            class: crate::outcome::FailureClass::CouldNotStart,
+            reason: format!("cannot write {}: {e}", run_dir.join(RESULT).display()),
+            log_tail: String::new(),
+            wall_time: 0.0,
+            measured: None,
+        }),
     }
 }
 
@@ -175,6 +203,69 @@ impl Point {
             })
             .collect();
         (mfr, vx)
+    }
+}
+
+/// The pour's parameters the heap model reads (sweep units: mm, J/m²).
+#[derive(Debug, Clone, Copy)]
+pub struct PourPoint {
+    pub friction: f64,
+    pub rolling_friction: f64,
+    pub surface_energy: f64,
+    pub diameter: f64,
+}
+
+/// SD of the stand-in heap's angle about its mean (its reported SE), degrees, and of its packing.
+pub const ANGLE_NOISE: f64 = 0.5;
+pub const PACKING_NOISE: f64 = 0.003;
+
+impl PourPoint {
+    /// The surface energy at which cohesion has added half its steepening: scales with the
+    /// weight of a grain over its contact area, so with D² (0.05 J/m² at D = 2 mm).
+    fn cohesion_half(&self) -> f64 {
+        0.05 * (self.diameter / 2.0).powi(2)
+    }
+
+    fn cohesion(&self) -> f64 {
+        let g = self.surface_energy.max(0.0);
+        g / (g + self.cohesion_half())
+    }
+
+    /// The noiseless angle of repose, degrees: 10° for frictionless spheres, rising with the
+    /// product of sliding and rolling friction (each saturating, so that one angle is met along
+    /// a ridge of pairs) and with cohesion. The shape of the pour's measurements (steeper with
+    /// either friction, by less at larger values: docs/study/pour), not their numbers.
+    pub fn mean_angle(&self) -> f64 {
+        let rolling = (self.rolling_friction / 0.15).tanh();
+        let sliding = (self.friction / 0.2).tanh();
+        10.0 + 30.0 * rolling * sliding + 10.0 * self.cohesion()
+    }
+
+    /// The noiseless packing of the heap: looser with friction, more with sliding than rolling,
+    /// and with cohesion.
+    pub fn mean_packing(&self) -> f64 {
+        0.64 - 0.1 * self.friction - 0.05 * self.rolling_friction - 0.05 * self.cohesion()
+    }
+
+    /// A heap: the angle and packing with their noise ([`ANGLE_NOISE`], [`PACKING_NOISE`]).
+    pub fn model(&self, noise: &mut Noise) -> crate::outcome::heap::Heap {
+        let angle = self.mean_angle() + ANGLE_NOISE * noise.normal();
+        let packing = self.mean_packing() + PACKING_NOISE * noise.normal();
+        // The cone of the pour's particles at this angle and packing: V = π r² h / 3, h = r tan θ.
+        let solid =
+            crate::scenes::pour::PARTICLES as f64 * std::f64::consts::PI * self.diameter.powi(3) / 6.0;
+        let tan = angle.to_radians().tan();
+        let radius = (3.0 * solid / packing / (std::f64::consts::PI * tan)).cbrt();
+        crate::outcome::heap::Heap {
+            angle_deg: angle,
+            angle_se_deg: ANGLE_NOISE,
+            sector_angles_deg: Vec::new(),
+            height_mm: radius * tan,
+            base_radius_mm: radius,
+            packing,
+            particles_in_heap: crate::scenes::pour::PARTICLES,
+            particles_run_out: 0,
+        }
     }
 }
 

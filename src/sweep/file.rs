@@ -18,6 +18,12 @@ pub struct SweepFile {
     pub name: String,
     #[serde(default)]
     pub description: String,
+    /// Files whose `[parameters]` this sweep takes, in order, for every parameter it does not
+    /// set itself (e.g. the powder `sweep calibrate` wrote: `include = ["calibrated.toml"]`).
+    /// Paths are relative to the sweep file; the resolved sweep (`DIR/sweep.toml`) holds the
+    /// parameters themselves and no include.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub include: Vec<PathBuf>,
     /// Every parameter of the scene that the sweep sets: a range (swept) or a value (fixed).
     /// Parameters not named take the scene's defaults.
     pub parameters: toml::Table,

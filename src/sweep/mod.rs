@@ -73,6 +73,7 @@ impl Sweep {
             key: "scene.fidelity".into(),
             why: e,
         })?;
+        include(&mut file, path)?;
         let (swept, fixed) = validate(&file, path)?;
         Ok(Sweep { path: path.to_path_buf(), file, swept, fixed })
     }
@@ -103,6 +104,59 @@ impl Sweep {
                 self.path.parent().unwrap_or(Path::new(".")).join(t)
             }
         })
+    }
+}
+
+/// Take the `[parameters]` of each file of `include` that the sweep file does not set itself
+/// (the first include that sets one wins), then drop the include: the sweep holds them now.
+fn include(file: &mut SweepFile, path: &Path) -> Result<(), SweepError> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    for inc in std::mem::take(&mut file.include) {
+        let full = if inc.is_absolute() { inc.clone() } else { dir.join(&inc) };
+        let bad = |why: String| SweepError::Key { path: path.to_path_buf(), key: "include".into(), why };
+        let text = std::fs::read_to_string(&full)
+            .map_err(|e| bad(format!("cannot read {}: {}", full.display(), io_reason(&e))))?;
+        let table: toml::Table = toml::from_str(&text)
+            .map_err(|e| bad(format!("{}: not TOML: {}", full.display(), e.message())))?;
+        if let Some(other) = table.keys().find(|k| *k != "parameters") {
+            return Err(bad(format!(
+                "{}: holds [{other}]; an included file holds only [parameters]",
+                full.display()
+            )));
+        }
+        let Some(toml::Value::Table(params)) = table.get("parameters") else {
+            return Err(bad(format!("{}: no [parameters] table", full.display())));
+        };
+        for (k, v) in params {
+            file.parameters.entry(k.clone()).or_insert_with(|| v.clone());
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod include_tests {
+    use super::*;
+
+    #[test]
+    fn included_parameters_fill_what_the_file_leaves_out_and_the_file_wins() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("powder.toml"),
+            "[parameters]\nfriction = { value = 0.31 }\nrolling_friction = { lo = 0.17, hi = 0.24 }\ngap = 9.0\n",
+        )
+        .unwrap();
+        let path = dir.path().join("s.toml");
+        let text = "name = \"s\"\ninclude = [\"powder.toml\"]\n[parameters]\ngap = { lo = 2.0, hi = 3.0 }\n";
+        let s = Sweep::parse(text, &path).unwrap();
+        assert_eq!(s.names(), ["gap", "rolling_friction"]);
+        assert!(s.fixed.iter().any(|p| p.name == "friction" && p.kind == ParamKind::Fixed(0.31)));
+        assert!(s.file.include.is_empty(), "the resolved sweep holds the parameters, not the include");
+        let missing = Sweep::parse(&text.replace("powder", "nowhere"), &path).unwrap_err().to_string();
+        assert!(missing.contains("include: cannot read") && missing.contains("nowhere.toml"), "{missing}");
+        std::fs::write(dir.path().join("bad.toml"), "[scene]\nlayout = \"pour\"\n").unwrap();
+        let other = Sweep::parse(&text.replace("powder", "bad"), &path).unwrap_err().to_string();
+        assert!(other.contains("holds [scene]; an included file holds only [parameters]"), "{other}");
     }
 }
 

@@ -15,6 +15,7 @@ mod input;
 // Running a sweep: the pool, failed runs, interruption and resume, several processes on one
 // directory, what the directory holds, the engine, the screen, clusters, the adaptive design.
 mod adapt;
+mod calibrate;
 mod cluster;
 mod concurrency;
 mod engine;

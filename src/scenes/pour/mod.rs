@@ -20,7 +20,7 @@ pub mod geometry;
 pub mod heap;
 
 use crate::engine::dump::read_dump;
-use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT};
+use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT, VX_LAYERS};
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
 use crate::scene::{Base, Conveyor, Scene, GRAVITY, LAYER_FRACTION_MAX, ROLLING_MODEL};
@@ -278,7 +278,9 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         // The heap came to rest (a heap still moving fails as not-settled).
         steady: true,
         steady_p: f64::NAN,
-        vx: Vec::new(),
+        // No blade, so no layer in front of one: every v_x layer empty (a sweep directory reads
+        // a done result as one v_x per layer).
+        vx: vec![None; VX_LAYERS],
         vx_se: Vec::new(),
         particles: scene.particles,
         layer: None,

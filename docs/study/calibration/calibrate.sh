@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# The calibration recovery of docs/study/calibration.md on LIGGGHTS, one pour at a time:
+# rolling friction calibrated against the angle of repose the pour gave at rolling friction 0.2
+# (docs/study/pour/pour.tsv: 26.55 ± 0.73°, friction 0.3). Resumable: run it again after an
+# interruption and it goes on where the directory stands. Its record (posterior, batches,
+# results) is copied to docs/study/calibration/record/ after each run.
+#
+#   bash docs/study/calibration/calibrate.sh            # from the repository's root
+#
+# SWEEP: the binary (default target/release/sweep); CAL_DIR: the sweep directory.
+set -euo pipefail
+SWEEP=${SWEEP:-target/release/sweep}
+OUT=${CAL_DIR:-/tmp/calibration-study/pour-rolling}
+REC=docs/study/calibration/record
+mkdir -p "$(dirname "$OUT")" "$REC"
+status=0
+"$SWEEP" calibrate docs/study/calibration/pour-rolling.toml \
+  --target angle_of_repose=26.55±0.73 --first 8 --batch 2 --max 20 --jobs 1 --out "$OUT" || status=$?
+"$SWEEP" report "$OUT" >"$REC/answer.txt" 2>&1 || true
+for f in posterior.json calibration-batches.csv results.csv calibrated.toml calibrated-ranges.toml; do
+  [ -f "$OUT/$f" ] && cp "$OUT/$f" "$REC/$f"
+done
+"$SWEEP" status "$OUT" >"$REC/status.txt" 2>&1 || true
+exit $status

@@ -1,0 +1,131 @@
+//! The calibration's figures: a map of the posterior density over each pair of free parameters
+//! (the others at their posterior medians), with the runs, the posterior's mode and the credible
+//! intervals drawn.
+
+use plotters::prelude::*;
+
+use super::plots::{fmt_short, Figure, Res, AXIS_FONT, FONT, TICK_FONT, TITLE_FONT};
+use crate::analysis::calibration::{log_density, Emulated};
+use crate::run::calibrate::{unit_value, CalibrationWatch};
+use crate::store::{Manifest, PointStatus};
+use crate::sweep::Sweep;
+
+/// Cells per side of a map.
+const CELLS: usize = 60;
+
+/// The posterior maps: one per pair of free parameters (none for one parameter: its
+/// interval is the answer), on the last batch's emulators.
+pub fn maps(
+    sweep: &Sweep,
+    watch: &CalibrationWatch,
+    manifest: &Manifest,
+    status: &[PointStatus],
+) -> Res<Vec<Figure>> {
+    let Some(post) = watch.batches.iter().rev().find_map(|b| b.posterior.as_ref()) else {
+        return Ok(Vec::new());
+    };
+    let d = sweep.dim();
+    let mut out = Vec::new();
+    for i in 0..d {
+        for j in i + 1..d {
+            let base: Vec<f64> = post.marginals.iter().map(|m| m.median).collect();
+            let mut grid = vec![vec![f64::NEG_INFINITY; CELLS]; CELLS];
+            for (a, row) in grid.iter_mut().enumerate() {
+                for (b, cell) in row.iter_mut().enumerate() {
+                    let mut u = base.clone();
+                    u[i] = (a as f64 + 0.5) / CELLS as f64;
+                    u[j] = (b as f64 + 0.5) / CELLS as f64;
+                    *cell = density_at(watch, &u).unwrap_or(f64::NEG_INFINITY);
+                }
+            }
+            let top = grid.iter().flatten().copied().fold(f64::NEG_INFINITY, f64::max);
+            let runs: Vec<(Vec<f64>, bool)> = manifest
+                .points
+                .iter()
+                .zip(status)
+                .filter(|(_, s)| s.is_finished())
+                .map(|(p, s)| {
+                    (crate::sweep::space::unit_point(sweep, &p.values), matches!(s, PointStatus::Failed(_)))
+                })
+                .collect();
+            let (mi, mj) = (&post.marginals[i], &post.marginals[j]);
+            let (ni, nj) = (&sweep.swept[i].name, &sweep.swept[j].name);
+            let title = format!("posterior over {ni} × {nj}");
+            let others = if d > 2 { ", the other parameters at their posterior medians" } else { "" };
+            let caption = format!(
+                "{title}: density relative to its highest (colour{others}); dots: runs, red ×: failed runs; \
+                 white lines: each parameter's 95 % credible interval; white ○: the posterior's mode. \
+                 A diagonal band is a ridge: pairs along it reproduce the targets alike."
+            );
+            let vi = |u: f64| unit_value(sweep, i, u);
+            let vj = |u: f64| unit_value(sweep, j, u);
+            let fig =
+                super::plots::figure(format!("map-posterior-{ni}-{nj}"), caption, (640, 540), |root| {
+                    let root = root.titled(&title, (FONT, TITLE_FONT))?;
+                    let mut c = ChartBuilder::on(&root)
+                        .margin(10)
+                        .x_label_area_size(48)
+                        .y_label_area_size(66)
+                        .build_cartesian_2d(0.0..1.0, 0.0..1.0)?;
+                    c.configure_mesh()
+                        .disable_mesh()
+                        .label_style((FONT, TICK_FONT))
+                        .axis_desc_style((FONT, AXIS_FONT))
+                        .x_desc(format!("{ni} ({})", sweep.swept[i].unit))
+                        .y_desc(format!("{nj} ({})", sweep.swept[j].unit))
+                        .x_label_formatter(&|u| fmt_short(vi(*u)))
+                        .y_label_formatter(&|u| fmt_short(vj(*u)))
+                        .draw()?;
+                    let w = 1.0 / CELLS as f64;
+                    for (a, row) in grid.iter().enumerate() {
+                        for (b, l) in row.iter().enumerate() {
+                            let t = if top.is_finite() { (l - top).exp() } else { 0.0 };
+                            let r = [(a as f64 * w, b as f64 * w), ((a + 1) as f64 * w, (b + 1) as f64 * w)];
+                            c.draw_series(std::iter::once(Rectangle::new(
+                                r,
+                                super::maps::viridis(t).filled(),
+                            )))?;
+                        }
+                    }
+                    let line = WHITE.stroke_width(2);
+                    for x in [mi.lo, mi.hi] {
+                        c.draw_series(std::iter::once(PathElement::new(vec![(x, 0.0), (x, 1.0)], line)))?;
+                    }
+                    for y in [mj.lo, mj.hi] {
+                        c.draw_series(std::iter::once(PathElement::new(vec![(0.0, y), (1.0, y)], line)))?;
+                    }
+                    c.draw_series(
+                        runs.iter()
+                            .filter(|r| !r.1)
+                            .map(|(u, _)| Circle::new((u[i], u[j]), 3, BLACK.mix(0.8).filled())),
+                    )?;
+                    c.draw_series(
+                        runs.iter()
+                            .filter(|r| r.1)
+                            .map(|(u, _)| Cross::new((u[i], u[j]), 5, RED.stroke_width(2))),
+                    )?;
+                    c.draw_series(std::iter::once(Circle::new(
+                        (post.best[i], post.best[j]),
+                        7,
+                        WHITE.stroke_width(3),
+                    )))?;
+                    Ok(())
+                })?;
+            out.push(fig);
+        }
+    }
+    Ok(out)
+}
+
+/// The posterior's log density at unit point `u` from the watch's last emulators.
+fn density_at(watch: &CalibrationWatch, u: &[f64]) -> Option<f64> {
+    let ems = watch.emulators()?;
+    let outs: Vec<Emulated> = watch
+        .settings()
+        .targets
+        .iter()
+        .zip(ems)
+        .map(|(target, emulator)| Emulated { target, emulator })
+        .collect();
+    Some(log_density(&outs, u))
+}

@@ -1,0 +1,504 @@
+//! `sweep calibrate`: the free parameters of a sweep file fitted to measured targets, batch by
+//! batch, in one sweep directory.
+//!
+//! The directory is an adaptive sweep's ([`crate::run::adapt`]): a scrambled-Halton first batch,
+//! then each batch planned from the results before it and appended to the manifest as one more
+//! space (`calibrate N`: the first N points), so `status`, `resume`, the joblog and the claims read
+//! it as any sweep. What makes it a calibration is [`SETTINGS`] (the targets and the stopping
+//! rule), written when it is created. After each batch the [`CalibrationWatch`] fits one emulator
+//! per target, computes the posterior ([`crate::analysis::calibration`]) and judges whether its
+//! credible intervals have stopped moving; the next batch goes where the posterior is least
+//! known. A batch is a pure function of the points and results before it: a resume, or a second
+//! process, plans the same one.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use super::{RunError, RunOptions, Summary};
+use crate::analysis::adapt::new_run_noise;
+use crate::analysis::calibration::{self as cal, Emulated, Pick, Posterior, Target};
+use crate::analysis::emulator::Emulator;
+use crate::error::{Error, Result};
+use crate::outcome::RunResult;
+use crate::run::pool::{Executor, Flow};
+use crate::run::{PointExecutor, SpaceHook, SweepExecutor};
+use crate::store::{DesignRecord, Manifest, PointRecord, PointStatus, SpaceRecord, Store};
+use crate::sweep::Sweep;
+use crate::sys::process::CancelToken;
+
+/// `calibration.json`: the targets and the stopping rule of a calibration directory.
+pub const SETTINGS: &str = "calibration.json";
+/// `calibration-batches.csv`: why each planned point went where it went.
+pub const BATCHES: &str = "calibration-batches.csv";
+
+/// The stopping rule's defaults: no bound of a credible interval moves by more than 10 % of the
+/// interval's width, two batches in a row.
+pub const TOLERANCE: f64 = 0.1;
+pub const HOLD: usize = 2;
+
+/// What a calibration directory calibrates against, and when it stops.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Settings {
+    pub targets: Vec<Target>,
+    pub tolerance: f64,
+    pub hold: usize,
+}
+
+/// A quantity a run measures that a calibration can target.
+pub struct Quantity {
+    pub name: &'static str,
+    pub unit: &'static str,
+    /// Whether the layout of this name measures it.
+    measured_by: fn(&str) -> bool,
+    /// Its value in a result, with the result's SE of it where it gives one.
+    read: fn(&RunResult) -> Option<Measured>,
+}
+
+/// A measured value and the run's SE of it, where it gives one.
+pub type Measured = (f64, Option<f64>);
+
+/// Every quantity a calibration can target.
+pub const QUANTITIES: &[Quantity] = &[
+    Quantity {
+        name: "angle_of_repose",
+        unit: "°",
+        measured_by: |l| l == "pour",
+        read: |r| r.heap.as_ref().map(|h| (h.angle_deg, Some(h.angle_se_deg).filter(|s| *s > 0.0))),
+    },
+    Quantity {
+        name: "bulk_packing",
+        unit: "-",
+        measured_by: |l| l == "pour",
+        read: |r| r.heap.as_ref().map(|h| (h.packing, None)),
+    },
+    Quantity {
+        name: "mfr",
+        unit: "-",
+        measured_by: |l| l != "pour",
+        read: |r| r.mfr.is_finite().then_some((r.mfr, r.mfr_se)),
+    },
+];
+
+impl Quantity {
+    /// Its value in `r`, with the result's SE of it where it gives one.
+    pub fn read(&self, r: &RunResult) -> Option<Measured> {
+        (self.read)(r)
+    }
+}
+
+/// The quantity named `name`.
+pub fn quantity(name: &str) -> Option<&'static Quantity> {
+    QUANTITIES.iter().find(|q| q.name == name)
+}
+
+/// Refuse targets the sweep cannot be calibrated against: a sweep with no free parameter, a
+/// quantity nobody measures or its layout does not, a target given twice. The error is the
+/// sentence after the flag.
+pub fn check(sweep: &Sweep, targets: &[Target]) -> std::result::Result<(), String> {
+    let layout = &sweep.file.scene.layout;
+    if sweep.dim() == 0 {
+        return Err(format!(
+            "{}: no free parameter: give the parameters to calibrate as ranges in [parameters], e.g. friction = {{ lo = 0.1, hi = 0.5 }}",
+            sweep.path.display()
+        ));
+    }
+    if targets.is_empty() {
+        return Err("--target: expected at least one, e.g. --target angle_of_repose=34.0±1.0".into());
+    }
+    let measured: Vec<&str> = QUANTITIES.iter().filter(|q| (q.measured_by)(layout)).map(|q| q.name).collect();
+    for (k, t) in targets.iter().enumerate() {
+        match quantity(&t.name) {
+            None => {
+                let all: Vec<&str> = QUANTITIES.iter().map(|q| q.name).collect();
+                return Err(format!(
+                    "--target {}: not a quantity a run measures; expected one of {}",
+                    t.name,
+                    all.join(", ")
+                ));
+            }
+            Some(q) if !(q.measured_by)(layout) => {
+                return Err(format!(
+                    "--target {}: scene.layout \"{layout}\" does not measure it; it measures {}",
+                    t.name,
+                    measured.join(", ")
+                ))
+            }
+            Some(_) => {}
+        }
+        if targets[..k].iter().any(|o| o.name == t.name) {
+            return Err(format!("--target {}: given twice", t.name));
+        }
+    }
+    Ok(())
+}
+
+/// The executor of a calibration: LIGGGHTS, or the stand-in. A pour, whose single runs a
+/// plain sweep refuses (its statistics read MFR), is what a calibration is made of.
+pub fn executor(sweep: &Sweep) -> Result<SweepExecutor> {
+    if super::standin::selected(sweep) {
+        Ok(SweepExecutor::StandIn(Box::new(super::standin::StandIn::new(sweep.clone())?)))
+    } else {
+        Ok(SweepExecutor::Real(Box::new(PointExecutor::new(sweep.clone())?)))
+    }
+}
+
+/// The settings of the calibration directory `dir`; `None` when it is not one.
+pub fn settings(dir: &Path) -> Option<Settings> {
+    serde_json::from_str(&std::fs::read_to_string(dir.join(SETTINGS)).ok()?).ok()
+}
+
+/// Per target: the unit points, values and SEs of the done runs that measured it.
+type Data = Vec<(Vec<Vec<f64>>, Vec<f64>, Vec<Option<f64>>)>;
+
+fn data(sweep: &Sweep, targets: &[Target], points: &[(&PointRecord, &PointStatus)]) -> Data {
+    targets
+        .iter()
+        .map(|t| {
+            let q = quantity(&t.name).expect("targets are checked");
+            let mut d = (Vec::new(), Vec::new(), Vec::new());
+            for (p, s) in points {
+                if let PointStatus::Done(r) = s {
+                    if let Some((v, se)) = q.read(r).filter(|(v, _)| v.is_finite()) {
+                        d.0.push(crate::sweep::space::unit_point(sweep, &p.values));
+                        d.1.push(v);
+                        d.2.push(se.filter(|s| s.is_finite()));
+                    }
+                }
+            }
+            d
+        })
+        .collect()
+}
+
+/// One judged batch.
+#[derive(Debug, Clone, Serialize)]
+pub struct Batch {
+    pub label: String,
+    pub points: usize,
+    /// Points whose runs measured every target.
+    pub measured: usize,
+    pub posterior: Option<Posterior>,
+    /// The rule's change against the batch before ([`cal::interval_change`]).
+    pub change: Option<f64>,
+}
+
+/// The [`SpaceHook`] of a calibration: judges each batch by its posterior and keeps the last
+/// batch's emulators for planning the next.
+pub struct CalibrationWatch {
+    sweep: Sweep,
+    settings: Settings,
+    seed: u64,
+    pub batches: Vec<Batch>,
+    /// The batch (index into `batches`) at which the credible region stopped shrinking.
+    pub converged_at: Option<usize>,
+    /// The last judged batch's label, emulators (one per target, `None` for all when one could
+    /// not be fitted) and data.
+    last: Option<(String, Option<Vec<Emulator>>, Data)>,
+    lines: Vec<String>,
+}
+
+impl CalibrationWatch {
+    pub fn new(sweep: &Sweep, settings: Settings, seed: u64) -> CalibrationWatch {
+        CalibrationWatch {
+            sweep: sweep.clone(),
+            settings,
+            seed,
+            batches: Vec::new(),
+            converged_at: None,
+            last: None,
+            lines: Vec::new(),
+        }
+    }
+
+    /// The lines of the batches judged since the last call, for the terminal.
+    pub fn take_lines(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.lines)
+    }
+
+    /// The last batch's emulators, one per target, when it had them.
+    pub fn emulators(&self) -> Option<&[Emulator]> {
+        self.last.as_ref().and_then(|(_, e, _)| e.as_deref())
+    }
+
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    fn line(&self, k: usize) -> String {
+        let b = &self.batches[k];
+        let head = format!("batch {} ({}, {} points)", k + 1, b.label, b.points);
+        let Some(p) = &b.posterior else {
+            return format!(
+                "{head}: too few measured runs for an emulator of every target ({} measured)",
+                b.measured
+            );
+        };
+        let params: Vec<String> = self
+            .sweep
+            .swept
+            .iter()
+            .enumerate()
+            .map(|(j, par)| {
+                let v = |u: f64| fmt(unit_value(&self.sweep, j, u));
+                let m = &p.marginals[j];
+                format!("{} {} [{}, {}]", par.name, v(m.median), v(m.lo), v(m.hi))
+            })
+            .collect();
+        let verdict = match b.change {
+            None => "nothing to compare with yet".to_string(),
+            Some(c) if c <= self.settings.tolerance => {
+                format!("intervals moved {:.0} % of their width: the rule holds", 100.0 * c)
+            }
+            Some(c) => format!("intervals moved {:.0} % of their width", 100.0 * c),
+        };
+        let conv = if self.converged_at == Some(k) { "; converged" } else { "" };
+        format!("{head}: {}; {verdict}{conv}", params.join(", "))
+    }
+}
+
+/// A number in four significant figures.
+pub fn fmt(v: f64) -> String {
+    crate::scene::plausible::round_to(v, 4)
+}
+
+/// The value of swept parameter `j` at unit coordinate `u`.
+pub fn unit_value(sweep: &Sweep, j: usize, u: f64) -> f64 {
+    match sweep.swept[j].kind {
+        crate::sweep::ParamKind::Swept { lo, hi, scale } => crate::sweep::space::scale(u, lo, hi, scale),
+        crate::sweep::ParamKind::Fixed(v) => v,
+    }
+}
+
+impl SpaceHook for CalibrationWatch {
+    fn space_complete(&mut self, space: &SpaceRecord, points: &[(&PointRecord, &PointStatus)]) -> Flow {
+        let k = match self.batches.iter().position(|b| b.label == space.label) {
+            Some(k) => k,
+            None => {
+                let d = data(&self.sweep, &self.settings.targets, points);
+                let ems: Option<Vec<Emulator>> = d.iter().map(|(x, y, se)| Emulator::fit(x, y, se)).collect();
+                let posterior = ems.as_ref().and_then(|ems| {
+                    let outs: Vec<Emulated> = self
+                        .settings
+                        .targets
+                        .iter()
+                        .zip(ems)
+                        .map(|(target, emulator)| Emulated { target, emulator })
+                        .collect();
+                    cal::posterior(&outs, self.sweep.dim(), self.seed)
+                });
+                let measured = d.iter().map(|x| x.1.len()).min().unwrap_or(0);
+                self.batches.push(Batch {
+                    label: space.label.clone(),
+                    points: points.len(),
+                    measured,
+                    posterior,
+                    change: None,
+                });
+                self.last = Some((space.label.clone(), ems, d));
+                let ivs: Vec<Option<Vec<(f64, f64)>>> =
+                    self.batches.iter().map(|b| b.posterior.as_ref().map(|p| p.intervals())).collect();
+                let (changes, conv) = cal::judge(&ivs, self.settings.tolerance, self.settings.hold);
+                let k = self.batches.len() - 1;
+                self.batches[k].change = changes[k];
+                self.converged_at = conv;
+                self.lines.push(self.line(k));
+                k
+            }
+        };
+        if self.converged_at.is_some_and(|c| c <= k) {
+            Flow::Drain
+        } else {
+            Flow::Continue
+        }
+    }
+}
+
+/// `sweep calibrate SWEEP`: create the directory with its first batch and its settings (or
+/// check an existing one), then run it as [`run`] does.
+#[allow(clippy::too_many_arguments)]
+pub fn start<E: Executor>(
+    sweep: &Sweep,
+    design: DesignRecord,
+    settings: &Settings,
+    out: &Path,
+    exec: &E,
+    opts: &RunOptions,
+    watch: &mut CalibrationWatch,
+    cancel: &CancelToken,
+) -> Result<Summary> {
+    if let Some(old) = self::settings(out).filter(|old| old != settings) {
+        let why = format!(
+            "holds a calibration against {}; another needs another directory (--out)",
+            old.targets
+                .iter()
+                .map(|t| format!("{}={}±{}", t.name, t.value, t.sd))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        return Err(RunError::OutDir { dir: out.to_path_buf(), why }.into());
+    }
+    super::create(sweep, design, out, exec, opts.progress, cancel)?;
+    let text = serde_json::to_string_pretty(settings).expect("settings serialise");
+    crate::sys::atomic::write(&out.join(SETTINGS), text.as_bytes())
+        .map_err(|e| RunError::Write { path: out.join(SETTINGS), source: e })?;
+    run(out, exec, opts, watch, cancel)
+}
+
+/// Run a calibration directory until its credible region stops shrinking, `max` points have
+/// run, or it is interrupted: batch by batch, planning each from the results before it.
+pub fn run<E: Executor>(
+    dir: &Path,
+    exec: &E,
+    opts: &RunOptions,
+    watch: &mut CalibrationWatch,
+    cancel: &CancelToken,
+) -> Result<Summary> {
+    let mut ran = 0;
+    let mut reused = None;
+    let mut before: Option<Summary> = None;
+    loop {
+        let mut s = match super::resume(dir, exec, opts, watch, cancel) {
+            Err(Error::Interrupted) if before.is_some() => {
+                let mut s = before.take().expect("checked");
+                s.interrupted = true;
+                return Ok(s);
+            }
+            r => r?,
+        };
+        ran += s.ran;
+        if opts.progress != crate::run::progress::ProgressMode::Quiet {
+            for line in watch.take_lines() {
+                eprintln!("{line}");
+            }
+        }
+        let reused_first = *reused.get_or_insert(s.reused);
+        s.ran = ran;
+        s.reused = reused_first;
+        let stop =
+            s.interrupted || s.stopped_after.is_some() || s.pending > 0 || watch.converged_at.is_some();
+        if stop || !plan_next(dir, exec, watch, s.points)? {
+            return Ok(s);
+        }
+        before = Some(s);
+    }
+}
+
+/// Append the next batch to the manifest, planned from `watch`'s last batch. `true` when there
+/// are new points to run (planned here or by another process meanwhile).
+fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &CalibrationWatch, ran: usize) -> Result<bool> {
+    let (manifest, toml) = Store::read_manifest(dir)?;
+    if manifest.points.len() > ran {
+        return Ok(true);
+    }
+    let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
+    let DesignRecord::Adapt { batch, max, seed, .. } = manifest.design else {
+        return Err(RunError::Dir { path: dir.to_path_buf(), why: "not a calibration".into() }.into());
+    };
+    let Some(last) = manifest.spaces.last() else { return Ok(false) };
+    let Some((label, ems, d)) = watch.last.as_ref().filter(|(l, ..)| *l == last.label) else {
+        return Ok(false);
+    };
+    let size = batch.min(max.saturating_sub(manifest.points.len()));
+    if size == 0 {
+        return Ok(false);
+    }
+    let k = manifest.spaces.len() - 1;
+    let post = watch.batches.last().and_then(|b| b.posterior.as_ref());
+    let cands = cal::candidates(sweep.dim(), k, seed, post);
+    let existing: Vec<Vec<f64>> =
+        manifest.points.iter().map(|p| crate::sweep::space::unit_point(&sweep, &p.values)).collect();
+    let picks: Vec<Pick> = match ems {
+        Some(ems) => {
+            let outs: Vec<Emulated> = watch
+                .settings
+                .targets
+                .iter()
+                .zip(ems)
+                .map(|(target, emulator)| Emulated { target, emulator })
+                .collect();
+            let noise: Vec<f64> = ems.iter().zip(d).map(|(em, (_, _, se))| new_run_noise(em, se)).collect();
+            cal::next_batch(&outs, &noise, &cands, &existing, size)
+        }
+        // No emulator yet: the candidates in their quasi-random order, which fill the space.
+        None => cands[..size.min(cands.len())]
+            .iter()
+            .map(|u| Pick { point: u.clone(), why: "coverage", log_var: f64::NAN })
+            .collect(),
+    };
+    let values: Vec<Vec<f64>> =
+        picks.iter().map(|c| crate::sweep::space::scale_point(&sweep, &c.point)).collect();
+    let jobs: Vec<E::Job> = values.iter().map(|v| exec.prepare(v)).collect::<Result<_>>()?;
+    let store = Store::open(dir);
+    let base = manifest.points.len();
+    let mut appended = false;
+    store.update_manifest(|now: Option<(Manifest, String)>| -> Result<Option<(Manifest, String)>> {
+        let Some((mut m, t)) = now else { return Ok(None) };
+        if m.spaces.len() != manifest.spaces.len() || m.points.len() != base {
+            appended = true;
+            return Ok(None);
+        }
+        let mut rows = Vec::new();
+        for ((values, job), c) in values.iter().zip(&jobs).zip(&picks) {
+            let hash = exec.hash(job);
+            if m.points.iter().any(|p| p.hash == hash) {
+                continue;
+            }
+            let index = m.points.len();
+            m.points.push(PointRecord {
+                index,
+                values: values.clone(),
+                hash: hash.to_string(),
+                closed: false,
+            });
+            rows.push((index, c));
+        }
+        if rows.is_empty() {
+            return Ok(None);
+        }
+        let n = m.points.len();
+        m.spaces.push(SpaceRecord { label: format!("calibrate {n}"), points: (0..n).collect() });
+        write_batches(dir, &sweep, label, k + 1, &rows)?;
+        appended = true;
+        Ok(Some((m, t)))
+    })?;
+    Ok(appended)
+}
+
+/// Append the rows of one batch to [`BATCHES`] (written whole, under the directory's lock).
+fn write_batches(dir: &Path, sweep: &Sweep, from: &str, batch: usize, rows: &[(usize, &Pick)]) -> Result<()> {
+    let path: PathBuf = dir.join(BATCHES);
+    let mut text = std::fs::read_to_string(&path).unwrap_or_default();
+    if text.is_empty() {
+        text = format!("batch,index,planned_from,why,log_var_density,{}\n", sweep.names().join(","));
+    }
+    for (index, c) in rows {
+        let values = crate::sweep::space::scale_point(sweep, &c.point);
+        let lv = if c.log_var.is_finite() { c.log_var.to_string() } else { String::new() };
+        text.push_str(&format!(
+            "{batch},{index},{from},{},{lv},{}\n",
+            c.why,
+            values.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(",")
+        ));
+    }
+    crate::sys::atomic::write(&path, text.as_bytes())
+        .map_err(|e| RunError::Write { path: path.clone(), source: e }.into())
+}
+
+/// Judge the finished batches of the calibration in `dir` without running anything (for
+/// `sweep report`): `watch` then holds every judged batch and the last batch's emulators.
+pub fn judge_dir(dir: &Path, watch: &mut CalibrationWatch) -> Result<(Manifest, Vec<PointStatus>)> {
+    let (manifest, _) = Store::read_manifest(dir)?;
+    let (status, _, _) = crate::run::screen::Screen::of(&watch.sweep).statuses(&Store::open(dir), &manifest);
+    for space in &manifest.spaces {
+        if space.points.iter().any(|&i| !status[i].is_finished()) {
+            break;
+        }
+        let rows: Vec<(&PointRecord, &PointStatus)> =
+            space.points.iter().map(|&i| (&manifest.points[i], &status[i])).collect();
+        if watch.space_complete(space, &rows) == Flow::Drain {
+            break;
+        }
+    }
+    Ok((manifest, status))
+}

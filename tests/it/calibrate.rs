@@ -1,0 +1,272 @@
+//! `sweep calibrate`: known parameters recovered on the stand-in's pour (a closed-form angle of
+//! repose and packing in sliding and rolling friction, with noise of known SD); one target
+//! leaves a ridge; an interrupted calibration resumes to the uninterrupted one running nothing
+//! twice; bad input is one line and writes nothing; the calibrated parameters are included by a
+//! spreading sweep.
+
+use crate::support as common;
+use std::collections::HashMap;
+use std::path::Path;
+use std::time::Duration;
+
+use demsweep::analysis::calibration::Target;
+use demsweep::run::calibrate::{self, CalibrationWatch, Settings};
+use demsweep::run::fake::{Behaviour, FakeExecutor};
+use demsweep::run::standin::PourPoint;
+use demsweep::store::{self, DesignRecord, Store};
+use demsweep::sys::process::CancelToken;
+
+/// The pour on the stand-in, sliding and rolling friction free.
+fn pour_sweep(dir: &Path) -> std::path::PathBuf {
+    common::write_file(
+        &dir.join("pour.toml"),
+        r#"name = "pour"
+[parameters]
+friction         = { lo = 0.1, hi = 0.5 }
+rolling_friction = { lo = 0.05, hi = 0.3 }
+diameter         = { value = 2.0, unit = "mm" }
+[scene]
+layout = "pour"
+[run]
+engine = "stand-in"
+"#,
+    )
+}
+
+/// The stand-in's noiseless angle and packing at friction 0.3, rolling friction 0.2: the truth
+/// the targets are made from.
+fn truth() -> PourPoint {
+    PourPoint { friction: 0.3, rolling_friction: 0.2, surface_energy: 0.0, diameter: 2.0 }
+}
+
+fn calibrate(file: &Path, out: &Path, targets: &[String], extra: &[&str]) -> std::process::Output {
+    let mut cmd = common::sweep_bin();
+    cmd.args(["calibrate", common::p(file), "-q", "--jobs", "2", "--out", common::p(out)]);
+    for t in targets {
+        cmd.args(["--target", t]);
+    }
+    common::output(cmd.args(extra))
+}
+
+fn posterior(out: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("posterior.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn two_targets_recover_known_frictions_within_their_credible_intervals() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = pour_sweep(tmp.path());
+    let out = tmp.path().join("out");
+    let t = truth();
+    let targets = [
+        format!("angle_of_repose={}±0.5", t.mean_angle()),
+        format!("bulk_packing={}+-0.003", t.mean_packing()),
+    ];
+    let o = calibrate(&file, &out, &targets, &["--first", "20", "--batch", "4", "--max", "60"]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let p = posterior(&out);
+    let params = p["parameters"].as_array().unwrap();
+    for (par, truth) in params.iter().zip([t.friction, t.rolling_friction]) {
+        let (lo, hi) = (par["lo"].as_f64().unwrap(), par["hi"].as_f64().unwrap());
+        assert!(lo <= truth && truth <= hi, "{par} misses {truth}");
+        // Narrower than the prior: the targets say something about each.
+        let (plo, phi) = (par["prior"][0].as_f64().unwrap(), par["prior"][1].as_f64().unwrap());
+        assert!(hi - lo < 0.6 * (phi - plo), "{par}");
+    }
+    // The best run reproduces both targets to within a few of their SDs.
+    for r in p["best_run"]["residuals"].as_array().unwrap() {
+        assert!(r["in_sd"].as_f64().unwrap().abs() < 3.0, "{r}");
+    }
+    let runs = p["runs_done"].as_u64().unwrap();
+    assert!((20..=60).contains(&runs), "{runs}");
+    // The criterion's runs go where the targets are met: their noiseless angles and packings
+    // are within a few target SDs of the targets, where the first batch's mostly are not.
+    let dist = |r: &std::collections::BTreeMap<String, String>| {
+        let at = PourPoint {
+            friction: r["friction"].parse::<f64>().unwrap(),
+            rolling_friction: r["rolling_friction"].parse::<f64>().unwrap(),
+            ..t
+        };
+        (((at.mean_angle() - t.mean_angle()) / 0.5).powi(2)
+            + ((at.mean_packing() - t.mean_packing()) / 0.003).powi(2))
+        .sqrt()
+    };
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let first = median(common::result_rows(&out)[..20].iter().map(dist).collect());
+    let planned = common::csv_rows(&out.join(calibrate::BATCHES));
+    let chosen: Vec<f64> = planned.iter().filter(|r| r["why"] == "posterior variance").map(dist).collect();
+    assert!(chosen.len() >= 6, "{planned:?}");
+    assert!(median(chosen.clone()) < 2.0 && first > 5.0, "{chosen:?}, first batch {first}");
+    // The report with its map, and the parameters for a sweep.
+    assert!(out.join("report/report.html").exists());
+    let map = out.join("report/map-posterior-friction-rolling_friction.png");
+    assert!(std::fs::metadata(&map).unwrap().len() > 5000, "{}", map.display());
+    let cal: toml::Table =
+        toml::from_str(&std::fs::read_to_string(out.join("calibrated.toml")).unwrap()).unwrap();
+    let median = params[0]["median"].as_f64().unwrap();
+    let written = cal["parameters"]["friction"]["value"].as_float().unwrap();
+    assert!((written - median).abs() < 1e-3 * median, "{written} vs {median}");
+    let ranges: toml::Table =
+        toml::from_str(&std::fs::read_to_string(out.join("calibrated-ranges.toml")).unwrap()).unwrap();
+    let lo = ranges["parameters"]["rolling_friction"]["lo"].as_float().unwrap();
+    assert!((lo - params[1]["lo"].as_f64().unwrap()).abs() < 1e-3, "{lo}");
+    assert_eq!(cal["parameters"]["diameter"]["value"].as_float(), Some(2.0));
+    // Then the recoater: a spreading sweep includes the calibrated powder and sweeps the gap.
+    let spread = common::write_file(
+        &tmp.path().join("spread.toml"),
+        &format!(
+            "name = \"spread\"\ninclude = [{:?}]\n[parameters]\ngap = {{ lo = 3.0, hi = 5.0, unit = \"mm\" }}\n[run]\nengine = \"stand-in\"\n",
+            out.join("calibrated.toml")
+        ),
+    );
+    let o = common::output(common::sweep_bin().args(["run", common::p(&spread), "--set", "gap=4", "--json"]));
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let run: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(run["parameters"]["friction"].as_f64(), Some(written), "{run}");
+}
+
+#[test]
+fn one_angle_leaves_a_ridge_of_friction_pairs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = pour_sweep(tmp.path());
+    let out = tmp.path().join("out");
+    let targets = [format!("angle_of_repose={}±0.5", truth().mean_angle())];
+    let o = calibrate(&file, &out, &targets, &["--first", "20", "--batch", "4", "--max", "40"]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let p = posterior(&out);
+    // Higher sliding friction is matched by lower rolling friction: strongly anti-correlated,
+    // and neither pinned down on its own.
+    assert!(p["correlation"][1].as_f64().unwrap() < -0.7, "{}", p["correlation"]);
+    assert_eq!(p["ridges"].as_array().unwrap().len(), 1, "{}", p["ridges"]);
+    for par in p["parameters"].as_array().unwrap() {
+        assert_ne!(par["identification"], "identified", "{par}");
+    }
+    let said = common::text(&o.stdout);
+    assert!(said.contains("ridge: friction and rolling_friction trade off"), "{said}");
+    // The truth is on the ridge: inside both intervals.
+    for (par, truth) in p["parameters"].as_array().unwrap().iter().zip([0.3, 0.2]) {
+        assert!(par["lo"].as_f64().unwrap() <= truth && truth <= par["hi"].as_f64().unwrap(), "{par}");
+    }
+}
+
+/// MFR as a calibration target on the fake executor (gap and blade speed free): a smooth,
+/// known response.
+fn fake_mfr(v: &[f64]) -> f64 {
+    0.1 + 0.05 * (v[0] - 2.0) - 0.1 * (v[1] - 1.2)
+}
+
+fn run_fake(dir: &Path, out: &Path, exec: &FakeExecutor, cancel: &CancelToken) -> demsweep::run::Summary {
+    let s = common::fake_sweep(dir, "");
+    let settings = settings();
+    let mut watch = CalibrationWatch::new(&s, settings.clone(), 7);
+    let design = DesignRecord::Adapt { first: 10, batch: 4, max: 30, seed: 7 };
+    calibrate::start(&s, design, &settings, out, exec, &common::quiet(2), &mut watch, cancel).unwrap()
+}
+
+fn settings() -> Settings {
+    // The truth: gap 3, blade speed 1.4 give MFR 0.13; a tight target so the rule never holds.
+    Settings {
+        targets: vec![Target { name: "mfr".into(), value: 0.13, sd: 0.002 }],
+        tolerance: 1e-9,
+        hold: 2,
+    }
+}
+
+#[test]
+fn an_interrupted_calibration_resumes_to_the_uninterrupted_one_running_nothing_twice() {
+    let tmp = tempfile::tempdir().unwrap();
+    let ms = Duration::from_millis(1);
+    let reference = tmp.path().join("reference");
+    let sum = run_fake(
+        tmp.path(),
+        &reference,
+        &FakeExecutor::new(move |_, _| Behaviour::Succeed(ms)).with_mfr(fake_mfr),
+        &CancelToken::new(),
+    );
+    assert_eq!(sum.exit_code(), 0, "{sum:?}");
+    let planned = sum.done;
+    assert!(planned > 14, "{sum:?}");
+
+    let out = tmp.path().join("out");
+    let exec = FakeExecutor::new(move |_, _| Behaviour::Succeed(120 * ms)).with_mfr(fake_mfr);
+    let cancel = CancelToken::new();
+    let c2 = cancel.clone();
+    let watched = out.clone();
+    let t = std::thread::spawn(move || {
+        let done =
+            |d: &Path| store::read_joblog(d).map_or(0, |l| l.iter().filter(|l| l.status == "done").count());
+        while done(&watched) < 12 {
+            std::thread::sleep(20 * ms);
+        }
+        c2.cancel();
+    });
+    let sum = run_fake(tmp.path(), &out, &exec, &cancel);
+    t.join().unwrap();
+    assert!(sum.interrupted && sum.exit_code() == 130, "{sum:?}");
+    let before: Vec<String> = store::read_joblog(&out)
+        .unwrap()
+        .into_iter()
+        .filter(|l| l.status == "done")
+        .map(|l| l.hash)
+        .collect();
+    assert!(Store::read_manifest(&out).unwrap().0.points.len() < planned);
+
+    // `sweep resume` reads the calibration's settings from the directory.
+    assert_eq!(calibrate::settings(&out), Some(settings()));
+    let exec2 = FakeExecutor::new(move |_, _| Behaviour::Succeed(ms)).with_mfr(fake_mfr);
+    let s = common::fake_sweep(tmp.path(), "");
+    let mut watch = CalibrationWatch::new(&s, settings(), 7);
+    let sum2 = calibrate::run(&out, &exec2, &common::quiet(2), &mut watch, &CancelToken::new()).unwrap();
+    assert_eq!((sum2.done, sum2.exit_code()), (planned, 0), "{sum2:?}");
+    for h in &before {
+        assert!(!exec2.attempts().contains_key(h), "finished run {h} ran again");
+    }
+    let mut runs: HashMap<String, usize> = HashMap::new();
+    for l in store::read_joblog(&out).unwrap().into_iter().filter(|l| l.status == "done") {
+        *runs.entry(l.hash).or_default() += 1;
+    }
+    assert!(runs.values().all(|&n| n == 1), "{runs:?}");
+    let (m, r) = (Store::read_manifest(&out).unwrap().0, Store::read_manifest(&reference).unwrap().0);
+    assert_eq!(m.points, r.points, "the same batches as without the interruption");
+    assert_eq!(common::results(&out), common::results(&reference));
+    // The posterior holds the truth (on a ridge: one target, two parameters).
+    let c = demsweep::report::calibration::write(&out).unwrap();
+    for (p, truth) in c.parameters.iter().zip([3.0, 1.4]) {
+        assert!(p.lo <= truth && truth <= p.hi, "{p:?} misses {truth}");
+    }
+}
+
+#[test]
+fn bad_input_is_one_line_and_writes_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = pour_sweep(tmp.path());
+    let fixed = common::write_file(
+        &tmp.path().join("fixed.toml"),
+        "name = \"f\"\n[parameters]\nfriction = 0.3\n[scene]\nlayout = \"pour\"\n[run]\nengine = \"stand-in\"\n",
+    );
+    let spreading = common::write_file(
+        &tmp.path().join("spread.toml"),
+        "name = \"s\"\n[parameters]\ngap = { lo = 2.0, hi = 4.0 }\n[run]\nengine = \"stand-in\"\n",
+    );
+    let out = tmp.path().join("out");
+    let cases: [(&Path, &str, &str); 7] = [
+        (&file, "angle_of_repose=34", "--target angle_of_repose=34: no ± SD"),
+        (&file, "angle_of_repose=abc±1", "is not a number"),
+        (&file, "angle_of_repose=34±0", "expected a positive uncertainty"),
+        (&file, "porosity=0.4±0.01", "--target porosity: not a quantity a run measures"),
+        (&file, "mfr=0.2±0.01", "--target mfr: scene.layout \"pour\" does not measure it"),
+        (&spreading, "angle_of_repose=34±1", "scene.layout \"conveyor\" does not measure it"),
+        (&fixed, "angle_of_repose=34±1", "expected at least one swept parameter"),
+    ];
+    for (f, target, says) in cases {
+        let o = calibrate(f, &out, &[target.to_string()], &[]);
+        let err = common::stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{target}: {err}");
+        assert!(err.contains(says), "{target}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(!out.exists(), "{target} wrote {}", out.display());
+    }
+}
