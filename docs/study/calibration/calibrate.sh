@@ -21,4 +21,16 @@ for f in posterior.json calibration-batches.csv results.csv calibrated.toml cali
   [ -f "$OUT/$f" ] && cp "$OUT/$f" "$REC/$f"
 done
 "$SWEEP" status "$OUT" >"$REC/status.txt" 2>&1 || true
+# Each done pour: its rolling friction, angle with SE, packing and CPU seconds, in run order.
+python3 - "$OUT" >"$REC/pours.tsv" <<'PY'
+import csv, json, os, sys
+out = sys.argv[1]
+print("index	rolling_friction	angle_deg	angle_se_deg	packing	cpu_s")
+for r in csv.DictReader(open(os.path.join(out, "results.csv"))):
+    path = os.path.join(out, "runs", r["hash"], "result.json")
+    if r["status"] != "done" or not os.path.exists(path):
+        continue
+    j = json.load(open(path)); h = j["heap"]
+    print(f"{r['index']}	{float(r['rolling_friction']):.4f}	{h['angle_deg']:.2f}	{h['angle_se_deg']:.2f}	{h['packing']:.3f}	{j.get('cpu_time', 0):.0f}")
+PY
 exit $status
