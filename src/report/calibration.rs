@@ -11,15 +11,14 @@ use serde::Serialize;
 
 use base64::Engine as _;
 
-use super::plots::{fmt_short, Figure};
+use super::plots::Figure;
 use crate::analysis::calibration::Target;
 use crate::error::Result;
 use crate::run::calibrate::{self as cal, fmt, unit_value, CalibrationWatch};
 use crate::store::PointStatus;
 use crate::sweep::{ParamKind, Sweep};
 
-/// `posterior.json`.
-pub const POSTERIOR: &str = "posterior.json";
+pub use crate::run::calibrate::POSTERIOR;
 /// The calibrated parameters as values, and with the credible intervals as ranges.
 pub const CALIBRATED: &str = "calibrated.toml";
 pub const CALIBRATED_RANGES: &str = "calibrated-ranges.toml";
@@ -411,7 +410,7 @@ fn write_html(dir: &std::path::Path, c: &Calibration, sweep: &Sweep, figures: &[
             crate::sys::atomic::write(&p, bytes).map_err(io(p.clone()))?;
         }
     }
-    let n = fmt_short;
+    let n = fmt;
     let mut h = format!(
         "<!doctype html><html><head><meta charset=\"utf-8\"><title>calibration: {}</title><style>{STYLE}</style></head><body>\n<h1>Calibration: {}</h1>\n",
         esc(&sweep.file.name),
@@ -461,12 +460,15 @@ fn write_html(dir: &std::path::Path, c: &Calibration, sweep: &Sweep, figures: &[
             sweep.names().iter().zip(&b.values).map(|(k, v)| format!("{k} = {}", n(*v))).collect();
         h.push_str(&format!("<p>Best run: #{} at {}.</p>\n", b.index.unwrap_or(0), esc(&vals.join(", "))));
     }
+    let cpu = if c.cpu_runs > 0 {
+        format!("{:.0} CPU s over the {} runs that record it", c.cpu_s, c.cpu_runs)
+    } else {
+        "no CPU time recorded".into()
+    };
     h.push_str(&format!(
-        "<p>{} runs done, {} failed; {:.0} CPU s over {} runs that record it. Effective posterior sample: {}.</p>\n",
+        "<p>{} runs done, {} failed; {cpu}. Effective posterior sample: {}.</p>\n",
         c.runs_done,
         c.runs_failed,
-        c.cpu_s,
-        c.cpu_runs,
         c.effective_samples.map_or("–".into(), |e| format!("{e:.0}"))
     ));
     for f in figures {

@@ -4,9 +4,10 @@
 
 use plotters::prelude::*;
 
-use super::plots::{fmt_short, Figure, Res, AXIS_FONT, FONT, TICK_FONT, TITLE_FONT};
+use super::plots::{Figure, Res, AXIS_FONT, FONT, TICK_FONT, TITLE_FONT};
 use crate::analysis::calibration::{log_density, Emulated};
 use crate::run::calibrate::{unit_value, CalibrationWatch};
+use crate::scene::plausible::round_to;
 use crate::store::{Manifest, PointStatus};
 use crate::sweep::Sweep;
 
@@ -73,8 +74,8 @@ pub fn maps(
                         .axis_desc_style((FONT, AXIS_FONT))
                         .x_desc(format!("{ni} ({})", sweep.swept[i].unit))
                         .y_desc(format!("{nj} ({})", sweep.swept[j].unit))
-                        .x_label_formatter(&|u| fmt_short(vi(*u)))
-                        .y_label_formatter(&|u| fmt_short(vj(*u)))
+                        .x_label_formatter(&|u| round_to(vi(*u), 3))
+                        .y_label_formatter(&|u| round_to(vj(*u), 3))
                         .draw()?;
                     let w = 1.0 / CELLS as f64;
                     for (a, row) in grid.iter().enumerate() {

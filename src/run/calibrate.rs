@@ -29,6 +29,8 @@ use crate::sys::process::CancelToken;
 
 /// `calibration.json`: the targets and the stopping rule of a calibration directory.
 pub const SETTINGS: &str = "calibration.json";
+/// `posterior.json`: the calibration's answer, written by its report.
+pub const POSTERIOR: &str = "posterior.json";
 /// `calibration-batches.csv`: why each planned point went where it went.
 pub const BATCHES: &str = "calibration-batches.csv";
 

@@ -133,8 +133,14 @@ pub fn status(dir: &Path) -> Result<StatusReport> {
     Ok(r)
 }
 
-/// The verdict of the last report (`DIR/summary.json`), if one was written.
+/// The verdict of the last report (`DIR/summary.json`, or a calibration's
+/// `DIR/posterior.json`), if one was written.
 fn read_verdict(dir: &Path) -> Option<bool> {
+    let cap = crate::store::OUTCOME_CAP;
+    if let Ok(text) = crate::sys::read::read_text_capped(&dir.join(super::calibrate::POSTERIOR), cap) {
+        let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+        return Some(v.get("status")?.as_str()? == "converged");
+    }
     let text =
         crate::sys::read::read_text_capped(&dir.join("summary.json"), crate::store::OUTCOME_CAP).ok()?;
     let v: serde_json::Value = serde_json::from_str(&text).ok()?;

@@ -152,6 +152,50 @@ fn one_angle_leaves_a_ridge_of_friction_pairs() {
     }
 }
 
+#[test]
+fn a_cohesive_powder_s_rolling_friction_and_surface_energy_are_recovered() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = common::write_file(
+        &tmp.path().join("cohesive.toml"),
+        r#"name = "cohesive"
+[parameters]
+friction         = 0.3
+rolling_friction = { lo = 0.05, hi = 0.3 }
+surface_energy   = { lo = 0.0, hi = 0.2, unit = "J/m2" }
+diameter         = { value = 2.0, unit = "mm" }
+[scene]
+layout = "pour"
+[run]
+engine = "stand-in"
+"#,
+    );
+    let t = PourPoint { surface_energy: 0.05, ..truth() };
+    let targets = [
+        format!("angle_of_repose={}±0.5", t.mean_angle()),
+        format!("bulk_packing={}±0.003", t.mean_packing()),
+    ];
+    let out = tmp.path().join("out");
+    let o = calibrate(&file, &out, &targets, &["--first", "20", "--batch", "4", "--max", "60"]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let p = posterior(&out);
+    for (par, truth) in p["parameters"].as_array().unwrap().iter().zip([t.rolling_friction, t.surface_energy])
+    {
+        let (lo, hi) = (par["lo"].as_f64().unwrap(), par["hi"].as_f64().unwrap());
+        assert!(lo <= truth && truth <= hi, "{par} misses {truth}");
+        assert!(
+            hi - lo < 0.6 * (par["prior"][1].as_f64().unwrap() - par["prior"][0].as_f64().unwrap()),
+            "{par}"
+        );
+    }
+    // `sweep status` reads the calibration's verdict.
+    let o = common::output(common::sweep_bin().args(["status", common::p(&out)]));
+    let said = common::text(&o.stdout);
+    assert!(
+        said.contains(&format!("converged: {}", if p["status"] == "converged" { "yes" } else { "no" })),
+        "{said}"
+    );
+}
+
 /// MFR as a calibration target on the fake executor (gap and blade speed free): a smooth,
 /// known response.
 fn fake_mfr(v: &[f64]) -> f64 {
