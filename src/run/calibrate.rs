@@ -151,7 +151,7 @@ pub fn settings(dir: &Path) -> Option<Settings> {
 }
 
 /// Per target: the unit points, values and SEs of the done runs that measured it.
-type Data = Vec<(Vec<Vec<f64>>, Vec<f64>, Vec<Option<f64>>)>;
+pub type Data = Vec<(Vec<Vec<f64>>, Vec<f64>, Vec<Option<f64>>)>;
 
 fn data(sweep: &Sweep, targets: &[Target], points: &[(&PointRecord, &PointStatus)]) -> Data {
     targets
@@ -221,6 +221,11 @@ impl CalibrationWatch {
     /// The last batch's emulators, one per target, when it had them.
     pub fn emulators(&self) -> Option<&[Emulator]> {
         self.last.as_ref().and_then(|(_, e, _)| e.as_deref())
+    }
+
+    /// The last batch's data: per target, the unit points, values and SEs of its runs.
+    pub fn data(&self) -> Option<&Data> {
+        self.last.as_ref().map(|(_, _, d)| d)
     }
 
     pub fn settings(&self) -> &Settings {
@@ -331,7 +336,7 @@ pub fn start<E: Executor>(
 ) -> Result<Summary> {
     if let Some(old) = self::settings(out).filter(|old| old != settings) {
         let why = format!(
-            "holds a calibration against {}; another needs another directory (--out)",
+            "holds a calibration against {}",
             old.targets
                 .iter()
                 .map(|t| format!("{}={}±{}", t.name, t.value, t.sd))

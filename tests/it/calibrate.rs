@@ -196,6 +196,25 @@ engine = "stand-in"
     );
 }
 
+#[test]
+fn one_free_parameter_is_recovered_and_drawn_as_a_curve() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = common::write_file(
+        &tmp.path().join("rolling.toml"),
+        "name = \"r\"\n[parameters]\nfriction = 0.3\nrolling_friction = { lo = 0.05, hi = 0.3 }\n\
+         [scene]\nlayout = \"pour\"\n[run]\nengine = \"stand-in\"\n",
+    );
+    let out = tmp.path().join("out");
+    let targets = [format!("angle_of_repose={}±0.5", truth().mean_angle())];
+    let o = calibrate(&file, &out, &targets, &["--first", "8", "--batch", "2", "--max", "20"]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let par = &posterior(&out)["parameters"][0];
+    let (lo, hi) = (par["lo"].as_f64().unwrap(), par["hi"].as_f64().unwrap());
+    assert!(lo <= 0.2 && 0.2 <= hi && hi - lo < 0.1, "{par}");
+    assert_eq!(par["identification"], "identified", "{par}");
+    assert!(std::fs::metadata(out.join("report/posterior-rolling_friction.png")).unwrap().len() > 5000);
+}
+
 /// MFR as a calibration target on the fake executor (gap and blade speed free): a smooth,
 /// known response.
 fn fake_mfr(v: &[f64]) -> f64 {
