@@ -89,6 +89,23 @@ pub struct RunResult {
     pub cpu_time: Option<f64>,
     pub engine_version: String,
     pub warnings: Vec<String>,
+    /// The finished point this run started from (absent: it started cold).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub warm_start: Option<WarmStart>,
+    /// The SE target of MFR the sweep chose for this run (absent: the scene's own).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mfr_se_target: Option<f64>,
+}
+
+/// Where a warm-started run began: the point whose steady state it was mapped from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct WarmStart {
+    /// The run hash of that point.
+    pub from: String,
+    /// Its distance in the design's unit cube.
+    pub distance: f64,
+    /// The particles mapped from it.
+    pub particles: usize,
 }
 
 impl Default for RunResult {
@@ -123,6 +140,8 @@ impl Default for RunResult {
             cpu_time: None,
             engine_version: String::new(),
             warnings: Vec::new(),
+            warm_start: None,
+            mfr_se_target: None,
         }
     }
 }

@@ -9,15 +9,16 @@ mod error;
 pub use error::PointError;
 
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use crate::engine::{Engine, LogLimits, RunStatus};
 use crate::error::{hint, Result};
-use crate::outcome::{FailureClass, RunFailure, RunOutcome, RESULT_FORMAT};
+use crate::outcome::{FailureClass, RunFailure, RunOutcome, WarmStart, RESULT_FORMAT};
 use crate::point::deck::{Deck, Template};
 use crate::scene::{mesh, params, Scene};
-use crate::scenes::{Finished, Layout};
+use crate::scenes::conveyor::warm::{STATE_DUMP, WARM_DATA};
+use crate::scenes::{Finished, Layout, Warm};
 use crate::sweep::{ParamKind, Parameter, Sweep};
 use crate::sys::atomic::write_json;
 use crate::sys::process::CancelToken;
@@ -233,10 +234,86 @@ fn header(parameters: &BTreeMap<String, f64>, hash: &str) -> String {
     format!("# point: {}\n# run {hash}\n", values.join(", "))
 }
 
-/// Run a prepared point in `run_dir` (created if missing; stale files from an interrupted
-/// attempt are overwritten). Writes `result.json` or `failure.json` atomically and returns the
-/// outcome; a cancelled run writes neither, so it stays pending.
+/// A finished point of the same sweep that a run may start from (its steady state mapped onto
+/// the run's point: [`crate::scenes::Layout::warm_start`]).
+#[derive(Debug, Clone)]
+pub struct Neighbour {
+    pub hash: String,
+    pub dir: PathBuf,
+    /// Every catalogue parameter of it, as its result.json records them.
+    pub parameters: BTreeMap<String, f64>,
+    /// Its distance from the point to run, in the design's unit cube.
+    pub distance: f64,
+}
+
+/// How a sweep starts a run beyond its deck: choices that change how long it runs and where it
+/// begins, not what it is, so its hash does not depend on them (its result records them).
+#[derive(Debug, Clone, Default)]
+pub struct Start {
+    /// The finished point to start from (`None`: from rest).
+    pub neighbour: Option<Neighbour>,
+    /// The SE of MFR to run to, the sweep's choice (`None`: the scene's own target).
+    pub mfr_se_target: Option<f64>,
+}
+
+/// Run a prepared point in `run_dir` from rest, to its scene's own precision.
 pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &CancelToken) -> RunOutcome {
+    execute_from(ctx, p, run_dir, cancel, &Start::default())
+}
+
+/// What is run for `p` under `start`: the scene, the deck (the hashed deck's files with its input
+/// rendered from that scene, when it differs) and the warm start's particles and record.
+struct Started {
+    scene: Scene,
+    deck: Deck,
+    warm: Option<(Warm, WarmStart)>,
+    mfr_se_target: Option<f64>,
+}
+
+fn started(ctx: &PointContext, p: &Prepared, start: &Start) -> Started {
+    let target = start.mfr_se_target.and_then(|t| Some((t, ctx.layout.with_precision(&p.scene, t)?)));
+    let (scene, mfr_se_target) = match target {
+        Some((t, scene)) => (scene, Some(t)),
+        None => (p.scene.clone(), None),
+    };
+    // A neighbour that does not map (another size distribution, nothing of it fits): from rest.
+    let warm = start.neighbour.as_ref().and_then(|n| {
+        let from = crate::scenes::build(&n.parameters, &ctx.sweep.file.scene).ok()?;
+        let warm = ctx.layout.warm_start(&from, &n.dir, &scene, &p.deck.pile).ok()?;
+        let record = WarmStart { from: n.hash.clone(), distance: n.distance, particles: warm.particles };
+        Some((warm, record))
+    });
+    let scene = warm.as_ref().map_or(scene, |(w, _)| w.scene.clone());
+    let deck = match (&warm, mfr_se_target) {
+        (None, None) => p.deck.clone(),
+        _ => match ctx.template.render(&scene) {
+            Ok(input) => Deck { input, ..p.deck.clone() },
+            // The hashed deck rendered; this one differs in a few numbers only.
+            Err(_) => {
+                return Started {
+                    scene: p.scene.clone(),
+                    deck: p.deck.clone(),
+                    warm: None,
+                    mfr_se_target: None,
+                }
+            }
+        },
+    };
+    Started { scene, deck, warm, mfr_se_target }
+}
+
+/// Run a prepared point in `run_dir` (created if missing; stale files from an interrupted
+/// attempt are overwritten), as `start` says: from a neighbour's steady state where it maps onto
+/// the point, else from rest, and to the sweep's precision where it chose one. The run's hash is
+/// the same either way. Writes `result.json` or `failure.json` atomically and returns the
+/// outcome; a cancelled run writes neither, so it stays pending.
+pub fn execute_from(
+    ctx: &PointContext,
+    p: &Prepared,
+    run_dir: &Path,
+    cancel: &CancelToken,
+    start: &Start,
+) -> RunOutcome {
     let fail_measured = |class: FailureClass, reason: String, log_tail: String, wall: f64, measured| {
         let f = RunFailure {
             format: RESULT_FORMAT,
@@ -252,10 +329,17 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
         RunOutcome::Failed(f)
     };
     let fail = |class, reason, log_tail, wall| fail_measured(class, reason, log_tail, wall, None);
-    for stale in [RESULT, FAILURE, DUMP, crate::engine::LOG] {
+    for stale in [RESULT, FAILURE, DUMP, crate::engine::LOG, WARM_DATA, STATE_DUMP] {
         let _ = std::fs::remove_file(run_dir.join(stale));
     }
-    if let Err(e) = std::fs::create_dir_all(run_dir).and_then(|_| p.deck.write(run_dir)) {
+    let Started { scene, deck, warm, mfr_se_target } = started(ctx, p, start);
+    let scene = &scene;
+    let written =
+        std::fs::create_dir_all(run_dir).and_then(|_| deck.write(run_dir)).and_then(|_| match &warm {
+            Some((w, _)) => std::fs::write(run_dir.join(WARM_DATA), &w.data),
+            None => Ok(()),
+        });
+    if let Err(e) = written {
         return fail(
             FailureClass::CouldNotStart,
             format!("cannot write the deck in {}: {e}", run_dir.display()),
@@ -263,7 +347,7 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
             0.0,
         );
     }
-    let limits = LogLimits { ke_limit: p.scene.ke_limit, atoms: ctx.layout.atoms_kept(&p.scene) };
+    let limits = LogLimits { ke_limit: scene.ke_limit, atoms: ctx.layout.atoms_kept(scene) };
     let run = ctx.engine.run(run_dir, Deck::INPUT, &limits, ctx.timeout, cancel);
     let wall = run.wall_time;
     match run.status {
@@ -272,17 +356,19 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
         RunStatus::Ok => {}
     }
     let finished = Finished {
-        scene: &p.scene,
+        scene,
         parameters: &p.parameters,
         hash: &p.hash,
         run_dir,
         run: &run,
         engine_version: &ctx.engine.version,
     };
-    let result = match ctx.layout.measure(&finished) {
+    let mut result = match ctx.layout.measure(&finished) {
         Ok(result) => result,
         Err(r) => return fail_measured(r.class, r.reason, String::new(), wall, r.measured),
     };
+    result.warm_start = warm.map(|(_, record)| record);
+    result.mfr_se_target = mfr_se_target;
     if let Err(e) = write_json(&run_dir.join(RESULT), &result) {
         return fail(FailureClass::Unparsable, format!("cannot write {RESULT}: {e}"), String::new(), wall);
     }

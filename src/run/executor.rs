@@ -5,7 +5,9 @@ use std::path::Path;
 use crate::error::Result;
 use crate::outcome::RunOutcome;
 use crate::point::{self, PointContext};
+use crate::run::finished::FinishedPoints;
 use crate::run::pool::Executor;
+use crate::run::precision;
 use crate::run::standin::{self, StandIn, StandInJob};
 use crate::sweep::Sweep;
 use crate::sys::process::CancelToken;
@@ -16,6 +18,8 @@ use crate::sys::process::CancelToken;
 /// (rendering is cheap and deterministic), so a 10,000-point sweep does not hold 10,000 decks.
 pub struct PointExecutor {
     ctx: PointContext,
+    /// The finished points beside a run: where it starts, the sweep's precision.
+    finished: FinishedPoints,
 }
 
 /// A point to run for real.
@@ -29,7 +33,7 @@ pub struct PointJob {
 impl PointExecutor {
     /// Find LIGGGHTS and load the template of `sweep`.
     pub fn new(sweep: Sweep) -> Result<PointExecutor> {
-        Ok(PointExecutor { ctx: PointContext::new(sweep)? })
+        Ok(PointExecutor { ctx: PointContext::new(sweep)?, finished: FinishedPoints::default() })
     }
 
     /// Run each LIGGGHTS job on `ranks` MPI ranks (`mpirun -np ranks`).
@@ -61,11 +65,41 @@ impl Executor for PointExecutor {
 
     fn execute(&self, job: &PointJob, run_dir: &Path, cancel: &CancelToken) -> RunOutcome {
         match point::prepare(&self.ctx, &job.values) {
-            Ok(p) if p.hash == job.hash => point::execute(&self.ctx, &p, run_dir, cancel),
+            Ok(p) if p.hash == job.hash => {
+                let start = self.start(job, run_dir);
+                point::execute_from(&self.ctx, &p, run_dir, cancel, &start)
+            }
             // Prepared once already, so neither can happen short of a bug; fail the run loudly.
             Ok(p) => point_failure(job, run_dir, format!("deck hash changed on re-render: {}", p.hash)),
             Err(e) => point_failure(job, run_dir, format!("cannot render the deck: {e}")),
         }
+    }
+}
+
+impl PointExecutor {
+    /// How the run in `run_dir` starts, from the finished points beside it: the nearest one's
+    /// steady state (`[scene] warm_start`), and the sweep's precision (`[scene] precision`).
+    fn start(&self, job: &PointJob, run_dir: &Path) -> point::Start {
+        let settings = &self.ctx.sweep.file.scene;
+        let (Some(runs), Some(sweep_dir)) = (run_dir.parent(), run_dir.parent().and_then(Path::parent))
+        else {
+            return point::Start::default();
+        };
+        let sweep = &self.ctx.sweep;
+        let mfr_se_target = (settings.precision == "sweep")
+            .then(|| {
+                precision::settle(
+                    sweep_dir,
+                    sweep.dim(),
+                    sweep.file.convergence.tolerance,
+                    &self.finished.mfrs(sweep, runs),
+                )
+            })
+            .flatten()
+            .map(|p| p.mfr_abs_se);
+        let neighbour =
+            settings.warm_start.then(|| self.finished.nearest(sweep, runs, &job.values, &job.hash)).flatten();
+        point::Start { neighbour, mfr_se_target }
     }
 }
 

@@ -29,8 +29,10 @@ mod error;
 mod executor;
 #[cfg(any(test, feature = "test-support"))]
 pub mod fake;
+mod finished;
 mod plan;
 pub mod pool;
+mod precision;
 pub mod progress;
 mod reporter;
 pub mod screen;

@@ -139,6 +139,8 @@ impl Executor for StandIn {
             vx: vx.into_iter().map(Some).collect(),
             engine_version: format!("{NAME} {MODEL_VERSION}"),
             warnings: vec![format!("{NAME}: a made-up model, not LIGGGHTS")],
+            warm_start: None,
+            mfr_se_target: None,
             ..RunResult::default()
         };
         write_result(job, run_dir, r)

@@ -225,6 +225,12 @@ pub struct Conveyor {
     /// Prime seeds of the feed's distribution and insertion.
     pub distribution_seed: u64,
     pub insert_seed: u64,
+    /// Write the powder ahead of the blade's rear face at the end (`dump.state`), for warm starts.
+    pub keep_state: bool,
+    /// Start from `warm.data` (a neighbour's state mapped to this point), after a warm-up of
+    /// `warm_warmup_blocks` in place of `warmup_blocks`.
+    pub warm_start: bool,
+    pub warm_warmup_blocks: u64,
 }
 
 #[derive(Debug, Clone, Serialize)]

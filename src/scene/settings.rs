@@ -66,6 +66,18 @@ pub struct SceneSettings {
     /// Conveyor layout: the least number of blocks after the warm-up before the target can stop
     /// the run.
     pub min_window_blocks: usize,
+    /// Conveyor layout, in a sweep: start a point from the steady state a finished point near it
+    /// left (its heap mapped to this point's size, speed and gap), so that the transient it must
+    /// outlive is the difference between neighbours, not a heap starting from rest. A point with
+    /// no such neighbour starts cold. The run's hash does not depend on it.
+    pub warm_start: bool,
+    /// Conveyor layout: the warm-up of a warm-started point, s (at least one block).
+    pub warm_warmup_s: f64,
+    /// Conveyor layout, in a sweep: `"sweep"` — once the first batch has finished, every later
+    /// point runs until the SE of its MFR is a tenth of the spread of MFR over that batch (what
+    /// the sweep's statistics need; `mfr_rel_se`/`mfr_abs_se` until then); `"fixed"` — always
+    /// `mfr_rel_se`/`mfr_abs_se` (the default when the file writes either).
+    pub precision: String,
     // What the point is.
     /// The scene's layout: `"conveyor"` (default: the blade's frame, a held heap, MFR in a
     /// steady state with its SE), `"gated"` (the dose settles at rest in a closed region on a
@@ -110,7 +122,7 @@ pub const FIDELITIES: [&str; 3] = ["fast", "reference", "thesis"];
 
 /// The numerical knobs a preset sets (field names of [`SceneSettings`]); everything else in
 /// `[scene]` says what the point is and is the same in every preset.
-pub const KNOBS: [&str; 17] = [
+pub const KNOBS: [&str; 20] = [
     "rayleigh_fraction",
     "timestep_s",
     "stiffness_factor",
@@ -128,6 +140,9 @@ pub const KNOBS: [&str; 17] = [
     "mfr_rel_se",
     "mfr_abs_se",
     "min_window_blocks",
+    "warm_start",
+    "warm_warmup_s",
+    "precision",
 ];
 
 impl SceneSettings {
@@ -154,6 +169,8 @@ impl SceneSettings {
                 rest_speed: 0.005,
                 settle_min_falls: 2.0,
                 skin_diameters: 0.25,
+                warm_start: false,
+                precision: "fixed".into(),
                 ..fast
             }),
             "thesis" => Some(SceneSettings {
@@ -165,6 +182,8 @@ impl SceneSettings {
                 skin_diameters: 0.25,
                 full_dump_every_s: 0.02,
                 run_to_end: true,
+                warm_start: false,
+                precision: "fixed".into(),
                 ..fast
             }),
             _ => None,
@@ -274,6 +293,9 @@ impl Default for SceneSettings {
             mfr_rel_se: 0.05,
             mfr_abs_se: 0.005,
             min_window_blocks: 8,
+            warm_start: true,
+            warm_warmup_s: 0.03,
+            precision: "sweep".into(),
             layout: "conveyor".into(),
             substrate: "rough".into(),
             settle_max_s: 1.0,

@@ -17,6 +17,7 @@ use crate::engine::EngineRun;
 use crate::outcome::{FailureClass, RunResult};
 use crate::scene::settings::SceneSettings;
 use crate::scene::{plausible, Base, Scene, SceneError};
+pub use conveyor::warm::Warm;
 
 /// Every layout, in the order `scene.layout`'s error lists them.
 pub const LAYOUTS: &[&dyn Layout] =
@@ -130,6 +131,25 @@ pub trait Layout: Sync {
     /// The deck's wall mesh (`blade.stl`): the blade, unless the layout moves another wall.
     fn mesh(&self, scene: &Scene) -> String {
         crate::scene::mesh::blade_stl(scene)
+    }
+
+    /// A warm start of `to` (whose particle file is `to_pile`) from the state a finished point
+    /// `from` left in `from_dir`: the scene to render and the particles it reads. `Err` says why
+    /// the point starts cold; a layout with no steady state to carry starts every point cold.
+    fn warm_start(
+        &self,
+        _from: &Scene,
+        _from_dir: &Path,
+        _to: &Scene,
+        _to_pile: &str,
+    ) -> Result<Warm, String> {
+        Err(format!("the {} layout starts every point cold", self.name()))
+    }
+
+    /// `scene` run until the SE of its MFR is at most `mfr_abs_se` (the sweep's choice), if
+    /// this layout runs to a precision.
+    fn with_precision(&self, _scene: &Scene, _mfr_abs_se: f64) -> Option<Scene> {
+        None
     }
 
     /// The deck's particle file (`pile.data`): the box, the dose and the substrate.

@@ -74,6 +74,11 @@ impl Sweep {
             why: e,
         })?;
         include(&mut file, path)?;
+        // A target the user wrote is the one the points run to.
+        let target_written = written.iter().any(|k| k == "mfr_rel_se" || k == "mfr_abs_se");
+        if target_written && !written.iter().any(|k| k == "precision") {
+            file.scene.precision = "fixed".into();
+        }
         let (swept, fixed) = validate(&file, path)?;
         Ok(Sweep { path: path.to_path_buf(), file, swept, fixed })
     }

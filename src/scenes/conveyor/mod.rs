@@ -3,6 +3,10 @@
 //! it (topped up to its count every fifth of a block), and the deposit is deleted downstream.
 //! MFR is measured in a steady state with its standard error ([`crate::measure::steady`]).
 
+pub mod warm;
+
+use std::path::Path;
+
 use crate::measure::frame::{Frame, COLUMNS};
 use crate::measure::{layer, steady};
 use crate::outcome::layer::Layer;
@@ -62,6 +66,9 @@ impl Layout for Conveyor {
                 return bad(k, format!("{v}: expected a number ≥ 0"));
             }
         }
+        if !["sweep", "fixed"].contains(&s.precision.as_str()) {
+            return bad("scene.precision", format!("\"{}\": expected \"sweep\" or \"fixed\"", s.precision));
+        }
         // MSER may drop up to half the window, and the trend over what is left needs 3 blocks.
         if s.min_window_blocks < 5 {
             return bad(
@@ -120,6 +127,23 @@ impl Layout for Conveyor {
             ],
             tail: Vec::new(),
         }
+    }
+
+    fn warm_start(
+        &self,
+        from: &Scene,
+        from_dir: &Path,
+        to: &Scene,
+        to_pile: &str,
+    ) -> Result<warm::Warm, String> {
+        warm::map(from, &from_dir.join(warm::STATE_DUMP), to, to_pile)
+    }
+
+    fn with_precision(&self, scene: &Scene, mfr_abs_se: f64) -> Option<Scene> {
+        let mut s = scene.clone();
+        s.conveyor.mfr_rel_se = 0.0;
+        s.conveyor.mfr_abs_se = mfr_abs_se;
+        Some(s)
     }
 
     fn held_heap(&self, sc: &Scene) -> Option<HeldHeap> {
@@ -216,6 +240,9 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         },
         distribution_seed: prime_seed(s.seed, 0),
         insert_seed: prime_seed(s.seed, 1),
+        keep_state: settings.warm_start,
+        warm_start: false,
+        warm_warmup_blocks: blocks((settings.warm_warmup_s * v / d).max(settings.block_diameters)),
     };
     s.blade_fixed = true;
     s.particles = 0;
@@ -313,6 +340,8 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         cpu_time: run.run.cpu_time,
         engine_version: run.engine_version.to_string(),
         warnings: run.run.warnings.clone(),
+        warm_start: None,
+        mfr_se_target: None,
     };
     if let Some(why) = st.unsteady {
         return Err(Rejected::measured(FailureClass::Unsteady, format!("MFR not steady: {why}"), result));

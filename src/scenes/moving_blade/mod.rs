@@ -377,6 +377,8 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         cpu_time: run.run.cpu_time,
         engine_version: run.engine_version.to_string(),
         warnings: run.run.warnings.clone(),
+        warm_start: None,
+        mfr_se_target: None,
     };
     if !result.steady {
         let reason = format!(

@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# Warm starts against cold starts, on the same points, one run at a time (BENCHMARKS.md "Warm
+# start"): the first 24 points of the thesis space's LDS draw (sweeps/thesis-lds.toml) and of the
+# machine-speed space (docs/study/thesis/machine-speeds.toml), every point run (no screen).
+#
+#   bash docs/study/warm-start/warm.sh [VARIANT ...]   (default: every variant of both spaces)
+#
+# A variant is a space (thesis or slow) and a way of computing it (SPACE-cold, -warm, -new, -long,
+# -thesis, below), or NAME=SPACE:key=value,... for other [scene] knobs (e.g.
+# thesis-w06=thesis:warm_warmup_s=0.06). Each runs `sweep lds --step 24 --max 24
+# --jobs 1` in WORK/<variant> (default WORK=/tmp/warm-study), which continues a directory it finds;
+# then compare.py prints the tables. Needs target/release/sweep (scripts/setup.sh).
+set -euo pipefail
+cd "$(dirname "$0")/../../.."
+bin=${SWEEP_BIN:-$PWD/target/release/sweep}
+work=${WORK:-/tmp/warm-study}
+mkdir -p "$work"
+
+space_file() {
+  case $1 in
+    thesis) echo sweeps/thesis-lds.toml ;;
+    slow) echo docs/study/thesis/machine-speeds.toml ;;
+    *) echo "warm.sh: unknown space '$1' (thesis or slow)" >&2; exit 2 ;;
+  esac
+}
+
+run_variant() { # name, space, [scene] lines
+  local name=$1 space=$2 scene=$3 file="$work/$1.toml"
+  # The space's file with its [scene] table extended, and every point run.
+  { sed "s/^\[scene\]$/[scene]\n$scene/" "$(space_file "$space")"; printf '\n[run]\nscreen = false\n'; } > "$file"
+  echo "warm.sh: $name" >&2
+  "$bin" lds "$file" --step 24 --max 24 --hold 1000 --jobs 1 --out "$work/$name" > "$work/$name.log" 2>&1 || true
+}
+
+variants=("$@")
+[ ${#variants[@]} -gt 0 ] || variants=(thesis-cold thesis-warm thesis-new thesis-long thesis-thesis slow-cold slow-warm slow-new)
+for v in "${variants[@]}"; do
+  case $v in
+    # Cold: from rest, to the scene's fixed 5 % target. Warm: the same, warm-started. New: the
+    # defaults (warm-started, to the precision the sweep chooses). Long: cold to a 1.5 % target
+    # (the truth the others are judged against). Thesis: the `thesis` fidelity preset.
+    *-cold) run_variant "$v" "${v%-cold}" 'warm_start = false\nprecision = "fixed"' ;;
+    *-warm) run_variant "$v" "${v%-warm}" 'warm_start = true\nprecision = "fixed"' ;;
+    *-new) run_variant "$v" "${v%-new}" '' ;;
+    *-long) run_variant "$v" "${v%-long}" 'warm_start = false\nmfr_rel_se = 0.015\nmfr_abs_se = 0.0015\nwindow_cap_diameters = 3000' ;;
+    *-thesis) run_variant "$v" "${v%-thesis}" 'fidelity = "thesis"' ;;
+    *=*:*)
+      name=${v%%=*}; rest=${v#*=}; space=${rest%%:*}; knobs=${rest#*:}
+      run_variant "$name" "$space" "$(echo "$knobs" | sed 's/,/\\n/g')" ;;
+    *) echo "warm.sh: unknown variant '$v'" >&2; exit 2 ;;
+  esac
+done
