@@ -279,7 +279,7 @@ fn started(ctx: &PointContext, p: &Prepared, start: &Start) -> Started {
     // A neighbour that does not map (another size distribution, nothing of it fits): from rest.
     let warm = start.neighbour.as_ref().and_then(|n| {
         let from = crate::scenes::build(&n.parameters, &ctx.sweep.file.scene).ok()?;
-        let warm = ctx.layout.warm_start(&from, &n.dir, &scene, &p.deck.pile).ok()?;
+        let warm = ctx.layout.warm_start(&from, &n.dir, &scene, &p.deck.pile, n.distance).ok()?;
         let record = WarmStart { from: n.hash.clone(), distance: n.distance, particles: warm.particles };
         Some((warm, record))
     });

@@ -116,6 +116,30 @@ fn parameter_headers(a: &Analysis) -> String {
     a.parameters.iter().zip(&a.units).map(|(p, u)| format!("<th>{} ({})</th>", esc(p), esc(u))).collect()
 }
 
+/// How the runs started and how precisely they ran: warm starts, and the sweep's precision.
+fn started_line(st: &crate::report::Setup) -> String {
+    let mut parts = Vec::new();
+    if st.warm_started > 0 {
+        parts.push(format!(
+            "{} of {} done runs started from the steady heap of a finished neighbour, the others from rest",
+            st.warm_started, st.done
+        ));
+    }
+    if let Some(p) = &st.precision {
+        parts.push(format!(
+            "after its first {} points (MFR's spread σ = {}), the sweep ran its points to an SE of MFR of at most {} \
+             (σ·√(τ/3): each point's noise biases the statistics by at most half the tolerance)",
+            p.points,
+            fmt_short(p.spread),
+            fmt_short(p.mfr_abs_se)
+        ));
+    }
+    if parts.is_empty() {
+        return String::new();
+    }
+    format!("<p>{}.</p>\n", esc(&parts.join("; ")))
+}
+
 fn setup_section(a: &Analysis) -> String {
     let st = &a.setup;
     let mut h = String::from("<h2>Setup: what every point shares</h2>\n");
@@ -166,6 +190,7 @@ fn setup_section(a: &Analysis) -> String {
         h.push_str(&format!("<tr><th class=\"l\">{}</th><td class=\"l\">{}</td></tr>\n", esc(k), esc(&v)));
     }
     h.push_str("</table></div>\n");
+    h.push_str(&started_line(st));
     if let Some(c) = &st.centre {
         let at = c
             .parameters

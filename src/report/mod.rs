@@ -172,6 +172,12 @@ pub struct Setup {
     pub centre: Option<CentreScene>,
     pub engine_version: String,
     pub engine_path: String,
+    /// The precision the sweep chose for its points after its first batch, if it chose one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub precision: Option<crate::run::precision::SweepPrecision>,
+    /// Done runs that started from a finished neighbour's steady state, of all done runs.
+    pub warm_started: usize,
+    pub done: usize,
 }
 
 /// The scene at the centre of the space, in mm, s and counts: what one run looks like.
@@ -193,7 +199,7 @@ pub struct CentreScene {
 }
 
 impl Setup {
-    fn of(sweep: &Sweep, manifest: &Manifest) -> Setup {
+    fn of(sweep: &Sweep, manifest: &Manifest, dir: &Path, done: &[&RunResult]) -> Setup {
         let mid: Vec<f64> = sweep
             .swept
             .iter()
@@ -228,6 +234,9 @@ impl Setup {
             centre,
             engine_version: id("engine_version"),
             engine_path: id("engine_path"),
+            precision: crate::run::precision::read(dir),
+            warm_started: done.iter().filter(|r| r.warm_start.is_some()).count(),
+            done: done.len(),
         }
     }
 }
@@ -386,7 +395,8 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
             _ => None,
         })
         .collect();
-    let setup = Setup::of(&sweep, &manifest);
+    let results: Vec<&RunResult> = done.iter().map(|(_, r, _)| *r).collect();
+    let setup = Setup::of(&sweep, &manifest, dir, &results);
     let advice = advice::advise(&manifest.parameters, &points, &sensitivity);
     let engine = manifest
         .identity

@@ -32,7 +32,7 @@ pub mod fake;
 mod finished;
 mod plan;
 pub mod pool;
-mod precision;
+pub mod precision;
 pub mod progress;
 mod reporter;
 pub mod screen;

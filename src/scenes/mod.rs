@@ -134,14 +134,16 @@ pub trait Layout: Sync {
     }
 
     /// A warm start of `to` (whose particle file is `to_pile`) from the state a finished point
-    /// `from` left in `from_dir`: the scene to render and the particles it reads. `Err` says why
-    /// the point starts cold; a layout with no steady state to carry starts every point cold.
+    /// `from`, `distance` away in the design's unit cube, left in `from_dir`: the scene to render
+    /// and the particles it reads. `Err` says why the point starts cold; a layout with no steady
+    /// state to carry starts every point cold.
     fn warm_start(
         &self,
         _from: &Scene,
         _from_dir: &Path,
         _to: &Scene,
         _to_pile: &str,
+        _distance: f64,
     ) -> Result<Warm, String> {
         Err(format!("the {} layout starts every point cold", self.name()))
     }

@@ -37,6 +37,7 @@ mod recoater;
 mod stability;
 mod steady;
 mod vtk;
+mod warm;
 
 // What a sweep ends with: statistics, convergence and the report.
 mod report;

@@ -50,3 +50,25 @@ for v in "${variants[@]}"; do
     *) echo "warm.sh: unknown variant '$v'" >&2; exit 2 ;;
   esac
 done
+
+# DENSE=N: the first N points of the thesis space's draw on the defaults (thesis-dense), then the
+# last 24 of them run cold to a 1.5 % target (thesis-dense-long/*.json, one `sweep run` each):
+# warm starts where a sweep has neighbours near (N = 200: a median distance of about 0.25).
+if [ -n "${DENSE:-}" ]; then
+  run_dense() {
+    local file="$work/thesis-dense.toml" long="$work/thesis-dense-long"
+    { cat sweeps/thesis-lds.toml; printf '\n[run]\nscreen = false\n'; } > "$file"
+    "$bin" lds "$file" --step "$DENSE" --max "$DENSE" --hold 1000 --jobs 1 --out "$work/thesis-dense" > "$work/thesis-dense.log" 2>&1 || true
+    sed "s/^\[scene\]$/[scene]\nwarm_start = false\nmfr_rel_se = 0.015\nmfr_abs_se = 0.0015\nwindow_cap_diameters = 3000/" "$file" > "$long.toml"
+    mkdir -p "$long"
+    python3 - "$work/thesis-dense/results.csv" "$DENSE" <<'PY' | while read -r index set; do
+import csv, sys
+rows = [r for r in csv.DictReader(open(sys.argv[1])) if int(r["index"]) >= int(sys.argv[2]) - 24]
+for r in rows:
+    print(r["index"], ",".join(f"{k}={r[k]}" for k in ("friction", "diameter", "gap", "blade_speed")))
+PY
+      [ -s "$long/$index.json" ] || "$bin" run "$long.toml" --set "$set" --json > "$long/$index.json.tmp" 2>/dev/null && mv "$long/$index.json.tmp" "$long/$index.json" || true
+    done
+  }
+  run_dense
+fi

@@ -120,7 +120,22 @@ impl Layout for Conveyor {
                 ("warm-up (s)", short(sc.warmup_s)),
                 (
                     "precision target: SE of MFR at most",
-                    format!("{} × MFR or {}", short(sc.mfr_rel_se), short(sc.mfr_abs_se)),
+                    match sc.precision.as_str() {
+                        "sweep" => format!(
+                            "{} × MFR or {} over the first batch, then σ·√(τ/3) (the sweep's precision)",
+                            short(sc.mfr_rel_se),
+                            short(sc.mfr_abs_se)
+                        ),
+                        _ => format!("{} × MFR or {}", short(sc.mfr_rel_se), short(sc.mfr_abs_se)),
+                    },
+                ),
+                (
+                    "warm start",
+                    if sc.warm_start {
+                        format!("from the nearest finished point, warm-up {} s", short(sc.warm_warmup_s))
+                    } else {
+                        "no: every point from rest".into()
+                    },
                 ),
                 ("least window (blocks)", sc.min_window_blocks.to_string()),
                 ("window cap, travel after the warm-up (D)", short(sc.window_cap_diameters)),
@@ -135,8 +150,9 @@ impl Layout for Conveyor {
         from_dir: &Path,
         to: &Scene,
         to_pile: &str,
+        distance: f64,
     ) -> Result<warm::Warm, String> {
-        warm::map(from, &from_dir.join(warm::STATE_DUMP), to, to_pile)
+        warm::map(from, &from_dir.join(warm::STATE_DUMP), to, to_pile, distance)
     }
 
     fn with_precision(&self, scene: &Scene, mfr_abs_se: f64) -> Option<Scene> {

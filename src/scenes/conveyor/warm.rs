@@ -25,6 +25,13 @@ pub const WARM_DATA: &str = "warm.data";
 const STATE_COLUMNS: [&str; 12] =
     ["id", "x", "y", "z", "vx", "vy", "vz", "omegax", "omegay", "omegaz", "radius", "mass"];
 
+/// The distance in the design's unit cube from which a warm start needs the whole cold warm-up:
+/// over the first 24 points of the thesis space's LDS draw (neighbours a median 0.48 apart),
+/// warm-ups of 0.03–0.1 s left MFR 3 ± 2 % high against long runs, some points by 4 SE, as the
+/// heap of a neighbour that far off relaxes about as slowly as one from rest
+/// (docs/study/warm-start). Nearer, the warm-up shrinks in proportion, down to `warm_warmup_s`.
+pub const FULL_WARMUP_DISTANCE: f64 = 0.5;
+
 /// The largest overlap a mapped sphere may keep with its neighbours, in diameters: loaded
 /// contacts in a heap overlap by a fraction of a percent; more is an artefact of the map.
 const OVERLAP_TOLERANCE: f64 = 0.02;
@@ -45,8 +52,9 @@ struct Sphere {
 }
 
 /// Map the state `from` left in `state` onto `to`, whose particle file is `to_pile` (its
-/// substrate spheres, the ids the warm particles follow). `Err` says why the point starts cold.
-pub fn map(from: &Scene, state: &Path, to: &Scene, to_pile: &str) -> Result<Warm, String> {
+/// substrate spheres, the ids the warm particles follow), `distance` apart in the design's unit
+/// cube. `Err` says why the point starts cold.
+pub fn map(from: &Scene, state: &Path, to: &Scene, to_pile: &str, distance: f64) -> Result<Warm, String> {
     let ratio = size_ratio(from, to)?;
     let snaps = read_dump(state, &STATE_COLUMNS).map_err(|e| e.to_string())?;
     let snap = snaps.last().ok_or("the state dump is empty")?;
@@ -110,9 +118,12 @@ pub fn map(from: &Scene, state: &Path, to: &Scene, to_pile: &str) -> Result<Warm
     let data = data_file(&warm, first_id, to.density);
     let mut scene = to.clone();
     let window_blocks = c.max_blocks - c.warmup_blocks;
+    let share = (distance / FULL_WARMUP_DISTANCE).clamp(0.0, 1.0);
+    let warmup_blocks = ((c.warmup_blocks as f64 * share).ceil() as u64)
+        .clamp(c.warm_warmup_blocks.min(c.warmup_blocks), c.warmup_blocks);
     scene.conveyor.warm_start = true;
-    scene.conveyor.warmup_blocks = c.warm_warmup_blocks;
-    scene.conveyor.max_blocks = c.warm_warmup_blocks + window_blocks;
+    scene.conveyor.warmup_blocks = warmup_blocks;
+    scene.conveyor.max_blocks = warmup_blocks + window_blocks;
     scene.window_length_steps = scene.conveyor.max_blocks * c.block_steps;
     Ok(Warm { scene, data, particles: warm.len() })
 }
@@ -287,7 +298,7 @@ mod tests {
         let to = scene(&[("diameter", 2.0), ("gap", 6.0), ("blade_speed", 1.5)]);
         let state = state_of(&from, dir.path(), 2);
         let pile = crate::scene::pile::pile_data(&to);
-        let w = map(&from, &state, &to, &pile).unwrap();
+        let w = map(&from, &state, &to, &pile, 0.01).unwrap();
         assert!(w.particles > 50, "{} particles", w.particles);
         assert!(
             w.scene.conveyor.warm_start && w.scene.conveyor.warmup_blocks == to.conveyor.warm_warmup_blocks
@@ -296,6 +307,11 @@ mod tests {
             w.scene.conveyor.max_blocks - w.scene.conveyor.warmup_blocks,
             to.conveyor.max_blocks - to.conveyor.warmup_blocks
         );
+        // The warm-up shrinks with the distance: the whole cold one from FULL_WARMUP_DISTANCE on.
+        let far = map(&from, &state, &to, &pile, FULL_WARMUP_DISTANCE).unwrap();
+        assert_eq!(far.scene.conveyor.warmup_blocks, to.conveyor.warmup_blocks);
+        let half = map(&from, &state, &to, &pile, 0.5 * FULL_WARMUP_DISTANCE).unwrap();
+        assert_eq!(half.scene.conveyor.warmup_blocks, to.conveyor.warmup_blocks.div_ceil(2));
         let atoms: Vec<Vec<f64>> = w
             .data
             .lines()
@@ -323,7 +339,7 @@ mod tests {
         let to = scene(&[("diameter", 1.0), ("gap", 1.5), ("blade_speed", 1.0), ("heap_height", 5.0)]);
         let state = state_of(&from, dir.path(), 12);
         let pile = crate::scene::pile::pile_data(&to);
-        let w = map(&from, &state, &to, &pile).unwrap();
+        let w = map(&from, &state, &to, &pile, 0.3).unwrap();
         assert!(w.particles <= to.conveyor.heap_particles + 200, "{}", w.particles);
         for l in w.data.lines().skip_while(|l| *l != "Atoms").skip(2).take_while(|l| !l.is_empty()) {
             let a: Vec<f64> = l.split_whitespace().map(|t| t.parse().unwrap()).collect();
@@ -345,7 +361,7 @@ mod tests {
         };
         let values: BTreeMap<String, f64> = [("diameter".to_string(), 1.0)].into();
         let to = crate::scenes::build(&values, &weibull).unwrap();
-        let err = map(&from, &state, &to, &crate::scene::pile::pile_data(&to)).unwrap_err();
+        let err = map(&from, &state, &to, &crate::scene::pile::pile_data(&to), 0.1).unwrap_err();
         assert!(err.contains("size distribution"), "{err}");
     }
 }
