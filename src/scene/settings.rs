@@ -71,7 +71,8 @@ pub struct SceneSettings {
     /// outlive is the difference between neighbours, not a heap starting from rest. A point with
     /// no such neighbour starts cold. The run's hash does not depend on it.
     pub warm_start: bool,
-    /// Conveyor layout: the warm-up of a warm-started point, s (at least one block).
+    /// Conveyor layout: the least warm-up of a warm-started point, s (at least one block); its
+    /// warm-up is the cold one's times the neighbour's distance over 0.5, never less than this.
     pub warm_warmup_s: f64,
     /// Conveyor layout, in a sweep: `"sweep"` — once the first batch has finished, every later
     /// point runs until the SE of its MFR is a tenth of the spread of MFR over that batch (what
