@@ -213,6 +213,26 @@ fn one_free_parameter_is_recovered_and_drawn_as_a_curve() {
     assert!(lo <= 0.2 && 0.2 <= hi && hi - lo < 0.1, "{par}");
     assert_eq!(par["identification"], "identified", "{par}");
     assert!(std::fs::metadata(out.join("report/posterior-rolling_friction.png")).unwrap().len() > 5000);
+    // The directory is this calibration's: other targets, or cluster arrays, are refused in one line.
+    let other = calibrate(&file, &out, &["angle_of_repose=30±1".to_string()], &[]);
+    let submit = common::output(common::sweep_bin().args([
+        "submit",
+        common::p(&out),
+        "--scheduler",
+        "slurm",
+        "--tasks",
+        "2",
+        "--dry-run",
+    ]));
+    for (o, says) in
+        [(other, "holds a calibration against angle_of_repose="), (submit, "plans each batch from the last")]
+    {
+        let err = common::stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(says) && err.trim().lines().count() == 1, "{err}");
+    }
+    assert!(!out.join("cluster").exists());
+    assert_eq!(calibrate::settings(&out).unwrap().targets[0].sd, 0.5);
 }
 
 /// MFR as a calibration target on the fake executor (gap and blade speed free): a smooth,
