@@ -117,12 +117,12 @@ fn parameter_headers(a: &Analysis) -> String {
 }
 
 /// How the runs started and how precisely they ran: warm starts, and the sweep's precision.
-fn started_line(st: &crate::report::Setup) -> String {
+fn started_line(st: &crate::report::Setup, done: usize) -> String {
     let mut parts = Vec::new();
     if st.warm_started > 0 {
         parts.push(format!(
-            "{} of {} done runs started from the steady heap of a finished neighbour, the others from rest",
-            st.warm_started, st.done
+            "{} of {done} done runs started from the steady heap of a finished neighbour, the others from rest",
+            st.warm_started
         ));
     }
     if let Some(p) = &st.precision {
@@ -190,7 +190,7 @@ fn setup_section(a: &Analysis) -> String {
         h.push_str(&format!("<tr><th class=\"l\">{}</th><td class=\"l\">{}</td></tr>\n", esc(k), esc(&v)));
     }
     h.push_str("</table></div>\n");
-    h.push_str(&started_line(st));
+    h.push_str(&started_line(st, a.counts.done));
     if let Some(c) = &st.centre {
         let at = c
             .parameters

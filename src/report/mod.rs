@@ -172,12 +172,10 @@ pub struct Setup {
     pub centre: Option<CentreScene>,
     pub engine_version: String,
     pub engine_path: String,
-    /// The precision the sweep chose for its points after its first batch, if it chose one.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    /// The precision the sweep chose for its points after its first batch (if it chose one), and
+    /// how many of the done runs started from a finished neighbour's steady state.
     pub precision: Option<crate::run::precision::SweepPrecision>,
-    /// Done runs that started from a finished neighbour's steady state, of all done runs.
     pub warm_started: usize,
-    pub done: usize,
 }
 
 /// The scene at the centre of the space, in mm, s and counts: what one run looks like.
@@ -236,7 +234,6 @@ impl Setup {
             engine_path: id("engine_path"),
             precision: crate::run::precision::read(dir),
             warm_started: done.iter().filter(|r| r.warm_start.is_some()).count(),
-            done: done.len(),
         }
     }
 }
@@ -395,8 +392,7 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
             _ => None,
         })
         .collect();
-    let results: Vec<&RunResult> = done.iter().map(|(_, r, _)| *r).collect();
-    let setup = Setup::of(&sweep, &manifest, dir, &results);
+    let setup = Setup::of(&sweep, &manifest, dir, &done.iter().map(|(_, r, _)| *r).collect::<Vec<_>>());
     let advice = advice::advise(&manifest.parameters, &points, &sensitivity);
     let engine = manifest
         .identity
