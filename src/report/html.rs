@@ -130,8 +130,8 @@ fn started_line(st: &crate::report::Setup, done: usize) -> String {
             "after its first {} points (MFR's spread σ = {}), the sweep ran its points to an SE of MFR of at most {} \
              (σ·√(τ/3): each point's noise biases the statistics by at most half the tolerance)",
             p.points,
-            fmt_short(p.spread),
-            fmt_short(p.mfr_abs_se)
+            fmt_short_sig(p.spread),
+            fmt_short_sig(p.mfr_abs_se)
         ));
     }
     if parts.is_empty() {

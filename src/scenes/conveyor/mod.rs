@@ -132,7 +132,10 @@ impl Layout for Conveyor {
                 (
                     "warm start",
                     if sc.warm_start {
-                        format!("from the nearest finished point, warm-up {} s", short(sc.warm_warmup_s))
+                        format!(
+                            "from the nearest finished point; warm-up the cold one's × distance/0.5, at least {} s",
+                            short(sc.warm_warmup_s)
+                        )
                     } else {
                         "no: every point from rest".into()
                     },
