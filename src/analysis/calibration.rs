@@ -119,6 +119,13 @@ pub struct Emulated<'a> {
     pub emulator: &'a Emulator,
 }
 
+impl<'a> Emulated<'a> {
+    /// Each target with its emulator, in order.
+    pub fn pair(targets: &'a [Target], emulators: &'a [Emulator]) -> Vec<Emulated<'a>> {
+        targets.iter().zip(emulators).map(|(target, emulator)| Emulated { target, emulator }).collect()
+    }
+}
+
 /// The log density of the posterior at `u`, up to a constant (module docs).
 pub fn log_density(outputs: &[Emulated], u: &[f64]) -> f64 {
     outputs

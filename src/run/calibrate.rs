@@ -285,13 +285,7 @@ impl SpaceHook for CalibrationWatch {
                 let d = data(&self.sweep, &self.settings.targets, points);
                 let ems: Option<Vec<Emulator>> = d.iter().map(|(x, y, se)| Emulator::fit(x, y, se)).collect();
                 let posterior = ems.as_ref().and_then(|ems| {
-                    let outs: Vec<Emulated> = self
-                        .settings
-                        .targets
-                        .iter()
-                        .zip(ems)
-                        .map(|(target, emulator)| Emulated { target, emulator })
-                        .collect();
+                    let outs = Emulated::pair(&self.settings.targets, ems);
                     cal::posterior(&outs, self.sweep.dim(), self.seed)
                 });
                 let measured = d.iter().map(|x| x.1.len()).min().unwrap_or(0);
@@ -417,13 +411,7 @@ fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &CalibrationWatch, ran: u
         manifest.points.iter().map(|p| crate::sweep::space::unit_point(&sweep, &p.values)).collect();
     let picks: Vec<Pick> = match ems {
         Some(ems) => {
-            let outs: Vec<Emulated> = watch
-                .settings
-                .targets
-                .iter()
-                .zip(ems)
-                .map(|(target, emulator)| Emulated { target, emulator })
-                .collect();
+            let outs = Emulated::pair(&watch.settings.targets, ems);
             let noise: Vec<f64> = ems.iter().zip(d).map(|(em, (_, _, se))| new_run_noise(em, se)).collect();
             cal::next_batch(&outs, &noise, &cands, &existing, size)
         }

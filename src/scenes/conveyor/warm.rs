@@ -102,14 +102,12 @@ pub fn map(from: &Scene, state: &Path, to: &Scene, to_pile: &str, distance: f64)
     // A heap larger than this point holds: its top goes (the deck tops a smaller one up).
     let front = to.blade_x0 + to.blade_thickness;
     let in_heap = |p: &Sphere| (front..=c.heap_x1).contains(&p.x[0]) && (0.0..=c.heap_z1).contains(&p.x[2]);
-    let mut excess = warm.iter().filter(|p| in_heap(p)).count().saturating_sub(c.heap_particles);
-    while excess > 0 {
-        let top = (0..warm.len())
-            .filter(|&i| in_heap(&warm[i]))
-            .max_by(|&a, &b| warm[a].x[2].total_cmp(&warm[b].x[2]));
-        let Some(top) = top else { break };
-        warm.swap_remove(top);
-        excess -= 1;
+    // `warm` is sorted lowest first, so the heap's top is its last members.
+    let excess = warm.iter().filter(|p| in_heap(p)).count().saturating_sub(c.heap_particles);
+    let mut tops: Vec<usize> = (0..warm.len()).rev().filter(|&i| in_heap(&warm[i])).take(excess).collect();
+    tops.sort_unstable();
+    for i in tops.into_iter().rev() {
+        warm.remove(i);
     }
     if warm.is_empty() {
         return Err("nothing of its heap fits this point".into());
