@@ -2,10 +2,10 @@
 # The thesis's study on real LIGGGHTS (docs/study/thesis/README.md): the 4-D LDS sweep to 2,400 points,
 # the 4-D lattice at levels 5, 6, 7, and an LDS over the blade speeds real machines use.
 #
-#   bash docs/study/thesis/thesis_study.sh [lds|lattice|slow|lds-0.3|slow-heap20|lds-heap20 ...]   (default: lds lattice slow)
+#   bash docs/study/thesis/thesis_study.sh [lds|lattice|slow|lds-0.3|slow-heap20|lds-heap20|adapt-240 ...]   (default: lds lattice slow)
 #
 # It takes hours on two cores and is meant to be cut off and started again: each sweep runs in
-# WORK/<name> (default WORK=/tmp/thesis-study) with `sweep lds|lattice`, which continues a
+# WORK/<name> (default WORK=/tmp/thesis-study) with `sweep lds|lattice|adapt`, which continues a
 # directory it finds; every SYNC_S seconds, and at the end, the sweep's slim record is copied to
 # docs/study/thesis/<name>/: sweep.toml, summary.json and convergence.csv as they are,
 # manifest.json, joblog.tsv and results.csv gzipped, and each run's result.json or failure.json
@@ -26,7 +26,7 @@ record=docs/study/thesis
 mkdir -p "$work" "$record"
 
 # The sweep's files kept as they are, and the bulky ones kept gzipped.
-plain=(sweep.toml summary.json convergence.csv)
+plain=(sweep.toml summary.json convergence.csv batches.csv precision.json)
 packed=(manifest.json joblog.tsv results.csv)
 
 # Copy the slim record of sweep directory $1 into its record $2. Runs not in the record yet are
@@ -117,6 +117,9 @@ for s in "${order[@]}"; do
     slow-heap20) run_sweep slow-heap20 lds "$record/machine-speeds.toml" --hold 1000 ;;
     # The thesis's 4-D LDS at one fixed heap (20 mm above the tip at every D): D's own index.
     lds-heap20) run_sweep lds-heap20 lds sweeps/thesis-lds.toml --max 400 --hold 1000 ;;
-    *) echo "study: unknown sweep '$s' (expected lds, lattice, slow, lds-0.3, slow-heap20 or lds-heap20)" >&2; exit 2 ;;
+    # The same space by `sweep adapt`, at most 240 runs (a tenth of `lds`), judged by the default
+    # rule: the verdict and the runs it took, against lds-heap20 (the same scene).
+    adapt-240) run_sweep adapt-240 adapt sweeps/thesis-lds.toml --first 40 --batch 8 --max 240 ;;
+    *) echo "study: unknown sweep '$s' (expected lds, lattice, slow, lds-0.3, slow-heap20, lds-heap20 or adapt-240)" >&2; exit 2 ;;
   esac
 done
