@@ -147,8 +147,8 @@ impl Criteria {
             ),
             Rule::Scaled => format!(
                 "rule \"scaled\": every statistic moved by at most {t}% of its scale since the previous \
-                 space and its 95% bootstrap half-width at most {t}% of its scale, for {} consecutive \
-                 space(s)",
+                 space and the half-width of its 95% interval at most {t}% of its scale, for {} \
+                 consecutive space(s)",
                 self.hold
             ),
         }
@@ -161,7 +161,8 @@ impl Criteria {
 pub struct SpaceStats {
     pub n: usize,
     pub moments: Moments,
-    /// Half-width of the 95 % bootstrap interval of mean, std, skewness, kurtosis.
+    /// Half-width of the 95 % interval of mean, std, skewness, kurtosis: the bootstrap's of a
+    /// sample, the emulator's posterior of an adaptive design.
     pub noise: [Option<f64>; 4],
 }
 

@@ -65,7 +65,8 @@ pub(super) enum BenchCommand {
     /// --replay RESULTS.csv a recorded sweep of that space replayed (an emulator of all its done
     /// runs; each run its mean plus noise at the SE of the nearest recorded run). The truth: the noiseless surface
     /// on 20,000 scrambled-Halton points. Targets: mean within 2 %, std within 3 %, skewness and
-    /// kurtosis within 5 % of their scale, the first-order sensitivity ranking the truth's, the
+    /// kurtosis within 5 % of their scale, the first-order sensitivity ranking the truth's (every
+    /// pair whose indices the truth tells apart, by non-overlapping 95 % intervals, in its order), the
     /// recommended run's true MFR within one SE of the truth's best. Runs in process (no sweep
     /// directory) with the functions the sweeps use; prints the tables of BENCHMARKS.md.
     Designs(DesignsArgs),

@@ -200,7 +200,8 @@ enum Command {
 #[derive(Args)]
 struct ConvergenceArgs {
     /// "scaled" (default: every statistic moved by at most the tolerance times its own scale and
-    /// known to within it, its 95% bootstrap half-width, for --hold consecutive spaces), "any"
+    /// known to within it, the half-width of its 95% interval — bootstrap for lattice and lds, the
+    /// emulator's posterior for adapt — for --hold consecutive spaces), "any"
     /// (the thesis's rule: any one statistic within the tolerance relatively) or "all" (every
     /// statistic within the tolerance relatively or the floor). docs/statistics.md.
     #[arg(long)]
