@@ -215,8 +215,12 @@ fn failing_tests(a: &Analysis) -> Vec<String> {
         ));
     }
     if !noisy.is_empty() {
+        let interval = match a.design {
+            DesignRecord::Adapt { .. } => "95% posterior interval",
+            _ => "95% bootstrap",
+        };
         out.push(format!(
-            "{} {} known only to more than ±{t}% of {} scale (95% bootstrap)",
+            "{} {} known only to more than ±{t}% of {} scale ({interval})",
             noisy.join(", "),
             verb(&noisy, "is", "are"),
             verb(&noisy, "its", "their")

@@ -372,3 +372,33 @@ fn each_batch_is_said_on_the_terminal_and_tabled_in_the_report() {
     assert!(html.contains("<th class=\"l\">batch</th><th>points</th><th>new</th>"), "no batch table");
     assert!(html.contains("<td class=\"l\">2 (adapt 12)</td><td>12</td><td>4</td>"), "no row of batch 2");
 }
+
+/// An adaptive sweep's statistics are known to their emulator's posterior interval, and its
+/// verdict says so (not a bootstrap's, which an adaptive design has none of).
+#[test]
+fn a_noisy_verdict_names_the_posterior_interval() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = standin_sweep(tmp.path());
+    let out = tmp.path().join("out");
+    let o = common::sweep_bin()
+        .args([
+            "adapt",
+            file.to_str().unwrap(),
+            "-q",
+            "--jobs",
+            "2",
+            "--max",
+            "30",
+            "--tolerance",
+            "0.001",
+            "--out",
+        ])
+        .arg(&out)
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    let text = format!("{}{}", String::from_utf8_lossy(&o.stdout), common::stderr(&o));
+    let verdict = text.lines().find(|l| l.starts_with("verdict:")).unwrap_or_else(|| panic!("{text}"));
+    assert!(verdict.contains("not converged after N = 30"), "{verdict}");
+    assert!(verdict.contains("95% posterior interval") && !verdict.contains("bootstrap"), "{verdict}");
+}
