@@ -5,7 +5,7 @@
 //! manifest as one more space (`adapt N`: the first N points), so every directory tool —
 //! `status`, `report`, `predict`, the joblog, `resume` — reads it as it reads an LDS sweep.
 //!
-//! The loop: run the unfinished points of the manifest ([`super::resume`], with the
+//! The loop ([`super::batches`]): run the unfinished points of the manifest ([`super::resume`], with the
 //! [`AdaptWatch`] as the space hook, which judges each batch by the emulator's statistics);
 //! stop if the rule holds, the sweep was interrupted, a point is still unfinished, or `max`
 //! points are planned; else plan the next batch and go round.
@@ -31,10 +31,11 @@ use crate::analysis::adapt::{self as criterion, Choice};
 use crate::analysis::convergence::{judge, Criteria, SpaceStats};
 use crate::analysis::emulator::{self, Emulator};
 use crate::analysis::stats::{Interval, Moments};
-use crate::error::{Error, Result};
+use crate::error::Result;
+use crate::run::batches::{self, Planned, Sequential};
 use crate::run::pool::{Executor, Flow};
 use crate::run::SpaceHook;
-use crate::store::{DesignRecord, Manifest, PointRecord, PointStatus, SpaceRecord, Store};
+use crate::store::{DesignRecord, PointRecord, PointStatus, SpaceRecord, Store};
 use crate::sweep::Sweep;
 use crate::sys::process::CancelToken;
 
@@ -264,36 +265,18 @@ pub fn run<E: Executor>(
     watch: &mut AdaptWatch,
     cancel: &CancelToken,
 ) -> Result<Summary> {
-    let mut ran = 0;
-    let mut reused = None;
-    let mut before: Option<Summary> = None;
-    loop {
-        let mut s = match super::resume(dir, exec, opts, watch, cancel) {
-            // Interrupted while preparing the next batch's runs: the sweep as it stood.
-            Err(Error::Interrupted) if before.is_some() => {
-                let mut s = before.take().expect("checked");
-                s.interrupted = true;
-                return Ok(s);
-            }
-            r => r?,
-        };
-        ran += s.ran;
-        if opts.progress != crate::run::progress::ProgressMode::Quiet {
-            for line in watch.take_lines() {
-                eprintln!("{line}");
-            }
-        }
-        let reused_first = *reused.get_or_insert(s.reused);
-        let stop =
-            s.interrupted || s.stopped_after.is_some() || s.pending > 0 || watch.converged_at.is_some();
-        if stop || !plan_next(dir, exec, watch, s.points)? {
-            s.ran = ran;
-            s.reused = reused_first;
-            return Ok(s);
-        }
-        s.ran = ran;
-        s.reused = reused_first;
-        before = Some(s);
+    batches::run(dir, exec, opts, watch, cancel)
+}
+
+impl Sequential for AdaptWatch {
+    fn take_lines(&mut self) -> Vec<String> {
+        AdaptWatch::take_lines(self)
+    }
+    fn converged(&self) -> bool {
+        self.converged_at.is_some()
+    }
+    fn plan_next<E: Executor>(&self, dir: &Path, exec: &E, ran: usize) -> Result<bool> {
+        plan_next(dir, exec, self, ran)
     }
 }
 
@@ -395,40 +378,20 @@ fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &AdaptWatch, ran: usize) 
             f64::NAN,
         ),
     };
-    let values: Vec<Vec<f64>> =
-        chosen.iter().map(|c| crate::sweep::space::scale_point(&sweep, &c.point)).collect();
-    let jobs: Vec<E::Job> = values.iter().map(|v| exec.prepare(v)).collect::<Result<_>>()?;
-    let store = Store::open(dir);
-    let base = manifest.points.len();
-    let mut appended = false;
-    store.update_manifest(|now: Option<(Manifest, String)>| -> Result<Option<(Manifest, String)>> {
-        let Some((mut m, t)) = now else { return Ok(None) };
-        // Another process planned this batch first: run its.
-        if m.spaces.len() != manifest.spaces.len() || m.points.len() != base {
-            appended = true;
-            return Ok(None);
-        }
-        let mut rows = Vec::new();
-        for ((values, job), c) in values.iter().zip(&jobs).zip(&chosen) {
-            let hash = exec.hash(job);
-            if m.points.iter().any(|p| p.hash == hash) {
-                continue;
-            }
-            let index = m.points.len();
-            let closed = sweep.file.run.screen && exec.closed(job);
-            m.points.push(PointRecord { index, values: values.clone(), hash: hash.to_string(), closed });
-            rows.push((index, c));
-        }
-        if rows.is_empty() {
-            return Ok(None);
-        }
-        let n = m.points.len();
-        m.spaces.push(SpaceRecord { label: format!("adapt {n}"), points: (0..n).collect() });
-        write_batches(dir, &sweep, label, k + 1, j_before, &rows)?;
-        appended = true;
-        Ok(Some((m, t)))
-    })?;
-    Ok(appended)
+    let planned: Vec<Planned<Choice>> = chosen
+        .iter()
+        .map(|c| Planned { values: crate::sweep::space::scale_point(&sweep, &c.point), note: c })
+        .collect();
+    let screen = sweep.file.run.screen;
+    batches::append(
+        dir,
+        exec,
+        &manifest,
+        &planned,
+        "adapt",
+        |job| screen && exec.closed(job),
+        |rows| write_batches(dir, &sweep, label, k + 1, j_before, rows),
+    )
 }
 
 /// Append the rows of one batch to `DIR/batches.csv` (written whole, atomically, under the

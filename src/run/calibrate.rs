@@ -19,8 +19,9 @@ use super::{RunError, RunOptions, Summary};
 use crate::analysis::adapt::new_run_noise;
 use crate::analysis::calibration::{self as cal, Emulated, Pick, Posterior, Target};
 use crate::analysis::emulator::Emulator;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::outcome::RunResult;
+use crate::run::batches::{self, Planned, Sequential};
 use crate::run::pool::{Executor, Flow};
 use crate::run::{PointExecutor, SpaceHook, SweepExecutor};
 use crate::store::{DesignRecord, Manifest, PointRecord, PointStatus, SpaceRecord, Store};
@@ -355,33 +356,18 @@ pub fn run<E: Executor>(
     watch: &mut CalibrationWatch,
     cancel: &CancelToken,
 ) -> Result<Summary> {
-    let mut ran = 0;
-    let mut reused = None;
-    let mut before: Option<Summary> = None;
-    loop {
-        let mut s = match super::resume(dir, exec, opts, watch, cancel) {
-            Err(Error::Interrupted) if before.is_some() => {
-                let mut s = before.take().expect("checked");
-                s.interrupted = true;
-                return Ok(s);
-            }
-            r => r?,
-        };
-        ran += s.ran;
-        if opts.progress != crate::run::progress::ProgressMode::Quiet {
-            for line in watch.take_lines() {
-                eprintln!("{line}");
-            }
-        }
-        let reused_first = *reused.get_or_insert(s.reused);
-        s.ran = ran;
-        s.reused = reused_first;
-        let stop =
-            s.interrupted || s.stopped_after.is_some() || s.pending > 0 || watch.converged_at.is_some();
-        if stop || !plan_next(dir, exec, watch, s.points)? {
-            return Ok(s);
-        }
-        before = Some(s);
+    batches::run(dir, exec, opts, watch, cancel)
+}
+
+impl Sequential for CalibrationWatch {
+    fn take_lines(&mut self) -> Vec<String> {
+        CalibrationWatch::take_lines(self)
+    }
+    fn converged(&self) -> bool {
+        self.converged_at.is_some()
+    }
+    fn plan_next<E: Executor>(&self, dir: &Path, exec: &E, ran: usize) -> Result<bool> {
+        plan_next(dir, exec, self, ran)
     }
 }
 
@@ -421,43 +407,19 @@ fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &CalibrationWatch, ran: u
             .map(|u| Pick { point: u.clone(), why: "coverage", log_var: f64::NAN })
             .collect(),
     };
-    let values: Vec<Vec<f64>> =
-        picks.iter().map(|c| crate::sweep::space::scale_point(&sweep, &c.point)).collect();
-    let jobs: Vec<E::Job> = values.iter().map(|v| exec.prepare(v)).collect::<Result<_>>()?;
-    let store = Store::open(dir);
-    let base = manifest.points.len();
-    let mut appended = false;
-    store.update_manifest(|now: Option<(Manifest, String)>| -> Result<Option<(Manifest, String)>> {
-        let Some((mut m, t)) = now else { return Ok(None) };
-        if m.spaces.len() != manifest.spaces.len() || m.points.len() != base {
-            appended = true;
-            return Ok(None);
-        }
-        let mut rows = Vec::new();
-        for ((values, job), c) in values.iter().zip(&jobs).zip(&picks) {
-            let hash = exec.hash(job);
-            if m.points.iter().any(|p| p.hash == hash) {
-                continue;
-            }
-            let index = m.points.len();
-            m.points.push(PointRecord {
-                index,
-                values: values.clone(),
-                hash: hash.to_string(),
-                closed: false,
-            });
-            rows.push((index, c));
-        }
-        if rows.is_empty() {
-            return Ok(None);
-        }
-        let n = m.points.len();
-        m.spaces.push(SpaceRecord { label: format!("calibrate {n}"), points: (0..n).collect() });
-        write_batches(dir, &sweep, label, k + 1, &rows)?;
-        appended = true;
-        Ok(Some((m, t)))
-    })?;
-    Ok(appended)
+    let planned: Vec<Planned<Pick>> = picks
+        .iter()
+        .map(|c| Planned { values: crate::sweep::space::scale_point(&sweep, &c.point), note: c })
+        .collect();
+    batches::append(
+        dir,
+        exec,
+        &manifest,
+        &planned,
+        "calibrate",
+        |_| false,
+        |rows| write_batches(dir, &sweep, label, k + 1, rows),
+    )
 }
 
 /// Append the rows of one batch to [`BATCHES`] (written whole, under the directory's lock).

@@ -23,6 +23,7 @@
 //! for the directory's formats ([`crate::store`]); no statistics here.
 
 pub mod adapt;
+pub mod batches;
 pub mod calibrate;
 pub mod cluster;
 mod error;

@@ -1,0 +1,128 @@
+//! A sequential design run batch by batch in one sweep directory (`sweep adapt`, `sweep
+//! calibrate`): run the planned points, let the design judge the batch (its [`SpaceHook`]), plan
+//! the next batch from the results, and go round until the design's rule holds, its `max` is
+//! reached or the run is cut off.
+//!
+//! A planned batch is appended to the manifest as one more space (the first N points), under
+//! the directory's lock. Two processes that finish a batch plan the same next one (a batch is a
+//! pure function of the results before it); the first appends it, and the other finds it there
+//! and runs its share of it.
+
+use std::path::Path;
+
+use super::{RunOptions, Summary};
+use crate::error::{Error, Result};
+use crate::run::pool::Executor;
+use crate::run::SpaceHook;
+use crate::store::{Manifest, PointRecord, SpaceRecord, Store};
+use crate::sys::process::CancelToken;
+
+/// What a sequential design adds to a space hook: what it says of its batches, whether its rule
+/// has held, and its next batch.
+pub trait Sequential: SpaceHook {
+    /// The lines said about the batches judged since the last call.
+    fn take_lines(&mut self) -> Vec<String>;
+    /// Whether the design's rule has held.
+    fn converged(&self) -> bool;
+    /// Append the next batch to the manifest of `dir` (`ran`: the points of the manifest just
+    /// run). `true` when there are new points to run, planned here or by another process.
+    fn plan_next<E: Executor>(&self, dir: &Path, exec: &E, ran: usize) -> Result<bool>;
+}
+
+/// Run the sequential design in `dir` until its rule holds, `max` points have run, a point is
+/// left unfinished, or it is interrupted: batch by batch, each planned from the results before.
+pub fn run<E: Executor, W: Sequential>(
+    dir: &Path,
+    exec: &E,
+    opts: &RunOptions,
+    watch: &mut W,
+    cancel: &CancelToken,
+) -> Result<Summary> {
+    let mut ran = 0;
+    let mut reused = None;
+    let mut before: Option<Summary> = None;
+    loop {
+        let mut s = match super::resume(dir, exec, opts, watch, cancel) {
+            // Interrupted while preparing the next batch's runs: the sweep as it stood.
+            Err(Error::Interrupted) if before.is_some() => {
+                let mut s = before.take().expect("checked");
+                s.interrupted = true;
+                return Ok(s);
+            }
+            r => r?,
+        };
+        ran += s.ran;
+        if opts.progress != crate::run::progress::ProgressMode::Quiet {
+            for line in watch.take_lines() {
+                eprintln!("{line}");
+            }
+        }
+        let reused_first = *reused.get_or_insert(s.reused);
+        s.ran = ran;
+        s.reused = reused_first;
+        let stop = s.interrupted || s.stopped_after.is_some() || s.pending > 0 || watch.converged();
+        if stop || !watch.plan_next(dir, exec, s.points)? {
+            return Ok(s);
+        }
+        before = Some(s);
+    }
+}
+
+/// One planned point: its parameter values and what the design says of it.
+pub struct Planned<'a, T> {
+    pub values: Vec<f64>,
+    pub note: &'a T,
+}
+
+/// Append `planned` to the manifest of `dir` as one new space named `{name} N` (N its points),
+/// if the manifest still stands as `from` (the one it was planned from); a point whose deck is
+/// already in the manifest is left out. `closed(job)` marks points the screen will not run;
+/// `record` writes the design's own account of the new rows (point index, note) under the
+/// lock. `true` when the batch was appended here or another process had appended one first.
+pub fn append<E: Executor, T>(
+    dir: &Path,
+    exec: &E,
+    from: &Manifest,
+    planned: &[Planned<T>],
+    name: &str,
+    closed: impl Fn(&E::Job) -> bool,
+    record: impl FnOnce(&[(usize, &T)]) -> Result<()>,
+) -> Result<bool> {
+    let jobs: Vec<E::Job> = planned.iter().map(|p| exec.prepare(&p.values)).collect::<Result<_>>()?;
+    let base = from.points.len();
+    let mut appended = false;
+    Store::open(dir).update_manifest(
+        |now: Option<(Manifest, String)>| -> Result<Option<(Manifest, String)>> {
+            let Some((mut m, t)) = now else { return Ok(None) };
+            // Another process planned this batch first: run its.
+            if m.spaces.len() != from.spaces.len() || m.points.len() != base {
+                appended = true;
+                return Ok(None);
+            }
+            let mut rows = Vec::new();
+            for (p, job) in planned.iter().zip(&jobs) {
+                let hash = exec.hash(job);
+                if m.points.iter().any(|q| q.hash == hash) {
+                    continue;
+                }
+                let index = m.points.len();
+                m.points.push(PointRecord {
+                    index,
+                    values: p.values.clone(),
+                    hash: hash.to_string(),
+                    closed: closed(job),
+                });
+                rows.push((index, p.note));
+            }
+            if rows.is_empty() {
+                return Ok(None);
+            }
+            let n = m.points.len();
+            m.spaces.push(SpaceRecord { label: format!("{name} {n}"), points: (0..n).collect() });
+            record(&rows)?;
+            appended = true;
+            Ok(Some((m, t)))
+        },
+    )?;
+    Ok(appended)
+}
