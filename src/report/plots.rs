@@ -162,8 +162,12 @@ pub(super) fn histogram(a: &Analysis, k: usize, members: &[usize]) -> Res<Figure
 }
 
 pub(super) fn statistics(a: &Analysis) -> Res<Figure> {
+    let interval = match a.design {
+        crate::store::DesignRecord::Adapt { .. } => "the emulator's 95% posterior intervals",
+        _ => "95% bootstrap intervals",
+    };
     let caption = format!(
-        "MFR statistics against N, with 95% bootstrap intervals; band: ±{}% of the last value",
+        "MFR statistics against N, with {interval}; band: ±{}% of the last value",
         a.criteria.tolerance * 100.0
     );
     let conv_n = a.verdict.n;

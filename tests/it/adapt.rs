@@ -374,7 +374,7 @@ fn each_batch_is_said_on_the_terminal_and_tabled_in_the_report() {
 }
 
 /// An adaptive sweep's statistics are known to their emulator's posterior interval, and its
-/// verdict says so (not a bootstrap's, which an adaptive design has none of).
+/// verdict and its report say so (not a bootstrap's, which an adaptive design has none of).
 #[test]
 fn a_noisy_verdict_names_the_posterior_interval() {
     let tmp = tempfile::tempdir().unwrap();
@@ -401,4 +401,8 @@ fn a_noisy_verdict_names_the_posterior_interval() {
     let verdict = text.lines().find(|l| l.starts_with("verdict:")).unwrap_or_else(|| panic!("{text}"));
     assert!(verdict.contains("not converged after N = 30"), "{verdict}");
     assert!(verdict.contains("95% posterior interval") && !verdict.contains("bootstrap"), "{verdict}");
+    // So does the report's figure of the statistics against N.
+    let html = std::fs::read_to_string(out.join("report/report.html")).unwrap();
+    assert!(html.contains("with the emulator's 95% posterior intervals"), "no posterior caption");
+    assert!(!html.contains("95% bootstrap intervals"), "a bootstrap caption in an adaptive report");
 }
