@@ -13,7 +13,10 @@ pub fn draw_all(a: &Analysis) -> Res<Vec<Figure>> {
     if !a.points.iter().any(|p| p.mfr().is_some()) {
         return Ok(out);
     }
-    for (k, s) in a.spaces.iter().enumerate() {
+    // An adaptive sweep's spaces are its batches, each the runs so far: one histogram, of them all.
+    let adaptive = matches!(a.design, crate::store::DesignRecord::Adapt { .. });
+    let skip = if adaptive { a.spaces.len().saturating_sub(1) } else { 0 };
+    for (k, s) in a.spaces.iter().enumerate().skip(skip) {
         out.push(plots::histogram(a, k, &s.members)?);
     }
     if !a.spaces.is_empty() {

@@ -614,7 +614,16 @@ fn measured_sections(a: &Analysis, figures: &[Figure]) -> String {
     for f in figures.iter().filter(|f| f.name == "statistics") {
         push(&mut h, &img(f));
     }
-    push(&mut h, "<h2>MFR distribution per space</h2>\n<div class=\"grid\">\n");
+    if matches!(a.design, crate::store::DesignRecord::Adapt { .. }) {
+        push(
+            &mut h,
+            "<h2>MFR of the runs</h2>\n<p>The runs of an adaptive design crowd where MFR varies, so this is the \
+             distribution of its runs, not of the space: the space's statistics above are the emulator's.</p>\n\
+             <div class=\"grid\">\n",
+        );
+    } else {
+        push(&mut h, "<h2>MFR distribution per space</h2>\n<div class=\"grid\">\n");
+    }
     for f in figures.iter().filter(|f| f.name.starts_with("histogram-")) {
         push(&mut h, &img(f));
     }

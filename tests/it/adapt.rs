@@ -374,7 +374,8 @@ fn each_batch_is_said_on_the_terminal_and_tabled_in_the_report() {
 }
 
 /// An adaptive sweep's statistics are known to their emulator's posterior interval, and its
-/// verdict and its report say so (not a bootstrap's, which an adaptive design has none of).
+/// verdict and its report say so (not a bootstrap's, which an adaptive design has none of); the
+/// report draws one histogram of its runs, not one per batch.
 #[test]
 fn a_noisy_verdict_names_the_posterior_interval() {
     let tmp = tempfile::tempdir().unwrap();
@@ -405,4 +406,9 @@ fn a_noisy_verdict_names_the_posterior_interval() {
     let html = std::fs::read_to_string(out.join("report/report.html")).unwrap();
     assert!(html.contains("with the emulator's 95% posterior intervals"), "no posterior caption");
     assert!(!html.contains("95% bootstrap intervals"), "a bootstrap caption in an adaptive report");
+    // Its spaces are its batches: one histogram, of every run, not one per batch.
+    let spaces = manifest(&out).spaces.len();
+    assert!(spaces >= 2, "{spaces} spaces");
+    assert!(html.contains("MFR of the runs"));
+    assert_eq!(html.matches("alt=\"MFR distribution of").count(), 1);
 }
