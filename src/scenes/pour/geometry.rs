@@ -80,9 +80,10 @@ pub fn column_data(s: &Scene) -> String {
 
 /// The cylinder as ASCII STL: an open tube of [`TUBE_SEGMENTS`] flat faces from the plate to
 /// `blade_top`, each face cut into rings no taller than its width (LIGGGHTS bins mesh elements
-/// by their bounding radius), two triangles per cell.
+/// by their bounding radius), two triangles per cell. The faces lie at the cylinder's radius (the
+/// corners just outside it), where the smooth wall the column settled against stood.
 pub fn tube_stl(s: &Scene) -> String {
-    let r = cylinder_radius(s);
+    let r = cylinder_radius(s) / (PI / TUBE_SEGMENTS as f64).cos();
     let [cx, cy] = axis(s);
     let width = 2.0 * r * (PI / TUBE_SEGMENTS as f64).sin();
     let rings = (s.blade_top / width).ceil().max(1.0) as usize;
