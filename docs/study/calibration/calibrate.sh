@@ -3,7 +3,7 @@
 # against the angle of repose the pour gave at friction 0.3, rolling friction 0.2
 # (docs/study/pour/pour.tsv: 26.55 ± 0.73°): rolling friction alone (`rolling`), or sliding and
 # rolling friction together (`friction-rolling`); or the surface energy of Ti-6Al-4V 15–45 µm
-# against the angle its pour gave at 0.1 mJ/m² (`ti64-surface-energy`: that target pour runs
+# against the angle its pour gave at 0.01 mJ/m² (`ti64-surface-energy`: that target pour runs
 # first, once, and is kept in the record as target.json). Resumable: run it again after an
 # interruption and it goes on where the directory stands. Its record (posterior, batches,
 # pours) is copied to docs/study/calibration/record/ (record-friction-rolling/,
@@ -21,15 +21,15 @@ TARGET=26.55±0.73
 case "$STUDY" in
   rolling) REC=docs/study/calibration/record; FIRST=8; MAX=20; FILE=pour-rolling ;;
   friction-rolling) REC=docs/study/calibration/record-friction-rolling; FIRST=10; MAX=40; FILE=pour-friction-rolling ;;
-  ti64-surface-energy) REC=docs/study/calibration/record-ti64-surface-energy; FIRST=5; MAX=14; FILE=pour-ti64 ;;
+  ti64-surface-energy) REC=docs/study/calibration/record-ti64-surface-energy; FIRST=4; MAX=12; FILE=pour-ti64 ;;
   *) echo "calibrate.sh: unknown study $STUDY: expected rolling, friction-rolling or ti64-surface-energy" >&2; exit 2 ;;
 esac
 OUT=${CAL_DIR:-/tmp/calibration-study}/pour-$STUDY
 mkdir -p "$(dirname "$OUT")" "$REC"
 if [ "$STUDY" = ti64-surface-energy ]; then
-  # The target: the same pour at 0.1 mJ/m², its angle with its own SE as the measurement's SD.
+  # The target: the same pour at 0.01 mJ/m², its angle with its own SE as the measurement's SD.
   if [ ! -s "$REC/target.json" ]; then
-    "$SWEEP" run "docs/study/calibration/$FILE.toml" --set surface_energy=1e-4 --json >"$REC/target.json.part"
+    "$SWEEP" run "docs/study/calibration/$FILE.toml" --set surface_energy=1e-5 --json >"$REC/target.json.part"
     mv "$REC/target.json.part" "$REC/target.json"
   fi
   TARGET=$(python3 -c 'import json,sys; h=json.load(open(sys.argv[1]))["heap"]; print(f"{h[\"angle_deg\"]:.2f}±{h[\"angle_se_deg\"]:.2f}")' "$REC/target.json")
