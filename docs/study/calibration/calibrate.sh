@@ -32,7 +32,7 @@ if [ "$STUDY" = ti64-surface-energy ]; then
     "$SWEEP" run "docs/study/calibration/$FILE.toml" --set surface_energy=1e-5 --json >"$REC/target.json.part"
     mv "$REC/target.json.part" "$REC/target.json"
   fi
-  TARGET=$(python3 -c 'import json,sys; h=json.load(open(sys.argv[1]))["heap"]; print(f"{h[\"angle_deg\"]:.2f}±{h[\"angle_se_deg\"]:.2f}")' "$REC/target.json")
+  TARGET=$(python3 -c 'import json,sys; h=json.load(open(sys.argv[1]))["heap"]; print("%.2f±%.2f" % (h["angle_deg"], h["angle_se_deg"]))' "$REC/target.json")
 fi
 status=0
 "$SWEEP" calibrate "docs/study/calibration/$FILE.toml" \
