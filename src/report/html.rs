@@ -709,8 +709,16 @@ fn emulator_section(a: &Analysis) -> String {
          than any function the emulator deems possible, and so less spread out).</p>\n",
         e.statistics.paths
     ));
-    h.push_str("<table><tr><th class=\"l\">statistic</th><th>raw sample</th><th>emulator: posterior median <small>[95% interval]</small></th></tr>\n");
-    let raw = a.statistics;
+    // An adaptive design's space statistics are the emulator's; its runs are not a sample of the space.
+    let (raw_head, raw) = if matches!(a.design, crate::store::DesignRecord::Adapt { .. }) {
+        let runs: Vec<f64> = a.points.iter().filter_map(|p| p.mfr()).collect();
+        ("its runs (not a sample of the space)", Some(crate::analysis::stats::moments(&runs)))
+    } else {
+        ("raw sample", a.statistics)
+    };
+    h.push_str(&format!(
+        "<table><tr><th class=\"l\">statistic</th><th>{raw_head}</th><th>emulator: posterior median <small>[95% interval]</small></th></tr>\n"
+    ));
     for (k, st) in STATISTICS.iter().enumerate() {
         let iv = e.statistics.intervals[k];
         h.push_str(&format!(

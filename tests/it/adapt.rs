@@ -410,5 +410,6 @@ fn a_noisy_verdict_names_the_posterior_interval() {
     let spaces = manifest(&out).spaces.len();
     assert!(spaces >= 2, "{spaces} spaces");
     assert!(html.contains("MFR of the runs"));
+    assert!(html.contains("its runs (not a sample of the space)") && !html.contains("<th>raw sample</th>"));
     assert_eq!(html.matches("alt=\"MFR distribution of").count(), 1);
 }
