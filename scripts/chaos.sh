@@ -6,7 +6,7 @@
 #   ENGINE=stand-in   run the stand-in engine instead of LIGGGHTS (for storms of 10,000 points)
 #   WORKERS=3         that many `sweep` processes work on the same directory at once
 #   KEEP=1            keep the work directory;  SWEEP=path  the binary (default target/release/sweep)
-#   WARM=0            start every LIGGGHTS run from rest (default: warm starts, the scene's default)
+#   WARM=0            start every LIGGGHTS run from rest (default: warm starts on)
 #
 # Runs a small LDS sweep once without interruption (the reference), then again in another
 # directory under a storm: WORKERS processes (`sweep lds`, then `sweep resume`) work on it at
@@ -42,7 +42,8 @@ blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
 diameter    = { value = 1.5, unit = "mm" }
 EOF
 [ "${ENGINE:-}" = stand-in ] && printf '[run]\nengine = "stand-in"\n' >>"$work/chaos.toml"
-[ "${WARM:-1}" = 0 ] && printf '[scene]\nwarm_start = false\n' >>"$work/chaos.toml"
+if [ "${WARM:-1}" = 0 ]; then warm=false; else warm=true; fi
+printf '[scene]\nwarm_start = %s\n' "$warm" >>"$work/chaos.toml"
 lds=(lds "$work/chaos.toml" --max "$POINTS" --step "$POINTS" --jobs "$JOBS" -q)
 
 echo "chaos: reference sweep of $POINTS points ($JOBS jobs, engine ${ENGINE:-liggghts})"

@@ -24,6 +24,8 @@ friction = 0.2
 [design.lds]
 step = {max}
 max = {max}
+[scene]
+warm_start = true
 [run]
 screen = false
 "#
