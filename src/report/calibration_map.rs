@@ -77,8 +77,8 @@ pub fn maps(
                         .axis_desc_style((FONT, AXIS_FONT))
                         .x_desc(format!("{ni} ({})", sweep.swept[i].unit))
                         .y_desc(format!("{nj} ({})", sweep.swept[j].unit))
-                        .x_label_formatter(&|u| round_to(vi(*u), 3))
-                        .y_label_formatter(&|u| round_to(vj(*u), 3))
+                        .x_label_formatter(&|u| tick(vi(*u)))
+                        .y_label_formatter(&|u| tick(vj(*u)))
                         .draw()?;
                     let w = 1.0 / CELLS as f64;
                     for (a, row) in grid.iter().enumerate() {
@@ -167,7 +167,7 @@ fn curve(
             .label_style((FONT, TICK_FONT))
             .axis_desc_style((FONT, AXIS_FONT))
             .y_desc(target.name.clone())
-            .x_label_formatter(&|u| round_to(v(*u), 3))
+            .x_label_formatter(&|u| tick(v(*u)))
             .y_label_formatter(&|y| round_to(*y, 3))
             .draw()?;
         let band = [(0.0, target.value - target.sd), (1.0, target.value + target.sd)];
@@ -202,7 +202,7 @@ fn curve(
             .axis_desc_style((FONT, AXIS_FONT))
             .x_desc(format!("{name} ({})", sweep.swept[0].unit))
             .y_desc("posterior")
-            .x_label_formatter(&|u| round_to(v(*u), 3))
+            .x_label_formatter(&|u| tick(v(*u)))
             .y_label_formatter(&|y| round_to(*y, 2))
             .draw()?;
         let curve =
@@ -226,4 +226,30 @@ fn density_at(watch: &CalibrationWatch, u: &[f64]) -> Option<f64> {
         .map(|(target, emulator)| Emulated { target, emulator })
         .collect();
     Some(log_density(&outs, u))
+}
+
+/// An axis tick: three significant figures, and below 10⁻³ in scientific notation
+/// (`1.2e-5`), so that neighbouring ticks of a small quantity do not run into each other.
+fn tick(v: f64) -> String {
+    if v != 0.0 && v.abs() < 1e-3 {
+        let e = format!("{v:.1e}");
+        e.replace(".0e", "e")
+    } else {
+        round_to(v, 3)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::tick;
+
+    #[test]
+    fn small_ticks_are_short_and_tell_their_neighbours_apart() {
+        assert_eq!(tick(1.2e-5), "1.2e-5");
+        assert_eq!(tick(1.4e-5), "1.4e-5");
+        assert_eq!(tick(2e-6), "2e-6");
+        assert_eq!(tick(0.25), "0.25");
+        assert_eq!(tick(0.0), "0");
+        assert_eq!(tick(34.0), "34");
+    }
 }
