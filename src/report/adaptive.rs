@@ -7,7 +7,7 @@ use super::{PointRow, SpaceRow};
 use crate::analysis::convergence::SpaceStats;
 use crate::analysis::sensitivity::{self, Index};
 use crate::analysis::stats::{Bootstrap, Interval};
-use crate::store::{DesignRecord, Manifest};
+use crate::store::Manifest;
 use crate::sweep::Sweep;
 
 /// The sensitivity indices of the report: of the emulator's surface for an adaptive sweep, of
@@ -46,7 +46,7 @@ pub(super) fn sensitivity(
 /// the sweep's units, fitted to every done point of an adaptive sweep; `None` for other designs
 /// or without an emulator.
 fn surface(sweep: &Sweep, manifest: &Manifest, points: &[PointRow]) -> Option<(Vec<Vec<f64>>, Vec<f64>)> {
-    if !matches!(manifest.design, DesignRecord::Adapt { .. }) {
+    if !manifest.design.is_adaptive() {
         return None;
     }
     let usable: Vec<&PointRow> = points.iter().filter(|p| p.mfr().is_some()).collect();

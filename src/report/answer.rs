@@ -215,10 +215,7 @@ fn failing_tests(a: &Analysis) -> Vec<String> {
         ));
     }
     if !noisy.is_empty() {
-        let interval = match a.design {
-            DesignRecord::Adapt { .. } => "95% posterior interval",
-            _ => "95% bootstrap",
-        };
+        let interval = if a.design.is_adaptive() { "95% posterior interval" } else { "95% bootstrap" };
         out.push(format!(
             "{} {} known only to more than ±{t}% of {} scale ({interval})",
             noisy.join(", "),

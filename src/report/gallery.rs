@@ -14,8 +14,7 @@ pub fn draw_all(a: &Analysis) -> Res<Vec<Figure>> {
         return Ok(out);
     }
     // An adaptive sweep's spaces are its batches, each the runs so far: one histogram, of them all.
-    let adaptive = matches!(a.design, crate::store::DesignRecord::Adapt { .. });
-    let skip = if adaptive { a.spaces.len().saturating_sub(1) } else { 0 };
+    let skip = if a.design.is_adaptive() { a.spaces.len().saturating_sub(1) } else { 0 };
     for (k, s) in a.spaces.iter().enumerate().skip(skip) {
         out.push(plots::histogram(a, k, &s.members)?);
     }

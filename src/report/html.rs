@@ -614,7 +614,7 @@ fn measured_sections(a: &Analysis, figures: &[Figure]) -> String {
     for f in figures.iter().filter(|f| f.name == "statistics") {
         push(&mut h, &img(f));
     }
-    if matches!(a.design, crate::store::DesignRecord::Adapt { .. }) {
+    if a.design.is_adaptive() {
         push(
             &mut h,
             "<h2>MFR of the runs</h2>\n<p>The runs of an adaptive design crowd where MFR varies, so this is the \
@@ -710,7 +710,7 @@ fn emulator_section(a: &Analysis) -> String {
         e.statistics.paths
     ));
     // An adaptive design's space statistics are the emulator's; its runs are not a sample of the space.
-    let (raw_head, raw) = if matches!(a.design, crate::store::DesignRecord::Adapt { .. }) {
+    let (raw_head, raw) = if a.design.is_adaptive() {
         let runs: Vec<f64> = a.points.iter().filter_map(|p| p.mfr()).collect();
         ("its runs (not a sample of the space)", Some(crate::analysis::stats::moments(&runs)))
     } else {

@@ -456,7 +456,7 @@ fn judge_spaces(
     c: &Criteria,
     boot: &Bootstrap,
 ) -> Vec<SpaceRow> {
-    let adaptive = matches!(manifest.design, DesignRecord::Adapt { .. });
+    let adaptive = manifest.design.is_adaptive();
     let mut rows = Vec::new();
     let mut judged: Vec<SpaceStats> = Vec::new();
     for space in &manifest.spaces {

@@ -162,9 +162,10 @@ pub(super) fn histogram(a: &Analysis, k: usize, members: &[usize]) -> Res<Figure
 }
 
 pub(super) fn statistics(a: &Analysis) -> Res<Figure> {
-    let interval = match a.design {
-        crate::store::DesignRecord::Adapt { .. } => "the emulator's 95% posterior intervals",
-        _ => "95% bootstrap intervals",
+    let interval = if a.design.is_adaptive() {
+        "the emulator's 95% posterior intervals"
+    } else {
+        "95% bootstrap intervals"
     };
     let caption = format!(
         "MFR statistics against N, with {interval}; band: ±{}% of the last value",

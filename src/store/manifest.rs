@@ -237,6 +237,14 @@ pub enum DesignRecord {
     },
 }
 
+impl DesignRecord {
+    /// Whether the points were planned batch by batch from the results (`sweep adapt`, `sweep
+    /// calibrate`): the runs are then not a sample of the space.
+    pub fn is_adaptive(&self) -> bool {
+        matches!(self, DesignRecord::Adapt { .. })
+    }
+}
+
 /// One nested space: a lattice level or an LDS prefix.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct SpaceRecord {
