@@ -4,7 +4,9 @@
 # (docs/study/pour/pour.tsv: 26.55 ± 0.73°): rolling friction alone (`rolling`), or sliding and
 # rolling friction together (`friction-rolling`); or the surface energy of Ti-6Al-4V 15–45 µm
 # against the angle its pour gave at 0.01 mJ/m² (`ti64-surface-energy`: that target pour runs
-# first, once, and is kept in the record as target.json). Resumable: run it again after an
+# first, once, and is kept in the record as target.json); or the surface energy of 316L against
+# the angle of repose a public flowability dataset records for it, 28.2° (`316l-surface-energy`,
+# pour-316l.toml says where it comes from and what is assumed). Resumable: run it again after an
 # interruption and it goes on where the directory stands. Its record (posterior, batches,
 # pours) is copied to docs/study/calibration/record/ (record-friction-rolling/,
 # record-ti64-surface-energy/) after each run.
@@ -12,6 +14,7 @@
 #   bash docs/study/calibration/calibrate.sh                    # from the repository's root
 #   bash docs/study/calibration/calibrate.sh friction-rolling
 #   bash docs/study/calibration/calibrate.sh ti64-surface-energy
+#   bash docs/study/calibration/calibrate.sh 316l-surface-energy
 #
 # SWEEP: the binary (default target/release/sweep); CAL_DIR: the sweep directory.
 set -euo pipefail
@@ -22,7 +25,8 @@ case "$STUDY" in
   rolling) REC=docs/study/calibration/record; FIRST=8; MAX=20; FILE=pour-rolling ;;
   friction-rolling) REC=docs/study/calibration/record-friction-rolling; FIRST=10; MAX=40; FILE=pour-friction-rolling ;;
   ti64-surface-energy) REC=docs/study/calibration/record-ti64-surface-energy; FIRST=4; MAX=12; FILE=pour-ti64 ;;
-  *) echo "calibrate.sh: unknown study $STUDY: expected rolling, friction-rolling or ti64-surface-energy" >&2; exit 2 ;;
+  316l-surface-energy) REC=docs/study/calibration/record-316l-surface-energy; FIRST=4; MAX=12; FILE=pour-316l; TARGET=28.2±1.0 ;;
+  *) echo "calibrate.sh: unknown study $STUDY: expected rolling, friction-rolling, ti64-surface-energy or 316l-surface-energy" >&2; exit 2 ;;
 esac
 OUT=${CAL_DIR:-/tmp/calibration-study}/pour-$STUDY
 mkdir -p "$(dirname "$OUT")" "$REC"
