@@ -198,63 +198,147 @@ fn clamp_params(p: &mut [f64], d: usize) {
     }
 }
 
+/// y standardised (mean, scale, z) and the squared SE on z's scale; `None` with too few points
+/// or no spread.
+fn standardise(x: &[Vec<f64>], y: &[f64], se: &[Option<f64>]) -> Option<(f64, f64, Vec<f64>, Vec<f64>)> {
+    let n = x.len();
+    if n < MIN_POINTS || y.len() != n || se.len() != n {
+        return None;
+    }
+    let y_mean = y.iter().sum::<f64>() / n as f64;
+    let y_scale = (y.iter().map(|v| (v - y_mean).powi(2)).sum::<f64>() / n as f64).sqrt();
+    let big = y.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    if y_scale <= 1e-12 * big || !y_scale.is_finite() {
+        return None;
+    }
+    let z: Vec<f64> = y.iter().map(|v| (v - y_mean) / y_scale).collect();
+    let se2: Vec<f64> = se.iter().map(|s| s.map_or(0.0, |s| (s / y_scale).powi(2))).collect();
+    Some((y_mean, y_scale, z, se2))
+}
+
+/// Length scales, signal variance and nugget maximising the marginal likelihood of `z`.
+fn likelihood_fit(x: &[Vec<f64>], z: &[f64], se2: &[f64]) -> (Vec<f64>, f64, f64) {
+    let d = x[0].len();
+    // The fit subset: a seeded random one (every k-th point of a Halton sequence would share
+    // its leading digits, and sit in one slice of the box).
+    let idx = subset(x.len(), FIT_POINTS, 1);
+    let fx: Vec<Vec<f64>> = idx.iter().map(|&i| x[i].clone()).collect();
+    let fz: Vec<f64> = idx.iter().map(|&i| z[i]).collect();
+    let fs: Vec<f64> = idx.iter().map(|&i| se2[i]).collect();
+    let f = |p: &[f64]| nll(&fx, &fz, &fs, p);
+    let mut start = vec![0.3f64.ln(); d];
+    start.extend([0.0, 1e-3f64.ln()]);
+    let mut best = minimise(&f, &start, 1.0, 300 * (d + 2), &|p| clamp_params(p, d));
+    // A restart from the optimum escapes an early collapse of the simplex.
+    best = minimise(&f, &best, 0.5, 150 * (d + 2), &|p| clamp_params(p, d));
+    let theta: Vec<f64> = best[..d].iter().map(|v| v.exp()).collect();
+    (theta, best[d].exp(), best[d + 1].exp())
+}
+
+fn normal_pdf(a: f64) -> f64 {
+    (-0.5 * a * a).exp() / (std::f64::consts::TAU).sqrt()
+}
+
+fn normal_cdf(a: f64) -> f64 {
+    0.5 * statrs::function::erf::erfc(-a / std::f64::consts::SQRT_2)
+}
+
 impl Emulator {
     /// Fit to points `x` (unit coordinates), values `y` and their standard errors `se` (`None`:
     /// not recorded). `None` when there are fewer than [`MIN_POINTS`] points, y has no spread, or
     /// no covariance could be factorised.
     pub fn fit(x: &[Vec<f64>], y: &[f64], se: &[Option<f64>]) -> Option<Emulator> {
-        let n = x.len();
-        if n < MIN_POINTS || y.len() != n || se.len() != n {
-            return None;
+        let (y_mean, y_scale, z, se2) = standardise(x, y, se)?;
+        let (theta, sigma2, nugget) = likelihood_fit(x, &z, &se2);
+        Emulator::condition_all(x, &z, &se2, y_mean, y_scale, theta, sigma2, nugget)
+    }
+
+    /// Fit MFR, whose zeros (jammed points) are a floor, not a value: the emulator is of a latent
+    /// flow rate that goes on below zero, and MFR is its positive part (a Tobit model). A zero
+    /// run says only that the latent value there is at most 0; it is replaced by its expected
+    /// value given that and the other runs (the truncated-normal mean of its leave-one-out
+    /// prediction, iterated to a fixed point), and the hyperparameters are fitted again on the
+    /// result. Why: fitted as values, the zeros flatten the surface and the smooth emulator
+    /// rounds the kink where flow stops upwards — too much flow near it, too little spread and
+    /// skewness in the space's statistics; on the latent surface the kink is where it crosses 0,
+    /// as sharp as the truth's. Without zeros this is [`Emulator::fit`].
+    pub fn fit_censored(x: &[Vec<f64>], y: &[f64], se: &[Option<f64>]) -> Option<Emulator> {
+        let floor: Vec<usize> = (0..y.len()).filter(|&i| y[i] <= 0.0).collect();
+        let (y_mean, y_scale, mut z, se2) = standardise(x, y, se)?;
+        let (theta, sigma2, nugget) = likelihood_fit(x, &z, &se2);
+        let mut em = Emulator::condition_all(x, &z, &se2, y_mean, y_scale, theta, sigma2, nugget)?;
+        if floor.is_empty() || floor.len() == y.len() {
+            return Some(em);
         }
-        let d = x[0].len();
-        let y_mean = y.iter().sum::<f64>() / n as f64;
-        let y_scale = (y.iter().map(|v| (v - y_mean).powi(2)).sum::<f64>() / n as f64).sqrt();
-        let big = y.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        if y_scale <= 1e-12 * big || !y_scale.is_finite() {
-            return None;
+        let c = -y_mean / y_scale;
+        for _round in 0..2 {
+            em.impute_below(&mut z, &floor, c);
+            let (theta, sigma2, nugget) = likelihood_fit(x, &z, &se2);
+            em = Emulator::condition_all(x, &z, &se2, y_mean, y_scale, theta, sigma2, nugget)?;
         }
-        let z: Vec<f64> = y.iter().map(|v| (v - y_mean) / y_scale).collect();
-        let se2: Vec<f64> = se.iter().map(|s| s.map_or(0.0, |s| (s / y_scale).powi(2))).collect();
-        // The fit subset: a seeded random one (every k-th point of a Halton sequence would share
-        // its leading digits, and sit in one slice of the box).
-        let idx = subset(n, FIT_POINTS, 1);
-        let (fx, fz, fs): (Vec<Vec<f64>>, Vec<f64>, Vec<f64>) = {
-            let mut a = (Vec::new(), Vec::new(), Vec::new());
-            for &i in &idx {
-                a.0.push(x[i].clone());
-                a.1.push(z[i]);
-                a.2.push(se2[i]);
-            }
-            a
-        };
-        let f = |p: &[f64]| nll(&fx, &fz, &fs, p);
-        let mut start = vec![0.3f64.ln(); d];
-        start.extend([0.0, 1e-3f64.ln()]);
-        let mut best = minimise(&f, &start, 1.0, 300 * (d + 2), &|p| clamp_params(p, d));
-        // A restart from the optimum escapes an early collapse of the simplex.
-        best = minimise(&f, &best, 0.5, 150 * (d + 2), &|p| clamp_params(p, d));
-        let theta: Vec<f64> = best[..d].iter().map(|v| v.exp()).collect();
-        let (sigma2, mut nugget) = (best[d].exp(), best[d + 1].exp());
-        // All points: add jitter until the factorisation succeeds.
+        Some(em)
+    }
+
+    /// Condition on every point, adding jitter to the nugget until the factorisation succeeds.
+    #[allow(clippy::too_many_arguments)]
+    fn condition_all(
+        x: &[Vec<f64>],
+        z: &[f64],
+        se2: &[f64],
+        y_mean: f64,
+        y_scale: f64,
+        theta: Vec<f64>,
+        sigma2: f64,
+        mut nugget: f64,
+    ) -> Option<Emulator> {
         for _ in 0..6 {
             let noise: Vec<f64> = se2.iter().map(|s| s + nugget).collect();
-            if let Some((mu, alpha, chol)) = condition(x, &z, &theta, sigma2, &noise) {
-                return Some(Emulator {
-                    x: x.to_vec(),
-                    y_mean,
-                    y_scale,
-                    theta,
-                    sigma2,
-                    nugget,
-                    mu,
-                    chol,
-                    alpha,
-                });
+            if let Some((mu, alpha, chol)) = condition(x, z, &theta, sigma2, &noise) {
+                return Some(Emulator { x: x.to_vec(), y_mean, y_scale, theta, sigma2, nugget, mu, chol, alpha });
             }
             nugget = (nugget * 10.0).max(1e-8);
         }
         None
+    }
+
+    /// Replace the standardised values `z` at `floor` (runs known only to be at most `c`) by
+    /// their expected value given that bound and every other value: Gauss–Seidel sweeps of the
+    /// truncated-normal mean of each one's leave-one-out prediction, with the covariance held.
+    fn impute_below(&self, z: &mut [f64], floor: &[usize], c: f64) {
+        let n = self.n();
+        // K⁻¹ column by column; it is symmetric, so column i is row i.
+        let kinv: Vec<Vec<f64>> = (0..n)
+            .map(|j| {
+                let mut e = vec![0.0; n];
+                e[j] = 1.0;
+                backward(&self.chol, n, &forward(&self.chol, n, &e))
+            })
+            .collect();
+        let mut alpha = self.alpha.clone();
+        for _sweep in 0..100 {
+            let mut largest = 0.0f64;
+            for &i in floor {
+                let kii = kinv[i][i];
+                // The leave-one-out prediction of run i's value (its own noise included).
+                let m = z[i] - alpha[i] / kii;
+                let s = (1.0 / kii).sqrt();
+                let a = (c - m) / s;
+                // E[v | v ≤ c] for v ~ N(m, s²); the ratio φ/Φ by its asymptote far below.
+                let ratio = if a > -30.0 { normal_pdf(a) / normal_cdf(a) } else { -a };
+                let new = (m - s * ratio).min(c);
+                let step = new - z[i];
+                if step != 0.0 {
+                    for (al, k) in alpha.iter_mut().zip(&kinv[i]) {
+                        *al += step * k;
+                    }
+                    z[i] = new;
+                }
+                largest = largest.max(step.abs());
+            }
+            if largest < 1e-5 {
+                break;
+            }
+        }
     }
 
     fn n(&self) -> usize {
@@ -552,6 +636,35 @@ mod tests {
         // The best candidate is the corner (1, 1), where the function is largest.
         let r = e.rank(&[vec![0.2, 0.2], vec![1.0, 1.0], vec![0.5, 0.5]]);
         assert_eq!(r[0].0, 1);
+    }
+
+    #[test]
+    fn a_censored_fit_keeps_the_kink_where_flow_stops_sharp() {
+        // A curved flow rate that stops (zero over ~30 % of the square), sampled at 60 points:
+        // fitted as values, the zeros pull the surface up near the kink; fitted as a floor, the
+        // latent surface crosses zero where the truth does.
+        let f = |u: &[f64]| ((u[0] + 0.5 * u[1] - 0.55) * (1.0 + u[1])).max(0.0);
+        let g = 300;
+        let truth: Vec<f64> =
+            (0..g * g).map(|k| f(&[((k / g) as f64 + 0.5) / g as f64, ((k % g) as f64 + 0.5) / g as f64])).collect();
+        let tm = crate::analysis::stats::moments(&truth);
+        let x = design(60);
+        let y: Vec<f64> = x.iter().map(|u| f(u)).collect();
+        let se = vec![Some(0.005); 60];
+        let pts = crate::design::halton::halton(2, 4096, crate::design::halton::Scrambling::Random, 5);
+        let err = |e: &Emulator| {
+            let m = crate::analysis::stats::moments(&pts.iter().map(|u| e.mean(u).max(0.0)).collect::<Vec<_>>());
+            let rel = |a: Option<f64>, b: Option<f64>| (a.unwrap() / b.unwrap() - 1.0).abs();
+            (rel(m.mean, tm.mean), rel(m.std, tm.std), (m.skewness.unwrap() - tm.skewness.unwrap()).abs())
+        };
+        let plain = err(&Emulator::fit(&x, &y, &se).unwrap());
+        let floored = err(&Emulator::fit_censored(&x, &y, &se).unwrap());
+        eprintln!("plain {plain:?} censored {floored:?}");
+        assert!(floored.0 < plain.0 && floored.2 < plain.2, "plain {plain:?} censored {floored:?}");
+        // Without zeros it is the plain fit.
+        let yp: Vec<f64> = y.iter().map(|v| v + 0.1).collect();
+        let (a, b) = (Emulator::fit(&x, &yp, &se).unwrap(), Emulator::fit_censored(&x, &yp, &se).unwrap());
+        assert_eq!(a.mean(&[0.3, 0.7]), b.mean(&[0.3, 0.7]));
     }
 
     #[test]

@@ -258,7 +258,7 @@ pub fn lds(
     let (y, se) = run_all(s, &x);
     let mut rows = Vec::new();
     for &n in checkpoints {
-        let em = Emulator::fit(&x[..n], &y[..n], &se[..n]);
+        let em = Emulator::fit_censored(&x[..n], &y[..n], &se[..n]);
         let rec = recommended(s, &x[..n], em.as_ref(), &y[..n]);
         rows.push(Row {
             design: "lds".into(),
@@ -293,7 +293,7 @@ pub fn lattice(s: &dyn Surface, names: &[String], levels: &[usize]) -> Vec<Row> 
             let x = crate::design::lattice::lattice(names.len(), l);
             let (y, se) = run_all(s, &x);
             let w = crate::analysis::weights::trapezoid(&x);
-            let em = Emulator::fit(&x, &y, &se);
+            let em = Emulator::fit_censored(&x, &y, &se);
             Row {
                 design: "lattice".into(),
                 seed: 0,
@@ -317,7 +317,7 @@ pub fn adapt(s: &dyn Surface, names: &[String], seed: u64, p: &Plan) -> Vec<Row>
     let mut rows = Vec::new();
     let mut k = 0;
     loop {
-        let em = Emulator::fit(&x, &y, &se);
+        let em = Emulator::fit_censored(&x, &y, &se);
         let (st, r) = emulated(names, x.len(), em.as_ref());
         rows.push(Row {
             design: "adapt".into(),

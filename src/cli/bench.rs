@@ -110,7 +110,7 @@ pub(super) fn bench_designs(a: DesignsArgs) -> Result<(), Error> {
     let surface: Box<dyn Surface> = match &a.replay {
         Some(csv) => {
             let (x, y, se) = replay_runs(&sweep, csv)?;
-            let emulator = demsweep::analysis::emulator::Emulator::fit(&x, &y, &se).ok_or_else(|| {
+            let emulator = demsweep::analysis::emulator::Emulator::fit_censored(&x, &y, &se).ok_or_else(|| {
                 flag(csv.display().to_string(), "too few done runs to replay (or MFR the same everywhere)")
             })?;
             let recorded = x.into_iter().zip(se).filter_map(|(u, s)| Some((u, s?))).collect();

@@ -55,7 +55,7 @@ fn surface(sweep: &Sweep, manifest: &Manifest, points: &[PointRow]) -> Option<(V
         picked.iter().map(|&i| crate::sweep::space::unit_point(sweep, &usable[i].values)).collect();
     let y: Vec<f64> = picked.iter().map(|&i| usable[i].mfr().expect("filtered")).collect();
     let se: Vec<Option<f64>> = picked.iter().map(|&i| usable[i].mfr_se).collect();
-    let em = crate::analysis::emulator::Emulator::fit(&x, &y, &se)?;
+    let em = crate::analysis::emulator::Emulator::fit_censored(&x, &y, &se)?;
     let pts = crate::design::halton::halton(
         sweep.dim(),
         crate::analysis::adapt::DRAWS,

@@ -79,7 +79,7 @@ fn fit(sweep: &Sweep, rows: &[&PointRow]) -> Option<Fitted> {
     let x: Vec<Vec<f64>> = picked.iter().map(|p| crate::sweep::space::unit_point(sweep, &p.values)).collect();
     let y: Vec<f64> = picked.iter().map(|p| p.mfr().expect("filtered")).collect();
     let se: Vec<Option<f64>> = picked.iter().map(|p| p.mfr_se).collect();
-    let emulator = Emulator::fit(&x, &y, &se)?;
+    let emulator = Emulator::fit_censored(&x, &y, &se)?;
     Some(Fitted { emulator, x, y, se })
 }
 

@@ -123,7 +123,7 @@ pub fn space_statistics(
         let noise = c.intervals.map(|i| i.lo.zip(i.hi).map(|(lo, hi)| (hi - lo) / 2.0));
         return (SpaceStats { n, moments: c.moments, noise }, c.intervals, None);
     }
-    let em = Emulator::fit(x, y, se);
+    let em = Emulator::fit_censored(x, y, se);
     let (st, e) = criterion::space_stats(n, em.as_ref(), STATS_SEED);
     let intervals = e.map_or([Interval::UNDEFINED; 4], |e| e.intervals);
     // Another process may write it meanwhile: the last writer wins, and a lost entry is only
@@ -344,7 +344,7 @@ fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &AdaptWatch, ran: usize) 
     let em = match em {
         Some(em) => Some(em),
         None => {
-            fitted = Emulator::fit(x, y, se);
+            fitted = Emulator::fit_censored(x, y, se);
             fitted.as_ref()
         }
     };
