@@ -659,7 +659,6 @@ mod tests {
         };
         let plain = err(&Emulator::fit(&x, &y, &se).unwrap());
         let floored = err(&Emulator::fit_censored(&x, &y, &se).unwrap());
-        eprintln!("plain {plain:?} censored {floored:?}");
         assert!(floored.0 < plain.0 && floored.2 < plain.2, "plain {plain:?} censored {floored:?}");
         // Without zeros it is the plain fit.
         let yp: Vec<f64> = y.iter().map(|v| v + 0.1).collect();
