@@ -43,8 +43,10 @@
 //! seeds.
 //!
 //! Candidates are a fresh block of [`CANDIDATES`] scrambled-Halton points per batch (their own
-//! stream, never a point twice), and [`NEAR`] points within ±0.1 of the run the emulator ranks
-//! best, clipped to the cube, so that a best setting on a face or in a corner can be reached.
+//! stream, never a point twice), [`NEAR`] points within ±0.1 of the run the emulator ranks
+//! best, clipped to the cube, and where the upper bound peaks from that run (Nelder–Mead within
+//! the cube, as Bayesian optimisation maximises its acquisition), so that a best setting on a
+//! face, an edge or in a corner can be reached.
 //! Everything is seeded and sequential: the same points and results give the same batch.
 //!
 //! References: Bect, Ginsbourger, Li, Picheny & Vazquez (2012), Statistics and Computing 22,
@@ -58,6 +60,7 @@ use serde::Serialize;
 
 use crate::analysis::convergence::{scale, SpaceStats};
 use crate::analysis::emulator::{EmulatedStatistics, Emulator};
+use crate::analysis::simplex::minimise;
 use crate::analysis::stats::{moments, STATISTICS};
 use crate::design::halton::{halton_range, Scrambling};
 
@@ -105,7 +108,8 @@ const NEAR_STREAM: u64 = 3;
 
 /// The candidates of batch `batch`: its block of the candidate stream ([`candidates`]), then
 /// [`NEAR`] points within ±0.1 of the run the emulator ranks best among `existing`, clipped to
-/// the cube (so a best setting on a face or in a corner is reached).
+/// the cube (so a best setting on a face or in a corner is reached), then the upper bound's
+/// peak from that run ([`upper_bound_peak`]).
 pub fn batch_candidates(
     dim: usize,
     batch: usize,
@@ -123,7 +127,23 @@ pub fn batch_candidates(
             best.iter().zip(&h).map(|(b, u)| (b + NEAR_REACH * (2.0 * u - 1.0)).clamp(0.0, 1.0)).collect(),
         );
     }
+    if let Some(em) = em {
+        cands.push(upper_bound_peak(em, &best));
+    }
     cands
+}
+
+/// Where the emulator's upper bound (mean + one SD) peaks near `from`: Nelder–Mead within the
+/// cube. A best setting on an edge or in a corner needs several coordinates at their bounds at
+/// once, which random candidates near the best run seldom are (on the replayed LIGGGHTS surface
+/// the best lies on an edge, and the runs of two seeds in six stopped one SE short of it).
+fn upper_bound_peak(em: &Emulator, from: &[f64]) -> Vec<f64> {
+    let negative_bound = |u: &[f64]| {
+        let (m, s) = em.predict(u);
+        -(m + s)
+    };
+    let into_cube = |p: &mut [f64]| p.iter_mut().for_each(|v| *v = v.clamp(0.0, 1.0));
+    minimise(&negative_bound, from, NEAR_REACH, 100 * from.len(), &into_cube)
 }
 /// The quantities the criterion targets: the four statistics and the best setting's MFR.
 const TARGETS: usize = 5;
@@ -416,16 +436,16 @@ mod tests {
     }
 
     #[test]
-    fn one_run_goes_where_the_upper_bound_is_highest_among_candidates_near_the_best_run() {
+    fn one_run_goes_where_the_upper_bound_is_highest_among_candidates_and_its_peak_near_the_best_run() {
         assert_eq!(Split::of(20, 0.5), Split { explore: 10, exploit: 1 });
         assert_eq!(Split::of(2, 0.5), Split { explore: 1, exploit: 1 });
         assert_eq!(Split::of(1, 0.5), Split { explore: 0, exploit: 0 });
         let (x, e) = fitted(20);
         let c = batch_candidates(2, 0, 14, Some(&e), &x);
-        assert_eq!(c.len(), CANDIDATES + NEAR);
+        assert_eq!(c.len(), CANDIDATES + NEAR + 1);
         assert_eq!(batch_candidates(2, 0, 14, None, &x).len(), CANDIDATES);
         let best = &x[e.rank(&x)[0].0];
-        for u in &c[CANDIDATES..] {
+        for u in &c[CANDIDATES..CANDIDATES + NEAR] {
             for (a, b) in u.iter().zip(best) {
                 assert!((a - b).abs() <= NEAR_REACH + 1e-12 && (0.0..=1.0).contains(a), "{u:?} {best:?}");
             }
@@ -436,6 +456,12 @@ mod tests {
             let (m, sd) = e.predict(u);
             m + sd
         };
+        // The last candidate is the upper bound's peak from the best run: in the corner (1, 1)
+        // where the kinked surface is highest, beyond the reach of the random ones.
+        let peak = &c[CANDIDATES + NEAR];
+        assert!(ucb(peak) >= ucb(best), "{peak:?} {best:?}");
+        assert!(peak.iter().all(|v| *v > 0.999 && *v <= 1.0), "{peak:?} from {best:?}");
+        assert!(best.iter().any(|v| *v < 1.0 - NEAR_REACH), "the best run {best:?} is in reach of the corner already");
         let top = c.iter().map(|u| ucb(u)).fold(f64::MIN, f64::max);
         assert!((ucb(&batch[0].point) - top).abs() < 1e-9 * top.abs().max(1.0), "{batch:?}");
         // The kinked surface is highest in the corner u = (1, 1).
