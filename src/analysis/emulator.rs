@@ -46,6 +46,11 @@ pub struct Emulator {
     /// Cholesky factor of K (row-major, lower) and K⁻¹(z − μ).
     chol: Vec<f64>,
     alpha: Vec<f64>,
+    /// The standardised values conditioned on (a floored run's imputed latent value).
+    z: Vec<f64>,
+    /// Whether runs at 0 are a floor ([`Emulator::fit_censored`]): their left-out residual is
+    /// against the prediction's positive part.
+    floored: bool,
 }
 
 /// Leave-one-out cross-validation, in MFR units.
@@ -276,6 +281,7 @@ impl Emulator {
             let (theta, sigma2, nugget) = likelihood_fit(x, &z, &se2);
             em = Emulator::condition_all(x, &z, &se2, y_mean, y_scale, theta, sigma2, nugget)?;
         }
+        em.floored = true;
         Some(em)
     }
 
@@ -294,7 +300,8 @@ impl Emulator {
         for _ in 0..6 {
             let noise: Vec<f64> = se2.iter().map(|s| s + nugget).collect();
             if let Some((mu, alpha, chol)) = condition(x, z, &theta, sigma2, &noise) {
-                return Some(Emulator { x: x.to_vec(), y_mean, y_scale, theta, sigma2, nugget, mu, chol, alpha });
+                let (x, z) = (x.to_vec(), z.to_vec());
+                return Some(Emulator { x, y_mean, y_scale, theta, sigma2, nugget, mu, chol, alpha, z, floored: false });
             }
             nugget = (nugget * 10.0).max(1e-8);
         }
@@ -400,7 +407,9 @@ impl Emulator {
         let ybar = y.iter().sum::<f64>() / n as f64;
         let (mut ss, mut st, mut inside) = (0.0, 0.0, 0usize);
         for i in 0..n {
-            let r = self.alpha[i] / diag[i] * self.y_scale;
+            // The left-out prediction of run i, from the value the fit conditioned on.
+            let pred = self.y_mean + self.y_scale * (self.z[i] - self.alpha[i] / diag[i]);
+            let r = if self.floored && y[i] <= 0.0 { y[i] - pred.max(0.0) } else { y[i] - pred };
             let sd = (1.0 / diag[i]).sqrt() * self.y_scale;
             ss += r * r;
             st += (y[i] - ybar).powi(2);
@@ -657,8 +666,12 @@ mod tests {
             let rel = |a: Option<f64>, b: Option<f64>| (a.unwrap() / b.unwrap() - 1.0).abs();
             (rel(m.mean, tm.mean), rel(m.std, tm.std), (m.skewness.unwrap() - tm.skewness.unwrap()).abs())
         };
-        let plain = err(&Emulator::fit(&x, &y, &se).unwrap());
-        let floored = err(&Emulator::fit_censored(&x, &y, &se).unwrap());
+        let (plain_fit, floored_fit) = (Emulator::fit(&x, &y, &se).unwrap(), Emulator::fit_censored(&x, &y, &se).unwrap());
+        let (plain, floored) = (err(&plain_fit), err(&floored_fit));
+        // Left out, a zero run is compared with the prediction's positive part, never with
+        // its imputed latent value.
+        let (cp, cf) = (plain_fit.loo(&y, &se), floored_fit.loo(&y, &se));
+        assert!(cf.rmse < 0.5 * cp.rmse && cf.rmse < 0.005, "plain {cp:?} censored {cf:?}");
         assert!(floored.0 < plain.0 && floored.2 < plain.2, "plain {plain:?} censored {floored:?}");
         // Without zeros it is the plain fit.
         let yp: Vec<f64> = y.iter().map(|v| v + 0.1).collect();
