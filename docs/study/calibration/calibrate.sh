@@ -6,7 +6,8 @@
 # against the angle its pour gave at 0.01 mJ/m² (`ti64-surface-energy`: that target pour runs
 # first, once, and is kept in the record as target.json); or the surface energy of 316L against
 # the angle of repose a public flowability dataset records for it, 28.2° (`316l-surface-energy`,
-# pour-316l.toml says where it comes from and what is assumed). Resumable: run it again after an
+# pour-316l.toml says where it comes from and what is assumed), or its rolling friction against
+# the same angle (`316l-rolling`). Resumable: run it again after an
 # interruption and it goes on where the directory stands. Its record (posterior, batches,
 # pours) is copied to docs/study/calibration/record/ (record-friction-rolling/,
 # record-ti64-surface-energy/) after each run.
@@ -15,6 +16,7 @@
 #   bash docs/study/calibration/calibrate.sh friction-rolling
 #   bash docs/study/calibration/calibrate.sh ti64-surface-energy
 #   bash docs/study/calibration/calibrate.sh 316l-surface-energy
+#   bash docs/study/calibration/calibrate.sh 316l-rolling
 #
 # SWEEP: the binary (default target/release/sweep); CAL_DIR: the sweep directory.
 set -euo pipefail
@@ -26,7 +28,8 @@ case "$STUDY" in
   friction-rolling) REC=docs/study/calibration/record-friction-rolling; FIRST=10; MAX=40; FILE=pour-friction-rolling ;;
   ti64-surface-energy) REC=docs/study/calibration/record-ti64-surface-energy; FIRST=4; MAX=12; FILE=pour-ti64 ;;
   316l-surface-energy) REC=docs/study/calibration/record-316l-surface-energy; FIRST=4; MAX=12; FILE=pour-316l; TARGET=28.2±1.0 ;;
-  *) echo "calibrate.sh: unknown study $STUDY: expected rolling, friction-rolling, ti64-surface-energy or 316l-surface-energy" >&2; exit 2 ;;
+  316l-rolling) REC=docs/study/calibration/record-316l-rolling; FIRST=4; MAX=12; FILE=pour-316l-rolling; TARGET=28.2±1.0 ;;
+  *) echo "calibrate.sh: unknown study $STUDY: expected rolling, friction-rolling, ti64-surface-energy, 316l-surface-energy or 316l-rolling" >&2; exit 2 ;;
 esac
 OUT=${CAL_DIR:-/tmp/calibration-study}/pour-$STUDY
 mkdir -p "$(dirname "$OUT")" "$REC"
