@@ -14,6 +14,10 @@
 //! model this size; the closed-form leave-one-out residuals (Rasmussen & Williams 2006, Eq.
 //! 5.12) need the inverse covariance, which is a few lines here.
 //!
+//! MFR is fitted by [`Emulator::fit_censored`]: its zeros (jammed runs) are a floor of a latent
+//! flow rate that goes on below zero (the censored regression of Tobin 1958, Econometrica 26,
+//! 24–36), not values of a smooth surface.
+//!
 //! Uses: [`Emulator::predict`] (MFR with its predictive SE at a setting), [`Emulator::loo`]
 //! (cross-validation on every sweep), [`Emulator::space_statistics`] (the space's MFR statistics
 //! from many cheap draws, with their uncertainty), [`Emulator::zero_fraction`] (where MFR is
