@@ -461,7 +461,10 @@ mod tests {
         let peak = &c[CANDIDATES + NEAR];
         assert!(ucb(peak) >= ucb(best), "{peak:?} {best:?}");
         assert!(peak.iter().all(|v| *v > 0.999 && *v <= 1.0), "{peak:?} from {best:?}");
-        assert!(best.iter().any(|v| *v < 1.0 - NEAR_REACH), "the best run {best:?} is in reach of the corner already");
+        assert!(
+            best.iter().any(|v| *v < 1.0 - NEAR_REACH),
+            "the best run {best:?} is in reach of the corner already"
+        );
         let top = c.iter().map(|u| ucb(u)).fold(f64::MIN, f64::max);
         assert!((ucb(&batch[0].point) - top).abs() < 1e-9 * top.abs().max(1.0), "{batch:?}");
         // The kinked surface is highest in the corner u = (1, 1).

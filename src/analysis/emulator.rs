@@ -283,9 +283,13 @@ impl Emulator {
         for _round in 0..2 {
             em.impute_below(&mut z, &floor, c);
             let (theta, sigma2, nugget) = likelihood_fit(x, &z, &se2);
-            em = Emulator::condition_all(x, &z, &se2, y_mean, y_scale, theta, sigma2, nugget)?;
+            // Should the refit not factorise, the fit before it stands.
+            let Some(next) = Emulator::condition_all(x, &z, &se2, y_mean, y_scale, theta, sigma2, nugget)
+            else {
+                break;
+            };
+            em = Emulator { floored: true, ..next };
         }
-        em.floored = true;
         Some(em)
     }
 
@@ -305,7 +309,19 @@ impl Emulator {
             let noise: Vec<f64> = se2.iter().map(|s| s + nugget).collect();
             if let Some((mu, alpha, chol)) = condition(x, z, &theta, sigma2, &noise) {
                 let (x, z) = (x.to_vec(), z.to_vec());
-                return Some(Emulator { x, y_mean, y_scale, theta, sigma2, nugget, mu, chol, alpha, z, floored: false });
+                return Some(Emulator {
+                    x,
+                    y_mean,
+                    y_scale,
+                    theta,
+                    sigma2,
+                    nugget,
+                    mu,
+                    chol,
+                    alpha,
+                    z,
+                    floored: false,
+                });
             }
             nugget = (nugget * 10.0).max(1e-8);
         }
@@ -658,19 +674,22 @@ mod tests {
         // latent surface crosses zero where the truth does.
         let f = |u: &[f64]| ((u[0] + 0.5 * u[1] - 0.55) * (1.0 + u[1])).max(0.0);
         let g = 300;
-        let truth: Vec<f64> =
-            (0..g * g).map(|k| f(&[((k / g) as f64 + 0.5) / g as f64, ((k % g) as f64 + 0.5) / g as f64])).collect();
+        let truth: Vec<f64> = (0..g * g)
+            .map(|k| f(&[((k / g) as f64 + 0.5) / g as f64, ((k % g) as f64 + 0.5) / g as f64]))
+            .collect();
         let tm = crate::analysis::stats::moments(&truth);
         let x = design(60);
         let y: Vec<f64> = x.iter().map(|u| f(u)).collect();
         let se = vec![Some(0.005); 60];
         let pts = crate::design::halton::halton(2, 4096, crate::design::halton::Scrambling::Random, 5);
         let err = |e: &Emulator| {
-            let m = crate::analysis::stats::moments(&pts.iter().map(|u| e.mean(u).max(0.0)).collect::<Vec<_>>());
+            let m =
+                crate::analysis::stats::moments(&pts.iter().map(|u| e.mean(u).max(0.0)).collect::<Vec<_>>());
             let rel = |a: Option<f64>, b: Option<f64>| (a.unwrap() / b.unwrap() - 1.0).abs();
             (rel(m.mean, tm.mean), rel(m.std, tm.std), (m.skewness.unwrap() - tm.skewness.unwrap()).abs())
         };
-        let (plain_fit, floored_fit) = (Emulator::fit(&x, &y, &se).unwrap(), Emulator::fit_censored(&x, &y, &se).unwrap());
+        let (plain_fit, floored_fit) =
+            (Emulator::fit(&x, &y, &se).unwrap(), Emulator::fit_censored(&x, &y, &se).unwrap());
         let (plain, floored) = (err(&plain_fit), err(&floored_fit));
         // Left out, a zero run is compared with the prediction's positive part, never with
         // its imputed latent value.

@@ -110,9 +110,13 @@ pub(super) fn bench_designs(a: DesignsArgs) -> Result<(), Error> {
     let surface: Box<dyn Surface> = match &a.replay {
         Some(csv) => {
             let (x, y, se) = replay_runs(&sweep, csv)?;
-            let emulator = demsweep::analysis::emulator::Emulator::fit_censored(&x, &y, &se).ok_or_else(|| {
-                flag(csv.display().to_string(), "too few done runs to replay (or MFR the same everywhere)")
-            })?;
+            let emulator =
+                demsweep::analysis::emulator::Emulator::fit_censored(&x, &y, &se).ok_or_else(|| {
+                    flag(
+                        csv.display().to_string(),
+                        "too few done runs to replay (or MFR the same everywhere)",
+                    )
+                })?;
             let recorded = x.into_iter().zip(se).filter_map(|(u, s)| Some((u, s?))).collect();
             Box::new(ReplaySurface { emulator, recorded })
         }
