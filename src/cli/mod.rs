@@ -66,8 +66,9 @@ enum Command {
     /// Run a sequential design: a scrambled-Halton first batch, then batches placed where the
     /// emulator says the MFR statistics are least known, until they are known.
     ///
-    /// After each batch a Gaussian-process emulator (each run's own SE as its noise) gives the
-    /// four statistics of MFR over the space with 95% intervals from its posterior; the rule
+    /// After each batch a Gaussian-process emulator (each run's own SE as its noise; a jammed
+    /// run's zero read as the floor of the flow, not a value) gives the four statistics of MFR
+    /// over the space with 95% intervals from its posterior; the rule
     /// ([convergence], or the flags below) judges them batch to batch, and once it holds no new
     /// runs start. The next batch is the set of candidates that most reduces the statistics'
     /// posterior variance, each over its scale (docs/statistics.md "Adaptive design");
