@@ -301,6 +301,7 @@ fn chain_stops(dir: &std::path::Path, after_batch: Option<usize>) -> Result<bool
 fn next_adaptive_batch(dir: &std::path::Path) -> Result<bool, Error> {
     use demsweep::analysis::convergence::Criteria;
     use demsweep::run::adapt::{self, AdaptWatch, Standing};
+    use demsweep::run::batches::Sequential;
     let sweep = demsweep::run::load_dir_sweep(dir)?;
     let mut watch = AdaptWatch::new(dir, &sweep, Criteria::from_settings(&sweep.file.convergence));
     let (manifest, _) = demsweep::store::Store::read_manifest(dir)?;

@@ -149,7 +149,7 @@ pub struct AdaptWatch {
     /// The last judged space's label, its emulator if this process fitted it, and the points
     /// it is fitted to.
     last: Option<(String, Option<Emulator>, Fit)>,
-    /// A line per batch judged since [`AdaptWatch::take_lines`] was last called ([`batch_line`]).
+    /// A line per batch judged since [`Sequential::take_lines`] was last called ([`batch_line`]).
     lines: Vec<String>,
 }
 
@@ -169,12 +169,6 @@ impl AdaptWatch {
             last: None,
             lines: Vec::new(),
         }
-    }
-
-    /// The lines of the batches judged since the last call, for the terminal: each batch's
-    /// statistics with their intervals and what the rule made of them.
-    pub fn take_lines(&mut self) -> Vec<String> {
-        std::mem::take(&mut self.lines)
     }
 }
 
@@ -269,8 +263,9 @@ pub fn run<E: Executor>(
 }
 
 impl Sequential for AdaptWatch {
+    /// Each batch's statistics with their intervals and what the rule made of them.
     fn take_lines(&mut self) -> Vec<String> {
-        AdaptWatch::take_lines(self)
+        std::mem::take(&mut self.lines)
     }
     fn converged(&self) -> bool {
         self.converged_at.is_some()

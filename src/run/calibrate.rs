@@ -214,11 +214,6 @@ impl CalibrationWatch {
         }
     }
 
-    /// The lines of the batches judged since the last call, for the terminal.
-    pub fn take_lines(&mut self) -> Vec<String> {
-        std::mem::take(&mut self.lines)
-    }
-
     /// The last batch's emulators, one per target, when it had them.
     pub fn emulators(&self) -> Option<&[Emulator]> {
         self.last.as_ref().and_then(|(_, e, _)| e.as_deref())
@@ -361,7 +356,7 @@ pub fn run<E: Executor>(
 
 impl Sequential for CalibrationWatch {
     fn take_lines(&mut self) -> Vec<String> {
-        CalibrationWatch::take_lines(self)
+        std::mem::take(&mut self.lines)
     }
     fn converged(&self) -> bool {
         self.converged_at.is_some()
