@@ -2,7 +2,7 @@
 # The thesis's study on real LIGGGHTS (docs/study/thesis/README.md): the 4-D LDS sweep to 2,400 points,
 # the 4-D lattice at levels 5, 6, 7, and an LDS over the blade speeds real machines use.
 #
-#   bash docs/study/thesis/thesis_study.sh [lds|lattice|slow|lds-0.3|slow-heap20|lds-heap20|adapt-240|lds-2400 ...]   (default: lds lattice slow)
+#   bash docs/study/thesis/thesis_study.sh [lds|lattice|slow|lds-0.3|slow-heap20|lds-heap20|adapt-240|lds-2400|lds-2400-warm|lds-seed777 ...]   (default: lds lattice slow)
 #
 # It takes hours on two cores and is meant to be cut off and started again: each sweep runs in
 # WORK/<name> (default WORK=/tmp/thesis-study) with `sweep lds|lattice|adapt`, which continues a
@@ -123,6 +123,16 @@ for s in "${order[@]}"; do
     # The whole 2,400-point LDS again on today's defaults (the 20 mm heap, the sweep's precision,
     # cold starts): its core-hours against `lds-0.3` and `lds-heap20` (BENCHMARKS.md).
     lds-2400) run_sweep lds-2400 lds sweeps/thesis-lds.toml --max 2400 --hold 1000 ;;
-    *) echo "study: unknown sweep '$s' (expected lds, lattice, slow, lds-0.3, slow-heap20, lds-heap20, adapt-240 or lds-2400)" >&2; exit 2 ;;
+    # The same with warm starts on: what they save as the design fills, and against lds-2400's
+    # cold runs of the same points, what they move.
+    lds-2400-warm)
+      sed 's/^\[scene\]$/[scene]\nwarm_start = true/' sweeps/thesis-lds.toml > "$work/thesis-lds-warm.toml"
+      run_sweep lds-2400-warm lds "$work/thesis-lds-warm.toml" --max 2400 --hold 1000 ;;
+    # Its first 100 points again from rest with other particle seeds: how far two cold runs of a
+    # point differ, the yardstick for lds-2400-warm against lds-2400.
+    lds-seed777)
+      sed 's/^\[scene\]$/[scene]\nseed = 777/' sweeps/thesis-lds.toml > "$work/thesis-lds-seed777.toml"
+      run_sweep lds-seed777 lds "$work/thesis-lds-seed777.toml" --step 100 --max 100 --hold 1000 ;;
+    *) echo "study: unknown sweep '$s' (expected lds, lattice, slow, lds-0.3, slow-heap20, lds-heap20, adapt-240, lds-2400, lds-2400-warm or lds-seed777)" >&2; exit 2 ;;
   esac
 done

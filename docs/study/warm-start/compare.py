@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Variants of the same points against a cold baseline (docs/study/warm-start/warm.sh).
 
-    python3 docs/study/warm-start/compare.py BASELINE_DIR VARIANT_DIR [VARIANT_DIR ...] [--points]
+    python3 docs/study/warm-start/compare.py BASELINE_DIR VARIANT_DIR [VARIANT_DIR ...] [--points] [--bands=N]
 
 Points are matched by their index in results.csv. For each variant: CPU per point (median and
 mean of each run's own cpu_time) and its ratio to the baseline's on the same points; over the
@@ -9,12 +9,16 @@ points where both flow (MFR >= 0.01 in both): the mean of z = ΔMFR / combined S
 relative difference (bias) with its standard error, the largest |z| and how many points pass
 3 combined SE; the shared drift inside the variant's windows (last − first quarter over MFR,
 averaged over its flowing points); and the warm-started points and their median distance.
+--bands=N: a row per N consecutive design indices (a whole sweep run both ways: how the saving
+and the error move as the design fills in).
 """
 import csv, json, math, os, statistics, sys
 
 def load(d):
     out = {}
     for r in csv.DictReader(open(os.path.join(d, "results.csv"))):
+        if r["status"] not in ("done", "failed"):  # pending, running or screened: nothing ran
+            continue
         run = os.path.join(d, "runs", r["hash"])
         j = {}
         for name in ("result.json", "failure.json"):
@@ -78,8 +82,17 @@ def main():
           f"mean {statistics.fmean([p['cpu'] for p in base.values()]):.2f}\n")
     print("| variant | points | CPU s median | mean | × cold (mean) | × cold (median) | flowing | mean z | bias | max |z| | beyond 3 SE | drift | warm-started (median distance) |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    bands = next((int(a.split("=")[1]) for a in sys.argv if a.startswith("--bands=")), None)
     for d in args[1:]:
-        compare(base, load(d), os.path.basename(os.path.normpath(d)), False)
+        var, name = load(d), os.path.basename(os.path.normpath(d))
+        if bands is None:
+            compare(base, var, name, False)
+            continue
+        top = max(int(i) for i in var) + 1
+        for lo in range(0, top, bands):
+            band = lambda pts: {i: p for i, p in pts.items() if lo <= int(i) < lo + bands}
+            if any(i in base for i in band(var)):
+                compare(band(base), band(var), f"{name} [{lo}, {lo + bands})", False)
     if show:
         for d in args[1:]:
             compare(base, load(d), os.path.basename(os.path.normpath(d)), True)
