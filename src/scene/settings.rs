@@ -72,7 +72,8 @@ pub struct SceneSettings {
     /// no such neighbour starts cold. The run's hash does not depend on it.
     pub warm_start: bool,
     /// Conveyor layout: the least warm-up of a warm-started point, s (at least one block); its
-    /// warm-up is the cold one's times the neighbour's distance over 0.5, never less than this.
+    /// warm-up is the cold one's times the neighbour's distance over 0.5, never less than 0.6 of
+    /// the cold one nor than this.
     pub warm_warmup_s: f64,
     /// Conveyor layout, in a sweep: `"sweep"` — once the first batch has finished, every later
     /// point runs until the SE of its MFR is a tenth of the spread of MFR over that batch (what

@@ -124,7 +124,8 @@ for s in "${order[@]}"; do
     # cold starts): its core-hours against `lds-0.3` and `lds-heap20` (BENCHMARKS.md).
     lds-2400) run_sweep lds-2400 lds sweeps/thesis-lds.toml --max 2400 --hold 1000 ;;
     # The same with warm starts on: what they save as the design fills, and against lds-2400's
-    # cold runs of the same points, what they move.
+    # cold runs of the same points, what they move. (lds-2400-warm-share0 is its first 584
+    # points before a warm start kept 0.6 of the cold warm-up: a record, not resumable.)
     lds-2400-warm)
       sed 's/^\[scene\]$/[scene]\nwarm_start = true/' sweeps/thesis-lds.toml > "$work/thesis-lds-warm.toml"
       run_sweep lds-2400-warm lds "$work/thesis-lds-warm.toml" --max 2400 --hold 1000 ;;

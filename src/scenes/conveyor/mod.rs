@@ -133,7 +133,8 @@ impl Layout for Conveyor {
                     "warm start",
                     if sc.warm_start {
                         format!(
-                            "from the nearest finished point; warm-up the cold one's × distance/0.5, at least {} s",
+                            "from the nearest finished point; warm-up the cold one's × distance/0.5, at least {} of it and {} s",
+                            short(warm::LEAST_WARMUP_SHARE),
                             short(sc.warm_warmup_s)
                         )
                     } else {
