@@ -236,6 +236,11 @@ const MIN_LENGTH: f64 = 0.01;
 /// docs/study/calibration.md). The prior costs such a length scale 5.8 nats; a trend, nothing.
 pub const LENGTH_PRIOR: (f64, f64) = (0.3, 1.0);
 
+/// Whether a fit's length scales end at [`MIN_LENGTH`] (within its optimiser's reach of it).
+fn at_length_bound(theta: &[f64]) -> bool {
+    theta.iter().any(|t| *t <= MIN_LENGTH * 1.001)
+}
+
 /// Length scales, signal variance and nugget maximising the marginal likelihood of `z`, times
 /// a log-normal prior (median, SD of the logarithm) on each length scale where one is given.
 fn likelihood_fit(x: &[Vec<f64>], z: &[f64], se2: &[f64], prior: Option<(f64, f64)>) -> (Vec<f64>, f64, f64) {
@@ -274,7 +279,7 @@ impl Emulator {
     pub fn fit(x: &[Vec<f64>], y: &[f64], se: &[Option<f64>]) -> Option<Emulator> {
         let (y_mean, y_scale, z, se2) = standardise(x, y, se)?;
         let (mut theta, mut sigma2, mut nugget) = likelihood_fit(x, &z, &se2, None);
-        if theta.iter().any(|t| *t <= MIN_LENGTH * 1.001) {
+        if at_length_bound(&theta) {
             (theta, sigma2, nugget) = likelihood_fit(x, &z, &se2, Some(LENGTH_PRIOR));
         }
         Emulator::condition_all(x, &z, &se2, y_mean, y_scale, theta, sigma2, nugget)
@@ -745,7 +750,7 @@ mod tests {
         // By likelihood alone the length scale ends at its bound: spikes through every pour.
         let (_, _, z, se2) = standardise(&x, &y, &se).unwrap();
         let (theta, _, _) = likelihood_fit(&x, &z, &se2, None);
-        assert!(theta[0] <= MIN_LENGTH * 1.001, "{theta:?}: the case this guards is gone");
+        assert!(at_length_bound(&theta), "{theta:?}: the case this guards is gone");
         // The fit refits with the prior: a trend, rising over the range, no spike.
         let e = Emulator::fit(&x, &y, &se).unwrap();
         assert!(e.theta[0] > 0.1, "{:?}", e.theta);

@@ -7,19 +7,19 @@ Per directory: the runs with a CPU time (done or failed), their mean and median 
 over the indices the base also ran against the base's mean there, and the CPU-hours of the
 thesis LDS's 2,304 runs (2,400 points less the 96 its screen closes) at that mean.
 """
-import csv, json, os, statistics, sys
+import importlib.util, os, statistics, sys
+
+# The runs of a sweep directory as compare.py reads them (index → its row, CPU, ...).
+_spec = importlib.util.spec_from_file_location(
+    "compare", os.path.join(os.path.dirname(__file__), "..", "warm-start", "compare.py"))
+compare = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(compare)
+
+
 def load(d):
-    out = {}
-    for r in csv.DictReader(open(os.path.join(d, "results.csv"))):
-        if r["status"] not in ("done", "failed"):
-            continue
-        for n in ("result.json", "failure.json"):
-            f = os.path.join(d, "runs", r["hash"], n)
-            if os.path.exists(f):
-                j = json.load(open(f)); j = j.get("measured") or j
-                if j.get("cpu_time"):
-                    out[int(r["index"])] = j["cpu_time"]
-    return out
+    return {int(i): p["cpu"] for i, p in compare.load(d).items() if p["cpu"] == p["cpu"]}
+
+
 base = load(sys.argv[1])
 for d in sys.argv[1:]:
     v = load(d)
