@@ -13,7 +13,8 @@ pub struct SteadyState {
     pub window_blocks: usize,
     /// Substrate travel per block, in diameters.
     pub block_diameters: f64,
-    /// Blocks per batch of the SE, and the lag-1 autocorrelation of the batch means.
+    /// Blocks per batch of the SE, and the lag-1 autocorrelation of the batch means (over every
+    /// block after the warm-up, from which the SE is taken).
     pub batch_blocks: usize,
     pub batch_acf1: f64,
     /// Lag-1 autocorrelation of the window's blocks.

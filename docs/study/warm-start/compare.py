@@ -5,7 +5,7 @@
 
 Points are matched by their index in results.csv. For each variant: CPU per point (median and
 mean of each run's own cpu_time) and its ratio to the baseline's on the same points; over the
-points where both flow (MFR >= 0.01 in both): the mean of z = ΔMFR / combined SE, the mean
+points where both flow (MFR >= 0.01 in both): the mean and RMS of z = ΔMFR / combined SE, the mean
 relative difference (bias) with its standard error, the largest |z| and how many points pass
 3 combined SE; the shared drift inside the variant's windows (last − first quarter over MFR,
 averaged over its flowing points); and the warm-started points and their median distance.
@@ -33,6 +33,10 @@ def load(d):
 def num(s):
     return float(s) if s not in ("", None) else float("nan")
 
+def mean(v):
+    v = [x for x in v if not math.isnan(x)]
+    return statistics.fmean(v) if v else float("nan")
+
 def median(v):
     v = [x for x in v if not math.isnan(x)]
     return statistics.median(v) if v else float("nan")
@@ -46,7 +50,8 @@ def compare(base, var, name, show_points):
         if i not in var:
             continue
         b, v = base[i], var[i]
-        cb.append(b["cpu"]); cv.append(v["cpu"])
+        if not (math.isnan(b["cpu"]) or math.isnan(v["cpu"])):  # a run that failed has no CPU
+            cb.append(b["cpu"]); cv.append(v["cpu"])
         mb, sb, mv, sv = num(b["row"]["mfr"]), num(b["row"]["mfr_se"]), num(v["row"]["mfr"]), num(v["row"]["mfr_se"])
         se = math.hypot(sb, sv)
         z = (mv - mb) / se if se > 0 else float("nan")
@@ -69,8 +74,9 @@ def compare(base, var, name, show_points):
     drift = statistics.fmean(drifts) if drifts else float("nan")
     drift_se = statistics.stdev(drifts) / math.sqrt(len(drifts)) if len(drifts) > 1 else float("nan")
     big = sum(abs(z) > 3 for z in zs)
-    print(f"| {name} | {len(cv)} | {median(cv):.2f} | {statistics.fmean(cv):.2f} | {statistics.fmean(cb) / statistics.fmean(cv):.2f} | "
+    print(f"| {name} | {len(cv)} | {median(cv):.2f} | {mean(cv):.2f} | {mean(cb) / mean(cv):.2f} | "
           f"{median(cb) / median(cv):.2f} | {n} | {statistics.fmean(zs) if zs else float('nan'):+.2f} | "
+          f"{math.sqrt(statistics.fmean([z * z for z in zs])) if zs else float('nan'):.2f} | "
           f"{100 * bias:+.1f} ± {100 * bias_se:.1f} % | {max(map(abs, zs)) if zs else float('nan'):.2f} | {big} | "
           f"{100 * drift:+.1f} ± {100 * drift_se:.1f} % | {len(dist)} ({median(dist):.2f}) |")
 
@@ -79,9 +85,9 @@ def main():
     show = "--points" in sys.argv
     base = load(args[0])
     print(f"baseline {os.path.basename(os.path.normpath(args[0]))}: CPU s / point median {median([p['cpu'] for p in base.values()]):.2f}, "
-          f"mean {statistics.fmean([p['cpu'] for p in base.values()]):.2f}\n")
-    print("| variant | points | CPU s median | mean | × cold (mean) | × cold (median) | flowing | mean z | bias | max |z| | beyond 3 SE | drift | warm-started (median distance) |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+          f"mean {mean([p['cpu'] for p in base.values()]):.2f}\n")
+    print("| variant | points | CPU s median | mean | × cold (mean) | × cold (median) | flowing | mean z | RMS z | bias | max |z| | beyond 3 SE | drift | warm-started (median distance) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     bands = next((int(a.split("=")[1]) for a in sys.argv if a.startswith("--bands=")), None)
     for d in args[1:]:
         var, name = load(d), os.path.basename(os.path.normpath(d))

@@ -7,13 +7,15 @@
 #
 # A variant is a space (thesis or slow) and a way of computing it (SPACE-cold, -warm, -new, -long,
 # -thesis, below), or NAME=SPACE:key=value,... for other [scene] knobs (e.g.
-# thesis-w06=thesis:warm_warmup_s=0.06). Each runs `sweep lds --step 24 --max 24
-# --jobs 1` in WORK/<variant> (default WORK=/tmp/warm-study), which continues a directory it finds;
-# then compare.py prints the tables. Needs target/release/sweep (scripts/setup.sh).
+# thesis-w06=thesis:warm_warmup_s=0.06). Each runs `sweep lds --step N --max N --jobs 1` (N =
+# POINTS, default 24) in WORK/<variant> (default WORK=/tmp/warm-study), which continues a
+# directory it finds; then compare.py prints the tables. Needs target/release/sweep
+# (scripts/setup.sh).
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 bin=${SWEEP_BIN:-$PWD/target/release/sweep}
 work=${WORK:-/tmp/warm-study}
+points=${POINTS:-24}
 mkdir -p "$work"
 
 space_file() {
@@ -29,7 +31,7 @@ run_variant() { # name, space, [scene] lines
   # The space's file with its [scene] table extended, and every point run.
   { sed "s/^\[scene\]$/[scene]\n$scene/" "$(space_file "$space")"; printf '\n[run]\nscreen = false\n'; } > "$file"
   echo "warm.sh: $name" >&2
-  "$bin" lds "$file" --step 24 --max 24 --hold 1000 --jobs 1 --out "$work/$name" > "$work/$name.log" 2>&1 || true
+  "$bin" lds "$file" --step "$points" --max "$points" --hold 1000 --jobs 1 --out "$work/$name" > "$work/$name.log" 2>&1 || true
 }
 
 variants=("$@")
