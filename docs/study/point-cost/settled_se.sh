@@ -10,6 +10,8 @@
 #   pairs   the first 100 points of sweeps/thesis-lds.toml from rest, twice (particle seeds
 #           default and 777), with this tree's binary: two runs of each point, whose difference
 #           over their combined SE should be about 1 (RMS).
+#   warm    the same 100 points warm-started (pairs-warm): what a warm start saves and moves
+#           under this SE, against pairs-default.
 #   draws   the 24-point draws of the thesis space and of machine speeds (warm.sh's), cold and
 #           to the fixed 5 %, with SWEEP_OLD (before: the window's SE, an open top) as
 #           SPACE-before and this tree's binary as SPACE-now, one run at a time in the same
@@ -22,7 +24,7 @@ bin=${SWEEP_BIN:-$PWD/target/release/sweep}
 work=${WORK:-/tmp/se-study}
 mkdir -p "$work"
 steps=("$@")
-[ ${#steps[@]} -gt 0 ] || steps=(pairs draws)
+[ ${#steps[@]} -gt 0 ] || steps=(pairs warm draws)
 for s in "${steps[@]}"; do
   case $s in
     pairs)
@@ -32,6 +34,9 @@ for s in "${steps[@]}"; do
         else sed "s/^\[scene\]$/[scene]\nseed = $seed/" sweeps/thesis-lds.toml > "$file"; fi
         "$bin" lds "$file" --step 100 --max 100 --hold 1000 --jobs 1 --out "$work/pairs-$seed" > "$work/pairs-$seed.log" 2>&1 || true
       done ;;
+    warm)
+      sed 's/^\[scene\]$/[scene]\nwarm_start = true/' sweeps/thesis-lds.toml > "$work/pairs-warm.toml"
+      "$bin" lds "$work/pairs-warm.toml" --step 100 --max 100 --hold 1000 --jobs 1 --out "$work/pairs-warm" > "$work/pairs-warm.log" 2>&1 || true ;;
     draws)
       : "${SWEEP_OLD:?draws needs SWEEP_OLD, the binary before the change}"
       cold='warm_start=false,precision="fixed"'
@@ -39,6 +44,6 @@ for s in "${steps[@]}"; do
         SWEEP_BIN=$SWEEP_OLD WORK=$work bash docs/study/warm-start/warm.sh "$space-before=$space:$cold"
         SWEEP_BIN=$bin WORK=$work bash docs/study/warm-start/warm.sh "$space-now=$space:$cold"
       done ;;
-    *) echo "settled_se.sh: unknown step '$s' (pairs or draws)" >&2; exit 2 ;;
+    *) echo "settled_se.sh: unknown step '$s' (pairs, warm or draws)" >&2; exit 2 ;;
   esac
 done
