@@ -15,7 +15,7 @@
 //!   warm-up, scaled to the window's length: [`settled_se`]. Not the window's own spread: MSER
 //!   picks the truncation that makes that spread least, so an SE from it comes out low (two
 //!   runs of a point with other seeds differed by 1.18 of their combined SE, RMS, over 89
-//!   points; 0.98 with this SE). Blocks are batched in twos until the lag-1 autocorrelation of
+//!   points; 0.96 with this SE). Blocks are batched in twos until the lag-1 autocorrelation of
 //!   the batch means is at most [`MAX_BATCH_ACF`] (measured: 5 D blocks give −0.17 to −0.08 at
 //!   0.1–1.4 m/s, so batches of one block); the ACF is reported with the SE.
 //! - Steady: no trend over the window (|slope / SE| ≤ [`TREND_Z`], an ordinary least-squares
