@@ -167,3 +167,30 @@ fn a_flow_that_overshoots_runs_on_until_the_transient_is_behind_it() {
     assert!(window >= 8, "{st}");
     assert!(st["trend_z"].as_f64().unwrap().abs() <= 2.0, "{st}");
 }
+
+#[test]
+fn a_sphere_squeezed_out_under_the_blade_stays_in_the_box() {
+    support::require_liggghts!("a_sphere_squeezed_out_under_the_blade_stays_in_the_box");
+    // A machine-speed point at a gap of 0.55 D where a sphere pressed under the tip leaves at
+    // 2.6 m/s (13 times the blade speed) and flew out through the top of a box without a lid:
+    // the run failed as lost-atoms. With the lid it runs to its end and fails for what it is.
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = support::write_file(
+        &dir.path().join("lid.toml"),
+        r#"name = "lid"
+[parameters]
+friction = 0.2763469644997849
+diameter = { value = 2.8068351943107457, unit = "mm" }
+gap = { lo = 1.0, hi = 5.0, unit = "mm" }
+blade_speed = { value = 0.20057542020857944, unit = "m/s" }
+restitution = 0.5
+youngs_modulus = { value = 21.0, unit = "MPa" }
+[scene]
+layout = "conveyor"
+"#,
+    );
+    let (code, r, err) = run_point(&sweep, "gap=1.5348700671815916");
+    assert_eq!(r["class"], "implausible", "exit {code}: {err}");
+    assert!(r["reason"].as_str().unwrap().contains("0.55 D"), "{r}");
+    assert!(r["measured"]["steps"].as_u64().unwrap() > 74_000, "ran past the step it lost a sphere: {r}");
+}
