@@ -6,6 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
+use demsweep::scenes::conveyor::warm::FULL_WARMUP_DISTANCE;
 use serde_json::Value;
 
 use crate::support::{self, ok, p, require_liggghts, run_point};
@@ -80,7 +81,7 @@ fn a_point_starts_from_its_finished_neighbour_and_keeps_its_hash() {
     // started nearest its neighbour (from 0.5 away a warm start keeps the whole cold warm-up).
     let distance = |r: &Value| r["warm_start"]["distance"].as_f64().unwrap_or(f64::INFINITY);
     let (h, r) = runs.iter().min_by(|a, b| distance(&a.1).total_cmp(&distance(&b.1))).unwrap();
-    assert!(distance(r) < 0.5, "{h}: no warm start nearer than 0.5: {runs:?}");
+    assert!(distance(r) < FULL_WARMUP_DISTANCE, "{h}: no warm start nearer than 0.5: {runs:?}");
     let gap = r["parameters"]["gap"].as_f64().unwrap();
     let (code, cold, err) = run_point(&file, &format!("gap={gap}"));
     assert_eq!(code, 0, "{err}");

@@ -18,7 +18,14 @@ mc: stationary blocks (mean 1, coefficient of variation 0.12-0.17, lag-1 correla
 as measured), the deck's stop rule (least window 8 blocks, SE <= 5 % of the mean) with each
 estimator; z = (mean - 1) / SE over 4,000 runs.
 """
-import csv, json, math, os, random, statistics, sys
+import csv, importlib.util, json, math, os, random, statistics, sys
+
+# MSER truncation (White 1997) as the transient study computes it.
+_spec = importlib.util.spec_from_file_location(
+    "transient", os.path.join(os.path.dirname(__file__), "..", "recoater", "transient.py"))
+_transient = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(_transient)
+mser = _transient.mser
 
 
 def load(d):
@@ -38,17 +45,6 @@ def mean(y):
 def sd(y):
     m = mean(y)
     return math.sqrt(sum((v - m) ** 2 for v in y) / (len(y) - 1))
-
-
-def mser(y):
-    best, arg = float("inf"), 0
-    for d in range(len(y) // 2 + 1):
-        t = y[d:]
-        m = mean(t)
-        v = sum((x - m) ** 2 for x in t) / len(t) ** 2
-        if v < best:
-            best, arg = v, d
-    return arg
 
 
 def estimate(y, kind):
