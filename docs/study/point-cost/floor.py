@@ -1,0 +1,36 @@
+#!/usr/bin/env python3
+"""What a point from rest cannot skip: each run's CPU per block times its warm-up (max(0.3 s · v,
+10 D) in blocks of 5 D) and the least window (8 blocks).
+
+    python3 docs/study/point-cost/floor.py SWEEP_DIR     # results.csv and runs/<hash>/result.json
+"""
+import csv, json, math, os, statistics, sys
+
+LEAST_WINDOW = 8
+
+
+def main(d):
+    rows = []
+    for r in csv.DictReader(open(os.path.join(d, "results.csv"))):
+        f = os.path.join(d, "runs", r["hash"], "result.json")
+        if r["status"] != "done" or not os.path.exists(f):
+            continue
+        j = json.load(open(f))
+        blocks = len(j["steady_state"]["block_mfr"])
+        p = j["parameters"]
+        diameter = p["diameter"] * 1e-3
+        warmup = math.ceil(max(0.3 * p["blade_speed"], 10 * diameter) / diameter / 5)
+        per_block = j["cpu_time"] / blocks
+        rows.append((j["cpu_time"], per_block * (warmup + LEAST_WINDOW), per_block * LEAST_WINDOW, blocks, warmup))
+    print(f"{len(rows)} runs; blocks median {statistics.median(r[3] for r in rows)}, "
+          f"of them warm-up {statistics.median(r[4] for r in rows)}\n")
+    print("| | CPU s median | mean |\n|---|---|---|")
+    for i, name in enumerate(("each run as it ran", "its warm-up and the least window only",
+                              "the least window only")):
+        print(f"| {name} | {statistics.median(r[i] for r in rows):.2f} | {statistics.fmean(r[i] for r in rows):.2f} |")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 2:
+        sys.exit(__doc__)
+    main(sys.argv[1])
