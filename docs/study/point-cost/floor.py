@@ -4,22 +4,21 @@
 
     python3 docs/study/point-cost/floor.py SWEEP_DIR     # results.csv and runs/<hash>/result.json
 """
-import csv, json, math, os, statistics, sys
+import importlib.util, os, statistics, sys
+
+# The runs and the cold warm-up in blocks, as the SE study reads them.
+_spec = importlib.util.spec_from_file_location("settled_se", os.path.join(os.path.dirname(__file__), "settled_se.py"))
+_settled = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(_settled)
 
 LEAST_WINDOW = 8
 
 
 def main(d):
     rows = []
-    for r in csv.DictReader(open(os.path.join(d, "results.csv"))):
-        f = os.path.join(d, "runs", r["hash"], "result.json")
-        if r["status"] != "done" or not os.path.exists(f):
-            continue
-        j = json.load(open(f))
+    for j in _settled.load(d).values():
         blocks = len(j["steady_state"]["block_mfr"])
-        p = j["parameters"]
-        diameter = p["diameter"] * 1e-3
-        warmup = math.ceil(max(0.3 * p["blade_speed"], 10 * diameter) / diameter / 5)
+        warmup = _settled.warmup_blocks(j)
         per_block = j["cpu_time"] / blocks
         rows.append((j["cpu_time"], per_block * (warmup + LEAST_WINDOW), per_block * LEAST_WINDOW, blocks, warmup))
     print(f"{len(rows)} runs; blocks median {statistics.median(r[3] for r in rows)}, "
