@@ -1,27 +1,23 @@
 #!/usr/bin/env bash
-# The size study of docs/study/calibration.md: pour-316l-size.toml (316L) from columns of 500
-# and 700 particles (scene.supply_factor 0.25, 0.35; the 1,000 are record-316l-surface-energy's
-# five pours at 0.0146-0.0147 mJ/m²), seeds 1..5 (scene.seed: the column's lattice jitter and the
-# order of its sizes), one pour at a time, round by round (every size at seed 1, then at seed 2,
-# ...), so that a study cut short still has every size. `size` (the default) pours at sliding and
-# rolling friction 0.5 and 0.1, surface energy 0.0146 mJ/m², into record-size/; `published` at
-# sliding = rolling friction = 0.5, 0.01 mJ/m², 500 particles, into record-316l-05/. Each pour's
-# result.json is kept as n<N>-s<seed>.json; a pour already recorded is not run again
-# (resumable: run it again after an interruption). size.py beside it reads a record.
+# The size study of docs/study/calibration.md: pour-316l-size.toml (316L at sliding = rolling
+# friction = 0.5, surface energy 0.01 mJ/m²) from columns of 500, 700 and 1,000 particles
+# (scene.supply_factor 0.25, 0.35, 0.5), seeds 1..5 (scene.seed: the column's lattice jitter and
+# the order of its sizes), one pour at a time, round by round (every size at seed 1, then at
+# seed 2, ...), so that a study cut short still has every size. Each pour's result.json is kept
+# as record-size/n<N>-s<seed>.json; a pour already recorded is not run again (resumable: run it
+# again after an interruption). size.py beside it reads the record.
 #
-#   nohup bash docs/study/calibration/size.sh [size|published] >/tmp/size.log 2>&1 &   # from the root
+#   nohup bash docs/study/calibration/size.sh >/tmp/size.log 2>&1 &     # from the repository's root
 #
 # SWEEP: the binary (default target/release/sweep); SEEDS: the seeds (default "1 2 3 4 5");
-# SIZES: supply factors.
+# SIZES: supply factors (default "0.25 0.35 0.5").
 set -euo pipefail
 SWEEP=${SWEEP:-target/release/sweep}
 SEEDS=${SEEDS:-1 2 3 4 5}
 DIR=docs/study/calibration
-case "${1:-size}" in
-  size) REC=$DIR/record-size; SET=rolling_friction=0.1,surface_energy=1.465e-5; SIZES=${SIZES:-0.25 0.35} ;;
-  published) REC=$DIR/record-316l-05; SET=rolling_friction=0.5,surface_energy=1e-5; SIZES=${SIZES:-0.25} ;;
-  *) echo "size.sh: unknown study $1: expected size or published" >&2; exit 2 ;;
-esac
+SIZES=${SIZES:-0.25 0.35 0.5}
+REC=$DIR/record-size
+SET=rolling_friction=0.5,surface_energy=1e-5
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
 mkdir -p "$REC"
