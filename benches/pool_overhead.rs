@@ -27,7 +27,7 @@ impl Executor for TrueExecutor {
         serde_json::json!("true")
     }
 
-    fn prepare(&self, swept: &[f64]) -> demsweep::Result<String> {
+    fn prepare_seeded(&self, swept: &[f64], _seed: Option<u64>) -> demsweep::Result<String> {
         Ok(format!("job{:06}", swept[0] as u64))
     }
 

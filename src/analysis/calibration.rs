@@ -113,6 +113,77 @@ impl Target {
     }
 }
 
+/// The noise of one simulated quantity: how much one run scatters about its setting's mean.
+///
+/// A pour's own SE (over its heap's sectors) sees one avalanche history; the scatter between
+/// seeds (another initial packing of the same powder) is the test's noise, and was twice that
+/// SE on LIGGGHTS (docs/study/calibration.md). With settings run more than once it is measured
+/// here, pooled over the settings (Σ (n−1)·s² / Σ (n−1), the usual pooled variance of a
+/// one-way layout), and becomes each run's noise: never below the runs' own SE, which a pooled
+/// SD of a few degrees of freedom can fall under by chance. Without repeats the runs' own SE
+/// stands in for it, and the emulator's fitted nugget for the rest.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Scatter {
+    /// The quantity (the target's name).
+    pub name: String,
+    /// The SD between seeds at one setting, pooled; `None` without a setting run twice.
+    pub between_seed_sd: Option<f64>,
+    /// Its degrees of freedom, Σ (n − 1) over the settings.
+    pub df: usize,
+    /// The runs' own SE of the quantity, root mean square; `None` when they give none.
+    pub own_se: Option<f64>,
+    /// The SD of one run the emulator takes as its noise: the scatter between seeds (at least
+    /// the runs' own SE), or without repeats the runs' own SE.
+    pub run_sd: Option<f64>,
+    /// Settings and the runs over them.
+    pub settings: usize,
+    pub runs: usize,
+}
+
+impl Scatter {
+    /// The scatter of the runs of each setting, `runs[g]` the values and own SEs of setting g.
+    pub fn of(name: &str, runs: &[Vec<(f64, Option<f64>)>]) -> Scatter {
+        let (mut ss, mut df) = (0.0, 0usize);
+        for g in runs.iter().filter(|g| g.len() > 1) {
+            let m = g.iter().map(|r| r.0).sum::<f64>() / g.len() as f64;
+            ss += g.iter().map(|r| (r.0 - m).powi(2)).sum::<f64>();
+            df += g.len() - 1;
+        }
+        let between_seed_sd = (df > 0).then(|| (ss / df as f64).sqrt());
+        let own: Vec<f64> = runs.iter().flatten().filter_map(|r| r.1).map(|s| s * s).collect();
+        let own_se = (!own.is_empty()).then(|| (own.iter().sum::<f64>() / own.len() as f64).sqrt());
+        let run_sd = match (between_seed_sd, own_se) {
+            (Some(b), Some(o)) => Some(b.max(o)),
+            (b, o) => b.or(o),
+        };
+        Scatter {
+            name: name.to_string(),
+            between_seed_sd,
+            df,
+            own_se,
+            run_sd,
+            settings: runs.len(),
+            runs: runs.iter().map(Vec::len).sum(),
+        }
+    }
+
+    /// Each setting's mean and the SE of it the emulator takes: [`Scatter::run_sd`] over √n
+    /// with repeats; without them the run's own SE (or none, for the emulator's nugget).
+    pub fn means(&self, runs: &[Vec<(f64, Option<f64>)>]) -> Vec<(f64, Option<f64>)> {
+        runs.iter()
+            .map(|g| {
+                let n = g.len() as f64;
+                let mean = g.iter().map(|r| r.0).sum::<f64>() / n;
+                let se = match self.between_seed_sd {
+                    Some(_) => self.run_sd.map(|s| s / n.sqrt()),
+                    None => g.first().and_then(|r| r.1),
+                };
+                (mean, se)
+            })
+            .collect()
+    }
+}
+
 /// One target with the emulator of its simulated quantity.
 pub struct Emulated<'a> {
     pub target: &'a Target,
@@ -467,6 +538,34 @@ mod tests {
         let x = halton_range(2, 0, n, Scrambling::Random, 5);
         let y: Vec<f64> = x.iter().map(|u| f(u)).collect();
         Emulator::fit(&x, &y, &vec![None; n]).unwrap()
+    }
+
+    #[test]
+    fn the_scatter_between_seeds_is_pooled_over_the_repeated_settings() {
+        // Setting a: 1, 3 (variance 2, 1 df); b: 2, 2, 5 (variance 3, 2 df); c: one run.
+        let runs = vec![
+            vec![(1.0, Some(0.5)), (3.0, Some(0.5))],
+            vec![(2.0, Some(0.5)), (2.0, Some(0.5)), (5.0, Some(0.5))],
+            vec![(7.0, Some(0.5))],
+        ];
+        let s = Scatter::of("angle", &runs);
+        assert_eq!((s.df, s.settings, s.runs), (3, 3, 6));
+        let pooled = ((2.0 * 1.0 + 3.0 * 2.0) / 3.0f64).sqrt();
+        assert!((s.between_seed_sd.unwrap() - pooled).abs() < 1e-12, "{s:?}");
+        assert_eq!(s.own_se, Some(0.5));
+        // Each setting's mean carries the scatter between seeds over √n, not the runs' own SE.
+        let m = s.means(&runs);
+        assert_eq!(m.iter().map(|x| x.0).collect::<Vec<_>>(), vec![2.0, 3.0, 7.0]);
+        for (got, n) in m.iter().zip([2.0, 3.0, 1.0f64]) {
+            assert!((got.1.unwrap() - pooled / n.sqrt()).abs() < 1e-12, "{got:?}");
+        }
+        // Never below the runs' own SE; without repeats the runs' own SE stands.
+        let tight = vec![vec![(1.0, Some(0.5)), (1.1, Some(0.5))]];
+        assert_eq!(Scatter::of("a", &tight).run_sd, Some(0.5));
+        let single = vec![vec![(1.0, Some(0.4))], vec![(2.0, None)]];
+        let s = Scatter::of("a", &single);
+        assert_eq!((s.between_seed_sd, s.df), (None, 0));
+        assert_eq!(s.means(&single), vec![(1.0, Some(0.4)), (2.0, None)]);
     }
 
     #[test]

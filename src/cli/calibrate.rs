@@ -22,16 +22,21 @@ pub(super) struct CalibrateArgs {
     /// bulk_packing of a pour, mfr of a spreading layout. Repeat for several.
     #[arg(long = "target", required = true)]
     targets: Vec<String>,
-    /// Points of the first (scrambled-Halton) batch; default design.adapt.first, else 10 per
+    /// Settings of the first (scrambled-Halton) batch; default design.adapt.first, else 10 per
     /// free parameter.
     #[arg(long)]
     first: Option<usize>,
-    /// Points of every later batch; default design.adapt.batch, else --jobs.
+    /// Settings of every later batch; default design.adapt.batch, else --jobs.
     #[arg(long)]
     batch: Option<usize>,
-    /// Most points to run; default design.adapt.max.
+    /// Most runs (settings × repeats) to run; default design.adapt.max.
     #[arg(long)]
     max: Option<usize>,
+    /// Runs of each setting, each with its own scene.seed (the sweep's, then the next ones):
+    /// their scatter is each run's noise in the emulator. Default 2 for a pour's targets (one
+    /// heap's SE over its sectors understates the scatter between seeds), 1 for MFR.
+    #[arg(long)]
+    repeats: Option<usize>,
     /// Stop once no bound of a credible interval moves by more than this share of the
     /// interval's width from one batch to the next, --hold batches in a row.
     #[arg(long, default_value_t = driver::TOLERANCE)]
@@ -73,16 +78,20 @@ pub(super) fn calibrate(a: CalibrateArgs) -> Result<(), Error> {
     if batch == 0 {
         return Err(flag("--batch 0", "expected a positive number of points per batch"));
     }
+    let repeats = a.repeats.unwrap_or_else(|| driver::default_repeats(&targets));
+    if repeats == 0 {
+        return Err(flag("--repeats 0", "expected at least 1 run per setting"));
+    }
     let max_src = if a.max.is_some() { "--max".to_string() } else { format!("design.adapt.max in {file}") };
     demsweep::design::lds_size(max).map_err(|e| flag(format!("{max_src} {max}"), e))?;
-    if max < first {
+    if max < first * repeats {
         return Err(flag(
-            format!("{max_src} {max} is less than the first batch, {first}"),
-            "expected max ≥ first; lower --first or raise --max",
+            format!("{max_src} {max} is less than the first batch, {first} settings × {repeats} repeats"),
+            "expected max ≥ first × repeats; lower --first or --repeats, or raise --max",
         ));
     }
     let settings = Settings { targets, tolerance: a.tolerance, hold: a.hold };
-    let design = DesignRecord::Adapt { first, batch, max, seed: ad.seed };
+    let design = DesignRecord::Adapt { first, batch, max, seed: ad.seed, repeats };
     let out = a.out.unwrap_or_else(|| demsweep::run::default_out(&sweep));
     demsweep::run::check_out_dir(&out)?;
     demsweep::sys::process::install_interrupt_handler();

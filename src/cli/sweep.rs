@@ -265,7 +265,7 @@ pub(super) fn adapt(a: AdaptArgs) -> Result<(), Error> {
             "expected max ≥ first; lower the first batch or raise max",
         ));
     }
-    let design = DesignRecord::Adapt { first, batch, max, seed: ad.seed };
+    let design = DesignRecord::Adapt { first, batch, max, seed: ad.seed, repeats: 1 };
     driver::check_out_dir(&out)?;
     sweep.file.convergence.min_points = driver::judge_from(&out, &sweep, &design)?;
     demsweep::sys::process::install_interrupt_handler();

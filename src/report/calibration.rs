@@ -92,6 +92,39 @@ pub struct Calibration {
     pub cpu_s: f64,
     /// Runs with a CPU time (LIGGGHTS); the stand-in has none.
     pub cpu_runs: usize,
+    /// Per target: the scatter of its runs between seeds beside their own SE, the noise the
+    /// emulator took, and the nugget it fitted on top (the last batch's).
+    pub noise: Vec<Noise>,
+}
+
+/// One target's noise, as the last batch's emulator saw it.
+#[derive(Debug, Clone, Serialize)]
+pub struct Noise {
+    #[serde(flatten)]
+    pub scatter: crate::analysis::calibration::Scatter,
+    pub nugget_sd: Option<f64>,
+}
+
+impl Noise {
+    /// The noise in one line.
+    pub fn line(&self) -> String {
+        let s = &self.scatter;
+        let own = s.own_se.map_or("none".into(), fmt);
+        let between = match s.between_seed_sd {
+            Some(b) => format!(
+                "scatter between seeds {} ({} df over {} settings, {} runs) against the runs' own SE {own}",
+                fmt(b),
+                s.df,
+                s.settings,
+                s.runs
+            ),
+            None => format!(
+                "scatter between seeds not measured (one run per setting; --repeats 2 or more measures it); the runs' own SE {own}"
+            ),
+        };
+        let nugget = self.nugget_sd.map_or(String::new(), |n| format!("; the emulator's nugget {}", fmt(n)));
+        format!("{}: {between}{nugget}", s.name)
+    }
 }
 
 impl Calibration {
@@ -112,6 +145,9 @@ impl Calibration {
         }
         for r in &self.ridges {
             out.push(format!("  ridge: {r}"));
+        }
+        for n in &self.noise {
+            out.push(format!("  noise of {}", n.line()));
         }
         if let Some(b) = &self.best_run {
             let res: Vec<String> = b
@@ -320,6 +356,13 @@ fn answer(
         runs_failed,
         cpu_s: cpu.iter().fold(0.0, |a, b| a + b),
         cpu_runs: cpu.len(),
+        noise: watch.batches.last().map_or(Vec::new(), |b| {
+            b.scatter
+                .iter()
+                .zip(&b.nugget_sd)
+                .map(|(s, n)| Noise { scatter: s.clone(), nugget_sd: *n })
+                .collect()
+        }),
     }
 }
 
@@ -454,6 +497,9 @@ fn write_html(dir: &std::path::Path, c: &Calibration, sweep: &Sweep, figures: &[
     h.push_str("</table>\n");
     for r in &c.ridges {
         h.push_str(&format!("<p><b>Ridge.</b> {}</p>\n", esc(r)));
+    }
+    for x in &c.noise {
+        h.push_str(&format!("<p><b>Noise of</b> {}.</p>\n", esc(&x.line())));
     }
     if let Some(b) = &c.best_run {
         let vals: Vec<String> =

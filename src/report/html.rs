@@ -395,7 +395,7 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
         crate::store::DesignRecord::Lds { step, max, scrambling, seed } => {
             format!("scrambled Halton ({scrambling:?}, seed {seed}), step {step}, max {max}")
         }
-        crate::store::DesignRecord::Adapt { first, batch, max, seed } => format!(
+        crate::store::DesignRecord::Adapt { first, batch, max, seed, .. } => format!(
             "adaptive: {first} scrambled-Halton points (seed {seed}), then batches of {batch} where the \
              emulator says the statistics are least known, max {max}; statistics from the emulator"
         ),

@@ -375,7 +375,7 @@ fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &AdaptWatch, ran: usize) 
     };
     let planned: Vec<Planned<Choice>> = chosen
         .iter()
-        .map(|c| Planned { values: crate::sweep::space::scale_point(&sweep, &c.point), note: c })
+        .map(|c| Planned { values: crate::sweep::space::scale_point(&sweep, &c.point), seed: None, note: c })
         .collect();
     let screen = sweep.file.run.screen;
     batches::append(

@@ -71,6 +71,8 @@ pub fn run<E: Executor, W: Sequential>(
 /// One planned point: its parameter values and what the design says of it.
 pub struct Planned<'a, T> {
     pub values: Vec<f64>,
+    /// Its own `scene.seed` (a repeat of a setting), or the sweep's.
+    pub seed: Option<u64>,
     pub note: &'a T,
 }
 
@@ -88,7 +90,8 @@ pub fn append<E: Executor, T>(
     closed: impl Fn(&E::Job) -> bool,
     record: impl FnOnce(&[(usize, &T)]) -> Result<()>,
 ) -> Result<bool> {
-    let jobs: Vec<E::Job> = planned.iter().map(|p| exec.prepare(&p.values)).collect::<Result<_>>()?;
+    let jobs: Vec<E::Job> =
+        planned.iter().map(|p| exec.prepare_seeded(&p.values, p.seed)).collect::<Result<_>>()?;
     let base = from.points.len();
     let mut appended = false;
     Store::open(dir).update_manifest(
@@ -111,6 +114,7 @@ pub fn append<E: Executor, T>(
                     values: p.values.clone(),
                     hash: hash.to_string(),
                     closed: closed(job),
+                    seed: p.seed,
                 });
                 rows.push((index, p.note));
             }

@@ -17,7 +17,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{RunError, RunOptions, Summary};
 use crate::analysis::adapt::new_run_noise;
-use crate::analysis::calibration::{self as cal, Emulated, Pick, Posterior, Target};
+use crate::analysis::calibration::{self as cal, Emulated, Pick, Posterior, Scatter, Target};
 use crate::analysis::emulator::Emulator;
 use crate::error::Result;
 use crate::outcome::RunResult;
@@ -56,6 +56,10 @@ pub struct Quantity {
     measured_by: fn(&str) -> bool,
     /// Its value in a result, with the result's SE of it where it gives one.
     read: fn(&RunResult) -> Option<Measured>,
+    /// Runs of each setting by default (`--repeats`): 2 for a heap's quantities, whose own SE
+    /// (over one heap's sectors) understates the scatter between seeds; 1 for MFR, whose SE is
+    /// over the window's batches.
+    pub repeats: usize,
 }
 
 /// A measured value and the run's SE of it, where it gives one.
@@ -68,18 +72,21 @@ pub const QUANTITIES: &[Quantity] = &[
         unit: "°",
         measured_by: |l| l == "pour",
         read: |r| r.heap.as_ref().map(|h| (h.angle_deg, Some(h.angle_se_deg).filter(|s| *s > 0.0))),
+        repeats: 2,
     },
     Quantity {
         name: "bulk_packing",
         unit: "-",
         measured_by: |l| l == "pour",
         read: |r| r.heap.as_ref().map(|h| (h.packing, None)),
+        repeats: 2,
     },
     Quantity {
         name: "mfr",
         unit: "-",
         measured_by: |l| l != "pour",
         read: |r| r.mfr.is_finite().then_some((r.mfr, r.mfr_se)),
+        repeats: 1,
     },
 ];
 
@@ -88,6 +95,11 @@ impl Quantity {
     pub fn read(&self, r: &RunResult) -> Option<Measured> {
         (self.read)(r)
     }
+}
+
+/// Runs of each setting by default for `targets` (checked): the most any of them asks.
+pub fn default_repeats(targets: &[Target]) -> usize {
+    targets.iter().filter_map(|t| quantity(&t.name)).map(|q| q.repeats).max().unwrap_or(1)
 }
 
 /// The quantity named `name`.
@@ -151,27 +163,39 @@ pub fn settings(dir: &Path) -> Option<Settings> {
     serde_json::from_str(&std::fs::read_to_string(dir.join(SETTINGS)).ok()?).ok()
 }
 
-/// Per target: the unit points, values and SEs of the done runs that measured it.
+/// Per target: the unit points of the settings whose done runs measured it, each setting's
+/// mean over its runs (its repeats, one per seed) and the SE of that mean the emulator takes
+/// ([`Scatter::means`]).
 pub type Data = Vec<(Vec<Vec<f64>>, Vec<f64>, Vec<Option<f64>>)>;
 
-fn data(sweep: &Sweep, targets: &[Target], points: &[(&PointRecord, &PointStatus)]) -> Data {
+/// The data of every target and the scatter of its runs between seeds.
+fn data(sweep: &Sweep, targets: &[Target], points: &[(&PointRecord, &PointStatus)]) -> (Data, Vec<Scatter>) {
     targets
         .iter()
         .map(|t| {
             let q = quantity(&t.name).expect("targets are checked");
-            let mut d = (Vec::new(), Vec::new(), Vec::new());
+            // The runs of each setting (the same values, any seed), in the order first run.
+            let mut settings: Vec<(&[f64], Vec<Measured>)> = Vec::new();
             for (p, s) in points {
-                if let PointStatus::Done(r) = s {
-                    if let Some((v, se)) = q.read(r).filter(|(v, _)| v.is_finite()) {
-                        d.0.push(crate::sweep::space::unit_point(sweep, &p.values));
-                        d.1.push(v);
-                        d.2.push(se.filter(|s| s.is_finite()));
-                    }
+                let PointStatus::Done(r) = s else { continue };
+                let Some((v, se)) = q.read(r).filter(|(v, _)| v.is_finite()) else { continue };
+                let run = (v, se.filter(|s| s.is_finite()));
+                let same = |u: &&mut (&[f64], Vec<Measured>)| {
+                    u.0.len() == p.values.len()
+                        && u.0.iter().zip(&p.values).all(|(a, b)| a.to_bits() == b.to_bits())
+                };
+                match settings.iter_mut().find(same) {
+                    Some(g) => g.1.push(run),
+                    None => settings.push((&p.values, vec![run])),
                 }
             }
-            d
+            let runs: Vec<Vec<Measured>> = settings.iter().map(|g| g.1.clone()).collect();
+            let scatter = Scatter::of(&t.name, &runs);
+            let means = scatter.means(&runs);
+            let x = settings.iter().map(|g| crate::sweep::space::unit_point(sweep, g.0)).collect();
+            ((x, means.iter().map(|m| m.0).collect(), means.iter().map(|m| m.1).collect()), scatter)
         })
-        .collect()
+        .unzip()
 }
 
 /// One judged batch.
@@ -184,6 +208,11 @@ pub struct Batch {
     pub posterior: Option<Posterior>,
     /// The rule's change against the batch before ([`cal::interval_change`]).
     pub change: Option<f64>,
+    /// Per target: the scatter of its runs between seeds and the noise the emulator takes.
+    pub scatter: Vec<Scatter>,
+    /// Per target: the emulator's fitted nugget as an SD, the noise beyond what it was given
+    /// (`None` without an emulator).
+    pub nugget_sd: Vec<Option<f64>>,
 }
 
 /// The [`SpaceHook`] of a calibration: judges each batch by its posterior and keeps the last
@@ -278,19 +307,25 @@ impl SpaceHook for CalibrationWatch {
         let k = match self.batches.iter().position(|b| b.label == space.label) {
             Some(k) => k,
             None => {
-                let d = data(&self.sweep, &self.settings.targets, points);
+                let (d, scatter) = data(&self.sweep, &self.settings.targets, points);
                 let ems: Option<Vec<Emulator>> = d.iter().map(|(x, y, se)| Emulator::fit(x, y, se)).collect();
+                let nugget_sd = match &ems {
+                    Some(ems) => ems.iter().map(|e| Some(e.nugget_variance().sqrt())).collect(),
+                    None => vec![None; scatter.len()],
+                };
                 let posterior = ems.as_ref().and_then(|ems| {
                     let outs = Emulated::pair(&self.settings.targets, ems);
                     cal::posterior(&outs, self.sweep.dim(), self.seed)
                 });
-                let measured = d.iter().map(|x| x.1.len()).min().unwrap_or(0);
+                let measured = scatter.iter().map(|s| s.runs).min().unwrap_or(0);
                 self.batches.push(Batch {
                     label: space.label.clone(),
                     points: points.len(),
                     measured,
                     posterior,
                     change: None,
+                    scatter,
+                    nugget_sd,
                 });
                 self.last = Some((space.label.clone(), ems, d));
                 let ivs: Vec<Option<Vec<(f64, f64)>>> =
@@ -374,14 +409,15 @@ fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &CalibrationWatch, ran: u
         return Ok(true);
     }
     let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
-    let DesignRecord::Adapt { batch, max, seed, .. } = manifest.design else {
+    let DesignRecord::Adapt { batch, max, seed, repeats, .. } = manifest.design else {
         return Err(RunError::Dir { path: dir.to_path_buf(), why: "not a calibration".into() }.into());
     };
     let Some(last) = manifest.spaces.last() else { return Ok(false) };
     let Some((label, ems, d)) = watch.last.as_ref().filter(|(l, ..)| *l == last.label) else {
         return Ok(false);
     };
-    let size = batch.min(max.saturating_sub(manifest.points.len()));
+    // Settings: each runs `repeats` times, and `max` counts runs.
+    let size = batch.min(max.saturating_sub(manifest.points.len()) / repeats.max(1));
     if size == 0 {
         return Ok(false);
     }
@@ -402,9 +438,13 @@ fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &CalibrationWatch, ran: u
             .map(|u| Pick { point: u.clone(), why: "coverage", log_var: f64::NAN })
             .collect(),
     };
+    let seeds = crate::run::plan::repeat_seeds(&sweep, repeats);
     let planned: Vec<Planned<Pick>> = picks
         .iter()
-        .map(|c| Planned { values: crate::sweep::space::scale_point(&sweep, &c.point), note: c })
+        .flat_map(|c| {
+            let values = crate::sweep::space::scale_point(&sweep, &c.point);
+            seeds.iter().map(move |&seed| Planned { values: values.clone(), seed, note: c })
+        })
         .collect();
     batches::append(
         dir,

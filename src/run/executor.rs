@@ -25,6 +25,8 @@ pub struct PointExecutor {
 /// A point to run for real.
 pub struct PointJob {
     values: Vec<f64>,
+    /// Its own `scene.seed`, when not the sweep's.
+    seed: Option<u64>,
     hash: String,
     /// Nothing can pass under the blade here ([`crate::scene::Scene::nothing_passes`]).
     closed: bool,
@@ -50,9 +52,10 @@ impl Executor for PointExecutor {
         self.ctx.identity()
     }
 
-    fn prepare(&self, swept: &[f64]) -> Result<PointJob> {
-        let p = point::prepare(&self.ctx, swept)?;
-        Ok(PointJob { values: swept.to_vec(), hash: p.hash, closed: p.scene.nothing_passes() })
+    fn prepare_seeded(&self, swept: &[f64], seed: Option<u64>) -> Result<PointJob> {
+        let own = self.reseeded(seed);
+        let p = point::prepare(own.as_ref().unwrap_or(&self.ctx), swept)?;
+        Ok(PointJob { values: swept.to_vec(), seed, hash: p.hash, closed: p.scene.nothing_passes() })
     }
 
     fn hash<'a>(&self, job: &'a PointJob) -> &'a str {
@@ -64,10 +67,12 @@ impl Executor for PointExecutor {
     }
 
     fn execute(&self, job: &PointJob, run_dir: &Path, cancel: &CancelToken) -> RunOutcome {
-        match point::prepare(&self.ctx, &job.values) {
+        let own = self.reseeded(job.seed);
+        let ctx = own.as_ref().unwrap_or(&self.ctx);
+        match point::prepare(ctx, &job.values) {
             Ok(p) if p.hash == job.hash => {
                 let start = self.start(job, run_dir);
-                point::execute_from(&self.ctx, &p, run_dir, cancel, &start)
+                point::execute_from(ctx, &p, run_dir, cancel, &start)
             }
             // Prepared once already, so neither can happen short of a bug; fail the run loudly.
             Ok(p) => point_failure(job, run_dir, format!("deck hash changed on re-render: {}", p.hash)),
@@ -77,6 +82,16 @@ impl Executor for PointExecutor {
 }
 
 impl PointExecutor {
+    /// The point context of a run with `seed` as its `scene.seed`; `None` without one (the
+    /// sweep's own context then serves).
+    fn reseeded(&self, seed: Option<u64>) -> Option<PointContext> {
+        seed.map(|seed| {
+            let mut sweep = self.ctx.sweep.clone();
+            sweep.file.scene.seed = seed;
+            self.ctx.with_sweep(sweep)
+        })
+    }
+
     /// How the run in `run_dir` starts, from the finished points beside it: the nearest one's
     /// steady state (`[scene] warm_start`), and the sweep's precision (`[scene] precision`).
     fn start(&self, job: &PointJob, run_dir: &Path) -> point::Start {
@@ -156,10 +171,10 @@ impl Executor for SweepExecutor {
         }
     }
 
-    fn prepare(&self, swept: &[f64]) -> Result<SweepJob> {
+    fn prepare_seeded(&self, swept: &[f64], seed: Option<u64>) -> Result<SweepJob> {
         match self {
-            SweepExecutor::Real(e) => e.prepare(swept).map(SweepJob::Real),
-            SweepExecutor::StandIn(e) => e.prepare(swept).map(SweepJob::StandIn),
+            SweepExecutor::Real(e) => e.prepare_seeded(swept, seed).map(SweepJob::Real),
+            SweepExecutor::StandIn(e) => e.prepare_seeded(swept, seed).map(SweepJob::StandIn),
         }
     }
 

@@ -114,11 +114,14 @@ impl Executor for FakeExecutor {
         serde_json::json!({ "engine": self.identity })
     }
 
-    fn prepare(&self, swept: &[f64]) -> crate::Result<FakeJob> {
+    fn prepare_seeded(&self, swept: &[f64], seed: Option<u64>) -> crate::Result<FakeJob> {
         let mut h = Sha256::new();
         h.update(self.identity.as_bytes());
         for v in swept {
             h.update(v.to_bits().to_le_bytes());
+        }
+        if let Some(seed) = seed {
+            h.update(format!("seed {seed}"));
         }
         let hash = h.finalize().iter().map(|b| format!("{b:02x}")).collect();
         Ok(FakeJob { values: swept.to_vec(), hash })

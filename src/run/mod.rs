@@ -232,7 +232,13 @@ pub fn resume_share<E: Executor>(
     let jobs: Vec<E::Job> = manifest
         .points
         .par_iter()
-        .map(|p| if cancel.is_cancelled() { Err(Error::Interrupted) } else { exec.prepare(&p.values) })
+        .map(|p| {
+            if cancel.is_cancelled() {
+                Err(Error::Interrupted)
+            } else {
+                exec.prepare_seeded(&p.values, p.seed)
+            }
+        })
         .collect::<Result<_>>()?;
     let changed = manifest.points.iter().zip(&jobs).filter(|(p, j)| exec.hash(j) != p.hash).count();
     if changed > 0 {

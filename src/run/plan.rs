@@ -44,6 +44,9 @@ pub fn plan<E: Executor>(
     plan_with_progress(exec, sweep, design, cancel, ProgressMode::Quiet)
 }
 
+/// A point to plan: its swept values and its own `scene.seed` (a repeat), or the sweep's.
+pub(super) type Seeded = (Vec<f64>, Option<u64>);
+
 /// Time planning may take before it says how far it is.
 const PLAN_QUIET_FOR: std::time::Duration = std::time::Duration::from_secs(1);
 
@@ -52,7 +55,7 @@ const PLAN_QUIET_FOR: std::time::Duration = std::time::Duration::from_secs(1);
 /// [`crate::run::progress::LINE_EVERY`] (a 10⁶-point lattice takes minutes).
 fn prepare_all<E: Executor>(
     exec: &E,
-    values: &[Vec<f64>],
+    values: &[Seeded],
     cancel: &CancelToken,
     progress: ProgressMode,
 ) -> Result<Vec<E::Job>> {
@@ -79,11 +82,11 @@ fn prepare_all<E: Executor>(
         }
         let jobs = values
             .par_iter()
-            .map(|v| {
+            .map(|(v, seed)| {
                 if cancel.is_cancelled() {
                     return Err(Error::Interrupted);
                 }
-                let job = exec.prepare(v);
+                let job = exec.prepare_seeded(v, *seed);
                 done.fetch_add(1, Ordering::Relaxed);
                 job
             })
@@ -141,47 +144,66 @@ pub fn plan_with_progress<E: Executor>(
         }
         // The design alone fixes only the first batch; the driver plans the others from the
         // results ([`crate::run::adapt`]).
-        DesignRecord::Adapt { first, max, seed, .. } => {
-            if *first == 0 || *max > MAX_POINTS || max < first {
+        DesignRecord::Adapt { first, max, seed, repeats, .. } => {
+            if *first == 0 || *repeats == 0 || *max > MAX_POINTS || *max < first * repeats {
                 return Err(RunError::Design {
-                    design: format!("adapt first {first}, max {max}"),
-                    why: format!("expected 1 ≤ first ≤ max ≤ {MAX_POINTS}"),
+                    design: format!("adapt first {first}, max {max}, repeats {repeats}"),
+                    why: format!("expected 1 ≤ first × repeats ≤ max ≤ {MAX_POINTS}"),
                 }
                 .into());
             }
-            vec![(format!("adapt {first}"), halton(dim, *first, crate::sweep::Scrambling::Random, *seed))]
+            let settings = halton(dim, *first, crate::sweep::Scrambling::Random, *seed);
+            let seeds = repeat_seeds(sweep, *repeats);
+            let points = settings
+                .iter()
+                .flat_map(|u| seeds.iter().map(|s| (crate::sweep::space::scale_point(sweep, u), *s)))
+                .collect();
+            return plan_values(
+                exec,
+                sweep,
+                vec![(format!("adapt {}", first * repeats), points)],
+                cancel,
+                progress,
+            );
         }
     };
     let spaces = spaces
         .into_iter()
         .map(|(label, unit)| {
-            (label, unit.iter().map(|u| crate::sweep::space::scale_point(sweep, u)).collect())
+            (label, unit.iter().map(|u| (crate::sweep::space::scale_point(sweep, u), None)).collect())
         })
         .collect();
     plan_values(exec, sweep, spaces, cancel, progress)
+}
+
+/// The seeds of `repeats` runs of one setting: the sweep's own `scene.seed` (`None`), then the
+/// next seeds after it.
+pub fn repeat_seeds(sweep: &Sweep, repeats: usize) -> Vec<Option<u64>> {
+    let base = sweep.file.scene.seed;
+    (0..repeats.max(1)).map(|k| (k > 0).then(|| base.wrapping_add(k as u64))).collect()
 }
 
 /// [`plan_with_progress`] of spaces given as lists of points in the sweep's units.
 pub(super) fn plan_values<E: Executor>(
     exec: &E,
     sweep: &Sweep,
-    spaces: Vec<(String, Vec<Vec<f64>>)>,
+    spaces: Vec<(String, Vec<Seeded>)>,
     cancel: &CancelToken,
     progress: ProgressMode,
 ) -> Result<SweepPlan<E::Job>> {
     // Distinct values first (LDS prefixes and nested lattices repeat points), each prepared
     // once, on every core: rendering and hashing 10,000 decks takes tens of seconds on one.
-    let mut distinct: Vec<Vec<f64>> = Vec::new();
-    let mut by_bits: HashMap<Vec<u64>, usize> = HashMap::new();
+    let mut distinct: Vec<Seeded> = Vec::new();
+    let mut by_bits: HashMap<(Vec<u64>, Option<u64>), usize> = HashMap::new();
     let space_values: Vec<(String, Vec<usize>)> = spaces
         .into_iter()
         .map(|(label, points)| {
             let members = points
                 .into_iter()
-                .map(|values| {
-                    let bits = values.iter().map(|v| v.to_bits()).collect();
+                .map(|(values, seed)| {
+                    let bits = (values.iter().map(|v| v.to_bits()).collect(), seed);
                     *by_bits.entry(bits).or_insert_with(|| {
-                        distinct.push(values);
+                        distinct.push((values, seed));
                         distinct.len() - 1
                     })
                 })
@@ -195,11 +217,11 @@ pub(super) fn plan_values<E: Executor>(
     let mut jobs = Vec::new();
     let mut by_hash: HashMap<String, usize> = HashMap::new();
     let mut point_of_value = Vec::with_capacity(distinct.len());
-    for (values, job) in distinct.into_iter().zip(prepared) {
+    for ((values, seed), job) in distinct.into_iter().zip(prepared) {
         let hash = exec.hash(&job).to_string();
         let closed = sweep.file.run.screen && exec.closed(&job);
         let index = *by_hash.entry(hash.clone()).or_insert_with(|| {
-            points.push(PointRecord { index: points.len(), values, hash, closed });
+            points.push(PointRecord { index: points.len(), values, hash, closed, seed });
             jobs.push(job);
             points.len() - 1
         });
@@ -230,7 +252,7 @@ pub fn resolved_toml(sweep: &Sweep, design: &DesignRecord) -> Result<String> {
             f.design.lds.scrambling = *scrambling;
             f.design.lds.seed = *seed;
         }
-        DesignRecord::Adapt { first, batch, max, seed } => {
+        DesignRecord::Adapt { first, batch, max, seed, .. } => {
             f.design.adapt.first = *first;
             f.design.adapt.batch = *batch;
             f.design.adapt.max = *max;

@@ -43,7 +43,12 @@ pub trait Executor: Sync {
     /// recorded in the manifest; a resume refuses when it changed.
     fn identity(&self) -> serde_json::Value;
     /// Prepare the job of one design point (swept values in file order, sweep units). Pure.
-    fn prepare(&self, swept: &[f64]) -> crate::Result<Self::Job>;
+    fn prepare(&self, swept: &[f64]) -> crate::Result<Self::Job> {
+        self.prepare_seeded(swept, None)
+    }
+    /// Prepare the job of one design point run with its own `scene.seed` (a repeat of a
+    /// setting; `None`: the sweep's seed, as [`Executor::prepare`]). Pure.
+    fn prepare_seeded(&self, swept: &[f64], seed: Option<u64>) -> crate::Result<Self::Job>;
     /// The content hash naming the job's run dir.
     fn hash<'a>(&self, job: &'a Self::Job) -> &'a str;
     /// Whether nothing can pass under the blade at this job's point, so that a verified screen

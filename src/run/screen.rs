@@ -254,7 +254,7 @@ pub fn preview(sweep: &Sweep, values: &[Vec<f64>]) -> crate::Result<Vec<&'static
                     .map_err(|source| crate::point::PointError::Scene { path: sweep.path.clone(), source })?
                     .nothing_passes()
             };
-            Ok(PointRecord { index, values: v.clone(), hash: String::new(), closed })
+            Ok(PointRecord { index, values: v.clone(), hash: String::new(), closed, seed: None })
         })
         .collect::<crate::Result<Vec<_>>>()?;
     let sample = screen.sample(&points);
@@ -295,6 +295,7 @@ mod tests {
                 values: vec![i as f64, 0.5],
                 hash: format!("{i:064x}"),
                 closed: closed(i),
+                seed: None,
             })
             .collect()
     }

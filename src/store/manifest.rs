@@ -234,7 +234,20 @@ pub enum DesignRecord {
         batch: usize,
         max: usize,
         seed: u64,
+        /// Runs of each planned setting, each with its own `scene.seed` (`sweep calibrate
+        /// --repeats`): `first` and `batch` count settings, `max` runs. Absent (1) in manifests
+        /// written before repeats.
+        #[serde(default = "one", skip_serializing_if = "is_one")]
+        repeats: usize,
     },
+}
+
+fn one() -> usize {
+    1
+}
+
+fn is_one(n: &usize) -> bool {
+    *n == 1
 }
 
 impl DesignRecord {
@@ -265,6 +278,10 @@ pub struct PointRecord {
     /// screen is verified. Absent (false) in manifests written before the screen.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub closed: bool,
+    /// The `scene.seed` this point runs with, when not the sweep's: a repeat of a setting
+    /// (the same values, another initial packing). Absent in manifests written before repeats.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
 }
 
 /// `manifest.json`.
@@ -326,8 +343,10 @@ impl Manifest {
             DesignRecord::Lds { step, max, .. } if *step == 0 || max < step => {
                 Err(format!("design: lds step {step}, max {max}: expected 1 ≤ step ≤ max"))
             }
-            DesignRecord::Adapt { first, batch, max, .. } if *first == 0 || *batch == 0 || max < first => {
-                Err(format!("design: adapt first {first}, batch {batch}, max {max}: expected 1 ≤ first ≤ max, batch ≥ 1"))
+            DesignRecord::Adapt { first, batch, max, repeats, .. }
+                if *first == 0 || *batch == 0 || *repeats == 0 || *max < first * repeats =>
+            {
+                Err(format!("design: adapt first {first}, batch {batch}, max {max}, repeats {repeats}: expected 1 ≤ first × repeats ≤ max, batch ≥ 1, repeats ≥ 1"))
             }
             DesignRecord::Lattice { levels } if levels.iter().any(|&l| l < 2) => {
                 Err(format!("design: lattice levels {levels:?}: expected each at least 2"))

@@ -18,7 +18,7 @@ use demsweep::sys::process::CancelToken;
 const MS: Duration = Duration::from_millis(1);
 
 fn design(first: usize, batch: usize, max: usize) -> DesignRecord {
-    DesignRecord::Adapt { first, batch, max, seed: 7 }
+    DesignRecord::Adapt { first, batch, max, seed: 7, repeats: 1 }
 }
 
 /// A rule that never holds (tolerance 0): the sweep runs to its max.

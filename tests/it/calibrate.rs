@@ -210,8 +210,10 @@ fn one_free_parameter_is_recovered_and_drawn_as_a_curve() {
     assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
     let par = &posterior(&out)["parameters"][0];
     let (lo, hi) = (par["lo"].as_f64().unwrap(), par["hi"].as_f64().unwrap());
-    assert!(lo <= 0.2 && 0.2 <= hi && hi - lo < 0.1, "{par}");
-    assert_eq!(par["identification"], "identified", "{par}");
+    // The stand-in's heap scatters by 1° between seeds against a target of ±0.5°: pinned to
+    // about half the prior's range, no better.
+    assert!(lo <= 0.2 && 0.2 <= hi && hi - lo < 0.15, "{par}");
+    assert_ne!(par["identification"], "not identified", "{par}");
     assert!(std::fs::metadata(out.join("report/posterior-rolling_friction.png")).unwrap().len() > 5000);
     // The directory is this calibration's: other targets, or cluster arrays, are refused in one line.
     let other = calibrate(&file, &out, &["angle_of_repose=30±1".to_string()], &[]);
@@ -235,6 +237,59 @@ fn one_free_parameter_is_recovered_and_drawn_as_a_curve() {
     assert_eq!(calibrate::settings(&out).unwrap().targets[0].sd, 0.5);
 }
 
+#[test]
+fn the_emulator_takes_the_scatter_between_seeds_as_each_run_s_noise() {
+    // The stand-in's heap scatters between seeds by ANGLE_SCATTER but reports an SE of half
+    // that (ANGLE_SE), as a real pour's sectors do: repeats measure the scatter, and it, not the
+    // SE, is each run's noise in the emulator and so in the likelihood.
+    use demsweep::run::standin::{ANGLE_SCATTER, ANGLE_SE};
+    let tmp = tempfile::tempdir().unwrap();
+    let file = common::write_file(
+        &tmp.path().join("rolling.toml"),
+        "name = \"r\"\n[parameters]\nfriction = 0.3\nrolling_friction = { lo = 0.05, hi = 0.3 }\n\
+         [scene]\nlayout = \"pour\"\n[run]\nengine = \"stand-in\"\n",
+    );
+    let targets = [format!("angle_of_repose={}±0.5", truth().mean_angle())];
+    let out = tmp.path().join("out");
+    let o =
+        calibrate(&file, &out, &targets, &["--first", "8", "--batch", "2", "--max", "36", "--repeats", "3"]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let p = posterior(&out);
+    let noise = &p["noise"][0];
+    let between = noise["between_seed_sd"].as_f64().unwrap();
+    let df = noise["df"].as_u64().unwrap();
+    assert!(df >= 16, "{noise}");
+    // Within about 2 SE of the truth (an SD from ≥ 16 df is known to about ±18 %).
+    assert!((between / ANGLE_SCATTER - 1.0).abs() < 0.4, "{noise}");
+    assert_eq!(noise["own_se"].as_f64(), Some(ANGLE_SE), "{noise}");
+    assert_eq!(noise["run_sd"].as_f64(), Some(between), "{noise}");
+    // Each setting ran three times, with three seeds: three runs of the same values.
+    let rows = common::result_rows(&out);
+    assert_eq!(rows.len() % 3, 0, "{}", rows.len());
+    let (manifest, _) = Store::read_manifest(&out).unwrap();
+    for k in (0..manifest.points.len()).step_by(3) {
+        let p = &manifest.points[k..k + 3];
+        assert!(p.iter().all(|q| q.values == p[0].values), "{p:?}");
+        assert_eq!(p.iter().map(|q| q.seed).collect::<Vec<_>>(), vec![None, Some(12346), Some(12347)]);
+    }
+    let said = common::text(&o.stdout);
+    assert!(said.contains("noise of angle_of_repose: scatter between seeds"), "{said}");
+    let par = &p["parameters"][0];
+    assert!(par["lo"].as_f64().unwrap() <= 0.2 && 0.2 <= par["hi"].as_f64().unwrap(), "{par}");
+    // One run per setting measures no scatter, and says so.
+    let single = tmp.path().join("single");
+    let o = calibrate(
+        &file,
+        &single,
+        &targets,
+        &["--first", "8", "--batch", "2", "--max", "12", "--repeats", "1"],
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let noise = &posterior(&single)["noise"][0];
+    assert!(noise["between_seed_sd"].is_null() && noise["df"] == 0, "{noise}");
+    assert!(common::text(&o.stdout).contains("scatter between seeds not measured"));
+}
+
 /// MFR as a calibration target on the fake executor (gap and blade speed free): a smooth,
 /// known response.
 fn fake_mfr(v: &[f64]) -> f64 {
@@ -245,7 +300,7 @@ fn run_fake(dir: &Path, out: &Path, exec: &FakeExecutor, cancel: &CancelToken) -
     let s = common::fake_sweep(dir, "");
     let settings = settings();
     let mut watch = CalibrationWatch::new(&s, settings.clone(), 7);
-    let design = DesignRecord::Adapt { first: 10, batch: 4, max: 30, seed: 7 };
+    let design = DesignRecord::Adapt { first: 10, batch: 4, max: 30, seed: 7, repeats: 1 };
     calibrate::start(&s, design, &settings, out, exec, &common::quiet(2), &mut watch, cancel).unwrap()
 }
 

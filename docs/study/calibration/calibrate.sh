@@ -18,6 +18,9 @@
 #   bash docs/study/calibration/calibrate.sh 316l-surface-energy
 #   bash docs/study/calibration/calibrate.sh 316l-rolling
 #
+# These studies ran one pour per setting (`--repeats 1`), before repeats measured the scatter
+# between seeds.
+#
 # SWEEP: the binary (default target/release/sweep); CAL_DIR: the sweep directory.
 set -euo pipefail
 SWEEP=${SWEEP:-target/release/sweep}
@@ -43,7 +46,7 @@ if [ "$STUDY" = ti64-surface-energy ]; then
 fi
 status=0
 "$SWEEP" calibrate "docs/study/calibration/$FILE.toml" \
-  --target "angle_of_repose=$TARGET" --first "$FIRST" --batch 2 --max "$MAX" --jobs 1 --out "$OUT" || status=$?
+  --target "angle_of_repose=$TARGET" --first "$FIRST" --batch 2 --max "$MAX" --repeats 1 --jobs 1 --out "$OUT" || status=$?
 "$SWEEP" report "$OUT" >"$REC/answer.txt" 2>&1 || true
 for f in posterior.json calibration-batches.csv results.csv calibrated.toml calibrated-ranges.toml; do
   [ -f "$OUT/$f" ] && cp "$OUT/$f" "$REC/$f"
