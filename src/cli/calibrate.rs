@@ -18,8 +18,9 @@ pub(super) struct CalibrateArgs {
     /// The sweep file (TOML): its ranges in [parameters] are the free parameters, its fixed
     /// values and [scene] the rest of the test (e.g. layout "pour" for an angle of repose).
     sweep: PathBuf,
-    /// A measured value to reproduce, NAME=VALUE±SD (or +-): angle_of_repose (degrees) or
-    /// bulk_packing of a pour, mfr of a spreading layout. Repeat for several.
+    /// A measured value to reproduce, NAME=VALUE±SD (or +-): angle_of_repose (degrees),
+    /// bulk_packing or apparent_density (g/cm³, ASTM B212: the packing times the density) of a
+    /// pour, mfr of a spreading layout. Repeat for several.
     #[arg(long = "target", required = true)]
     targets: Vec<String>,
     /// Settings of the first (scrambled-Halton) batch; default design.adapt.first, else 10 per

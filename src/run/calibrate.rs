@@ -81,6 +81,18 @@ pub const QUANTITIES: &[Quantity] = &[
         read: |r| r.heap.as_ref().map(|h| (h.packing, None)),
         repeats: 2,
     },
+    // ASTM B212's apparent density (a Hall funnel's free-poured fill of a cup) as the heap's
+    // packing times the material's density: both a free-poured, unconsolidated packing.
+    Quantity {
+        name: "apparent_density",
+        unit: "g/cm³",
+        measured_by: |l| l == "pour",
+        read: |r| {
+            let density = r.parameters.get("density")?;
+            r.heap.as_ref().map(|h| (h.packing * density / 1000.0, None))
+        },
+        repeats: 2,
+    },
     Quantity {
         name: "mfr",
         unit: "-",

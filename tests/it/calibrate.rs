@@ -290,6 +290,46 @@ fn the_emulator_takes_the_scatter_between_seeds_as_each_run_s_noise() {
     assert!(common::text(&o.stdout).contains("scatter between seeds not measured"));
 }
 
+#[test]
+fn apparent_density_beside_the_angle_narrows_the_friction_ridge() {
+    // One angle leaves sliding and rolling friction on a ridge; a datasheet's apparent density
+    // (ASTM B212: the packing times the material's density, 7980 kg/m³ here) cuts it, as the
+    // stand-in's packing falls with sliding friction twice as fast as with rolling friction.
+    let tmp = tempfile::tempdir().unwrap();
+    let file = pour_sweep(tmp.path());
+    let t = truth();
+    let angle = format!("angle_of_repose={}±0.5", t.mean_angle());
+    let density = format!("apparent_density={}±0.02", t.mean_packing() * 7.98);
+    let args = ["--first", "12", "--batch", "4", "--max", "56"];
+    let width = |out: &Path| {
+        let p = posterior(out);
+        let f = &p["parameters"][0];
+        assert_eq!(f["name"], "friction");
+        let (lo, hi) = (f["lo"].as_f64().unwrap(), f["hi"].as_f64().unwrap());
+        assert!(lo <= t.friction && t.friction <= hi, "{f} misses {}", t.friction);
+        (hi - lo, p)
+    };
+    let (one, two) = (tmp.path().join("one"), tmp.path().join("two"));
+    let o = calibrate(&file, &one, std::slice::from_ref(&angle), &args);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let o = calibrate(&file, &two, &[angle.clone(), density], &args);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let ((w1, p1), (w2, p2)) = (width(&one), width(&two));
+    assert!(w2 < 0.7 * w1, "friction's 95 % interval: {w2} with the apparent density, {w1} without");
+    assert_eq!(p1["ridges"].as_array().unwrap().len(), 1, "{}", p1["ridges"]);
+    let ratio = |p: &serde_json::Value| p["parameters"][0]["sd_ratio"].as_f64().unwrap();
+    assert!(
+        ratio(&p2) < 0.6 * ratio(&p1),
+        "posterior SD over the prior's: {} against {}",
+        ratio(&p2),
+        ratio(&p1)
+    );
+    // The apparent density is read in g/cm³ from the heap's packing.
+    let best = &p2["best_run"]["residuals"][1];
+    assert_eq!(best["target"]["name"], "apparent_density");
+    assert!((best["simulated"].as_f64().unwrap() - t.mean_packing() * 7.98).abs() < 0.1, "{best}");
+}
+
 /// MFR as a calibration target on the fake executor (gap and blade speed free): a smooth,
 /// known response.
 fn fake_mfr(v: &[f64]) -> f64 {
