@@ -4,11 +4,11 @@ pours done, the mean angle of repose and its scatter between seeds (SD, ddof 1) 
 each pour reports over its heap's eight sectors (root mean square), the packing, and the CPU
 seconds of a pour; then the CPU a mean to ±1° (one SE) costs at each size, (SD / 1°)² pours.
 
-    python3 docs/study/calibration/size.py            # from the repository's root
+    python3 docs/study/calibration/size.py [record-size-2mm]   # from the repository's root
 """
 import glob, json, math, os, re, statistics as st, sys
 
-REC = os.path.join(os.path.dirname(os.path.abspath(__file__)), "record-size")
+REC = os.path.join(os.path.dirname(os.path.abspath(__file__)), sys.argv[1] if len(sys.argv) > 1 else "record-size")
 rows = {}
 failed = []
 for path in sorted(glob.glob(os.path.join(REC, "n*-s*.json"))):
