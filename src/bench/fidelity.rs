@@ -344,72 +344,113 @@ pub fn profile_error(a: &[Option<f64>], b: &[Option<f64>], speed: f64) -> Option
     mean(&d).map(f64::sqrt)
 }
 
+/// A header: `before`, the parameter names, `after`.
+fn header(before: &[&str], names: &[&str], after: &[&str]) -> Vec<String> {
+    before.iter().chain(names).chain(after).map(|s| s.to_string()).collect()
+}
+
 /// One row per run.
 pub fn runs_csv(runs: &[Run], variants: &[Variant], points: &[Vec<f64>], names: &[&str]) -> String {
-    let mut s = format!(
-        "point,{},variant,seed,status,mfr,wall_s,cpu_s,steps,particles,reused,hash,reason\n",
-        names.join(",")
+    let head = header(
+        &["point"],
+        names,
+        &[
+            "variant",
+            "seed",
+            "status",
+            "mfr",
+            "wall_s",
+            "cpu_s",
+            "steps",
+            "particles",
+            "reused",
+            "hash",
+            "reason",
+        ],
     );
-    for r in runs {
-        let values: Vec<String> = points[r.point].iter().map(|v| format!("{v:.6}")).collect();
-        s += &format!(
-            "{},{},{},{},{},{},{:.2},{:.2},{},{},{},{},\"{}\"\n",
-            r.point,
-            values.join(","),
-            variants[r.variant].name,
-            r.seed,
-            r.status,
+    let rows = runs.iter().map(|r| {
+        let mut row = vec![r.point.to_string()];
+        row.extend(points[r.point].iter().map(|v| format!("{v:.6}")));
+        row.extend([
+            variants[r.variant].name.to_string(),
+            r.seed.to_string(),
+            r.status.to_string(),
             opt(r.mfr(), 5),
-            r.wall,
-            r.cpu,
+            format!("{:.2}", r.wall),
+            format!("{:.2}", r.cpu),
             r.result.as_ref().map_or(String::new(), |x| x.steps.to_string()),
             r.result.as_ref().map_or(String::new(), |x| x.particles.to_string()),
-            r.reused,
-            r.hash,
-            r.reason.replace('"', "'")
-        );
-    }
-    s
+            r.reused.to_string(),
+            r.hash.clone(),
+            r.reason.clone(),
+        ]);
+        row
+    });
+    super::csv_text(head, rows)
 }
 
 /// One row per point and variant.
 pub fn cells_csv(cells: &[Cell], variants: &[Variant], points: &[Vec<f64>], names: &[&str]) -> String {
-    let mut s = format!(
-        "point,{},variant,runs,failed,mfr,mfr_se,mfr_error,mfr_error_se,vx_error,wall_s,cpu_s\n",
-        names.join(",")
+    let head = header(
+        &["point"],
+        names,
+        &[
+            "variant",
+            "runs",
+            "failed",
+            "mfr",
+            "mfr_se",
+            "mfr_error",
+            "mfr_error_se",
+            "vx_error",
+            "wall_s",
+            "cpu_s",
+        ],
     );
-    for c in cells {
-        let values: Vec<String> = points[c.point].iter().map(|v| format!("{v:.6}")).collect();
-        s += &format!(
-            "{},{},{},{},{},{},{},{},{},{},{:.2},{:.2}\n",
-            c.point,
-            values.join(","),
-            variants[c.variant].name,
-            c.runs,
-            c.failed,
+    let rows = cells.iter().map(|c| {
+        let mut row = vec![c.point.to_string()];
+        row.extend(points[c.point].iter().map(|v| format!("{v:.6}")));
+        row.extend([
+            variants[c.variant].name.to_string(),
+            c.runs.to_string(),
+            c.failed.to_string(),
             opt(c.mfr, 5),
             opt(c.mfr_se, 5),
             opt(c.mfr_error, 5),
             opt(c.mfr_error_se, 5),
             opt(c.vx_error, 4),
-            c.wall,
-            c.cpu
-        );
-    }
-    s
+            format!("{:.2}", c.wall),
+            format!("{:.2}", c.cpu),
+        ]);
+        row
+    });
+    super::csv_text(head, rows)
 }
 
 /// One row per variant.
 pub fn summary_csv(summaries: &[Summary], variants: &[Variant]) -> String {
-    let mut s = String::from(
-        "variant,cpu_s_per_point,wall_s_per_point,speedup_vs_thesis,speedup_vs_reference,worst_mfr_error,mean_abs_mfr_error,mean_error_se,mean_vx_error,worst_vx_error,failed\n",
+    let head = header(
+        &[
+            "variant",
+            "cpu_s_per_point",
+            "wall_s_per_point",
+            "speedup_vs_thesis",
+            "speedup_vs_reference",
+            "worst_mfr_error",
+            "mean_abs_mfr_error",
+            "mean_error_se",
+            "mean_vx_error",
+            "worst_vx_error",
+            "failed",
+        ],
+        &[],
+        &[],
     );
-    for m in summaries {
-        s += &format!(
-            "{},{:.2},{:.2},{},{},{},{},{},{},{},{}\n",
-            variants[m.variant].name,
-            m.cpu_per_point,
-            m.wall_per_point,
+    let rows = summaries.iter().map(|m| {
+        vec![
+            variants[m.variant].name.to_string(),
+            format!("{:.2}", m.cpu_per_point),
+            format!("{:.2}", m.wall_per_point),
             opt(m.speedup_vs_thesis, 2),
             opt(m.speedup_vs_reference, 2),
             opt(m.worst_error, 4),
@@ -417,10 +458,10 @@ pub fn summary_csv(summaries: &[Summary], variants: &[Variant]) -> String {
             opt(m.mean_error_se, 4),
             opt(m.mean_vx_error, 4),
             opt(m.worst_vx_error, 4),
-            m.failed
-        );
-    }
-    s
+            m.failed.to_string(),
+        ]
+    });
+    super::csv_text(head, rows)
 }
 
 /// The frontier: per variant, CPU seconds per point (log x) against the mean |MFR error|

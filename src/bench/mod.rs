@@ -59,3 +59,31 @@ impl From<BenchError> for crate::Error {
         }
     }
 }
+
+/// The CSV text of a header and rows.
+pub fn csv_text(head: Vec<String>, rows: impl IntoIterator<Item = Vec<String>>) -> String {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    // Writing into memory cannot fail.
+    w.write_record(&head).expect("in memory");
+    for row in rows {
+        w.write_record(&row).expect("in memory");
+    }
+    String::from_utf8(w.into_inner().expect("in memory")).expect("UTF-8 fields")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::csv_text;
+
+    #[test]
+    fn a_field_with_a_quote_or_a_comma_reads_back_and_an_ordinary_one_is_written_bare() {
+        let head = vec!["point".to_string(), "reason".to_string()];
+        let odd = "said \"no\", twice";
+        let text = csv_text(head, [vec!["1".into(), odd.into()], vec!["2".into(), "plain text".into()]]);
+        assert!(text.ends_with("\n2,plain text\n"), "{text}");
+        let mut r = csv::Reader::from_reader(text.as_bytes());
+        let rows: Vec<csv::StringRecord> = r.records().map(|x| x.unwrap()).collect();
+        assert_eq!(&rows[0][1], odd);
+        assert_eq!(&rows[1][1], "plain text");
+    }
+}

@@ -350,51 +350,68 @@ pub fn edge<'a>(
 
 /// One row per level.
 pub fn levels_csv(results: &[LevelResult]) -> String {
-    let mut s = String::from(
-        "ladder,rayleigh_fraction,youngs_modulus_mpa,timestep_s,runs,failed,mfr_mean,mfr_se,drift,bound,wall_s,verdict\n",
-    );
-    for r in results {
-        s += &format!(
-            "{},{},{},{:.4e},{},{},{},{},{},{},{:.1},\"{}\"\n",
-            r.ladder,
-            r.level.fraction,
-            r.level.youngs_mpa,
-            r.timestep(),
-            r.runs.len(),
-            r.runs.iter().filter(|x| x.failed()).count(),
+    let head = [
+        "ladder",
+        "rayleigh_fraction",
+        "youngs_modulus_mpa",
+        "timestep_s",
+        "runs",
+        "failed",
+        "mfr_mean",
+        "mfr_se",
+        "drift",
+        "bound",
+        "wall_s",
+        "verdict",
+    ];
+    let rows = results.iter().map(|r| {
+        vec![
+            r.ladder.to_string(),
+            r.level.fraction.to_string(),
+            r.level.youngs_mpa.to_string(),
+            format!("{:.4e}", r.timestep()),
+            r.runs.len().to_string(),
+            r.runs.iter().filter(|x| x.failed()).count().to_string(),
             opt(r.mfr_mean, 5),
             opt(r.mfr_se, 5),
             opt(r.drift, 4),
             opt(r.bound, 4),
-            r.wall(),
-            r.verdict.replace('"', "'")
-        );
-    }
-    s
+            format!("{:.1}", r.wall()),
+            r.verdict.clone(),
+        ]
+    });
+    super::csv_text(head.iter().map(|s| s.to_string()).collect(), rows)
 }
 
 /// One row per run.
 pub fn runs_csv(results: &[LevelResult]) -> String {
-    let mut s = String::from(
-        "ladder,rayleigh_fraction,youngs_modulus_mpa,timestep_s,seed,status,mfr,wall_s,reason\n",
-    );
-    for r in results {
-        for x in &r.runs {
-            s += &format!(
-                "{},{},{},{:.4e},{},{},{},{:.1},\"{}\"\n",
-                r.ladder,
-                r.level.fraction,
-                r.level.youngs_mpa,
-                x.timestep,
-                x.seed,
-                x.status,
+    let head = [
+        "ladder",
+        "rayleigh_fraction",
+        "youngs_modulus_mpa",
+        "timestep_s",
+        "seed",
+        "status",
+        "mfr",
+        "wall_s",
+        "reason",
+    ];
+    let rows = results.iter().flat_map(|r| {
+        r.runs.iter().map(move |x| {
+            vec![
+                r.ladder.to_string(),
+                r.level.fraction.to_string(),
+                r.level.youngs_mpa.to_string(),
+                format!("{:.4e}", x.timestep),
+                x.seed.to_string(),
+                x.status.to_string(),
                 opt(x.mfr, 5),
-                x.wall,
-                x.reason.replace('"', "'")
-            );
-        }
-    }
-    s
+                format!("{:.1}", x.wall),
+                x.reason.clone(),
+            ]
+        })
+    });
+    super::csv_text(head.iter().map(|s| s.to_string()).collect(), rows)
 }
 
 /// The stability map: mean MFR ± 2 SE per level against the timestep fraction (left) and the
@@ -577,5 +594,20 @@ restitution = 0.5
         assert_eq!(csv.lines().count(), 2);
         let svg = plot_svg(&[judge("timestep", l, vec![run(None)], None)], "t").unwrap();
         assert!(crate::report::to_png(&svg).unwrap().starts_with(b"\x89PNG"));
+    }
+
+    #[test]
+    fn a_reason_with_a_quote_and_a_comma_reads_back_whole() {
+        let l = Level { fraction: 0.4, youngs_mpa: 21.0 };
+        let reason = "lost atoms: \"3 of 1,000\", then \"nan\"";
+        let failed = Run { reason: reason.into(), ..run(None) };
+        let csv = runs_csv(&[judge("timestep", l, vec![failed, run(Some(0.1))], None)]);
+        let mut r = csv::Reader::from_reader(csv.as_bytes());
+        let rows: Vec<csv::StringRecord> = r.records().map(|x| x.unwrap()).collect();
+        assert_eq!(rows.len(), 2);
+        assert_eq!(rows[0].len(), 9);
+        assert_eq!(&rows[0][8], reason);
+        // An ordinary row: plain fields, nothing quoted.
+        assert_eq!(csv.lines().nth(2), Some("timestep,0.4,21,1.0000e-5,1,ok,0.10000,1.0,"));
     }
 }

@@ -124,15 +124,21 @@ pub(super) fn points(a: PointsArgs) -> Result<(), Error> {
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
     let write = |out: &mut dyn Write| -> std::io::Result<()> {
-        let extra = if screen.is_some() { ",screen" } else { "" };
-        writeln!(out, "{}{extra}", sweep.names().join(","))?;
+        // The write's own error, so that a closed pipe stays one.
+        let io = |e: csv::Error| match e.into_kind() {
+            csv::ErrorKind::Io(e) => e,
+            other => std::io::Error::other(format!("{other:?}")),
+        };
+        let mut w = csv::Writer::from_writer(out);
+        let extra = screen.as_ref().map(|_| "screen");
+        w.write_record(sweep.names().into_iter().chain(extra)).map_err(io)?;
         for (k, v) in values.iter().enumerate() {
             // 12 significant digits: every digit a design has, without float noise.
-            let row: Vec<String> = v.iter().map(|v| demsweep::scene::plausible::round_to(*v, 12)).collect();
-            let extra = screen.as_ref().map_or(String::new(), |c| format!(",{}", c[k]));
-            writeln!(out, "{}{extra}", row.join(","))?;
+            let row = v.iter().map(|v| demsweep::scene::plausible::round_to(*v, 12));
+            let extra = screen.as_ref().map(|c| c[k].to_string());
+            w.write_record(row.chain(extra)).map_err(io)?;
         }
-        out.flush()
+        w.flush()
     };
     match write(&mut out) {
         Ok(()) => Ok(()),

@@ -401,26 +401,31 @@ fn write_batches(
     rows: &[(usize, &Choice)],
 ) -> Result<()> {
     let path = dir.join(BATCHES);
-    let mut text = std::fs::read_to_string(&path).unwrap_or_default();
-    if text.is_empty() {
-        let names: Vec<&str> = sweep.swept.iter().map(|p| p.name.as_str()).collect();
-        text = format!(
-            "batch,index,planned_from,criterion_before,gain,emulator_mfr,emulator_se,{}\n",
-            names.join(",")
-        );
+    let text = std::fs::read_to_string(&path).unwrap_or_default();
+    let mut w = csv::Writer::from_writer(text.into_bytes());
+    let csv_error = |e: csv::Error| RunError::Write { path: path.clone(), source: e.into() };
+    let io_error = |e: std::io::Error| RunError::Write { path: path.clone(), source: e };
+    if w.get_ref().is_empty() {
+        let head =
+            ["batch", "index", "planned_from", "criterion_before", "gain", "emulator_mfr", "emulator_se"];
+        let names = sweep.swept.iter().map(|p| p.name.as_str());
+        w.write_record(head.iter().copied().chain(names)).map_err(csv_error)?;
     }
     let num = |v: f64| if v.is_finite() { format!("{v}") } else { String::new() };
     for (index, c) in rows {
         let values = crate::sweep::space::scale_point(sweep, &c.point);
-        text.push_str(&format!(
-            "{batch},{index},{from},{},{},{},{},{}\n",
+        let head = [
+            batch.to_string(),
+            index.to_string(),
+            from.to_string(),
             num(j_before),
             num(c.gain),
             num(c.mfr),
             num(c.se),
-            values.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(",")
-        ));
+        ];
+        w.write_record(head.into_iter().chain(values.iter().map(|v| v.to_string()))).map_err(csv_error)?;
     }
-    crate::sys::atomic::write(&path, text.as_bytes())
+    let text = w.into_inner().map_err(|e| io_error(e.into_error()))?;
+    crate::sys::atomic::write(&path, &text)
         .map_err(|e| RunError::Write { path: path.clone(), source: e }.into())
 }

@@ -472,20 +472,22 @@ fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &CalibrationWatch, ran: u
 /// Append the rows of one batch to [`BATCHES`] (written whole, under the directory's lock).
 fn write_batches(dir: &Path, sweep: &Sweep, from: &str, batch: usize, rows: &[(usize, &Pick)]) -> Result<()> {
     let path: PathBuf = dir.join(BATCHES);
-    let mut text = std::fs::read_to_string(&path).unwrap_or_default();
-    if text.is_empty() {
-        text = format!("batch,index,planned_from,why,log_var_density,{}\n", sweep.names().join(","));
+    let text = std::fs::read_to_string(&path).unwrap_or_default();
+    let mut w = csv::Writer::from_writer(text.into_bytes());
+    let csv_error = |e: csv::Error| RunError::Write { path: path.clone(), source: e.into() };
+    let io_error = |e: std::io::Error| RunError::Write { path: path.clone(), source: e };
+    if w.get_ref().is_empty() {
+        let head = ["batch", "index", "planned_from", "why", "log_var_density"];
+        w.write_record(head.iter().copied().chain(sweep.names())).map_err(csv_error)?;
     }
     for (index, c) in rows {
         let values = crate::sweep::space::scale_point(sweep, &c.point);
         let lv = if c.log_var.is_finite() { c.log_var.to_string() } else { String::new() };
-        text.push_str(&format!(
-            "{batch},{index},{from},{},{lv},{}\n",
-            c.why,
-            values.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(",")
-        ));
+        let head = [batch.to_string(), index.to_string(), from.to_string(), c.why.to_string(), lv];
+        w.write_record(head.into_iter().chain(values.iter().map(|v| v.to_string()))).map_err(csv_error)?;
     }
-    crate::sys::atomic::write(&path, text.as_bytes())
+    let text = w.into_inner().map_err(|e| io_error(e.into_error()))?;
+    crate::sys::atomic::write(&path, &text)
         .map_err(|e| RunError::Write { path: path.clone(), source: e }.into())
 }
 
