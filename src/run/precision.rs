@@ -49,13 +49,8 @@ pub fn settle(dir: &Path, dim: usize, tau: f64, mfrs: &[f64]) -> Option<SweepPre
         return Some(p);
     }
     let chosen = choose(mfrs, first_batch(dim), tau)?;
-    let tmp = dir.join(format!(".{PRECISION}.tmp.{}", std::process::id()));
-    let mut text = serde_json::to_string_pretty(&chosen).ok()?;
-    text.push('\n');
-    std::fs::write(&tmp, text).ok()?;
-    // A hard link never replaces a record another process made first.
-    let _ = std::fs::hard_link(&tmp, dir.join(PRECISION));
-    let _ = std::fs::remove_file(&tmp);
+    // Never over a record another process made first: then that one is read.
+    crate::sys::atomic::create_json(&dir.join(PRECISION), &chosen).ok()?;
     read(dir)
 }
 

@@ -11,12 +11,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Write `bytes` to `path` atomically.
 pub fn write(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let dir = path.parent().unwrap_or(Path::new("."));
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
-    // Unique per writer: two threads of one process may write the same file at once.
-    static WRITES: AtomicU64 = AtomicU64::new(0);
-    let n = WRITES.fetch_add(1, Ordering::SeqCst);
-    let tmp = dir.join(format!(".{name}.tmp.{}.{}.{n}", host(), std::process::id()));
+    let tmp = temporary(path);
     let written = std::fs::File::create(&tmp).and_then(|mut f| {
         f.write_all(bytes)?;
         f.sync_all()?;
@@ -28,11 +23,41 @@ pub fn write(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     written
 }
 
+/// A temporary name beside `path`, unique per writer: two threads of one process may write the
+/// same file at once.
+fn temporary(path: &Path) -> std::path::PathBuf {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
+    static WRITES: AtomicU64 = AtomicU64::new(0);
+    let n = WRITES.fetch_add(1, Ordering::SeqCst);
+    dir.join(format!(".{name}.tmp.{}.{}.{n}", host(), std::process::id()))
+}
+
 /// Write `value` as pretty JSON (with a final newline) to `path` atomically.
 pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> std::io::Result<()> {
     let mut bytes = serde_json::to_vec_pretty(value)?;
     bytes.push(b'\n');
     write(path, &bytes)
+}
+
+/// Write `value` as pretty JSON (with a final newline) to `path` only if no file is there yet:
+/// whole or not at all, and never over a file another writer made first (a hard link, which
+/// fails where the target exists). `Ok(false)`: one was there.
+pub fn create_json<T: serde::Serialize>(path: &Path, value: &T) -> std::io::Result<bool> {
+    let mut bytes = serde_json::to_vec_pretty(value)?;
+    bytes.push(b'\n');
+    let tmp = temporary(path);
+    let written = std::fs::File::create(&tmp).and_then(|mut f| {
+        f.write_all(&bytes)?;
+        f.sync_all()
+    });
+    let linked = written.and_then(|_| match std::fs::hard_link(&tmp, path) {
+        Ok(()) => Ok(true),
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(false),
+        Err(e) => Err(e),
+    });
+    let _ = std::fs::remove_file(&tmp);
+    linked
 }
 
 fn host() -> &'static str {
@@ -71,6 +96,16 @@ mod tests {
         super::write(&path, b"old").unwrap();
         super::write(&path, b"new").unwrap();
         assert_eq!(std::fs::read(&path).unwrap(), b"new");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn create_json_never_replaces_a_file_and_leaves_no_temporary() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("p.json");
+        assert!(super::create_json(&path, &1).unwrap());
+        assert!(!super::create_json(&path, &2).unwrap());
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "1\n");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }
 
