@@ -127,11 +127,17 @@ pub(super) fn resume(
 
 /// Write the calibration's report, print its answer, and say what to do about the runs.
 fn finish(s: &Summary) -> Result<(), Error> {
-    let c = demsweep::report::calibration::write(&s.dir)?;
-    for line in c.lines() {
-        println!("{line}");
+    let dir = demsweep::sys::shell::quote(&s.dir.display().to_string()).into_owned();
+    // Told to stop: stop now, and leave the report of what is done to `sweep report`.
+    if !s.interrupted {
+        demsweep::sys::process::on_interrupt_say(format!(
+            "the runs are kept; the report was not finished: `sweep report {dir}` writes it"
+        ));
+        let c = demsweep::report::calibration::write(&s.dir)?;
+        for line in c.lines() {
+            println!("{line}");
+        }
     }
-    let dir = s.dir.display();
     if s.interrupted {
         eprintln!(
             "interrupted: {} of {} points finished; continue with `sweep resume {dir}`",

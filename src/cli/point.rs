@@ -197,6 +197,9 @@ pub(super) fn run_one(a: RunArgs) -> Result<(), Error> {
     let standin = demsweep::run::standin::selected(&sweep);
     let ctx = if standin { None } else { Some(PointContext::new(sweep.clone())?) };
     let prepared = ctx.as_ref().map(|c| prepare_set(c, &values, &a.set)).transpose()?;
+    // The stand-in checks its template here, before a line says it runs.
+    let standin_exec =
+        if standin { Some(demsweep::run::standin::StandIn::new(sweep.clone())?) } else { None };
     notes.iter().for_each(|n| eprintln!("note: {n}"));
     let temp;
     let dir = match &a.out {
@@ -228,7 +231,7 @@ pub(super) fn run_one(a: RunArgs) -> Result<(), Error> {
         (Some(ctx), Some(p)) => point::execute(ctx, p, &dir, &cancel),
         _ => {
             use demsweep::run::pool::Executor;
-            let exec = demsweep::run::standin::StandIn::new(sweep.clone())?;
+            let exec = standin_exec.expect("the stand-in when no LIGGGHTS context");
             exec.execute(&exec.prepare(&values)?, &dir, &cancel)
         }
     };

@@ -10,6 +10,7 @@ use demsweep::analysis::convergence::Criteria;
 use demsweep::analysis::stats::Bootstrap;
 use demsweep::error::Error;
 use demsweep::run::adapt::AdaptWatch;
+use demsweep::run::progress::ProgressMode;
 use demsweep::run::{self as driver, Summary, Watch};
 use demsweep::store::DesignRecord;
 use demsweep::sweep::Sweep;
@@ -233,13 +234,20 @@ pub(super) fn adapt(a: AdaptArgs) -> Result<(), Error> {
     let opts = run_options(&a.pool, false, false)?;
     let ad = &sweep.file.design.adapt;
     let file = a.sweep.display();
-    let source = |flag: &str, key: &str, given: Option<usize>, from_file: usize| match given {
+    // Where a number came from: the flag, the file, or the default the file left in place.
+    let default = demsweep::sweep::AdaptSettings::default();
+    let source = |flag: &str, key: &str, given: Option<usize>, from_file: usize, unset: usize| match given {
         Some(v) => (v, flag.to_string()),
+        None if from_file == unset => (from_file, format!("the default design.adapt.{key}")),
         None => (from_file, format!("design.adapt.{key} in {file}")),
     };
-    let (first, first_src) = source("--first", "first", a.first, ad.first);
-    let first = if first == 0 && a.first.is_none() { 10 * sweep.dim() } else { first };
-    let (max, max_src) = source("--max", "max", a.max, ad.max);
+    let (first, first_src) = source("--first", "first", a.first, ad.first, default.first);
+    let (first, first_src) = if first == 0 && a.first.is_none() {
+        (10 * sweep.dim(), "the default first batch (10 per swept parameter)".to_string())
+    } else {
+        (first, first_src)
+    };
+    let (max, max_src) = source("--max", "max", a.max, ad.max, default.max);
     let out = a.out.unwrap_or_else(|| driver::default_out(&sweep));
     // The batch size is part of the design: an existing directory keeps its own unless told.
     let existing = demsweep::store::Store::read_manifest(&out).ok().and_then(|(m, _)| match m.design {
@@ -276,7 +284,7 @@ pub(super) fn adapt(a: AdaptArgs) -> Result<(), Error> {
     let cancel = CancelToken::new();
     let exec = driver::SweepExecutor::for_sweep(&sweep)?;
     let summary = driver::adapt::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?;
-    finish(&summary, &sweep)
+    finish(&summary, &sweep, opts.progress)
 }
 
 pub(super) fn start(
@@ -300,7 +308,7 @@ pub(super) fn start(
     let cancel = CancelToken::new();
     let exec = driver::SweepExecutor::for_sweep(&sweep)?;
     let summary = driver::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?;
-    finish(&summary, &sweep)
+    finish(&summary, &sweep, opts.progress)
 }
 
 /// `--plan`: the directory written, nothing run; say what to do with it.
@@ -313,7 +321,7 @@ fn plan(
     let cancel = CancelToken::new();
     let exec = driver::SweepExecutor::for_sweep(sweep)?;
     let (points, unfinished) = driver::plan_dir(sweep, design, out, &exec, opts.progress, &cancel)?;
-    let dir = out.display();
+    let dir = demsweep::sys::shell::quote(&out.display().to_string()).into_owned();
     eprintln!("planned {points} points in {dir}, {unfinished} to run; nothing run");
     eprintln!(
         "run them here: `sweep resume {dir}`; on a cluster: `sweep submit {dir} --scheduler slurm --tasks N`"
@@ -343,12 +351,24 @@ pub(super) fn resume(a: ResumeArgs) -> Result<(), Error> {
         let mut watch = Watch::new(criteria.for_design(lattice));
         driver::resume(&a.dir, &exec, &opts, &mut watch, &cancel)?
     };
-    finish(&summary, &sweep)
+    finish(&summary, &sweep, opts.progress)
 }
 
 /// Write the report, say what happened and what to do next; failed runs or an interruption are
 /// the error returned.
-pub(super) fn finish(s: &Summary, sweep: &Sweep) -> Result<(), Error> {
+pub(super) fn finish(s: &Summary, sweep: &Sweep, progress: ProgressMode) -> Result<(), Error> {
+    // Told to stop: stop now, and leave the report of what is done to `sweep report`.
+    if s.interrupted {
+        return finish_runs(s);
+    }
+    let dir = demsweep::sys::shell::quote(&s.dir.display().to_string()).into_owned();
+    demsweep::sys::process::on_interrupt_say(format!(
+        "the runs are kept; the report was not finished: `sweep report {dir}` writes it"
+    ));
+    // A large sweep's report takes seconds: say what is going on.
+    if progress != ProgressMode::Quiet {
+        eprintln!("writing the report of {} points…", s.points);
+    }
     let criteria = Criteria::from_settings(&sweep.file.convergence);
     let analysis = demsweep::report::analyse(&s.dir, &criteria, &Bootstrap::default())?;
     let html = demsweep::report::write(&analysis)?;
@@ -370,7 +390,7 @@ fn print_answer(analysis: &demsweep::report::Analysis) {
 
 /// Say what to do next about the runs; failed runs or an interruption are the error returned.
 pub(super) fn finish_runs(s: &Summary) -> Result<(), Error> {
-    let dir = s.dir.display();
+    let dir = demsweep::sys::shell::quote(&s.dir.display().to_string()).into_owned();
     if let Some(line) = s.screen.sentence() {
         let warning =
             if s.screen.verdict == demsweep::run::screen::Verdict::Refuted { "warning: " } else { "" };
@@ -378,7 +398,7 @@ pub(super) fn finish_runs(s: &Summary) -> Result<(), Error> {
     }
     if s.interrupted {
         eprintln!(
-            "interrupted: {} of {} points finished; continue with `sweep resume {dir}`",
+            "interrupted: {} of {} points finished; continue with `sweep resume {dir}` (`sweep report {dir}` reports what is done)",
             s.done + s.failed,
             s.points
         );
@@ -413,7 +433,7 @@ pub(super) fn unclaim(a: UnclaimArgs) -> Result<(), Error> {
     eprintln!(
         "released {} claims; kept {kept} held by live processes here; `sweep resume {}` runs the released points",
         released.len(),
-        a.dir.display()
+        demsweep::sys::shell::quote(&a.dir.display().to_string())
     );
     Ok(())
 }

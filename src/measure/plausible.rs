@@ -22,7 +22,13 @@ pub const VX_MAX_BLADE_SPEEDS: f64 = 10.0;
 
 /// Why a number is not possible, naming it.
 fn bad(what: &str, v: f64, expected: &str) -> String {
-    format!("{what} = {v}: expected {expected}")
+    // Shortest form that is still the value: 1e300 as "1e300", not 301 digits.
+    let shown = if v.is_finite() && v != 0.0 && !(1e-5..1e9).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    };
+    format!("{what} = {shown}: expected {expected}")
 }
 
 fn check_within(what: &str, v: f64, hi: f64) -> Result<(), String> {

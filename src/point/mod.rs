@@ -42,7 +42,16 @@ impl PointContext {
     pub fn new(sweep: Sweep) -> Result<PointContext> {
         // The template first: a bad one is bad input, found before the engine is run.
         let layout = crate::scenes::of(&sweep.file.scene).map_err(PointError::Layout)?;
-        let template = Template::load(sweep.template_path().as_deref(), layout).map_err(PointError::Deck)?;
+        let path = sweep.template_path();
+        let template = Template::load(path.as_deref(), layout).map_err(|e| match path {
+            // The sweep file's template: named by its file and key.
+            Some(_) => crate::error::Error::from(crate::sweep::SweepError::Key {
+                path: sweep.path.clone(),
+                key: "scene.template".into(),
+                why: e.to_string(),
+            }),
+            None => PointError::Deck(e).into(),
+        })?;
         // Under the process's interrupt flag (Ctrl-C, SIGTERM), like every run.
         let engine = Engine::locate(sweep.file.run.engine.as_deref(), &CancelToken::new())?;
         let timeout = Duration::from_secs_f64(sweep.file.run.timeout_s);

@@ -228,13 +228,15 @@ fn failing_tests(a: &Analysis) -> Vec<String> {
 
 /// What to do next: resume, extend the design, look at the failures.
 fn next(a: &Analysis) -> Option<String> {
-    let dir = a.dir.display();
+    // Words a user pastes into a shell: a name with a space or a `*` stays one word.
+    let quote = |p: &std::path::Path| crate::sys::shell::quote(&p.display().to_string()).into_owned();
+    let (dir, file) = (quote(&a.dir), quote(&a.dir.join("sweep.toml")));
     let mut steps = Vec::new();
     match a.verdict.status {
         "unfinished" => steps.push(format!("`sweep resume {dir}` runs the pending points")),
         "not-converged" => steps.push(match &a.design {
             DesignRecord::Lds { max, .. } => format!(
-                "raise design.lds.max: `sweep lds {dir}/sweep.toml --max {} --out {dir}` keeps the {} points run and adds {}",
+                "raise design.lds.max: `sweep lds {file} --max {} --out {dir}` keeps the {} points run and adds {}",
                 2 * max,
                 max,
                 max
@@ -243,12 +245,12 @@ fn next(a: &Analysis) -> Option<String> {
                 let more: Vec<String> =
                     levels.iter().chain(levels.last().map(|l| l + 1).as_ref()).map(|l| l.to_string()).collect();
                 format!(
-                    "add a finer level: `sweep lattice {dir}/sweep.toml --levels {} --out {dir}` keeps the points run",
+                    "add a finer level: `sweep lattice {file} --levels {} --out {dir}` keeps the points run",
                     more.join(",")
                 )
             }
             DesignRecord::Adapt { max, .. } => format!(
-                "raise design.adapt.max: `sweep adapt {dir}/sweep.toml --max {} --out {dir}` keeps the {} points run and adds batches",
+                "raise design.adapt.max: `sweep adapt {file} --max {} --out {dir}` keeps the {} points run and adds batches",
                 2 * max,
                 max
             ),

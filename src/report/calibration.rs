@@ -329,7 +329,7 @@ fn answer(
             ),
         ),
         (None, Some(_)) if pending > 0 => {
-            ("not converged".to_string(), format!("{pending} planned points are not finished; `sweep resume {}`", dir.display()))
+            ("not converged".to_string(), format!("{pending} planned points are not finished; `sweep resume {}`", crate::sys::shell::quote(&dir.display().to_string())))
         }
         (None, Some(_)) => (
             "not converged".to_string(),

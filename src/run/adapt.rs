@@ -401,7 +401,8 @@ fn write_batches(
     rows: &[(usize, &Choice)],
 ) -> Result<()> {
     let path = dir.join(BATCHES);
-    let text = std::fs::read_to_string(&path).unwrap_or_default();
+    // Rows a kill left of a batch planned again are replaced, not repeated.
+    let text = super::batches::without_replanned(std::fs::read_to_string(&path).unwrap_or_default(), rows);
     let mut w = csv::Writer::from_writer(text.into_bytes());
     let csv_error = |e: csv::Error| RunError::Write { path: path.clone(), source: e.into() };
     let io_error = |e: std::io::Error| RunError::Write { path: path.clone(), source: e };

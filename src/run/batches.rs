@@ -130,3 +130,35 @@ pub fn append<E: Executor, T>(
     )?;
     Ok(appended)
 }
+
+/// `text`, a design's CSV of planned rows (`batch,index,…` under a header), without the rows of
+/// the point indices in `rows`: those of a batch written before a kill cut off the manifest's
+/// append, which plans the same points again under the same indices.
+pub fn without_replanned<T>(text: String, rows: &[(usize, T)]) -> String {
+    let again = |line: &str| {
+        let index = line.split(',').nth(1).and_then(|i| i.parse::<usize>().ok());
+        index.is_some_and(|i| rows.iter().any(|(r, _)| *r == i))
+    };
+    if !text.lines().skip(1).any(again) {
+        return text;
+    }
+    let mut kept: String = text
+        .lines()
+        .enumerate()
+        .filter(|(n, l)| *n == 0 || !again(l))
+        .map(|(_, l)| format!("{l}\n"))
+        .collect();
+    kept.shrink_to_fit();
+    kept
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn rows_planned_again_replace_those_a_kill_left() {
+        let text = "batch,index,x\n1,0,0.5\n1,1,0.6\n2,2,0.7\n2,3,0.8\n".to_string();
+        let again = [(2, ()), (3, ())];
+        assert_eq!(super::without_replanned(text.clone(), &again), "batch,index,x\n1,0,0.5\n1,1,0.6\n");
+        assert_eq!(super::without_replanned(text.clone(), &[(4, ())]), text, "nothing to drop: unchanged");
+    }
+}

@@ -60,6 +60,8 @@ pub struct Quantity {
     /// (over one heap's sectors) understates the scatter between seeds; 1 for MFR, whose SE is
     /// over the window's batches.
     pub repeats: usize,
+    /// The values it can take: a target outside is a slip, and its SD is at most this width.
+    possible: (f64, f64),
 }
 
 /// A measured value and the run's SE of it, where it gives one.
@@ -73,6 +75,7 @@ pub const QUANTITIES: &[Quantity] = &[
         measured_by: |l| l == "pour",
         read: |r| r.heap.as_ref().map(|h| (h.angle_deg, Some(h.angle_se_deg).filter(|s| *s > 0.0))),
         repeats: 2,
+        possible: (0.0, 90.0),
     },
     Quantity {
         name: "bulk_packing",
@@ -80,6 +83,8 @@ pub const QUANTITIES: &[Quantity] = &[
         measured_by: |l| l == "pour",
         read: |r| r.heap.as_ref().map(|h| (h.packing, None)),
         repeats: 2,
+        // Spheres pack no denser than π/√18 (face-centred cubic).
+        possible: (0.0, 0.7405),
     },
     // ASTM B212's apparent density (a Hall funnel's free-poured fill of a cup) as the heap's
     // packing times the material's density: both a free-poured, unconsolidated packing.
@@ -92,6 +97,8 @@ pub const QUANTITIES: &[Quantity] = &[
             r.heap.as_ref().map(|h| (h.packing * density / 1000.0, None))
         },
         repeats: 2,
+        // The heap's packing (at most 0.7405) times the densest material (25,000 kg/m³).
+        possible: (0.0, 20.0),
     },
     Quantity {
         name: "mfr",
@@ -99,6 +106,7 @@ pub const QUANTITIES: &[Quantity] = &[
         measured_by: |l| l != "pour",
         read: |r| r.mfr.is_finite().then_some((r.mfr, r.mfr_se)),
         repeats: 1,
+        possible: (0.0, 1.0),
     },
 ];
 
@@ -151,11 +159,40 @@ pub fn check(sweep: &Sweep, targets: &[Target]) -> std::result::Result<(), Strin
                     measured.join(", ")
                 ))
             }
-            Some(_) => {}
+            Some(q) => check_possible(q, t)?,
         }
         if targets[..k].iter().any(|o| o.name == t.name) {
             return Err(format!("--target {}: given twice", t.name));
         }
+    }
+    Ok(())
+}
+
+/// Smallest SD of a target, as a fraction of its quantity's possible range: no measurement is
+/// finer, and below it the posterior's numbers are rounding.
+const MIN_SD_OF_RANGE: f64 = 1e-6;
+
+/// A target inside what its quantity can be, with an SD between [`MIN_SD_OF_RANGE`] of that
+/// range and the whole range.
+fn check_possible(q: &Quantity, t: &Target) -> std::result::Result<(), String> {
+    let (lo, hi) = q.possible;
+    let unit = if q.unit == "-" { "" } else { q.unit };
+    if !(t.value >= lo && t.value <= hi) {
+        return Err(format!(
+            "--target {}={}: outside {lo}–{hi}{unit}, the values it can take",
+            t.name,
+            if t.value.abs() < 1e6 { t.value.to_string() } else { format!("{:e}", t.value) }
+        ));
+    }
+    let (min_sd, max_sd) = ((hi - lo) * MIN_SD_OF_RANGE, hi - lo);
+    if !(t.sd >= min_sd && t.sd <= max_sd) {
+        let sd = if (1e-4..1e6).contains(&t.sd) { t.sd.to_string() } else { format!("{:e}", t.sd) };
+        return Err(format!(
+            "--target {}: SD {sd}{unit}: expected {} to {}{unit} (the measurement's SD, at most the whole range)",
+            t.name,
+            crate::scene::plausible::show(min_sd),
+            crate::scene::plausible::show(max_sd)
+        ));
     }
     Ok(())
 }
@@ -472,7 +509,8 @@ fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &CalibrationWatch, ran: u
 /// Append the rows of one batch to [`BATCHES`] (written whole, under the directory's lock).
 fn write_batches(dir: &Path, sweep: &Sweep, from: &str, batch: usize, rows: &[(usize, &Pick)]) -> Result<()> {
     let path: PathBuf = dir.join(BATCHES);
-    let text = std::fs::read_to_string(&path).unwrap_or_default();
+    // Rows a kill left of a batch planned again are replaced, not repeated.
+    let text = batches::without_replanned(std::fs::read_to_string(&path).unwrap_or_default(), rows);
     let mut w = csv::Writer::from_writer(text.into_bytes());
     let csv_error = |e: csv::Error| RunError::Write { path: path.clone(), source: e.into() };
     let io_error = |e: std::io::Error| RunError::Write { path: path.clone(), source: e };

@@ -337,8 +337,10 @@ pub fn plan(dir: &Path, o: &SubmitOptions) -> Result<std::result::Result<Rendere
     }
     let tasks = layout.tasks_of(wanted.iter().copied());
     let template = match &o.template {
-        Some(p) => std::fs::read_to_string(p)
-            .map_err(|e| flag(format!("--template {}", p.display()), e.to_string()))?,
+        Some(p) => crate::sys::read::read_capped(p, crate::sweep::FILE_CAP)
+            .map_err(|e| e.to_string())
+            .and_then(|b| String::from_utf8(b).map_err(|_| "not UTF-8 text".to_string()))
+            .map_err(|why| flag(format!("--template {}", p.display()), why))?,
         None => match o.scheduler {
             Scheduler::Slurm => SLURM_TEMPLATE.to_string(),
             _ => PBS_TEMPLATE.to_string(),

@@ -196,7 +196,16 @@ fn create<E: Executor>(
         }
     })?;
     let manifest = in_force.map_or(manifest, |(m, _)| m);
+    crate::sys::process::on_interrupt_say(continue_with(out));
     Ok((store, manifest, jobs))
+}
+
+/// What to do after an interrupt that cut a sweep in `dir` short.
+fn continue_with(dir: &Path) -> String {
+    format!(
+        "every finished run is kept; continue with `sweep resume {}`",
+        crate::sys::shell::quote(&dir.display().to_string())
+    )
 }
 
 /// `sweep resume DIR`: re-prepare the manifest's points, refuse if the identity or the decks
@@ -226,6 +235,7 @@ pub fn resume_share<E: Executor>(
     cancel: &CancelToken,
 ) -> Result<Summary> {
     let (mut manifest, toml) = Store::read_manifest(dir)?;
+    crate::sys::process::on_interrupt_say(continue_with(dir));
     let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
     check_parameters(dir, &manifest, &sweep)?;
     Store::open(dir).check_joblog()?;

@@ -130,6 +130,10 @@ pub fn status(dir: &Path) -> Result<StatusReport> {
             }
         }
     }
+    // What `sweep resume` would refuse before running anything.
+    if let Err(e) = store.check_joblog() {
+        r.damaged.push(format!("{e}; `sweep resume` refuses to run until it is moved away"));
+    }
     Ok(r)
 }
 
@@ -179,7 +183,7 @@ impl StatusReport {
         if self.running > 0 {
             s.push_str(&format!(
                 "    a claim whose holder is gone for good (a lost node, a clock far ahead): `sweep unclaim {}` releases it\n",
-                self.dir.display()
+                crate::sys::shell::quote(&self.dir.display().to_string())
             ));
         }
         for d in &self.damaged {

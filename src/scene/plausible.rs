@@ -79,7 +79,8 @@ pub fn check(scene: &Scene, values: &BTreeMap<String, f64>, settings: &SceneSett
         return Err(format!(
             "{} particles at gap {} mm and {d_name} {} mm (gap = {} D): more than the {} the scene \
              is built for; values are in mm — lower the gap or raise the diameter {FORCE}",
-            particles,
+            // A count that saturated is past anything countable.
+            if particles == usize::MAX { "more than 1e19".to_string() } else { particles.to_string() },
             show(gap),
             show(d_value),
             show(gap / d),

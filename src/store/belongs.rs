@@ -32,6 +32,23 @@ fn holds(r: &RunResult, names: &[String], values: &[f64]) -> Result<(), String> 
     Ok(())
 }
 
+/// Whether `r` holds the sweep's `fixed` values. A result that names the swept parameters
+/// (every real run names them all) must name each fixed one with its value; one that names none
+/// of them (a test executor's) is not compared.
+fn holds_fixed(r: &RunResult, swept: &[String], fixed: &[(String, f64)]) -> Result<(), String> {
+    if !swept.iter().any(|n| r.parameters.contains_key(n)) {
+        return Ok(());
+    }
+    for (n, v) in fixed {
+        match r.parameters.get(n) {
+            Some(&got) if same(got, *v) => {}
+            Some(&got) => return Err(format!("its fixed {n} = {got} is not the sweep's {v}")),
+            None => return Err(format!("it does not give the fixed {n} (the sweep's is {v})")),
+        }
+    }
+    Ok(())
+}
+
 impl Store {
     /// The state of point `p`'s run ([`Store::state`]), with a result that holds another
     /// point's parameters turned into [`RunState::Damaged`] (run again, saying why).
@@ -46,7 +63,9 @@ impl Store {
 
     fn belongs(&self, manifest: &Manifest, p: &PointRecord, state: RunState) -> RunState {
         match state {
-            RunState::Done(r) => match holds(&r, &manifest.parameters, &p.values) {
+            RunState::Done(r) => match holds(&r, &manifest.parameters, &p.values)
+                .and_then(|()| holds_fixed(&r, &manifest.parameters, self.fixed()))
+            {
                 Ok(()) => RunState::Done(r),
                 Err(reason) => RunState::Damaged { file: self.result_path(&p.hash), reason },
             },

@@ -78,7 +78,10 @@ impl Store {
     /// owner is gone.
     pub fn claim(&self, hash: &str) -> Result<ClaimAttempt, StoreError> {
         let dir = self.run_dir(hash);
+        super::check_run_dir(&dir, hash)?;
         fs::create_dir_all(&dir).map_err(io(&dir))?;
+        // A link put there between the check and now: refused all the same.
+        super::check_run_dir(&dir, hash)?;
         let path = dir.join("claim");
         let _lock = DirLock::take(&self.dir.join(LOCK))?;
         let mut stale = None;

@@ -111,6 +111,7 @@ pub struct Store {
     me: ClaimInfo,
     /// Claim files held now, renewed by the heartbeat.
     held: Arc<Mutex<Vec<PathBuf>>>,
+    fixed: Arc<std::sync::OnceLock<Vec<(String, f64)>>>,
 }
 
 impl Store {
@@ -134,7 +135,28 @@ impl Store {
                 renewed_at: None,
             },
             held: Arc::default(),
+            fixed: Arc::default(),
         }
+    }
+
+    /// The fixed parameters of the directory's sweep file (`DIR/sweep.toml`), read once; none
+    /// when it cannot be read (the manifest check says why elsewhere).
+    pub(crate) fn fixed(&self) -> &[(String, f64)] {
+        self.fixed.get_or_init(|| {
+            let path = self.dir.join("sweep.toml");
+            let Ok(text) = crate::sys::read::read_text_capped(&path, SWEEP_TOML_CAP) else {
+                return Vec::new();
+            };
+            let Ok(sweep) = crate::sweep::Sweep::parse(&text, &path) else { return Vec::new() };
+            sweep
+                .fixed
+                .iter()
+                .filter_map(|p| match p.kind {
+                    crate::sweep::ParamKind::Fixed(v) => Some((p.name.clone(), v)),
+                    _ => None,
+                })
+                .collect()
+        })
     }
 
     /// Claims of this store last `lease` without renewal (default [`DEFAULT_LEASE`]).
@@ -246,16 +268,7 @@ impl Store {
         for e in entries.flatten() {
             let name = e.file_name();
             let Some(name) = name.to_str().filter(|n| hashes.contains(n)) else { continue };
-            // A link to a directory is one.
-            if !e.file_type().is_ok_and(|t| t.is_dir()) && !fs::metadata(e.path()).is_ok_and(|m| m.is_dir()) {
-                return Err(StoreError::NotASweep {
-                    path: e.path(),
-                    reason: format!(
-                        "not a directory, where the run of a point ({}) belongs; remove it and resume",
-                        short(name)
-                    ),
-                });
-            }
+            check_run_dir(&e.path(), name)?;
         }
         Ok(())
     }
@@ -265,6 +278,26 @@ impl Store {
         let _lock = DirLock::take(&self.dir.join(".lock"))?;
         Ok(f())
     }
+}
+
+/// Refuse `path`, the run directory of the point whose hash is `hash`, unless it is a
+/// directory itself (or absent): a file cannot hold a run, and a symbolic link would have the run
+/// written wherever it points, outside the sweep directory.
+pub(crate) fn check_run_dir(path: &Path, hash: &str) -> Result<(), StoreError> {
+    let why = match fs::symlink_metadata(path) {
+        Err(_) => return Ok(()),
+        Ok(m) if m.is_dir() => return Ok(()),
+        Ok(m) if m.file_type().is_symlink() => format!(
+            "a symbolic link, where the run of a point ({}) belongs; runs are written only inside the \
+             sweep directory: remove the link and resume",
+            short(hash)
+        ),
+        Ok(_) => format!(
+            "not a directory, where the run of a point ({}) belongs; remove it and resume",
+            short(hash)
+        ),
+    };
+    Err(StoreError::NotASweep { path: path.to_path_buf(), reason: why })
 }
 
 /// `flock(2)` on a lock file, held while the guard lives. Released by the kernel if we die.

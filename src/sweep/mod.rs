@@ -51,10 +51,7 @@ pub struct Sweep {
 impl Sweep {
     pub fn load(path: &Path) -> Result<Sweep, SweepError> {
         let unreadable = |why: String| SweepError::Read { path: path.to_path_buf(), why };
-        if path.is_dir() {
-            return Err(unreadable("it is a directory".into()));
-        }
-        let text = std::fs::read_to_string(path).map_err(|e| unreadable(io_reason(&e)))?;
+        let text = read_text(path).map_err(unreadable)?;
         Sweep::parse(&text, path)
     }
 
@@ -68,6 +65,7 @@ impl Sweep {
             .and_then(|v| v.as_table())
             .map(|t| t.keys().cloned().collect())
             .unwrap_or_default();
+        refuse_keys_of_mono(&raw, path)?;
         file.scene = file.scene.resolve_preset(&written).map_err(|e| SweepError::Key {
             path: path.to_path_buf(),
             key: "scene.fidelity".into(),
@@ -112,6 +110,39 @@ impl Sweep {
     }
 }
 
+/// A monodisperse `[scene.size_distribution]` has no keys but `kind`: any other (a `classes`
+/// left from another kind, a typo) would be dropped without a word, so it is refused.
+fn refuse_keys_of_mono(raw: &toml::Table, path: &Path) -> Result<(), SweepError> {
+    let Some(psd) = raw.get("scene").and_then(|s| s.get("size_distribution")).and_then(|d| d.as_table())
+    else {
+        return Ok(());
+    };
+    if psd.get("kind").and_then(|k| k.as_str()) != Some("mono") {
+        return Ok(());
+    }
+    match psd.keys().find(|k| *k != "kind") {
+        Some(other) => Err(SweepError::Key {
+            path: path.to_path_buf(),
+            key: format!("scene.size_distribution.{other}"),
+            why: "not a key of kind = \"mono\" (every particle has the `diameter` parameter; \
+                  `classes`, `weibull` and `lognormal` take keys)"
+                .into(),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Largest sweep file or include read, in bytes: a sweep file is a page of TOML; 16 MiB holds a
+/// design written out point by point, and refuses a link to `/dev/zero` or a file given by slip.
+pub const FILE_CAP: u64 = 16 << 20;
+
+/// The text of a sweep file or an include: a regular file of at most [`FILE_CAP`] bytes, in
+/// UTF-8. A FIFO, a device or a directory is refused at once, without waiting for a writer.
+fn read_text(path: &Path) -> Result<String, String> {
+    let bytes = crate::sys::read::read_capped(path, FILE_CAP).map_err(|e| io_reason(&e))?;
+    String::from_utf8(bytes).map_err(|e| format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()))
+}
+
 /// Take the `[parameters]` of each file of `include` that the sweep file does not set itself
 /// (the first include that sets one wins), then drop the include: the sweep holds them now.
 fn include(file: &mut SweepFile, path: &Path) -> Result<(), SweepError> {
@@ -119,8 +150,7 @@ fn include(file: &mut SweepFile, path: &Path) -> Result<(), SweepError> {
     for inc in std::mem::take(&mut file.include) {
         let full = if inc.is_absolute() { inc.clone() } else { dir.join(&inc) };
         let bad = |why: String| SweepError::Key { path: path.to_path_buf(), key: "include".into(), why };
-        let text = std::fs::read_to_string(&full)
-            .map_err(|e| bad(format!("cannot read {}: {}", full.display(), io_reason(&e))))?;
+        let text = read_text(&full).map_err(|why| bad(format!("cannot read {}: {why}", full.display())))?;
         let table: toml::Table = toml::from_str(&text)
             .map_err(|e| bad(format!("{}: not TOML: {}", full.display(), e.message())))?;
         if let Some(other) = table.keys().find(|k| *k != "parameters") {

@@ -295,22 +295,15 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<Params, SweepErr
     }
     match &s.size_distribution {
         SizeDistributionSpec::Mono => {}
-        SizeDistributionSpec::Classes { classes, .. } => {
-            if classes.is_empty() {
-                return Err(bad("scene.size_distribution.classes", "expected at least one class".into()));
-            }
-            for (i, [dia, frac]) in classes.iter().enumerate() {
-                if !(dia.is_finite() && *dia > 0.0 && frac.is_finite() && *frac > 0.0) {
-                    return Err(bad(
-                        &format!("scene.size_distribution.classes[{i}]"),
-                        format!("[{dia}, {frac}]: expected a positive diameter and fraction"),
-                    ));
-                }
-            }
+        SizeDistributionSpec::Classes { classes, relative, .. } => {
+            check_classes(classes, *relative).map_err(|(k, why)| bad(&k, why))?;
         }
         SizeDistributionSpec::Weibull { bins } => {
-            if *bins == 0 {
-                return Err(bad("scene.size_distribution.bins", "expected at least 1".into()));
+            if *bins == 0 || *bins > MAX_CLASSES {
+                return Err(bad(
+                    "scene.size_distribution.bins",
+                    format!("{bins}: expected 1 to {MAX_CLASSES}"),
+                ));
             }
         }
         SizeDistributionSpec::Lognormal { d10_um, d50_um, d90_um, cut_um, bins, .. } => {
@@ -429,8 +422,8 @@ fn check_lognormal(q: [f64; 3], cut: Option<[f64; 2]>, bins: usize) -> Result<()
             ));
         }
     }
-    if bins < 2 {
-        return Err(("scene.size_distribution.bins", format!("{bins}: expected at least 2")));
+    if !(2..=MAX_CLASSES).contains(&bins) {
+        return Err(("scene.size_distribution.bins", format!("{bins}: expected 2 to {MAX_CLASSES}")));
     }
     let fit = crate::scene::psd::Lognormal::fit(q.map(|d| d * 1e-6), cut.map(|c| c.map(|d| d * 1e-6)));
     if fit.residual > MAX_FIT_MISS {
@@ -442,6 +435,57 @@ fn check_lognormal(q: [f64; 3], cut: Option<[f64; 2]>, bins: usize) -> Result<()
                 cut.map(|[lo, hi]| format!(" cut at {lo}–{hi} µm")).unwrap_or_default(),
                 MAX_FIT_MISS * 100.0,
                 fit.residual * 100.0
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Most size classes a distribution may have: a laser-diffraction table has up to about 100,
+/// and each class is a particle template the deck inserts from (10,000 took minutes to plan).
+pub const MAX_CLASSES: usize = 100;
+
+/// How far the fractions of a `classes` table may sum from 1 (or from 100, in %): the rounding
+/// of a measured table, not a table with classes left out.
+const FRACTION_SUM_SLACK: f64 = 0.02;
+
+/// A `classes` table: 1 to [`MAX_CLASSES`] classes of distinct positive diameters (each at least
+/// the scene's smallest, 10 µm, unless `relative`), fractions positive and summing to 1 or to 100.
+fn check_classes(classes: &[[f64; 2]], relative: bool) -> Result<(), (String, String)> {
+    let key = "scene.size_distribution.classes".to_string();
+    if classes.is_empty() || classes.len() > MAX_CLASSES {
+        return Err((key, format!("{} classes: expected 1 to {MAX_CLASSES}", classes.len())));
+    }
+    for (i, [dia, frac]) in classes.iter().enumerate() {
+        let at = || format!("{key}[{i}]");
+        if !(dia.is_finite() && *dia > 0.0 && frac.is_finite() && *frac > 0.0) {
+            return Err((at(), format!("[{dia}, {frac}]: expected a positive diameter and fraction")));
+        }
+        let floor = crate::scene::plausible::MIN_DIAMETER_MM;
+        if !relative && *dia < floor {
+            return Err((
+                at(),
+                format!(
+                    "[{dia}, {frac}]: diameter {dia} mm is below the {} µm the scene is built for; \
+                     diameters are in mm — did you mean {}?",
+                    floor * 1e3,
+                    dia * 1e3
+                ),
+            ));
+        }
+        if let Some(j) = classes[..i].iter().position(|[d, _]| d == dia) {
+            return Err((at(), format!("diameter {dia} is also class [{j}]: expected each diameter once")));
+        }
+    }
+    let sum: f64 = classes.iter().map(|[_, f]| f).sum();
+    let near = |total: f64| (sum / total - 1.0).abs() <= FRACTION_SUM_SLACK;
+    if !near(1.0) && !near(100.0) {
+        return Err((
+            key,
+            format!(
+                "fractions sum to {sum}: expected 1 (fractions) or 100 (%) within {} %; a table \
+                 with classes left out would be scaled up without a word",
+                FRACTION_SUM_SLACK * 100.0
             ),
         ));
     }

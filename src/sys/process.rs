@@ -89,6 +89,7 @@ pub fn run_watched(
     unsafe {
         cmd.pre_exec(guard_the_job);
     }
+    let _running = ChildRunning::new();
     let mut child = match cmd.spawn() {
         Ok(c) => c,
         Err(e) => {
@@ -279,13 +280,90 @@ extern "C" fn on_signal(sig: libc::c_int) {
 }
 
 /// Install SIGINT and SIGTERM handlers that set the global interrupt flag, which every
-/// [`CancelToken`] observes. Call once from `main` before starting jobs.
+/// [`CancelToken`] observes, and start the watchdog that makes sure the interrupt is obeyed
+/// (see [`INTERRUPT_GRACE`]). Call from `main` before starting jobs; a second call does nothing.
 pub fn install_interrupt_handler() {
-    // SAFETY: the handler only stores to an atomic, which is async-signal-safe.
-    unsafe {
-        libc::signal(libc::SIGINT, on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t);
-        libc::signal(libc::SIGTERM, on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t);
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        // SAFETY: the handler only stores to an atomic, which is async-signal-safe.
+        unsafe {
+            libc::signal(libc::SIGINT, on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t);
+            libc::signal(libc::SIGTERM, on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t);
+        }
+        let _ = std::thread::Builder::new().name("interrupt-watchdog".into()).spawn(watchdog);
+    });
+}
+
+/// How long the process may go on after an interrupt once no child is being stopped: the time
+/// to write the joblog line of a cancelled run and say how far the work got. A step that does
+/// not look at the interrupt flag (planning a huge design, reading a large directory, writing
+/// the report) is ended by the watchdog when this has passed, with exit code 128 + the signal:
+/// every write is atomic and a SIGKILL is already survived, so nothing finished is lost.
+pub const INTERRUPT_GRACE: Duration = Duration::from_millis(1500);
+/// Longest the process may spend stopping its children after an interrupt: their SIGTERM grace
+/// and the SIGKILL after it, with a margin.
+const STOPPING_MAX: Duration = Duration::from_secs(KILL_GRACE.as_secs() + 3);
+
+/// Children running under [`run_watched`] right now: while there are some, the interrupt is
+/// being obeyed (each is stopped within [`KILL_GRACE`]), so the watchdog waits for them.
+static RUNNING_CHILDREN: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+/// What the watchdog says after "interrupted" when it ends the process.
+static INTERRUPT_NOTE: std::sync::Mutex<String> = std::sync::Mutex::new(String::new());
+
+/// Say `note` after "interrupted: " if the watchdog has to end the process (e.g. how to
+/// continue the sweep).
+pub fn on_interrupt_say(note: String) {
+    if let Ok(mut n) = INTERRUPT_NOTE.lock() {
+        *n = note;
     }
+}
+
+/// Counts a running child for the watchdog while it lives.
+struct ChildRunning;
+
+impl ChildRunning {
+    fn new() -> ChildRunning {
+        RUNNING_CHILDREN.fetch_add(1, Ordering::SeqCst);
+        ChildRunning
+    }
+}
+
+impl Drop for ChildRunning {
+    fn drop(&mut self) {
+        RUNNING_CHILDREN.fetch_sub(1, Ordering::SeqCst);
+    }
+}
+
+/// Once an interrupt has come, end the process when it has been [`INTERRUPT_GRACE`] without a
+/// child to stop, or [`STOPPING_MAX`] after the signal at the latest. Children die with us
+/// through their guards.
+fn watchdog() {
+    let tick = Duration::from_millis(20);
+    let sig = loop {
+        if let Some(sig) = interrupt_signal() {
+            break sig;
+        }
+        std::thread::sleep(tick);
+    };
+    let signalled = Instant::now();
+    let mut quiet_since = signalled;
+    loop {
+        if RUNNING_CHILDREN.load(Ordering::SeqCst) > 0 {
+            quiet_since = Instant::now();
+        }
+        if quiet_since.elapsed() >= INTERRUPT_GRACE || signalled.elapsed() >= STOPPING_MAX {
+            break;
+        }
+        std::thread::sleep(tick);
+    }
+    let note = INTERRUPT_NOTE.lock().map(|n| n.clone()).unwrap_or_default();
+    let name = if sig == libc::SIGTERM { "SIGTERM" } else { "SIGINT" };
+    if note.is_empty() {
+        eprintln!("interrupted by {name}");
+    } else {
+        eprintln!("interrupted by {name}: {note}");
+    }
+    std::process::exit(128 + sig);
 }
 
 /// Whether SIGINT or SIGTERM has been received.

@@ -285,6 +285,21 @@ fn bad_adapt_sizes_are_refused_before_anything_is_written() {
         assert_eq!(err.trim().lines().count(), 1, "{err}");
         assert!(!out.exists(), "{args:?} wrote {}", out.display());
     }
+    // A file that leaves `first` out is not named as the one that set it.
+    let text = std::fs::read_to_string(&file).unwrap().replace("first = 20\n", "");
+    let bare = common::write_file(&tmp.path().join("bare.toml"), &text);
+    let o = common::sweep_bin()
+        .args(["adapt", bare.to_str().unwrap(), "--max", "10", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--max 10 is less than the default first batch (10 per swept parameter) 40"),
+        "{err}"
+    );
+    assert!(!err.contains("bare.toml"), "{err}");
     // An adaptive sweep on a cluster goes batch by batch: all at once is refused.
     let made = tmp.path().join("made");
     let o = common::sweep_bin()

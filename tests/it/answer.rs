@@ -257,6 +257,47 @@ fn a_manifest_that_is_a_fifo_or_a_device_is_refused_at_once() {
 }
 
 #[test]
+fn a_sweep_file_or_include_that_is_a_fifo_a_device_or_huge_is_refused_at_once() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    mkfifo(&dir.join("fifo.toml"));
+    std::os::unix::fs::symlink("/dev/zero", dir.join("zero.toml")).unwrap();
+    // 3 GB on disk's books, no blocks: read whole, it would take the memory of it.
+    std::fs::File::create(dir.join("huge.toml")).unwrap().set_len(3 << 30).unwrap();
+    let including = |name: &str| {
+        let file = format!("inc-{name}");
+        sweep_file(dir, &|t| t.replace("[parameters]", &format!("include = [\"{name}\"]\n[parameters]")));
+        std::fs::rename(dir.join("t.toml"), dir.join(&file)).unwrap();
+        file
+    };
+    let cases = [
+        ("fifo.toml".to_string(), "a FIFO, not a regular file"),
+        ("zero.toml".to_string(), "a device, not a regular file"),
+        ("huge.toml".to_string(), "over the 16777216 expected at most"),
+        (including("fifo.toml"), "include: cannot read"),
+        (including("zero.toml"), "a device, not a regular file"),
+        (including("huge.toml"), "over the 16777216 expected at most"),
+    ];
+    for (file, says) in &cases {
+        for args in [
+            vec!["run", file.as_str(), "--set", "gap=3,blade_speed=1.4"],
+            vec!["points", file.as_str(), "--lds", "4"],
+            vec!["lds", file.as_str(), "--plan", "--out", "planned"],
+            vec!["render", file.as_str(), "--set", "gap=3,blade_speed=1.4", "--out", "deck"],
+        ] {
+            let mut c = Command::new(common::SWEEP);
+            c.current_dir(dir).args(&args).stdin(Stdio::null());
+            let o = finish_within(c, Duration::from_secs(20));
+            let e = err(&o);
+            assert_eq!(o.status.code(), Some(2), "{args:?}: {e}");
+            assert!(e.contains(file.as_str()) && e.contains(says), "{args:?}: {e}");
+            assert_eq!(e.lines().count(), 1, "{args:?}: {e}");
+        }
+    }
+    assert!(!dir.join("planned").exists() && !dir.join("deck").exists());
+}
+
+#[test]
 fn a_result_that_is_a_fifo_or_a_device_is_not_read_and_the_point_runs_again() {
     let tmp = tempfile::tempdir().unwrap();
     let d = finished(tmp.path());
@@ -316,6 +357,42 @@ fn a_result_with_too_few_vx_layers_is_not_counted_as_done() {
 }
 
 #[test]
+fn a_result_whose_fixed_parameter_is_not_the_sweep_s_or_missing_is_not_counted_as_done() {
+    damaged_result(
+        &|v| v["parameters"]["diameter"] = 0.9.into(),
+        "its fixed diameter = 0.9 is not the sweep's 1.5",
+    );
+    damaged_result(
+        &|v| {
+            v["parameters"].as_object_mut().unwrap().remove("diameter");
+        },
+        "it does not give the fixed diameter (the sweep's is 1.5)",
+    );
+}
+
+#[test]
+fn a_huge_number_in_a_result_is_named_in_a_few_characters() {
+    damaged_result(&|v| v["mfr_windows"][0] = 1e300.into(), "mfr_windows[0] = 1e300: expected");
+}
+
+#[test]
+fn a_symbolic_link_where_a_run_directory_belongs_is_refused_and_nothing_is_written_through_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = finished(tmp.path());
+    let h = hash(&d, 0);
+    let run = d.join("runs").join(&h);
+    std::fs::remove_dir_all(&run).unwrap();
+    let outside = tmp.path().join("outside");
+    std::fs::create_dir(&outside).unwrap();
+    std::os::unix::fs::symlink(&outside, &run).unwrap();
+    let o = sweep_in(tmp.path(), &["resume", p(&d), "-q"]);
+    let e = err(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains(&format!("runs/{h}: a symbolic link")) && e.contains("remove the link"), "{e}");
+    assert!(tree(&outside).is_empty(), "written outside the sweep directory: {:?}", tree(&outside));
+}
+
+#[test]
 fn an_edited_hash_or_values_in_the_manifest_is_refused_naming_the_point() {
     type Edit<'a> = &'a dyn Fn(&mut serde_json::Value);
     let cases: Vec<(Edit, &str)> = vec![
@@ -359,6 +436,13 @@ fn a_joblog_of_gnu_parallel_is_refused_rather_than_appended_to() {
     let gnu = "Seq\tHost\tStarttime\tJobRuntime\tSend\tReceive\tExitval\tSignal\tCommand\n\
                1\t:\t1700000000.000\t1.000\t0\t0\t0\t0\techo hi\n";
     std::fs::write(d.join("joblog.tsv"), gnu).unwrap();
+    // `status` says so before `resume` is tried.
+    let o = sweep_in(tmp.path(), &["status", p(&d)]);
+    let text = out(&o);
+    assert!(
+        text.contains("warning: ") && text.contains("9 columns") && text.contains("`sweep resume` refuses"),
+        "{text}"
+    );
     let o = sweep_in(tmp.path(), &["resume", p(&d), "-q"]);
     assert_eq!(o.status.code(), Some(2), "{}", err(&o));
     assert!(err(&o).contains("joblog.tsv") && err(&o).contains("9 columns"), "{}", err(&o));
@@ -467,6 +551,36 @@ fn a_sweep_ends_with_the_answer_on_stdout() {
         out(&o)
     );
     assert_eq!(common::csv_rows(&tmp.path().join("runs/h/results.csv")).len(), 16);
+}
+
+#[test]
+fn the_next_command_is_quoted_so_a_shell_runs_it_as_printed() {
+    for (name, quoted) in [("ok name", "'runs/ok name'"), ("*", "'runs/*'")] {
+        let tmp = tempfile::tempdir().unwrap();
+        sweep_file(tmp.path(), &|t| t.replace("name = \"h\"", &format!("name = {name:?}")));
+        // Something for a `runs/*` a shell expanded to match.
+        std::fs::create_dir_all(tmp.path().join("runs/other")).unwrap();
+        let o = sweep_in(tmp.path(), &["lds", "t.toml", "-q"]);
+        assert_eq!(o.status.code(), Some(0), "{}", err(&o));
+        let text = out(&o);
+        let next = text.lines().find(|l| l.starts_with("next: ")).expect("a next line");
+        let command = next.split('`').nth(1).expect("a command in backquotes");
+        assert!(command.ends_with(&format!("--out {quoted}")), "{command}");
+        // Pasted into a shell, with this `sweep` first on PATH: it extends the same directory.
+        let bin = Path::new(common::SWEEP).parent().unwrap();
+        let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
+        let mut c = Command::new("sh");
+        c.current_dir(tmp.path())
+            .env("PATH", path)
+            .arg("-c")
+            .arg(format!("{command} -q"))
+            .stdin(Stdio::null());
+        let o = finish_within(c, Duration::from_secs(120));
+        assert_eq!(o.status.code(), Some(0), "{command}: {}", err(&o));
+        let rows = common::csv_rows(&tmp.path().join("runs").join(name).join("results.csv"));
+        assert_eq!(rows.len(), 16, "{command}");
+        assert!(!tmp.path().join("runs/other/results.csv").exists(), "{command} ran in the wrong directory");
+    }
 }
 
 #[test]

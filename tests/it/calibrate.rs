@@ -390,7 +390,14 @@ fn an_interrupted_calibration_resumes_to_the_uninterrupted_one_running_nothing_t
         .filter(|l| l.status == "done")
         .map(|l| l.hash)
         .collect();
-    assert!(Store::read_manifest(&out).unwrap().0.points.len() < planned);
+    let n = Store::read_manifest(&out).unwrap().0.points.len();
+    assert!(n < planned);
+    // A kill between writing a batch's rows and appending it to the manifest leaves rows of
+    // points the manifest does not hold; the batch planned again replaces them.
+    let batches = out.join("calibration-batches.csv");
+    let mut text = std::fs::read_to_string(&batches).unwrap();
+    text.push_str(&format!("9,{n},cut off,coverage,,3,1.4\n9,{},cut off,coverage,,3,1.4\n", n + 1));
+    std::fs::write(&batches, text).unwrap();
 
     // `sweep resume` reads the calibration's settings from the directory.
     assert_eq!(calibrate::settings(&out), Some(settings()));
@@ -410,6 +417,8 @@ fn an_interrupted_calibration_resumes_to_the_uninterrupted_one_running_nothing_t
     let (m, r) = (Store::read_manifest(&out).unwrap().0, Store::read_manifest(&reference).unwrap().0);
     assert_eq!(m.points, r.points, "the same batches as without the interruption");
     assert_eq!(common::results(&out), common::results(&reference));
+    let rows = |d: &Path| std::fs::read_to_string(d.join("calibration-batches.csv")).unwrap();
+    assert_eq!(rows(&out), rows(&reference), "one row per planned point, as without the kill");
     // The posterior holds the truth (on a ridge: one target, two parameters).
     let c = demsweep::report::calibration::write(&out).unwrap();
     for (p, truth) in c.parameters.iter().zip([3.0, 1.4]) {
@@ -430,8 +439,15 @@ fn bad_input_is_one_line_and_writes_nothing() {
         "name = \"s\"\n[parameters]\ngap = { lo = 2.0, hi = 4.0 }\n[run]\nengine = \"stand-in\"\n",
     );
     let out = tmp.path().join("out");
-    let cases: [(&Path, &str, &str); 7] = [
+    let cases: [(&Path, &str, &str); 13] = [
         (&file, "angle_of_repose=34", "--target angle_of_repose=34: no ± SD"),
+        // Values no powder can have, and SDs that make every residual rounding or nothing.
+        (&file, "angle_of_repose=400±1", "--target angle_of_repose=400: outside 0–90°"),
+        (&file, "angle_of_repose=-30±1", "--target angle_of_repose=-30: outside 0–90°"),
+        (&file, "bulk_packing=1.5±0.01", "--target bulk_packing=1.5: outside 0–0.7405"),
+        (&file, "bulk_packing=-0.2±0.01", "--target bulk_packing=-0.2: outside"),
+        (&file, "angle_of_repose=34±1e-300", "--target angle_of_repose: SD 1e-300°: expected 0.00009 to 90°"),
+        (&file, "angle_of_repose=34±1e300", "--target angle_of_repose: SD 1e300°: expected"),
         (&file, "angle_of_repose=abc±1", "is not a number"),
         (&file, "angle_of_repose=34±0", "expected a positive uncertainty"),
         (&file, "porosity=0.4±0.01", "--target porosity: not a quantity a run measures"),

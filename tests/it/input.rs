@@ -296,7 +296,10 @@ fn an_out_in_a_directory_that_cannot_be_written_is_bad_input_naming_the_path() {
             None
         }
         Err(why) => {
-            eprintln!("SKIPPED: running as root and cannot mount a read-only tmpfs: {why}");
+            support::skip(
+                "an_out_in_a_directory_that_cannot_be_written_is_bad_input_naming_the_path",
+                &format!("running as root and cannot mount a read-only tmpfs: {why}"),
+            );
             return;
         }
     };
@@ -407,4 +410,109 @@ fn force_renders_a_slip_and_set_takes_any_parameter() {
         deck_text.contains("diameter = 1.2 mm") && deck_text.contains("gap = 5 mm"),
         "deck header: {deck_text}"
     );
+}
+
+// ---- size distributions, layouts, calibration targets ----
+
+#[test]
+fn a_size_distribution_of_more_classes_than_a_deck_can_take_is_refused_at_once() {
+    // 100,000 bins kept `sweep lds` planning for 11 minutes, deaf to SIGINT.
+    let lognormal =
+        "[scene.size_distribution]\nkind = \"lognormal\"\nd10_um = 20.0\nd50_um = 31.0\nd90_um = 42.0\n";
+    rejects(
+        &format!("{BASE}{lognormal}bins = 100000\n"),
+        &["--lds", "2"],
+        &["bad-sweep.toml", "scene.size_distribution.bins", "100000", "expected 2 to 100"],
+    );
+    rejects(
+        &format!("{BASE}[scene.size_distribution]\nkind = \"weibull\"\nbins = 101\n"),
+        &["--lds", "2"],
+        &["scene.size_distribution.bins", "101: expected 1 to 100"],
+    );
+    let many: Vec<String> = (1..=101).map(|i| format!("[{}, 1.0]", 0.01 + i as f64 * 0.001)).collect();
+    rejects(
+        &format!("{BASE}[scene.size_distribution]\nkind = \"classes\"\nclasses = [{}]\n", many.join(", ")),
+        &["--lds", "2"],
+        &["scene.size_distribution.classes", "101 classes: expected 1 to 100"],
+    );
+    // The largest allowed plans in a moment.
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("s.toml");
+    std::fs::write(&file, format!("{BASE}{lognormal}bins = 100\n")).unwrap();
+    let out = points(&file, &["--lds", "2"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
+#[test]
+fn a_key_a_monodisperse_powder_does_not_take_is_refused_not_dropped() {
+    let mono = |key: &str| format!("{BASE}[scene.size_distribution]\nkind = \"mono\"\n{key}\n");
+    rejects(
+        &mono("classes = [[0.02, 0.5], [0.04, 0.5]]"),
+        &["--lds", "2"],
+        &["bad-sweep.toml", "scene.size_distribution.classes", "not a key of kind = \"mono\""],
+    );
+    rejects(&mono("d50um = 31"), &["--lds", "2"], &["scene.size_distribution.d50um", "\"mono\""]);
+}
+
+#[test]
+fn a_classes_table_that_misses_its_total_repeats_a_size_or_holds_dust_is_refused() {
+    let classes = |c: &str| format!("{BASE}[scene.size_distribution]\nkind = \"classes\"\nclasses = {c}\n");
+    for (table, sum) in [("[[0.02, 0.1], [0.04, 0.2]]", "0.3"), ("[[0.02, 0.4], [0.04, 0.4]]", "0.8")] {
+        rejects(
+            &classes(table),
+            &["--lds", "2"],
+            &[
+                "scene.size_distribution.classes",
+                &format!("fractions sum to {sum}"),
+                "expected 1 (fractions) or 100 (%)",
+            ],
+        );
+    }
+    rejects(
+        &classes("[[0.02, 0.5], [0.02, 0.5]]"),
+        &["--lds", "2"],
+        &["scene.size_distribution.classes[1]", "diameter 0.02 is also class [0]"],
+    );
+    rejects(
+        &classes("[[0.003, 0.2], [0.05, 0.8]]"),
+        &["--lds", "2"],
+        &["scene.size_distribution.classes[0]", "0.003 mm is below the 10 µm", "did you mean 3?"],
+    );
+    // A measured table in % with its rounding, and fractions, pass.
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("s.toml");
+    for ok in ["[[0.02, 30.1], [0.04, 70.3]]", "[[0.02, 0.3], [0.04, 0.7]]", "[[0.5, 0.5], [1.5, 0.5]]"] {
+        std::fs::write(&file, classes(ok)).unwrap();
+        let out = points(&file, &["--lds", "2"]);
+        assert!(out.status.success(), "{ok}: {}", String::from_utf8_lossy(&out.stderr));
+    }
+}
+
+#[test]
+fn a_missing_template_is_named_by_its_sweep_file_and_key_before_anything_is_said_to_run() {
+    let dir = tempfile::tempdir().unwrap();
+    for engine in ["", "[run]\nengine = \"stand-in\"\n"] {
+        let file = dir.path().join("t.toml");
+        std::fs::write(
+            &file,
+            format!("name = \"t\"\n[parameters]\ngap = {{ lo = 2.0, hi = 3.0 }}\n[scene]\ntemplate = \"nowhere.tera\"\n{engine}"),
+        )
+        .unwrap();
+        for cmd in ["render", "run"] {
+            let out = support::sweep_bin()
+                .current_dir(dir.path())
+                .args([cmd, "t.toml", "--set", "gap=2.5", "--out", "o"])
+                .stdin(Stdio::null())
+                .output()
+                .unwrap();
+            let err = stderr(&out);
+            assert_eq!(out.status.code(), Some(2), "{cmd} {engine:?}: {err}");
+            assert_eq!(err.lines().count(), 1, "{cmd} {engine:?}: {err}");
+            assert!(
+                err.contains("t.toml") && err.contains("scene.template") && err.contains("nowhere.tera"),
+                "{err}"
+            );
+            assert!(!dir.path().join("o").exists(), "{cmd} wrote its --out");
+        }
+    }
 }

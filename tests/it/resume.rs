@@ -355,3 +355,72 @@ fn a_claim_torn_by_a_kill_in_a_finished_run_is_removed_on_resume() {
     assert!(!claim.exists(), "the torn claim stays");
     assert_eq!(joblog(&d).len(), h.len(), "a run ran again");
 }
+
+// ---- an interrupt obeyed in every step ----
+
+/// Whether process `pid` catches signal `sig` (its handler is installed): bit sig − 1 of SigCgt
+/// in /proc/PID/status.
+fn catches(pid: u32, sig: i32) -> bool {
+    let Ok(status) = std::fs::read_to_string(format!("/proc/{pid}/status")) else { return false };
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("SigCgt:"))
+        .and_then(|m| u64::from_str_radix(m.trim(), 16).ok())
+        .is_some_and(|m| m & (1 << (sig - 1)) != 0)
+}
+
+/// SIGINT or SIGTERM while `resume` writes the report of a finished 400-point sweep (several
+/// seconds, and no step of it looks at the interrupt flag): the process ends within the
+/// interrupt's grace with 128 + the signal, before the report is written, and says how to get
+/// it. It used to finish the report and exit 0 three to five seconds later.
+#[test]
+fn an_interrupt_during_the_final_report_ends_the_process_within_its_grace() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("d");
+    let file = support::engine_sweep(tmp.path(), "big", "stand-in", 400, 200, "");
+    let o = output(support::sweep_bin().args(["lds", p(&file), "-q", "--out", p(&out)]));
+    assert!(matches!(o.status.code(), Some(0 | 1)), "{}", stderr(&o));
+    for sig in [libc::SIGINT, libc::SIGTERM] {
+        let _ = std::fs::remove_dir_all(out.join("report"));
+        let mut child = support::sweep_bin()
+            .args(["resume", p(&out)])
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // The line that says the report is being written, then the signal.
+        let mut lines = std::io::BufRead::lines(std::io::BufReader::new(child.stderr.take().unwrap()));
+        let mut err = String::new();
+        for line in lines.by_ref() {
+            let line = line.unwrap();
+            err.push_str(&line);
+            err.push('\n');
+            if line.starts_with("writing the report of 400 points") {
+                break;
+            }
+        }
+        assert!(err.contains("writing the report"), "{err}");
+        assert!(catches(child.id(), sig), "no handler of signal {sig}");
+        let sent = std::time::Instant::now();
+        // SAFETY: signalling the child we spawned.
+        unsafe { libc::kill(child.id() as i32, sig) };
+        let status = child.wait().unwrap();
+        let took = sent.elapsed();
+        for line in lines {
+            err.push_str(&line.unwrap());
+            err.push('\n');
+        }
+        assert_eq!(status.code(), Some(128 + sig), "signal {sig}: {err}");
+        // Ended by the interrupt, not by finishing: the report was never written.
+        assert!(!out.join("report/report.html").exists(), "signal {sig}: the report was finished first");
+        let name = if sig == libc::SIGINT { "SIGINT" } else { "SIGTERM" };
+        assert!(err.contains(&format!("interrupted by {name}: ")) && err.contains("`sweep report "), "{err}");
+        let grace = demsweep::sys::process::INTERRUPT_GRACE;
+        assert!(took < grace + Duration::from_secs(3), "signal {sig} obeyed after {took:?}");
+    }
+    // Nothing lost: the report is written by asking for it.
+    let o = output(support::sweep_bin().args(["report", p(&out)]));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.join("report/report.html").exists());
+}

@@ -83,21 +83,39 @@ pub fn wait_until(what: &str, limit: Duration, mut cond: impl FnMut() -> bool) {
     }
 }
 
-// ---- LIGGGHTS ----
+// ---- what a test needs from the machine ----
+
+/// Whether a missing dependency fails the test instead of skipping it: under CI (`CI` set and
+/// not `0`/`false`, as CI services set it) or with `DEMSWEEP_REQUIRE_ENGINE=1` (which `.ci/run`
+/// sets). There a skip would count as a pass of a check that never ran.
+pub fn skips_fail() -> bool {
+    let on = |name: &str| std::env::var(name).is_ok_and(|v| !v.is_empty() && v != "0" && v != "false");
+    on("CI") || on("DEMSWEEP_REQUIRE_ENGINE")
+}
+
+/// The one way a test skips: `needs` is missing (what, and how to get it). Says SKIPPED and
+/// returns, or fails the test when [`skips_fail`].
+pub fn skip(test: &str, needs: &str) {
+    if skips_fail() {
+        panic!("{test}: {needs}; under CI a missing dependency fails the test instead of skipping it");
+    }
+    eprintln!("SKIPPED {test}: {needs}");
+}
 
 /// Whether LIGGGHTS (`liggghts` on PATH) is missing; when it is, says which test is skipped
-/// and why.
+/// and why (or fails it, see [`skip`]).
 pub fn liggghts_missing(test: &str) -> bool {
     let found = std::env::var_os("PATH")
         .is_some_and(|paths| std::env::split_paths(&paths).any(|d| d.join("liggghts").is_file()));
     if !found {
-        eprintln!("SKIPPED {test}: needs LIGGGHTS, and `liggghts` is not on PATH (bash scripts/setup.sh installs it)");
+        skip(test, "needs LIGGGHTS, and `liggghts` is not on PATH (bash scripts/setup.sh installs it)");
     }
     !found
 }
 
 /// The one place where a test says it needs LIGGGHTS: `support::require_liggghts!("test name");`
-/// as its first line. Without LIGGGHTS the test says it is skipped and returns at once.
+/// as its first line. Without LIGGGHTS the test says it is skipped and returns at once (under
+/// CI it fails instead).
 macro_rules! require_liggghts {
     ($test:expr) => {
         if $crate::support::liggghts_missing($test) {

@@ -122,9 +122,12 @@ fn the_points_after_the_first_batch_run_to_the_recorded_precision() {
     assert_eq!(later.len(), 1, "{runs:?}");
     assert_eq!(later[0]["mfr_se_target"].as_f64(), Some(0.0123));
     let st = &later[0]["steady_state"];
-    if st["stop"] == "target" {
-        assert!(later[0]["mfr_se"].as_f64().unwrap() <= 0.0123 * 1.5, "{st}");
-    }
+    // Stopped by the recorded target, not by the window cap (a run that always reached the cap
+    // would pass a check made only when it stopped early). The deck judges the SE of its blocks
+    // as they come; the result's is taken again after the final truncation of the transient,
+    // hence the margin.
+    assert_eq!(st["stop"], "target", "{st}");
+    assert!(later[0]["mfr_se"].as_f64().unwrap() <= 0.0123 * 1.5, "{st}");
     let hash = later[0]["hash"].as_str().unwrap();
     let deck = std::fs::read_to_string(dir.join("runs").join(hash).join("in.liggghts")).unwrap();
     assert!(deck.contains("(v_se<=0.0123)"), "the deck runs to the recorded target");
