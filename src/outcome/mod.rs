@@ -5,6 +5,7 @@
 
 pub mod heap;
 pub mod layer;
+pub mod layers;
 pub mod steady;
 
 use std::collections::BTreeMap;
@@ -70,6 +71,9 @@ pub struct RunResult {
     /// Its standard error (MFR's, scaled alike).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub layer_packing_se: Option<f64>,
+    /// Layer after layer (layers layout): every pass and the steady layer (absent elsewhere).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub layers: Option<Box<crate::outcome::layers::LayerSeries>>,
     /// The heap a pour left at rest: its angle of repose and packing (absent elsewhere).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub heap: Option<crate::outcome::heap::Heap>,
@@ -131,6 +135,7 @@ impl Default for RunResult {
             layer_thickness: None,
             layer_packing: None,
             layer_packing_se: None,
+            layers: None,
             heap: None,
             sizes: None,
             settle_steps: 0,

@@ -85,6 +85,8 @@ fn chain(e: &tera::Error) -> String {
 pub struct Deck {
     pub input: String,
     pub mesh: String,
+    /// The layout's other wall meshes: (file name, ASCII STL).
+    pub extra_meshes: Vec<(&'static str, String)>,
     pub pile: String,
     /// sha256 over the deck, the mesh and the engine identity: equal hashes, equal runs.
     pub hash: String,
@@ -106,19 +108,28 @@ impl Deck {
         let input = template.render(scene)?;
         let mesh = layout.mesh(scene);
         let pile = layout.pile(scene);
+        let extra_meshes = layout.extra_meshes(scene);
         let mut h = Sha256::new();
-        for part in [input.as_bytes(), mesh.as_bytes(), pile.as_bytes(), engine_identity.as_bytes()] {
-            // Length-prefix each part so no two different sets of parts hash alike.
+        // Length-prefix each part so no two different sets of parts hash alike. A layout with
+        // no extra meshes hashes exactly as before they existed.
+        let mut parts = vec![input.as_bytes(), mesh.as_bytes(), pile.as_bytes(), engine_identity.as_bytes()];
+        for (name, stl) in &extra_meshes {
+            parts.extend([name.as_bytes(), stl.as_bytes()]);
+        }
+        for part in parts {
             h.update((part.len() as u64).to_le_bytes());
             h.update(part);
         }
-        Ok(Deck { input, mesh, pile, hash: hex(&h.finalize()), header: String::new() })
+        Ok(Deck { input, mesh, extra_meshes, pile, hash: hex(&h.finalize()), header: String::new() })
     }
 
     /// Write the deck, mesh and pile into `dir`.
     pub fn write(&self, dir: &Path) -> std::io::Result<()> {
         std::fs::write(dir.join(Self::INPUT), format!("{}{}", self.header, self.input))?;
         std::fs::write(dir.join(Self::MESH), &self.mesh)?;
+        for (name, stl) in &self.extra_meshes {
+            std::fs::write(dir.join(name), stl)?;
+        }
         std::fs::write(dir.join(pile::PILE_DATA), &self.pile)
     }
 }

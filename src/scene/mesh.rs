@@ -27,7 +27,7 @@ pub fn blade_stl(s: &Scene) -> String {
 /// An axis-aligned box [lo, hi] as ASCII STL, each face split into a grid of cells no larger
 /// than `h`, two triangles per cell, wound counter-clockwise seen from outside; `y_ends`
 /// includes the two faces normal to y.
-fn box_stl(name: &str, lo: [f64; 3], hi: [f64; 3], y_ends: bool, h: f64) -> String {
+pub fn box_stl(name: &str, lo: [f64; 3], hi: [f64; 3], y_ends: bool, h: f64) -> String {
     let corner = |c: [usize; 3]| [[lo[0], hi[0]][c[0]], [lo[1], hi[1]][c[1]], [lo[2], hi[2]][c[2]]];
     // Each face: outward normal and its four corners counter-clockwise seen from outside.
     let faces: [([f64; 3], [[usize; 3]; 4]); 6] = [

@@ -184,6 +184,11 @@ pub struct Scene {
     pub ke_limit: f64,
     /// Conveyor layout (zero elsewhere): the held heap and the block series.
     pub conveyor: Conveyor,
+    /// The layout's own numbers, as its own type serialised (null for a layout that keeps all
+    /// of its numbers in the common fields): the template reads them as `scene.own.*`, and the
+    /// layout reads them back with [`Scene::own`].
+    #[serde(skip_serializing_if = "serde_json::Value::is_null")]
+    pub own: serde_json::Value,
 }
 
 /// The blade's frame (conveyor layout): the blade stands still with its rear face at
@@ -233,7 +238,7 @@ pub struct Conveyor {
     pub warm_warmup_blocks: u64,
 }
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 pub struct FeedClass {
     pub diameter: f64,
     pub mass_fraction: f64,
@@ -256,6 +261,8 @@ pub struct Base {
     pub gap: f64,
     /// Height of the heap in front of the blade above its tip, m.
     pub heap_height: f64,
+    /// How far the platform drops between passes (layers layout), m.
+    pub layer_thickness: f64,
     pub speed: f64,
     pub density: f64,
     /// Young's modulus as the deck sets it (the stiffness factor applied, at least LIGGGHTS's
@@ -334,6 +341,7 @@ impl Base {
             d_min,
             gap,
             heap_height: get("heap_height") * mm,
+            layer_thickness: get("layer_thickness") * mm,
             speed,
             density,
             youngs,
@@ -349,6 +357,11 @@ impl Base {
 }
 
 impl Scene {
+    /// The layout's own numbers (`own`) as the type `T` the layout stored there.
+    pub fn own<T: serde::de::DeserializeOwned>(&self) -> Result<T, serde_json::Error> {
+        T::deserialize(&self.own)
+    }
+
     /// The spread layer's thickness: the gap plus the pockets' open depth, m.
     pub fn layer_thickness(&self) -> f64 {
         self.gap + self.open_depth()

@@ -110,6 +110,16 @@ pub const CATALOGUE: &[ParamInfo] = &[
         description: "height of the heap held in front of the blade above its tip (conveyor layout)",
     },
     ParamInfo {
+        name: "layer_thickness",
+        unit: "mm",
+        // 1.5 D at the default diameter, as machines print 1–3 D50 layers.
+        default: 3.0,
+        min: Bound::Open(0.0),
+        max: Bound::None,
+        description:
+            "how far the platform drops between passes: the machine's layer thickness (layers layout)",
+    },
+    ParamInfo {
         name: "blade_speed",
         unit: "m/s",
         default: 1.4,

@@ -96,6 +96,28 @@ pub struct SceneSettings {
     /// Size of the heap in front of the blade, relative to the planned one (gated: gap + 10 D
     /// tall at 30° repose; thesis: the heap left at the end, gap + 6 D tall).
     pub supply_factor: f64,
+    /// Layers layout: passes of the blade, each onto the layers before it.
+    #[serde(skip_serializing_if = "is_default_layers")]
+    pub layers: usize,
+    /// Layers layout: `"loose"` (default: the layers before stay powder and are sheared again,
+    /// as in a spreading test or binder jetting) or `"fused"` (each layer consolidates to a solid
+    /// of its packing times its height before the next, as in laser or electron-beam fusion).
+    #[serde(skip_serializing_if = "is_loose")]
+    pub bed: String,
+    /// Layers layout: the blade's profile, `"flat"` (default: a box, the thesis's) or `"round"`
+    /// (a cylinder of `blade_radius_mm`, its lowest line the tip).
+    #[serde(skip_serializing_if = "is_flat")]
+    pub blade_profile: String,
+    /// Layers layout: radius of a round blade, mm.
+    #[serde(skip_serializing_if = "is_default_blade_radius")]
+    pub blade_radius_mm: f64,
+    /// Layers layout: height of the blade's tip above the machine's top surface (the level the
+    /// dose is fed at and the platform drops from), mm; 0: the blade grazes it.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub blade_clearance_mm: f64,
+    /// Layers layout: length of the build plate along the travel, in diameters.
+    #[serde(skip_serializing_if = "is_default_plate")]
+    pub plate_diameters: f64,
     /// Size distribution of the particles.
     pub size_distribution: SizeDistributionSpec,
     /// How the `surface_energy` parameter is carried to the deck's softened contact
@@ -221,6 +243,12 @@ impl SceneSettings {
         s.settle_max_s = self.settle_max_s;
         s.window_start_diameters = self.window_start_diameters;
         s.supply_factor = self.supply_factor;
+        s.layers = self.layers;
+        s.bed = self.bed.clone();
+        s.blade_profile = self.blade_profile.clone();
+        s.blade_radius_mm = self.blade_radius_mm;
+        s.blade_clearance_mm = self.blade_clearance_mm;
+        s.plate_diameters = self.plate_diameters;
         s.size_distribution = self.size_distribution.clone();
         s.cohesion_scaling = self.cohesion_scaling;
         s.material_youngs_gpa = self.material_youngs_gpa;
@@ -305,6 +333,12 @@ impl Default for SceneSettings {
             settle_max_s: 1.0,
             window_start_diameters: 30.0,
             supply_factor: 1.0,
+            layers: DEFAULT_LAYERS,
+            bed: "loose".into(),
+            blade_profile: "flat".into(),
+            blade_radius_mm: DEFAULT_BLADE_RADIUS_MM,
+            blade_clearance_mm: 0.0,
+            plate_diameters: DEFAULT_PLATE_DIAMETERS,
             size_distribution: SizeDistributionSpec::default(),
             cohesion_scaling: CohesionScaling::PullOff,
             material_youngs_gpa: 0.0,
@@ -315,6 +349,33 @@ impl Default for SceneSettings {
             vtk: false,
         }
     }
+}
+
+/// Layers layout: passes by default; enough for the steady layer of every case measured
+/// (docs/study/layers.md).
+pub const DEFAULT_LAYERS: usize = 10;
+/// Layers layout: a round blade's radius by default, mm (Gaboriault et al. 2025's blade).
+pub const DEFAULT_BLADE_RADIUS_MM: f64 = 2.5;
+/// Layers layout: the build plate's length by default, in diameters.
+pub const DEFAULT_PLATE_DIAMETERS: f64 = 40.0;
+
+fn is_default_layers(n: &usize) -> bool {
+    *n == DEFAULT_LAYERS
+}
+fn is_loose(b: &str) -> bool {
+    b == "loose"
+}
+fn is_flat(p: &str) -> bool {
+    p == "flat"
+}
+fn is_default_blade_radius(r: &f64) -> bool {
+    *r == DEFAULT_BLADE_RADIUS_MM
+}
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
+}
+fn is_default_plate(v: &f64) -> bool {
+    *v == DEFAULT_PLATE_DIAMETERS
 }
 
 /// The particle size distribution, as written in the sweep file.

@@ -7,6 +7,7 @@
 //! `match` to extend elsewhere.
 
 pub mod conveyor;
+pub mod layers;
 pub mod moving_blade;
 pub mod pour;
 
@@ -21,7 +22,7 @@ pub use conveyor::warm::Warm;
 
 /// Every layout, in the order `scene.layout`'s error lists them.
 pub const LAYOUTS: &[&dyn Layout] =
-    &[&moving_blade::GATED, &moving_blade::THESIS, &conveyor::Conveyor, &pour::Pour];
+    &[&moving_blade::GATED, &moving_blade::THESIS, &conveyor::Conveyor, &pour::Pour, &layers::Layers];
 
 /// The layout named `name`.
 pub fn lookup(name: &str) -> Option<&'static dyn Layout> {
@@ -152,6 +153,12 @@ pub trait Layout: Sync {
     /// this layout runs to a precision.
     fn with_precision(&self, _scene: &Scene, _mfr_abs_se: f64) -> Option<Scene> {
         None
+    }
+
+    /// Wall meshes the deck reads besides `blade.stl`: (file name, ASCII STL). Part of the run's
+    /// identity.
+    fn extra_meshes(&self, _scene: &Scene) -> Vec<(&'static str, String)> {
+        Vec::new()
     }
 
     /// The deck's particle file (`pile.data`): the box, the dose and the substrate.

@@ -30,6 +30,7 @@ mod store;
 mod contact;
 mod dump;
 mod fidelity;
+mod layers;
 mod point;
 mod pour;
 mod powders;

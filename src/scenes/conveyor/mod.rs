@@ -351,6 +351,7 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         layer_thickness: Some(scene.layer_thickness()),
         layer_packing: Some(scene.layer_packing(st.mfr)),
         layer_packing_se: Some(scene.layer_packing(st.mfr_se)),
+        layers: None,
         heap: None,
         sizes: scene.sizes_of_a_distribution(),
         settle_steps: 0,

@@ -322,6 +322,7 @@ pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
         vx_length: 6.0 * profile_diameter,
         ke_limit,
         conveyor: Conveyor::default(),
+        own: serde_json::Value::Null,
     }
 }
 
@@ -368,6 +369,7 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         layer_thickness: Some(scene.layer_thickness()),
         layer_packing: Some(scene.layer_packing(m.mfr)),
         layer_packing_se: None,
+        layers: None,
         heap: None,
         sizes: scene.sizes_of_a_distribution(),
         settle_steps,

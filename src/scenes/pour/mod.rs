@@ -270,6 +270,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         vx_length: 0.0,
         ke_limit: 0.5 * mass * (10.0 * v_ref).powi(2),
         conveyor: Conveyor::default(),
+        own: serde_json::Value::Null,
     }
 }
 
@@ -325,6 +326,7 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         vx_se: Vec::new(),
         particles: scene.particles,
         layer: None,
+        layers: None,
         heap: Some(heap),
         sizes: scene.sizes_of_a_distribution(),
         settle_steps: steps,

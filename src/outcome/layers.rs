@@ -1,0 +1,57 @@
+//! Layer after layer, as result.json stores it (docs/layers.md defines each measure;
+//! [`crate::scenes::layers`] measures them).
+
+use serde::{Deserialize, Serialize};
+
+/// What one pass of the blade left on the build plate.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PassRecord {
+    /// The pass, from 1.
+    pub k: usize,
+    /// Solid volume the pass added to the plate over the plate's area, m: the deposit as a
+    /// height of solid.
+    pub deposit_m: f64,
+    /// The deposit over the platform's drop before the pass (Gaboriault et al. 2025's layer
+    /// relative density; the first pass's drop includes the blade's clearance).
+    pub relative_density: f64,
+    /// The powder's depth under the blade's tip: the tip's height over the bed's mean top
+    /// surface before the pass (loose) or over the solid's top (fused), m.
+    pub effective_thickness_m: f64,
+    /// The deposit over that depth: the packing of the layer the blade left.
+    pub packing: f64,
+    /// Share of the plate's area under this pass's own particles.
+    pub covered_fraction: f64,
+    /// RMS of the bed's top surface about its mean after the pass, in D.
+    pub roughness_d: f64,
+    /// Solid volume on the plate over its area and the height of everything laid so far (loose:
+    /// the bed's relative density; fused: the solid, 1 by construction, not stored).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bed_relative_density: Option<f64>,
+    /// Particles on the plate after the pass that it brought.
+    pub particles: usize,
+}
+
+/// Every pass and the steady layer: the answer of a layers run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LayerSeries {
+    /// `"loose"` or `"fused"`.
+    pub bed: String,
+    /// The platform's drop per pass, m.
+    pub layer_thickness_m: f64,
+    pub passes: Vec<PassRecord>,
+    /// The first pass of the steady layers (from 1): from it on, passes agree within their
+    /// scatter (MSER truncation of the measure the point answers with, no trend after it).
+    pub steady_from: usize,
+    /// Whether the passes from `steady_from` on show no trend (|z| of a least-squares slope
+    /// under [`crate::scenes::layers::MAX_TREND_Z`]) and at least three of them are left.
+    pub steady: bool,
+    /// The steady layer's means and standard errors over the steady passes.
+    pub packing: f64,
+    pub packing_se: f64,
+    pub relative_density: f64,
+    pub relative_density_se: f64,
+    pub effective_thickness_m: f64,
+    pub effective_thickness_se_m: f64,
+    pub covered_fraction: f64,
+    pub roughness_d: f64,
+}

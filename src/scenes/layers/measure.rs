@@ -1,0 +1,320 @@
+//! What each pass left on the build plate, and the steady layer (docs/layers.md).
+//!
+//! The deck prints, after each pass k, the powder's mass whose centres lie over the plate
+//! (`demsweep: layer k step S plate M count N`), and dumps those particles (`dump.layer.k`:
+//! id x y z radius). From them, per pass:
+//!
+//! - **deposit**: the solid volume the pass added over the plate, over the plate's area (a
+//!   height of solid): ΔM/(ρ·A) on a loose bed, M/(ρ·A) on a fused one (the bed before it is
+//!   solid and no longer on the plate);
+//! - **relative density**: the deposit over the platform's drop before the pass — Gaboriault et
+//!   al. 2025's layer relative density; on a loose bed it tends to the bed's packing;
+//! - **effective thickness**: the depth of powder the blade met, its tip's height over the mean
+//!   top surface before the pass (loose; the bare plate before the first) or over the solid
+//!   (fused; it tends to the drop over the layer's packing);
+//! - **packing**: deposit over effective thickness;
+//! - **covered fraction**: the share of the plate's area under the discs of the pass's own
+//!   particles (new IDs) — its complement is the bare bed or solid the pass left;
+//! - **roughness**: RMS of the top surface about its mean, in D.
+//!
+//! Surfaces are sampled on a grid of D/[`GRID_PER_D`] over the plate less [`EDGE_DIAMETERS`] at
+//! each wall, where the walls order the packing.
+//!
+//! The steady layer: MSER truncation of the point's measure over the passes (relative density
+//! on a loose bed, packing on a fused one — and the effective thickness too on a fused bed,
+//! which converges geometrically), then mean and SE (SD / √n) of what is left. It is steady when
+//! at least [`MIN_STEADY_PASSES`] passes remain and their least-squares trend is within
+//! [`MAX_TREND_Z`] SE of flat.
+
+use std::collections::HashSet;
+use std::path::Path;
+
+use super::{plan_of, Plan, MAX_TREND_Z, MIN_STEADY_PASSES};
+use crate::engine::dump::read_dump;
+use crate::measure::steady::{mser, trend_z};
+use crate::outcome::layers::{LayerSeries, PassRecord};
+use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT, VX_LAYERS};
+use crate::scene::Scene;
+use crate::scenes::{Finished, Rejected};
+
+/// Grid cells per diameter for surfaces and coverage.
+pub const GRID_PER_D: f64 = 4.0;
+/// Plate length left out at each wall for surfaces and coverage, in diameters.
+pub const EDGE_DIAMETERS: f64 = 2.0;
+
+/// One sphere over the plate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Grain {
+    pub id: u64,
+    pub x: f64,
+    pub y: f64,
+    pub z: f64,
+    pub r: f64,
+}
+
+/// A pass's line of the log.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PassLine {
+    pub k: usize,
+    pub step: u64,
+    /// Powder mass over the plate after the pass, kg.
+    pub plate_mass: f64,
+}
+
+/// The pass lines of a log, in order.
+pub fn parse_log(log: &str) -> Vec<PassLine> {
+    log.lines()
+        .filter_map(|l| {
+            let rest = l.trim().strip_prefix("demsweep: layer ")?;
+            let f: Vec<&str> = rest.split_whitespace().collect();
+            // k step S plate M count N
+            if f.len() < 5 || f[1] != "step" || f[3] != "plate" {
+                return None;
+            }
+            Some(PassLine { k: f[0].parse().ok()?, step: f[2].parse().ok()?, plate_mass: f[4].parse().ok()? })
+        })
+        .collect()
+}
+
+/// The top surface over the plate's inner part: per grid cell the top of the highest sphere over
+/// it, or `floor` where none is. Returns (cells, covered cells of `mine`), `mine` selecting the
+/// spheres whose discs count as covering.
+fn surface(
+    scene: &Scene,
+    plan: &Plan,
+    grains: &[Grain],
+    floor: f64,
+    mine: &dyn Fn(&Grain) -> bool,
+) -> (Vec<f64>, usize) {
+    let d = scene.diameter;
+    let (x0, x1) = (plan.plate_x0 + EDGE_DIAMETERS * d, plan.plate_x1 - EDGE_DIAMETERS * d);
+    let h = d / GRID_PER_D;
+    let nx = ((x1 - x0) / h).round().max(1.0) as usize;
+    let ny = (scene.depth / h).round().max(1.0) as usize;
+    let (hx, hy) = ((x1 - x0) / nx as f64, scene.depth / ny as f64);
+    let mut top = vec![floor; nx * ny];
+    let mut covered = vec![false; nx * ny];
+    for g in grains {
+        let yi = g.y.rem_euclid(scene.depth);
+        let (cx0, cx1) = (((g.x - g.r - x0) / hx).floor() as i64, ((g.x + g.r - x0) / hx).ceil() as i64);
+        let (cy0, cy1) = (((yi - g.r) / hy).floor() as i64, ((yi + g.r) / hy).ceil() as i64);
+        let counts = mine(g);
+        for cx in cx0.max(0)..cx1.min(nx as i64) {
+            let gx = x0 + (cx as f64 + 0.5) * hx;
+            for cy in cy0..cy1 {
+                let gy = (cy as f64 + 0.5) * hy;
+                // The nearest periodic image of the cell's centre.
+                let dy = (gy - yi + 0.5 * scene.depth).rem_euclid(scene.depth) - 0.5 * scene.depth;
+                let d2 = (gx - g.x).powi(2) + dy * dy;
+                if d2 < g.r * g.r {
+                    let i = cx as usize * ny + cy.rem_euclid(ny as i64) as usize;
+                    top[i] = top[i].max(g.z + (g.r * g.r - d2).sqrt());
+                    covered[i] |= counts;
+                }
+            }
+        }
+    }
+    let n_covered = covered.iter().filter(|&&c| c).count();
+    (top, n_covered)
+}
+
+fn mean(y: &[f64]) -> f64 {
+    y.iter().sum::<f64>() / y.len() as f64
+}
+
+/// Mean and SE (SD / √n, n − 1 divisor) of `y`.
+fn mean_se(y: &[f64]) -> (f64, f64) {
+    let m = mean(y);
+    if y.len() < 2 {
+        return (m, f64::NAN);
+    }
+    let var = y.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (y.len() - 1) as f64;
+    (m, (var / y.len() as f64).sqrt())
+}
+
+/// Every pass's record from the log's masses and each pass's particles over the plate.
+pub fn passes(scene: &Scene, plan: &Plan, lines: &[PassLine], grains: &[Vec<Grain>]) -> Vec<PassRecord> {
+    let d = scene.diameter;
+    let area = plan.plate_area;
+    let mut out = Vec::with_capacity(lines.len());
+    let (mut mass_before, mut floor_before, mut surface_before) = (0.0, 0.0, 0.0);
+    let mut ids_before: HashSet<u64> = HashSet::new();
+    let mut volume_after_first = 0.0;
+    for (line, gs) in lines.iter().zip(grains) {
+        let k = line.k;
+        let tip = plan.passes.get(k - 1).map_or(f64::NAN, |p| p.tip);
+        let deposit =
+            if plan.fused { line.plate_mass } else { line.plate_mass - mass_before } / (scene.density * area);
+        let effective = tip - if plan.fused { floor_before } else { surface_before };
+        let new = |g: &Grain| !ids_before.contains(&g.id);
+        let (top, covered) = surface(scene, plan, gs, floor_before, &new);
+        let m = mean(&top);
+        let roughness = (top.iter().map(|z| (z - m).powi(2)).sum::<f64>() / top.len() as f64).sqrt() / d;
+        let volume = line.plate_mass / (scene.density * area);
+        if k == 1 {
+            volume_after_first = volume;
+        }
+        out.push(PassRecord {
+            k,
+            deposit_m: deposit,
+            relative_density: deposit / plan.drop_before(k),
+            effective_thickness_m: effective,
+            packing: deposit / effective,
+            covered_fraction: covered as f64 / top.len() as f64,
+            roughness_d: roughness,
+            bed_relative_density: (!plan.fused && k > 1)
+                .then(|| (volume - volume_after_first) / ((k - 1) as f64 * plan.layer_thickness)),
+            particles: gs.iter().filter(|g| new(g)).count(),
+        });
+        mass_before = line.plate_mass;
+        if plan.fused {
+            floor_before += deposit;
+        }
+        surface_before = m;
+        ids_before = gs.iter().map(|g| g.id).collect();
+    }
+    out
+}
+
+/// The steady layer over `passes`.
+pub fn steady_layer(plan: &Plan, passes: Vec<PassRecord>) -> LayerSeries {
+    let answer: Vec<f64> =
+        passes.iter().map(|p| if plan.fused { p.packing } else { p.relative_density }).collect();
+    let depth: Vec<f64> = passes.iter().map(|p| p.effective_thickness_m).collect();
+    let cut = if plan.fused { mser(&answer).max(mser(&depth)) } else { mser(&answer) };
+    let kept = &passes[cut..];
+    let pick = |f: &dyn Fn(&PassRecord) -> f64| mean_se(&kept.iter().map(f).collect::<Vec<f64>>());
+    let (packing, packing_se) = pick(&|p| p.packing);
+    let (relative_density, relative_density_se) = pick(&|p| p.relative_density);
+    let (effective, effective_se) = pick(&|p| p.effective_thickness_m);
+    let steady = kept.len() >= MIN_STEADY_PASSES && trend_z(&answer[cut..]).abs() <= MAX_TREND_Z;
+    LayerSeries {
+        bed: if plan.fused { "fused" } else { "loose" }.into(),
+        layer_thickness_m: plan.layer_thickness,
+        steady_from: cut + 1,
+        steady,
+        packing,
+        packing_se,
+        relative_density,
+        relative_density_se,
+        effective_thickness_m: effective,
+        effective_thickness_se_m: effective_se,
+        covered_fraction: pick(&|p| p.covered_fraction).0,
+        roughness_d: pick(&|p| p.roughness_d).0,
+        passes,
+    }
+}
+
+fn read_grains(path: &Path) -> Result<Vec<Grain>, String> {
+    let snaps = read_dump(path, &["id", "x", "y", "z", "radius"]).map_err(|e| e.to_string())?;
+    let last = snaps.last().ok_or_else(|| format!("{}: no snapshot", path.display()))?;
+    let c = |n| last.column(n).expect("required column");
+    let (id, x, y, z, r) = (c("id"), c("x"), c("y"), c("z"), c("radius"));
+    Ok((0..last.len())
+        .map(|i| Grain {
+            id: last.get(i, id) as u64,
+            x: last.get(i, x),
+            y: last.get(i, y),
+            z: last.get(i, z),
+            r: last.get(i, r),
+        })
+        .collect())
+}
+
+/// The run's result: every pass, the steady layer as the point's answer (MFR: its relative
+/// density on a loose bed, its packing on a fused one). A run not steady by its last pass fails
+/// as `unsteady`, its numbers kept.
+pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
+    let scene = run.scene;
+    let plan = plan_of(scene);
+    // The deck warns rather than stops on a lost atom (see its thermo_modify): a loss is a failure.
+    if let Some(line) = run.run.log.lines().find(|l| l.contains("Lost atoms")) {
+        return Err(Rejected::new(FailureClass::LostAtoms, line.trim().to_string()));
+    }
+    let lines = parse_log(&run.run.log);
+    if lines.len() != plan.passes.len() || lines.iter().enumerate().any(|(i, l)| l.k != i + 1) {
+        return Err(Rejected::new(
+            FailureClass::Unparsable,
+            format!("the log reports {} of {} passes", lines.len(), plan.passes.len()),
+        ));
+    }
+    let grains: Vec<Vec<Grain>> = lines
+        .iter()
+        .map(|l| read_grains(&run.run_dir.join(format!("dump.layer.{}", l.k))))
+        .collect::<Result<_, _>>()
+        .map_err(|e| Rejected::new(FailureClass::Unparsable, e))?;
+    let series = steady_layer(&plan, passes(scene, &plan, &lines, &grains));
+    let (answer, answer_se) = if plan.fused {
+        (series.packing, series.packing_se)
+    } else {
+        (series.relative_density, series.relative_density_se)
+    };
+    let steps = lines.last().map_or(0, |l| l.step);
+    let result = RunResult {
+        format: RESULT_FORMAT,
+        hash: run.hash.to_string(),
+        parameters: run.parameters.clone(),
+        mfr: answer,
+        mfr_flux: f64::NAN,
+        mfr_particles: series.passes.iter().map(|p| p.particles).sum(),
+        mfr_se: Some(answer_se),
+        mfr_windows: series
+            .passes
+            .iter()
+            .map(|p| if plan.fused { p.packing } else { p.relative_density })
+            .collect(),
+        steady: series.steady,
+        steady_p: f64::NAN,
+        // The layers layout measures no v_x profile.
+        vx: vec![None; VX_LAYERS],
+        particles: scene.particles,
+        layer: Some(crate::outcome::layer::Layer {
+            layer_cv: f64::NAN,
+            layer_cv_noise: f64::NAN,
+            covered_fraction: series.covered_fraction,
+            roughness_d: series.roughness_d,
+            height_d: series.effective_thickness_m / scene.diameter,
+            particles: series.passes.last().map_or(0, |p| p.particles),
+        }),
+        layer_thickness: Some(series.effective_thickness_m),
+        layer_packing: Some(series.packing),
+        layer_packing_se: Some(series.packing_se),
+        sizes: scene.sizes_of_a_distribution(),
+        steps,
+        simulated_time: steps as f64 * scene.timestep,
+        wall_time: run.run.wall_time,
+        cpu_time: run.run.cpu_time,
+        engine_version: run.engine_version.to_string(),
+        warnings: run.run.warnings.clone(),
+        layers: Some(Box::new(series.clone())),
+        ..RunResult::default()
+    };
+    if !series.steady {
+        let why = if series.passes.len() - (series.steady_from - 1) < MIN_STEADY_PASSES {
+            format!(
+                "fewer than {MIN_STEADY_PASSES} passes after the transient (MSER kept passes {}–{})",
+                series.steady_from,
+                series.passes.len()
+            )
+        } else {
+            format!(
+                "a trend over passes {}–{} beyond {MAX_TREND_Z} SE",
+                series.steady_from,
+                series.passes.len()
+            )
+        };
+        return Err(Rejected::measured(
+            FailureClass::Unsteady,
+            format!("layers not steady by pass {}: {why}", series.passes.len()),
+            result,
+        ));
+    }
+    if !(answer.is_finite() && answer > 0.0 && answer < 0.75) {
+        return Err(Rejected::measured(
+            FailureClass::Implausible,
+            format!("steady layer {answer:.3}: outside (0, 0.75), beyond the densest packing of spheres"),
+            result,
+        ));
+    }
+    Ok(result)
+}

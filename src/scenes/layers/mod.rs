@@ -1,0 +1,473 @@
+//! The layers layout: the layer a machine prints on. The blade spreads layer k onto layers
+//! 1…k−1, the platform dropping by `layer_thickness` between passes and the dose refilled, for
+//! `scene.layers` passes; the answer is the steady layer, not the first on a bare plate.
+//!
+//! Geometry (docs/layers.md): x is the blade's travel, y across it (periodic), z up. The build
+//! plate lies at z = 0 between `plate_x0` and `plate_x1`, in a well: before pass k the
+//! machine's top surface — the feed platform before the well and a wall after it — stands
+//! k · layer_thickness above the plate, and the blade's tip `blade_clearance_mm` above that. This
+//! is the platform's drop in the plate's frame (the bed never moves, so nothing has to settle
+//! after a drop). A dose is inserted above the feed platform, falls, and the blade pushes it over
+//! the plate; what passes the plate falls into a pit beyond it and is deleted with what is left
+//! on the feed platform. Meshes are re-created at each pass's height (`move` of
+//! `fix mesh/surface`), so the blade returns to its start with nothing to sweep back over.
+//!
+//! Two beds ([`Bed`]): loose — the layers stay powder and each pass shears them again
+//! (spreading tests, binder jetting); fused — after each pass the powder on the plate is replaced
+//! by a solid of its volume (laser or electron-beam fusion), so the powder the blade meets
+//! converges to the drop over the layer's packing.
+//!
+//! What each pass measures ([`measure`]): the solid volume it added to the plate (as a height),
+//! Gaboriault et al. 2025's layer relative density (that over the drop), the powder's depth under
+//! the tip, the layer's packing, the covered fraction and the roughness. The steady layer is the
+//! passes after an MSER truncation of the point's measure, with their mean and SE.
+
+pub mod geometry;
+pub mod measure;
+
+use serde::{Deserialize, Serialize};
+
+use crate::outcome::RunResult;
+use crate::scene::plausible::short;
+use crate::scene::settings::SceneSettings;
+use crate::scene::{prime_seed, Base, FeedClass, Scene, ENGINE_VOLUME_LIMIT, GRAVITY, LAYER_FRACTION_MAX};
+use crate::scenes::moving_blade::{self, Dose};
+use crate::scenes::{BadSetting, BuiltinTemplate, Finished, Layout, Rejected, SetupRows};
+
+/// Dose of one pass over what the plate's layer can hold at [`LAYER_FRACTION_MAX`] (times
+/// `scene.supply_factor`): machines feed 1.5–3 times a layer, so that the last of the plate is
+/// covered.
+pub const DOSE_FACTOR: f64 = 2.0;
+/// Volume fraction the dose is inserted at (random placement without overlaps, before it falls).
+pub const DOSE_FRACTION: f64 = 0.3;
+/// Length of the feed platform the dose lies on, over the plate's length.
+const FEED_OVER_PLATE: f64 = 0.5;
+/// Length of the pit beyond the plate, in diameters: it holds one pass's excess dose.
+const PIT_DIAMETERS: f64 = 20.0;
+/// Blade travel over which it accelerates from rest to full speed, in diameters.
+const RAMP_DIAMETERS: f64 = 2.0;
+/// Passes from the steady layer on show a trend when the least-squares slope over its SE is
+/// beyond this.
+pub const MAX_TREND_Z: f64 = 2.5;
+/// Fewest passes in the steady layer for a mean and an SE.
+pub const MIN_STEADY_PASSES: usize = 3;
+/// Most passes a point may ask for (each is a whole spread; 30 is hours at 20–40 µm).
+pub const MAX_LAYERS: usize = 100;
+/// Share of a round blade's half circle that is meshed, centred on its lowest line (Gaboriault
+/// et al.'s case generator meshes 0.75 of it; above it the blade's faces are vertical).
+pub const ROUND_ARC_SHARE: f64 = 0.75;
+
+/// The built-in deck.
+const TEMPLATE: BuiltinTemplate = BuiltinTemplate {
+    name: "layers.liggghts.tera",
+    source: include_str!("../../../templates/layers.liggghts.tera"),
+};
+
+/// The layers layout (registered in [`crate::scenes::LAYOUTS`]).
+pub struct Layers;
+
+/// What happens to a layer once the next is spread onto it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Bed {
+    /// It stays powder and is sheared again.
+    Loose,
+    /// It consolidates to a solid of its volume.
+    Fused,
+}
+
+impl Bed {
+    pub fn parse(name: &str) -> Option<Bed> {
+        match name {
+            "loose" => Some(Bed::Loose),
+            "fused" => Some(Bed::Fused),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Bed::Loose => "loose",
+            Bed::Fused => "fused",
+        }
+    }
+}
+
+/// One pass of the blade, as the deck runs it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Pass {
+    /// From 1.
+    pub k: usize,
+    /// Height of the machine's top surface over the plate, m.
+    pub top: f64,
+    /// Height of the blade's tip over the plate, m.
+    pub tip: f64,
+    /// Step at which the blade starts (its ramp counts from it).
+    pub start: u64,
+    /// Prime seed of this pass's dose.
+    pub seed: u64,
+}
+
+/// The layers layout's own numbers (`scene.own`). Lengths in m.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Plan {
+    pub fused: bool,
+    pub layer_thickness: f64,
+    /// The blade's tip over the machine's top surface.
+    pub clearance: f64,
+    pub plate_x0: f64,
+    pub plate_x1: f64,
+    /// Plate area (length × depth), m².
+    pub plate_area: f64,
+    /// The feed platform's back end (its top runs from here to `plate_x0`).
+    pub feed_x0: f64,
+    /// How far the feed platform's and the wall's faces reach below their top: past the plate
+    /// at the last pass.
+    pub block_depth: f64,
+    /// The round blade's radius (0: flat).
+    pub blade_radius: f64,
+    /// x of the blade's lowest line at the start (flat: its rear face), and its travel in a pass.
+    pub tip_x0: f64,
+    pub travel: f64,
+    /// The dose's insertion region above the top surface.
+    pub dose_x0: f64,
+    pub dose_x1: f64,
+    pub dose_lift: f64,
+    pub dose_height: f64,
+    /// The first dose's region height: it fills the clearance too.
+    pub first_dose_height: f64,
+    pub dose_fraction: f64,
+    pub dose_particles: usize,
+    /// Steps of the first dose's fall before the first pass.
+    pub fall_steps: u64,
+    /// Steps of a pass until the blade has cleared the feed platform (the next dose goes in).
+    pub clear_steps: u64,
+    /// Steps of the blade's whole pass, the rest after it, and the wait for the rest of the
+    /// next dose's fall before the next pass.
+    pub pass_steps: u64,
+    pub rest_steps: u64,
+    pub wait_steps: u64,
+    pub passes: Vec<Pass>,
+    pub feed: Vec<FeedClass>,
+    pub volume_limit: f64,
+    pub distribution_seed: u64,
+}
+
+impl Plan {
+    /// Steps of the whole run: the first dose's fall, then each pass with its rest and wait.
+    pub fn total_steps(&self) -> u64 {
+        let n = self.passes.len() as u64;
+        self.fall_steps + n * (self.pass_steps + self.rest_steps) + n.saturating_sub(1) * self.wait_steps
+    }
+
+    /// The platform's drop before pass `k` (from 1): the first includes the clearance.
+    pub fn drop_before(&self, k: usize) -> f64 {
+        if k == 1 {
+            self.layer_thickness + self.clearance
+        } else {
+            self.layer_thickness
+        }
+    }
+}
+
+impl Layout for Layers {
+    fn name(&self) -> &'static str {
+        "layers"
+    }
+
+    fn template(&self) -> BuiltinTemplate {
+        TEMPLATE
+    }
+
+    fn check_settings(&self, s: &SceneSettings) -> Result<(), BadSetting> {
+        if !(1..=MAX_LAYERS).contains(&s.layers) {
+            return Err(BadSetting {
+                key: "scene.layers",
+                why: format!("{}: expected a whole number of passes from 1 to {MAX_LAYERS}", s.layers),
+            });
+        }
+        if Bed::parse(&s.bed).is_none() {
+            return Err(BadSetting {
+                key: "scene.bed",
+                why: format!("\"{}\": expected \"loose\" or \"fused\"", s.bed),
+            });
+        }
+        if !matches!(s.blade_profile.as_str(), "flat" | "round") {
+            return Err(BadSetting {
+                key: "scene.blade_profile",
+                why: format!("\"{}\": expected \"flat\" or \"round\"", s.blade_profile),
+            });
+        }
+        for (key, v, least) in [
+            ("scene.blade_radius_mm", s.blade_radius_mm, f64::MIN_POSITIVE),
+            ("scene.blade_clearance_mm", s.blade_clearance_mm, 0.0),
+            ("scene.plate_diameters", s.plate_diameters, 10.0),
+            ("scene.supply_factor", s.supply_factor, 0.5),
+        ] {
+            if !(v.is_finite() && v >= least) {
+                return Err(BadSetting {
+                    key,
+                    why: format!("{v}: expected a finite number of at least {least}"),
+                });
+            }
+        }
+        if s.substrate == "powder" {
+            return Err(BadSetting {
+                key: "scene.substrate",
+                why: "\"powder\": the layers layout spreads its own bed of the powder (scene.bed); expected \"smooth\" or \"rough\", which it ignores".into(),
+            });
+        }
+        Ok(())
+    }
+
+    fn derive(&self, base: Base, settings: &SceneSettings) -> Scene {
+        derive(base, settings)
+    }
+
+    fn atoms_kept(&self, _scene: &Scene) -> Option<u64> {
+        // Doses are inserted and what lies off the plate deleted, pass by pass.
+        None
+    }
+
+    fn measure(&self, run: &Finished) -> Result<RunResult, Rejected> {
+        measure::measure(run)
+    }
+
+    fn what_runs(&self, s: &Scene) -> String {
+        let plan = plan_of(s);
+        format!(
+            "{} passes of {} particles' dose onto a {} bed, {} steps",
+            plan.passes.len(),
+            plan.dose_particles,
+            if plan.fused { "fused" } else { "loose" },
+            plan.total_steps()
+        )
+    }
+
+    fn setup_rows(&self, s: &SceneSettings) -> SetupRows {
+        SetupRows {
+            head: vec![
+                ("passes", s.layers.to_string()),
+                ("bed", s.bed.clone()),
+                (
+                    "blade profile",
+                    if s.blade_profile == "round" {
+                        format!("round, radius {} mm", short(s.blade_radius_mm))
+                    } else {
+                        "flat".into()
+                    },
+                ),
+                ("blade clearance over the top surface (mm)", short(s.blade_clearance_mm)),
+                ("build plate length (D)", short(s.plate_diameters)),
+                ("dose (× the plate's layer)", short(DOSE_FACTOR * s.supply_factor)),
+            ],
+            tail: Vec::new(),
+        }
+    }
+
+    fn mesh(&self, scene: &Scene) -> String {
+        geometry::blade_stl(scene, &plan_of(scene))
+    }
+
+    fn extra_meshes(&self, scene: &Scene) -> Vec<(&'static str, String)> {
+        let plan = plan_of(scene);
+        vec![
+            ("feed.stl", geometry::feed_stl(scene, &plan)),
+            ("wall.stl", geometry::wall_stl(scene, &plan)),
+            ("plate.stl", geometry::plate_stl(scene, &plan)),
+            ("pit.stl", geometry::pit_stl(scene, &plan)),
+        ]
+    }
+
+    fn pile(&self, _scene: &Scene) -> String {
+        // The deck creates its box; every particle is inserted by a dose.
+        String::new()
+    }
+
+    fn result_lines(&self, r: &RunResult) -> Option<Vec<String>> {
+        let l = r.layers.as_ref()?;
+        let mut lines = vec![format!(
+            "steady layer     from pass {} of {}{}: packing {:.3} ± {:.3}, relative density {:.3} ± {:.3}",
+            l.steady_from,
+            l.passes.len(),
+            if l.steady { "" } else { " (NOT steady)" },
+            l.packing,
+            l.packing_se,
+            l.relative_density,
+            l.relative_density_se
+        )];
+        lines.push(format!(
+            "                 {:.1} ± {:.1} µm of powder under the tip (layer {:.0} µm), {:.2} covered, roughness {:.2} D",
+            l.effective_thickness_m * 1e6,
+            l.effective_thickness_se_m * 1e6,
+            l.layer_thickness_m * 1e6,
+            l.covered_fraction,
+            l.roughness_d
+        ));
+        lines.push("pass  deposit µm  rel. density  depth µm  packing  covered  rough D".into());
+        for p in &l.passes {
+            lines.push(format!(
+                "{:>4}  {:>10.1}  {:>12.3}  {:>8.1}  {:>7.3}  {:>7.2}  {:>7.2}",
+                p.k,
+                p.deposit_m * 1e6,
+                p.relative_density,
+                p.effective_thickness_m * 1e6,
+                p.packing,
+                p.covered_fraction,
+                p.roughness_d
+            ));
+        }
+        Some(lines)
+    }
+}
+
+/// The plan a scene of this layout carries.
+pub fn plan_of(scene: &Scene) -> Plan {
+    scene.own().expect("a layers scene carries its plan")
+}
+
+/// The scene of a layers point: the moving blade's common numbers, then the well, the dose and
+/// the passes.
+fn derive(base: Base, settings: &SceneSettings) -> Scene {
+    let t = base.layer_thickness;
+    let clearance = settings.blade_clearance_mm * 1e-3;
+    let mut s = moving_blade::derive(base.clone(), settings, Dose::Free);
+    let Base { psd, d, speed: v, timestep: dt, .. } = base;
+    let w = s.depth;
+    let fused = Bed::parse(&settings.bed) == Some(Bed::Fused);
+    let layers = settings.layers.max(1);
+    let plate_len = settings.plate_diameters.max(10.0) * d;
+    let feed_len = FEED_OVER_PLATE * plate_len;
+    let radius = if settings.blade_profile == "round" { settings.blade_radius_mm * 1e-3 } else { 0.0 };
+    // The blade's x extent about its lowest line: behind and ahead of it.
+    let (behind, ahead) = if radius > 0.0 {
+        let half = radius * (0.5 * ROUND_ARC_SHARE * std::f64::consts::PI).sin();
+        (half, half)
+    } else {
+        (0.0, d)
+    };
+    let tip_x0 = 0.5 * d + behind + d;
+    let front0 = tip_x0 + ahead;
+    let dose_x0 = front0 + 0.5 * d;
+    let plate_x0 = dose_x0 + feed_len + d;
+    let plate_x1 = plate_x0 + plate_len;
+    // The tip runs past the plate's end by two diameters: everything ahead of it is in the pit.
+    let travel = plate_x1 + 2.0 * d - tip_x0;
+    let x_hi = plate_x1 + 2.0 * d + ahead + PIT_DIAMETERS * d;
+
+    // Every dose is DOSE_FACTOR layers of the drop; the first fills the drop and the clearance.
+    let dose_for =
+        |drop: f64| DOSE_FACTOR * settings.supply_factor * plate_len * w * drop * LAYER_FRACTION_MAX;
+    let (dose_solid, first_solid) = (dose_for(t), dose_for(t + clearance));
+    let dose_particles = (dose_solid / psd.mean_volume()).ceil() as usize;
+    let dose_x1 = plate_x0 - d;
+    let region_height = |solid: f64| solid / (DOSE_FRACTION * (dose_x1 - dose_x0) * w) + psd.max_diameter();
+    let (dose_height, first_dose_height) = (region_height(dose_solid), region_height(first_solid));
+    let dose_lift = 0.5 * d;
+    let last_top = layers as f64 * t;
+    let block_depth = last_top + clearance + 2.0 * d;
+    // The pit holds a pass's excess dose below the plate.
+    let pit_depth = 10.0 * d + first_solid / (LAYER_FRACTION_MAX * PIT_DIAMETERS * d * w);
+    let blade_height = (dose_lift + first_dose_height + 2.0 * d)
+        .max(radius * (1.0 - (0.5 * ROUND_ARC_SHARE * std::f64::consts::PI).cos()) + 2.0 * d);
+    let z_top = last_top + clearance + blade_height + 2.0 * d;
+
+    let steps = |time: f64| ((time / dt).ceil() as u64).max(1);
+    // The dose falls from the top of its region, and as long again to come down in a heap. The
+    // first dose falls before the first pass; every later one is inserted as soon as the blade
+    // has cleared the feed platform, and falls while the blade crosses the plate (what is left
+    // of its fall is waited for before the next pass).
+    let fall = |height: f64| steps(2.0 * (2.0 * (dose_lift + height) / GRAVITY).sqrt());
+    let (fall_steps, later_fall_steps) = (fall(first_dose_height), fall(dose_height));
+    let ramp_time = 2.0 * RAMP_DIAMETERS * d / v;
+    let ramp_steps = steps(ramp_time);
+    let pass_steps = steps(travel / v + 0.5 * ramp_time);
+    let clear_travel = (plate_x0 - (tip_x0 - behind)).min(travel);
+    let clear_steps = steps(clear_travel / v + 0.5 * ramp_time).min(pass_steps);
+    let rest_steps = steps((2.0 * 10.0 * d / GRAVITY).sqrt());
+    let wait_steps = later_fall_steps.saturating_sub(pass_steps - clear_steps + rest_steps);
+    let cycle = pass_steps + rest_steps + wait_steps;
+    let passes = (1..=layers)
+        .map(|k| {
+            let top = k as f64 * t;
+            Pass {
+                k,
+                top,
+                tip: top + clearance,
+                start: fall_steps + (k as u64 - 1) * cycle,
+                seed: prime_seed(settings.seed, 100 + k),
+            }
+        })
+        .collect();
+    let feed_total: f64 = psd.classes.iter().map(|c| c.fraction * c.diameter.powi(3)).sum();
+    let feed = psd
+        .classes
+        .iter()
+        .enumerate()
+        .map(|(i, c)| FeedClass {
+            diameter: c.diameter,
+            mass_fraction: c.fraction * c.diameter.powi(3) / feed_total,
+            seed: prime_seed(settings.seed, i + 2),
+        })
+        .collect();
+    let smallest = std::f64::consts::PI / 6.0 * psd.min_diameter().powi(3);
+    let plan = Plan {
+        fused,
+        layer_thickness: t,
+        clearance,
+        plate_x0,
+        plate_x1,
+        plate_area: plate_len * w,
+        feed_x0: 0.5 * d,
+        block_depth,
+        blade_radius: radius,
+        tip_x0,
+        travel,
+        dose_x0,
+        dose_x1,
+        dose_lift,
+        dose_height,
+        first_dose_height,
+        dose_fraction: DOSE_FRACTION,
+        dose_particles,
+        fall_steps,
+        clear_steps,
+        pass_steps,
+        rest_steps,
+        wait_steps,
+        passes,
+        feed,
+        volume_limit: if smallest < 10.0 * ENGINE_VOLUME_LIMIT { 1e-3 * smallest } else { 0.0 },
+        distribution_seed: prime_seed(settings.seed, 0),
+    };
+
+    let mass = (first_solid / psd.mean_volume() + dose_particles as f64 * layers as f64)
+        * s.density
+        * psd.mean_volume();
+    let v_ref = v.max((2.0 * GRAVITY * z_top).sqrt());
+    s.gap = t + clearance;
+    s.particles = dose_particles * layers;
+    s.pile_n = [0, 0, 0];
+    s.gate_x = 0.0;
+    s.rest_ke = 0.0;
+    s.blade_x0 = tip_x0;
+    s.blade_thickness = if radius > 0.0 { 0.0 } else { d };
+    s.blade_top = blade_height;
+    s.x_hi = x_hi;
+    s.z_lo = -(block_depth.max(pit_depth) + d);
+    s.z_hi = z_top + v * v / GRAVITY;
+    s.settle_steps = 0;
+    s.approach_steps = 0;
+    s.ramp_steps = ramp_steps;
+    s.window_length_steps = fall_steps + cycle * layers as u64 - wait_steps;
+    s.dump_every = 0;
+    s.traverse_steps = 0;
+    s.full_dump_every = 0;
+    s.thermo_every = (cycle / 20).clamp(1, 1000);
+    s.ke_limit = 0.5 * mass * (10.0 * v_ref).powi(2);
+    s.own = serde_json::to_value(plan).expect("a plan serialises");
+    s
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,211 @@
+use std::collections::BTreeMap;
+
+use super::measure::{parse_log, passes, steady_layer, Grain, PassLine};
+use super::*;
+use crate::scene::settings::SceneSettings;
+
+fn settings() -> SceneSettings {
+    SceneSettings {
+        layout: "layers".into(),
+        layers: 4,
+        plate_diameters: 20.0,
+        blade_clearance_mm: 0.05,
+        ..SceneSettings::default()
+    }
+}
+
+fn values(pairs: &[(&str, f64)]) -> BTreeMap<String, f64> {
+    pairs.iter().map(|(k, v)| (k.to_string(), *v)).collect()
+}
+
+fn scene(s: &SceneSettings) -> Scene {
+    let v =
+        values(&[("diameter", 0.065), ("layer_thickness", 0.1), ("blade_speed", 0.1), ("density", 4386.0)]);
+    crate::scenes::build(&v, s).unwrap()
+}
+
+#[test]
+fn the_platform_drops_by_the_layer_thickness_before_every_pass() {
+    let sc = scene(&settings());
+    let plan = plan_of(&sc);
+    assert_eq!(plan.passes.len(), 4);
+    for pair in plan.passes.windows(2) {
+        assert!((pair[1].top - pair[0].top - 1e-4).abs() < 1e-12, "drop {}", pair[1].top - pair[0].top);
+        assert!((pair[1].tip - pair[1].top - 5e-5).abs() < 1e-12, "clearance");
+        assert!(pair[1].start > pair[0].start + plan.pass_steps, "passes overlap");
+    }
+    // The first layer is the drop and the clearance over the bare plate.
+    assert!((plan.drop_before(1) - 1.5e-4).abs() < 1e-12);
+    assert!((plan.drop_before(2) - 1e-4).abs() < 1e-12);
+    // The plate is the length asked for; the blade's tip travels past its end.
+    assert!((plan.plate_x1 - plan.plate_x0 - 20.0 * sc.diameter).abs() < 1e-12);
+    assert!(plan.tip_x0 + plan.travel > plan.plate_x1);
+    // Every pass's top and the feed platform's faces stay inside the box.
+    let last = plan.passes.last().unwrap();
+    assert!(last.tip + sc.blade_top < sc.z_hi);
+    assert!(last.top - plan.block_depth > sc.z_lo && last.top - plan.block_depth < 0.0);
+}
+
+#[test]
+fn a_bad_layer_count_bed_or_profile_is_refused_naming_its_key() {
+    let cases: [(SceneSettings, &str); 5] = [
+        (SceneSettings { layers: 0, ..settings() }, "scene.layers"),
+        (SceneSettings { layers: 1000, ..settings() }, "scene.layers"),
+        (SceneSettings { bed: "sintered".into(), ..settings() }, "scene.bed"),
+        (SceneSettings { blade_profile: "wavy".into(), ..settings() }, "scene.blade_profile"),
+        (SceneSettings { blade_clearance_mm: -0.1, ..settings() }, "scene.blade_clearance_mm"),
+    ];
+    for (s, key) in cases {
+        let err = Layers.check_settings(&s).unwrap_err();
+        assert_eq!(err.key, key);
+        assert!(!err.why.contains('\n'));
+    }
+    assert!(Layers.check_settings(&settings()).is_ok());
+    let v = values(&[("diameter", 0.065), ("layer_thickness", -0.05)]);
+    let err = crate::scenes::build(&v, &settings()).unwrap_err().to_string();
+    assert!(err.contains("layer_thickness") && err.contains("domain"), "{err}");
+}
+
+/// A square lattice of spheres of diameter `d` at height `z` over the plate's inner part, ids
+/// from `first`.
+fn lattice(sc: &Scene, plan: &Plan, d: f64, z: f64, first: u64) -> Vec<Grain> {
+    let nx = ((plan.plate_x1 - plan.plate_x0) / d).floor() as usize;
+    let ny = (sc.depth / d).floor() as usize;
+    let mut out = Vec::new();
+    for i in 0..nx {
+        for j in 0..ny {
+            out.push(Grain {
+                id: first + (i * ny + j) as u64,
+                x: plan.plate_x0 + (i as f64 + 0.5) * d,
+                y: (j as f64 + 0.5) * sc.depth / ny as f64,
+                z,
+                r: 0.5 * d,
+            });
+        }
+    }
+    out
+}
+
+#[test]
+fn a_second_layer_on_the_first_is_measured_as_its_own_deposit_and_cover() {
+    let sc = scene(&settings());
+    let plan = plan_of(&sc);
+    let d = sc.diameter;
+    let first = lattice(&sc, &plan, d, 0.5 * d, 1);
+    let mut both = first.clone();
+    both.extend(lattice(&sc, &plan, d, 1.5 * d, 10_000));
+    let m = sc.density * std::f64::consts::PI / 6.0 * d.powi(3);
+    let lines = [
+        PassLine { k: 1, step: 10, plate_mass: first.len() as f64 * m },
+        PassLine { k: 2, step: 20, plate_mass: both.len() as f64 * m },
+    ];
+    let recs = passes(&sc, &plan, &lines, &[first.clone(), both.clone()]);
+    let sphere_volume = std::f64::consts::PI / 6.0 * d.powi(3);
+    let expected = first.len() as f64 * sphere_volume / plan.plate_area;
+    for r in &recs {
+        assert!((r.deposit_m - expected).abs() < 1e-12 * expected.max(1.0), "pass {} deposit", r.k);
+        assert_eq!(r.particles, first.len());
+    }
+    // The second pass's relative density is its deposit over one drop, the first's over the
+    // drop and the clearance.
+    assert!((recs[1].relative_density - expected / 1e-4).abs() < 1e-9);
+    assert!((recs[0].relative_density - expected / 1.5e-4).abs() < 1e-9);
+    // Touching spheres on a square lattice cover π/4 of the plane; a grid of D/4 samples it to
+    // within a few per cent.
+    for r in &recs {
+        assert!(
+            (r.covered_fraction - std::f64::consts::FRAC_PI_4).abs() < 0.03,
+            "covered {}",
+            r.covered_fraction
+        );
+    }
+    // The second pass met the first one's top: its effective thickness is the tip over the
+    // first layer's mean surface, which lies between the spheres' centres and their tops.
+    let tip = plan.passes[1].tip;
+    assert!(recs[1].effective_thickness_m > tip - d && recs[1].effective_thickness_m < tip - 0.5 * d);
+    assert!((recs[0].effective_thickness_m - plan.passes[0].tip).abs() < 1e-15);
+}
+
+#[test]
+fn the_log_gives_each_pass_its_plate_mass() {
+    let log = "step atoms\ndemsweep: layer 1 step 1200 plate 3.5e-07 count 420\nnoise\n\
+               demsweep: layer 2 step 2400 plate 7.25e-07 count 860\ndemsweep: layers done at step 2400\n";
+    let lines = parse_log(log);
+    assert_eq!(lines.len(), 2);
+    assert_eq!(lines[1], PassLine { k: 2, step: 2400, plate_mass: 7.25e-7 });
+}
+
+fn record(k: usize, y: f64) -> crate::outcome::layers::PassRecord {
+    crate::outcome::layers::PassRecord {
+        k,
+        deposit_m: y * 1e-4,
+        relative_density: y,
+        effective_thickness_m: 1e-4,
+        packing: y,
+        covered_fraction: 1.0,
+        roughness_d: 0.3,
+        bed_relative_density: None,
+        particles: 100,
+    }
+}
+
+#[test]
+fn the_steady_layer_starts_after_the_first_layers_transient() {
+    let plan = plan_of(&scene(&settings()));
+    // A first layer well below the bed's, then scatter about 0.60.
+    let y = [0.45, 0.55, 0.605, 0.598, 0.601, 0.603, 0.597, 0.600, 0.602, 0.599];
+    let s = steady_layer(&plan, y.iter().enumerate().map(|(i, &v)| record(i + 1, v)).collect());
+    assert!(s.steady_from >= 3, "steady from {}", s.steady_from);
+    assert!(s.steady);
+    assert!((s.relative_density - 0.6).abs() < 0.003);
+    assert!(s.relative_density_se > 0.0 && s.relative_density_se < 0.003);
+    // A bed still filling up by the last pass is not steady.
+    let rising: Vec<_> =
+        (0..10).map(|i| record(i + 1, 0.5 + 0.01 * i as f64 + 0.001 * (i % 2) as f64)).collect();
+    assert!(!steady_layer(&plan, rising).steady);
+}
+
+#[test]
+fn the_round_blade_is_an_arc_whose_lowest_line_is_the_tip() {
+    let s = SceneSettings { blade_profile: "round".into(), blade_radius_mm: 1.0, ..settings() };
+    let sc = scene(&s);
+    let plan = plan_of(&sc);
+    let stl = Layers.mesh(&sc);
+    let mut lowest = (f64::INFINITY, 0.0);
+    let mut n_facets = 0;
+    let mut verts: Vec<[f64; 3]> = Vec::new();
+    let mut normal = [0.0; 3];
+    for line in stl.lines().map(str::trim) {
+        let nums = |t: &str| -> Vec<f64> { t.split_whitespace().map(|v| v.parse().unwrap()).collect() };
+        if let Some(rest) = line.strip_prefix("facet normal") {
+            let v = nums(rest);
+            normal = [v[0], v[1], v[2]];
+        } else if let Some(rest) = line.strip_prefix("vertex") {
+            let v = nums(rest);
+            if v[2] < lowest.0 {
+                lowest = (v[2], v[0]);
+            }
+            verts.push([v[0], v[1], v[2]]);
+            if verts.len() == 3 {
+                let (a, b, c) = (verts[0], verts[1], verts[2]);
+                let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+                let w = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+                let cross = [u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]];
+                let dot: f64 = (0..3).map(|i| cross[i] * normal[i]).sum();
+                assert!(dot > 0.0, "winding disagrees with normal {normal:?}");
+                // Outward: away from the cylinder's axis or up through the lid.
+                let centre = [(a[0] + b[0] + c[0]) / 3.0, (a[2] + b[2] + c[2]) / 3.0];
+                let out = (centre[0] - plan.tip_x0) * normal[0] + (centre[1] - plan.blade_radius) * normal[2];
+                assert!(out > 0.0 || normal[2] > 0.99, "inward facet at {centre:?}");
+                verts.clear();
+                n_facets += 1;
+            }
+        }
+    }
+    assert!(n_facets > 90);
+    assert!(lowest.0.abs() < 1e-12, "lowest z {}", lowest.0);
+    assert!((lowest.1 - plan.tip_x0).abs() < 1e-9);
+    // The extra meshes: the feed platform, the wall after the plate, the plate, the pit's wall.
+    let names: Vec<&str> = Layers.extra_meshes(&sc).iter().map(|(n, _)| *n).collect();
+    assert_eq!(names, ["feed.stl", "wall.stl", "plate.stl", "pit.stl"]);
+}
