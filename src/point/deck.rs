@@ -38,8 +38,10 @@ impl Template {
                 Template::from_source(builtin.name, builtin.source)
             }
             Some(p) => {
-                let source = std::fs::read_to_string(p)
-                    .map_err(|e| DeckError::Read { path: p.display().to_string(), reason: e.to_string() })?;
+                let read = |reason: String| DeckError::Read { path: p.display().to_string(), reason };
+                let bytes = crate::sys::read::read_capped(p, crate::sweep::FILE_CAP)
+                    .map_err(|e| read(e.to_string()))?;
+                let source = String::from_utf8(bytes).map_err(|_| read("not UTF-8 text".into()))?;
                 Template::from_source(&p.display().to_string(), &source)
             }
         }

@@ -489,6 +489,15 @@ fn a_classes_table_that_misses_its_total_repeats_a_size_or_holds_dust_is_refused
 }
 
 #[test]
+fn a_pour_on_a_bed_of_powder_is_refused_as_the_other_moving_blade_layouts_refuse_it() {
+    rejects(
+        &format!("{BASE}[scene]\nlayout = \"pour\"\nsubstrate = \"powder\"\n"),
+        &["--lds", "2"],
+        &["bad-sweep.toml", "scene.substrate", "\"powder\"", "the pour's heap stands on the plate"],
+    );
+}
+
+#[test]
 fn a_missing_template_is_named_by_its_sweep_file_and_key_before_anything_is_said_to_run() {
     let dir = tempfile::tempdir().unwrap();
     for engine in ["", "[run]\nengine = \"stand-in\"\n"] {

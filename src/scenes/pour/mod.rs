@@ -85,6 +85,13 @@ impl Layout for Pour {
     }
 
     fn check_settings(&self, s: &SceneSettings) -> Result<(), BadSetting> {
+        if s.substrate == "powder" {
+            return Err(BadSetting {
+                key: "scene.substrate",
+                why: "\"powder\": the pour's heap stands on the plate; a bed of the powder is the conveyor layout's"
+                    .into(),
+            });
+        }
         for (key, v) in [("scene.rest_speed", s.rest_speed), ("scene.settle_max_s", s.settle_max_s)] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(BadSetting { key, why: format!("{v}: expected a positive number") });
