@@ -1,0 +1,126 @@
+#!/usr/bin/env python3
+"""The layers study's figures and tables (docs/study/layers.md), from the records run.sh and
+ti64.sh write. Needs matplotlib.
+
+    python3 docs/study/layers/plot.py      # from the repository's root
+
+- gaboriault.png: the layer relative density per layer, ours per property set (each pass, the
+  steady layer's mean ± SE as a band) beside the experiment's three repeats (mean, min–max);
+- ti64-fused.png: the fused bed over passes at two layer thicknesses and two blade speeds — the
+  effective layer thickness over the drop, converging to 1 / packing, and the packing;
+- a Markdown table of each on stdout.
+"""
+import glob, json, os, sys
+
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def load(path):
+    j = json.load(open(path))
+    # `sweep run --json` prints the run's result; a failed run has its passes under `measured`.
+    if "layers" in j and j["layers"]:
+        return j["layers"], None
+    m = j.get("measured") or {}
+    return (m.get("layers") if isinstance(m, dict) else None), j.get("reason") or j.get("failed") or "failed"
+
+
+def experiment():
+    rows = []
+    for line in open(os.path.join(HERE, "experimental.data")):
+        if line.startswith("#") or line.startswith("Layer"):
+            continue
+        k, *r = line.split()
+        rows.append((int(k) + 1, [float(x) for x in r]))
+    return rows
+
+
+def gaboriault():
+    exp = experiment()
+    fig, ax = plt.subplots(figsize=(8, 4.8))
+    ks = [k for k, _ in exp]
+    mean = [sum(r) / 3 for _, r in exp]
+    lo = [m - min(r) for m, (_, r) in zip(mean, exp)]
+    hi = [max(r) - m for m, (_, r) in zip(mean, exp)]
+    ax.errorbar(ks, mean, yerr=[lo, hi], color="black", marker="s", capsize=3,
+                label="experiment, 3 repeats (mean, min–max)")
+    print("| set | first layer (over 100 µm) | first layer (over its 200 µm gap) | steady from | steady layer ± SE | passes | covered | experiment layers 2–10 |")
+    print("|---|---|---|---|---|---|---|---|")
+    plateau = [v for k, r in exp if 2 <= k <= 10 for v in r]
+    colours = {"PS1": "#e6550d", "PS2": "#3182bd", "PS3": "#31a354"}
+    for path in sorted(glob.glob(os.path.join(HERE, "record", "PS*.json"))):
+        label = os.path.basename(path)[:-5]
+        series, failed = load(path)
+        if not series:
+            print(f"| {label} | failed: {failed} | | | | | | |")
+            continue
+        p = series["passes"]
+        t = series["layer_thickness_m"]
+        # Their post-processing divides every layer's deposit by the drop δn (100 µm), the first
+        # too; ours divides the first by its whole gap (drop + clearance).
+        rd = [q["deposit_m"] / t for q in p]
+        c = colours.get(label, None)
+        ax.plot([q["k"] for q in p], rd, marker="o", color=c, label=f"{label} (ours, per pass)")
+        ax.plot([1], [p[0]["relative_density"]], marker="o", markerfacecolor="none", color=c, linestyle="none",
+                label=f"{label} first layer over its 200 µm gap")
+        s = series["steady_from"]
+        m, se = series["relative_density"], series["relative_density_se"]
+        ax.fill_between([s, len(p)], [m - se] * 2, [m + se] * 2, color=c, alpha=0.25)
+        cov = sum(q["covered_fraction"] for q in p[s - 1:]) / len(p[s - 1:])
+        print(f"| {label} | {rd[0]:.3f} | {p[0]['relative_density']:.3f} | {s} | "
+              f"{m:.3f} ± {se:.3f}{'' if series['steady'] else ' (not steady)'} | {len(p)} | {cov:.2f} | "
+              f"{min(plateau):.3f}–{max(plateau):.3f} |")
+    ax.set_xlabel("layer")
+    ax.set_ylabel("layer relative density (deposit / 100 µm)")
+    ax.set_xticks(range(1, 21))
+    ax.set_ylim(0, 1.0)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="lower right")
+    ax.set_title("Ti-6Al-4V 45–106 µm, 100 µm layers, 0.1 m/s: ours beside Gaboriault et al. 2025")
+    fig.tight_layout()
+    fig.savefig(os.path.join(HERE, "gaboriault.png"), dpi=110)
+
+
+def ti64():
+    paths = sorted(glob.glob(os.path.join(HERE, "ti64", "runs", "*", "result.json")))
+    if not paths:
+        return
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4.2))
+    print()
+    print("| layer thickness | blade speed | steady from | packing ± SE | effective thickness ± SE | over the drop | 1 / packing | covered |")
+    print("|---|---|---|---|---|---|---|---|")
+    rows = []
+    for path in paths:
+        j = json.load(open(path))
+        series = j.get("layers")
+        if not series:
+            continue
+        v = j["params"]["blade_speed"] if "params" in j else float("nan")
+        rows.append((series["layer_thickness_m"], v, series))
+    for t, v, s in sorted(rows, key=lambda r: (r[0], r[1])):
+        p = s["passes"]
+        lab = f"{t * 1e6:.0f} µm, {v:g} m/s"
+        a1.plot([q["k"] for q in p], [q["effective_thickness_m"] / t for q in p], marker="o", label=lab)
+        a2.plot([q["k"] for q in p], [q["packing"] for q in p], marker="o", label=lab)
+        cov = sum(q["covered_fraction"] for q in p[s["steady_from"] - 1:]) / len(p[s["steady_from"] - 1:])
+        print(f"| {t * 1e6:.0f} µm | {v:g} m/s | {s['steady_from']} | {s['packing']:.3f} ± {s['packing_se']:.3f} | "
+              f"{s['effective_thickness_m'] * 1e6:.1f} ± {s['effective_thickness_se_m'] * 1e6:.1f} µm | "
+              f"{s['effective_thickness_m'] / t:.2f} | {1 / s['packing']:.2f} | {cov:.2f} |")
+    a1.set_xlabel("pass")
+    a1.set_ylabel("effective layer thickness / layer thickness")
+    a2.set_xlabel("pass")
+    a2.set_ylabel("layer packing")
+    for a in (a1, a2):
+        a.grid(alpha=0.3)
+        a.legend(fontsize=8)
+    fig.suptitle("Ti-6Al-4V 15–45 µm on a fused bed: the layer converges to the drop over its packing")
+    fig.tight_layout()
+    fig.savefig(os.path.join(HERE, "ti64-fused.png"), dpi=110)
+
+
+if __name__ == "__main__":
+    gaboriault()
+    ti64()
