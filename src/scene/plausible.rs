@@ -41,7 +41,9 @@ pub fn check(scene: &Scene, values: &BTreeMap<String, f64>, settings: &SceneSett
     // The parameter that sets the mean diameter.
     let d_name = match settings.size_distribution {
         SizeDistributionSpec::Weibull { .. } => "weibull_scale",
-        SizeDistributionSpec::Lognormal { relative: false, .. } => "the size distribution's mean",
+        SizeDistributionSpec::Lognormal { relative: false, .. } | SizeDistributionSpec::Classes { relative: false, .. } => {
+            "the size distribution's mean"
+        }
         _ => "diameter",
     };
     let d_value = values.get(d_name).copied().unwrap_or(d);
@@ -73,18 +75,22 @@ pub fn check(scene: &Scene, values: &BTreeMap<String, f64>, settings: &SceneSett
             show(gap * 1e3)
         ));
     }
-    // The conveyor holds its heap at a count instead of placing a dose.
+    // The conveyor holds its heap at a count instead of placing a dose: then the heap sets it.
     let particles = scene.powder_particles();
+    let held_heap =
+        (scene.conveyor.heap_particles > scene.particles).then(|| mm(scene.conveyor.heap_height - scene.gap));
     if particles > MAX_PARTICLES {
         return Err(format!(
-            "{} particles at gap {} mm and {d_name} {} mm (gap = {} D): more than the {} the scene \
-             is built for; values are in mm — lower the gap or raise the diameter {FORCE}",
+            "{} particles at gap {} mm{} and {d_name} {} mm (gap = {} D): more than the {} the \
+             scene is built for; values are in mm — lower the {} or raise the diameter {FORCE}",
             // A count that saturated is past anything countable.
             if particles == usize::MAX { "more than 1e19".to_string() } else { particles.to_string() },
             show(gap),
+            held_heap.map(|h| format!(", a heap of {} mm", show(h))).unwrap_or_default(),
             show(d_value),
             show(gap / d),
-            MAX_PARTICLES
+            MAX_PARTICLES,
+            if held_heap.is_some() { "heap_height" } else { "gap" }
         ));
     }
     let fraction = scene.timestep / scene.rayleigh_time;

@@ -384,12 +384,33 @@ fn a_point_of_millions_of_particles_is_refused_with_its_count() {
         &cwd,
         &["render", "s.toml", "--out", deck.to_str().unwrap()],
         &[
-            " particles at gap 25 mm and diameter 0.02 mm (gap = 1250 D): more than the 200000",
+            " particles at gap 25 mm, a heap of 20 mm and diameter 0.02 mm (gap = 1250 D): more than the 200000",
             "values are in mm",
         ],
     );
     let count: u64 = err.split(": ").nth(2).unwrap().split(' ').next().unwrap().parse().unwrap();
     assert!(count > 5_000_000, "{err}");
+    assert!(!deck.exists());
+}
+
+#[test]
+fn a_held_heap_too_big_for_a_fine_powder_names_the_heap_and_the_powders_mean() {
+    let (tmp, cwd) = cwd();
+    // A 60 µm powder from a measured table, on the conveyor at its default millimetre heap: the
+    // heap, not the gap, is what holds too many particles, and the `diameter` parameter (2 mm by
+    // default) is not the powder's size.
+    lds_sweep(
+        &cwd,
+        "blade_speed = { lo = 0.05, hi = 0.2 }\ngap = 0.1\n[scene.size_distribution]\nkind = \"classes\"\n\
+         classes = [[0.06, 1.0]]",
+    );
+    let deck = tmp.path().join("deck");
+    let err = refused(
+        &cwd,
+        &["render", "s.toml", "--out", deck.to_str().unwrap()],
+        &["at gap 0.1 mm, a heap of ", "the size distribution's mean 0.06 mm", "lower the heap_height"],
+    );
+    assert!(!err.contains("diameter 2 mm"), "{err}");
     assert!(!deck.exists());
 }
 
