@@ -41,9 +41,8 @@ pub fn check(scene: &Scene, values: &BTreeMap<String, f64>, settings: &SceneSett
     // The parameter that sets the mean diameter.
     let d_name = match settings.size_distribution {
         SizeDistributionSpec::Weibull { .. } => "weibull_scale",
-        SizeDistributionSpec::Lognormal { relative: false, .. } | SizeDistributionSpec::Classes { relative: false, .. } => {
-            "the size distribution's mean"
-        }
+        SizeDistributionSpec::Lognormal { relative: false, .. }
+        | SizeDistributionSpec::Classes { relative: false, .. } => "the size distribution's mean",
         _ => "diameter",
     };
     let d_value = values.get(d_name).copied().unwrap_or(d);
