@@ -6,10 +6,12 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
+use super::answer::FULL_COVER;
 use super::{PointRow, PointState};
 use crate::analysis::sensitivity::Index;
 use crate::measure::quality::Quality;
 use crate::outcome::layer::Layer;
+use crate::scene::plausible::show;
 
 /// Points a conclusion needs before it is judged.
 pub const MIN_POINTS: usize = 20;
@@ -116,16 +118,20 @@ pub fn advise(parameters: &[String], points: &[PointRow], sensitivity: &[Index])
         points.iter().filter_map(|p| p.done().map(|(r, q)| (p, r, q))).collect();
     let classes = class_check(&done);
     let criterion = format!(
-        "highest MFR (the layer's packing over the gap) among the points whose layer is even along the travel \
-         (CV of the deposited mass along the travel within {EVEN_FACTOR}× its counting noise); points without layer \
-         measures are ranked by MFR alone. Uncertainty: the MFR's standard error where the run measured one (batch \
-         means over the steady window), else its counting noise, MFR/√n over the n particles counted"
+        "a whole layer before a higher MFR: the points whose layer covers at least {full} of the plate first, then the \
+         rest, each by highest MFR (the layer's packing over the gap), among the points whose layer is even along the \
+         travel (CV of the deposited mass along the travel within {EVEN_FACTOR}× its counting noise); points without \
+         layer measures are ranked by MFR alone. Uncertainty: the MFR's standard error where the run measured one \
+         (batch means over the steady window), else its counting noise, MFR/√n over the n particles counted",
+        full = show(FULL_COVER)
     );
     let even =
         |r: &crate::outcome::RunResult| r.layer.is_none_or(|l| l.layer_cv <= EVEN_FACTOR * l.layer_cv_noise);
     let mut ranked: Vec<&(&PointRow, &crate::outcome::RunResult, Quality)> =
         done.iter().filter(|(_, r, _)| even(r) && r.mfr.is_finite() && r.mfr > 0.0).collect();
-    ranked.sort_by(|a, b| b.1.mfr.total_cmp(&a.1.mfr));
+    // A process engineer wants the plate covered before a denser patchy layer.
+    let whole = |r: &crate::outcome::RunResult| r.layer.is_some_and(|l| l.covered_fraction >= FULL_COVER);
+    ranked.sort_by(|a, b| whole(b.1).cmp(&whole(a.1)).then(b.1.mfr.total_cmp(&a.1.mfr)));
     let recommended: Vec<Recommended> = ranked
         .iter()
         .take(LISTED)

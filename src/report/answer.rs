@@ -144,6 +144,16 @@ fn matters(a: &Analysis) -> Option<String> {
     if ranked.is_empty() {
         return None;
     }
+    // Every interval reaching zero: no parameter is shown to matter, so no order is.
+    let unranked =
+        a.sensitivity.iter().filter(|s| s.first_order.is_some()).all(|s| s.lo.is_some_and(|lo| lo < 0.005));
+    if unranked {
+        return Some(format!(
+            "cannot rank yet: every parameter's first-order index of MFR has a 95% interval that reaches 0 ({}); more \
+             points narrow them",
+            ranked.join(", ")
+        ));
+    }
     let trust = if a.sensitivity_reliable { String::new() } else { format!("; {}", a.sensitivity_note) };
     Some(format!(
         "{} (first-order index of MFR: the share of its variance each explains alone, 95% interval){trust}",
