@@ -32,6 +32,10 @@ use psd::SizeDistribution;
 pub const VTK_EVERY_S: f64 = 0.02;
 /// LIGGGHTS's least particle volume by default (`fix particletemplate/sphere`, volume_limit), m³.
 pub const ENGINE_VOLUME_LIMIT: f64 = 1e-12;
+/// The least region the deck inserts into, shrunk by the largest diameter, m³: LIGGGHTS 3.8
+/// refuses a region under 1e-10 m³ (region.cpp, `volume_mc`: an absolute floor in SI, whatever
+/// the particles' size), with a margin for its Monte-Carlo estimate of the volume.
+pub const MIN_INSERT_VOLUME: f64 = 1.2e-10;
 /// Standard gravity, m/s².
 pub const GRAVITY: f64 = 9.81;
 /// Number of equal sub-windows of the measurement window (steadiness check, dump cadence).

@@ -17,7 +17,7 @@ use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
 use crate::scene::{
     prime_seed, Base, Conveyor as Held, FeedClass, Scene, ENGINE_VOLUME_LIMIT, GRAVITY, LAYER_FRACTION_MAX,
-    REPOSE_DEG,
+    MIN_INSERT_VOLUME, REPOSE_DEG,
 };
 use crate::scenes::moving_blade::{self, Dose};
 use crate::scenes::{BadSetting, BuiltinTemplate, Finished, HeldHeap, Layout, Rejected, SetupRows};
@@ -27,10 +27,6 @@ pub struct Conveyor;
 
 /// Depth of a powder bed's solid, in diameters (at a packing of 0.55: about 2.6 D deep).
 const BED_THICKNESS: f64 = 2.0;
-
-/// The least heap box the deck inserts into, shrunk by the largest radius, m³: LIGGGHTS's floor
-/// of 1e-10 m³ with a margin for its Monte-Carlo estimate of the volume.
-const MIN_INSERT_VOLUME: f64 = 1.2e-10;
 
 /// The conveyor's one snapshot of the deposit behind the blade at the end.
 pub const STRIP_DUMP: &str = "dump.strip";

@@ -30,7 +30,9 @@ use serde::{Deserialize, Serialize};
 use crate::outcome::RunResult;
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
-use crate::scene::{prime_seed, Base, FeedClass, Scene, ENGINE_VOLUME_LIMIT, GRAVITY, LAYER_FRACTION_MAX};
+use crate::scene::{
+    prime_seed, Base, FeedClass, Scene, ENGINE_VOLUME_LIMIT, GRAVITY, LAYER_FRACTION_MAX, MIN_INSERT_VOLUME,
+};
 use crate::scenes::moving_blade::{self, Dose};
 use crate::scenes::{BadSetting, BuiltinTemplate, Finished, Layout, Rejected, SetupRows};
 
@@ -333,7 +335,6 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let clearance = settings.blade_clearance_mm * 1e-3;
     let mut s = moving_blade::derive(base.clone(), settings, Dose::Free);
     let Base { psd, d, speed: v, timestep: dt, .. } = base;
-    let w = s.depth;
     let fused = Bed::parse(&settings.bed) == Some(Bed::Fused);
     let layers = settings.layers.max(1);
     let plate_len = settings.plate_diameters.max(10.0) * d;
@@ -355,13 +356,24 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let travel = plate_x1 + 2.0 * d - tip_x0;
     let x_hi = plate_x1 + 2.0 * d + ahead + PIT_DIAMETERS * d;
 
+    let dose_x1 = plate_x0 - d;
     // Every dose is DOSE_FACTOR layers of the drop; the first fills the drop and the clearance.
-    let dose_for =
-        |drop: f64| DOSE_FACTOR * settings.supply_factor * plate_len * w * drop * LAYER_FRACTION_MAX;
+    // Its region's height does not depend on the depth; its volume does, and LIGGGHTS refuses to
+    // insert into a region under its floor once shrunk by the largest diameter: a fine powder
+    // in thin layers gets the depth its dose's region needs.
+    let per_depth = |drop: f64| DOSE_FACTOR * settings.supply_factor * plate_len * drop * LAYER_FRACTION_MAX;
+    let d_max = psd.max_diameter();
+    let dose_len = dose_x1 - dose_x0;
+    let later_rise = per_depth(t) / (DOSE_FRACTION * dose_len);
+    if (dose_len - d_max) * (s.depth - d_max) * later_rise < MIN_INSERT_VOLUME {
+        s.depth = d_max + MIN_INSERT_VOLUME / ((dose_len - d_max) * later_rise);
+        s.mesh_cell = s.depth / settings.mesh_cells_across as f64;
+    }
+    let w = s.depth;
+    let dose_for = |drop: f64| per_depth(drop) * w;
     let (dose_solid, first_solid) = (dose_for(t), dose_for(t + clearance));
     let dose_particles = (dose_solid / psd.mean_volume()).ceil() as usize;
-    let dose_x1 = plate_x0 - d;
-    let region_height = |solid: f64| solid / (DOSE_FRACTION * (dose_x1 - dose_x0) * w) + psd.max_diameter();
+    let region_height = |solid: f64| solid / (DOSE_FRACTION * dose_len * w) + d_max;
     let (dose_height, first_dose_height) = (region_height(dose_solid), region_height(first_solid));
     let dose_lift = 0.5 * d;
     let last_top = layers as f64 * t;

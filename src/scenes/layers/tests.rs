@@ -46,6 +46,38 @@ fn the_platform_drops_by_the_layer_thickness_before_every_pass() {
     assert!(last.top - plan.block_depth > sc.z_lo && last.top - plan.block_depth < 0.0);
 }
 
+/// The volume of a pass's dose region once shrunk by the largest diameter on every side, as
+/// LIGGGHTS measures it with `all_in yes`.
+fn shrunk_dose_region(sc: &Scene) -> f64 {
+    let plan = plan_of(sc);
+    let d_max = sc.diameter; // mono powder
+    (plan.dose_x1 - plan.dose_x0 - d_max) * (sc.depth - d_max) * (plan.dose_height - d_max)
+}
+
+#[test]
+fn a_fine_powder_in_thin_layers_gets_the_depth_its_dose_region_needs_and_no_more() {
+    let at = |d_mm: f64, t_mm: f64| {
+        let v = values(&[
+            ("diameter", d_mm),
+            ("layer_thickness", t_mm),
+            ("blade_speed", 0.1),
+            ("density", 4430.0),
+        ]);
+        crate::scenes::build(&v, &settings()).unwrap()
+    };
+    // 65 µm in 100 µm layers: the dose region is above LIGGGHTS's floor at the default depth.
+    let coarse = at(0.065, 0.1);
+    let default_depth = coarse.depth;
+    assert!(shrunk_dose_region(&coarse) > MIN_INSERT_VOLUME);
+    // 24 µm in 30 µm layers: at the default depth in diameters it would be under the floor
+    // (LIGGGHTS stops: "Unable to calculate region volume"); the depth grows to reach it exactly.
+    let fine = at(0.024, 0.03);
+    let r = shrunk_dose_region(&fine);
+    assert!(r >= MIN_INSERT_VOLUME * (1.0 - 1e-9), "{r:e}");
+    assert!(r <= MIN_INSERT_VOLUME * 1.01, "no more than needed: {r:e}");
+    assert!(fine.depth / fine.diameter > default_depth / coarse.diameter, "widened");
+}
+
 #[test]
 fn a_bad_layer_count_bed_or_profile_is_refused_naming_its_key() {
     let cases: [(SceneSettings, &str); 5] = [
