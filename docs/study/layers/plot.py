@@ -47,8 +47,8 @@ def gaboriault():
     hi = [max(r) - m for m, (_, r) in zip(mean, exp)]
     ax.errorbar(ks, mean, yerr=[lo, hi], color="black", marker="s", capsize=3,
                 label="experiment, 3 repeats (mean, min–max)")
-    print("| set | first layer (over 100 µm) | first layer (over its 200 µm gap) | steady from | steady layer ± SE | passes | covered | experiment layers 2–10 |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| set | first layer (over 100 µm) | first layer (over its 200 µm gap) | steady from | steady layer ± SE | passes 2–N ± SE | passes | covered | CPU s | experiment layers 2–10 |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     plateau = [v for k, r in exp if 2 <= k <= 10 for v in r]
     colours = {"PS1": "#e6550d", "PS2": "#3182bd", "PS3": "#31a354"}
     for path in sorted(glob.glob(os.path.join(HERE, "record", "PS*.json"))):
@@ -70,9 +70,14 @@ def gaboriault():
         m, se = series["relative_density"], series["relative_density_se"]
         ax.fill_between([s, len(p)], [m - se] * 2, [m + se] * 2, color=c, alpha=0.25)
         cov = sum(q["covered_fraction"] for q in p[s - 1:]) / len(p[s - 1:])
+        # Every pass after the first, as the experiment's plateau is read (its layers 2–10).
+        later = rd[1:]
+        lm = sum(later) / len(later)
+        lse = (sum((x - lm) ** 2 for x in later) / (len(later) - 1) / len(later)) ** 0.5
+        cpu = json.load(open(path)).get("cpu_time") or float("nan")
         print(f"| {label} | {rd[0]:.3f} | {p[0]['relative_density']:.3f} | {s} | "
-              f"{m:.3f} ± {se:.3f}{'' if series['steady'] else ' (not steady)'} | {len(p)} | {cov:.2f} | "
-              f"{min(plateau):.3f}–{max(plateau):.3f} |")
+              f"{m:.3f} ± {se:.3f}{'' if series['steady'] else ' (not steady)'} | {lm:.3f} ± {lse:.3f} | {len(p)} | "
+              f"{cov:.2f} | {cpu:.0f} | {min(plateau):.3f}–{max(plateau):.3f} |")
     ax.set_xlabel("layer")
     ax.set_ylabel("layer relative density (deposit / 100 µm)")
     ax.set_xticks(range(1, 21))
