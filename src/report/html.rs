@@ -198,7 +198,7 @@ fn setup_section(a: &Analysis) -> String {
             .map(|(k, v)| format!("{k} = {}", fmt_short(*v)))
             .collect::<Vec<_>>()
             .join(", ");
-        if let Some(cv) = &c.conveyor {
+        if let Some(cv) = &c.held_heap {
             h.push_str(&format!(
                 "<p>At the centre of the space ({}): a heap of {} particles, {:.1} mm tall, held in front of the blade \
                  on {} substrate spheres; domain {:.1} × {:.1} × {:.1} mm (travel × depth × height); blocks of {:.1} mm \

@@ -20,7 +20,9 @@ use crate::scene::{
     MIN_INSERT_VOLUME, REPOSE_DEG,
 };
 use crate::scenes::moving_blade::{self, Dose};
-use crate::scenes::{BadSetting, BuiltinTemplate, Finished, HeldHeap, Layout, Rejected, SetupRows};
+use crate::scenes::{
+    BadSetting, BuiltinTemplate, Finished, HeldHeap, Layout, Rejected, SetupRows, WarmFiles,
+};
 
 /// The conveyor layout (registered in [`crate::scenes::LAYOUTS`]).
 pub struct Conveyor;
@@ -153,6 +155,14 @@ impl Layout for Conveyor {
         distance: f64,
     ) -> Result<warm::Warm, String> {
         warm::map(from, &from_dir.join(warm::STATE_DUMP), to, to_pile, distance)
+    }
+
+    fn run_files(&self, _settings: &SceneSettings) -> Vec<String> {
+        [moving_blade::DUMP, STRIP_DUMP, warm::STATE_DUMP, warm::WARM_DATA].map(String::from).to_vec()
+    }
+
+    fn warm_start_files(&self) -> Option<WarmFiles> {
+        Some(WarmFiles { state: warm::STATE_DUMP, data: warm::WARM_DATA })
     }
 
     fn with_precision(&self, scene: &Scene, mfr_abs_se: f64) -> Option<Scene> {
@@ -318,7 +328,14 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
     let scene = run.scene;
     let (blocks, stop) = steady::parse_log(&run.run.log)
         .map_err(|e| Rejected::new(FailureClass::Unparsable, e.to_string()))?;
-    let st = steady::compute(scene, &blocks, &stop, &frames);
+    let c = &scene.conveyor;
+    let held = steady::HeldBlocks {
+        ideal_block_mass: c.ideal_block_mass,
+        warmup_blocks: c.warmup_blocks,
+        block_steps: c.block_steps,
+        heap_particles: c.heap_particles,
+    };
+    let st = steady::compute(scene, &held, &blocks, &stop, &frames);
     // The steady window in quarters (the moving-blade scenes' sub-windows, for the same readers).
     let w = &st.state.block_mfr[st.state.transient_blocks..];
     let quarter = w.len().div_ceil(4).max(1);

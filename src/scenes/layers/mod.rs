@@ -281,6 +281,11 @@ impl Layout for Layers {
         ]
     }
 
+    fn run_files(&self, s: &SceneSettings) -> Vec<String> {
+        // One dump per pass; the log is the run's own.
+        (1..=s.layers.max(1)).map(measure::layer_dump).collect()
+    }
+
     fn pile(&self, _scene: &Scene) -> String {
         // The deck creates its box; every particle is inserted by a dose.
         String::new()
