@@ -19,6 +19,7 @@ mod error;
 mod gallery;
 mod html;
 mod maps;
+mod page;
 mod plots;
 pub mod show;
 pub use error::ReportError;
