@@ -16,8 +16,8 @@ use crate::scene::bed::Bed;
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
 use crate::scene::{
-    prime_seed, Base, Conveyor as Held, FeedClass, Scene, ENGINE_VOLUME_LIMIT, GRAVITY, LAYER_FRACTION_MAX,
-    MIN_INSERT_VOLUME, REPOSE_DEG,
+    prime_seed, Base, Conveyor as Held, Feed, Scene, GRAVITY, LAYER_FRACTION_MAX, MIN_INSERT_VOLUME,
+    REPOSE_DEG,
 };
 use crate::scenes::moving_blade::{self, Dose};
 use crate::scenes::{
@@ -226,17 +226,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let blade_top = 2.0 * heap_height + 2.0 * d;
     let mean_volume = psd.mean_volume();
     let mass = heap_particles as f64 * s.density * mean_volume;
-    let feed_total: f64 = psd.classes.iter().map(|c| c.fraction * c.diameter.powi(3)).sum();
-    let feed = psd
-        .classes
-        .iter()
-        .enumerate()
-        .map(|(i, c)| FeedClass {
-            diameter: c.diameter,
-            mass_fraction: c.fraction * c.diameter.powi(3) / feed_total,
-            seed: prime_seed(s.seed, i + 2),
-        })
-        .collect();
+    let Feed { classes: feed, volume_limit } = Feed::of(&psd, s.seed);
     s.conveyor = Held {
         heap_height,
         heap_particles,
@@ -254,16 +244,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         powder_bed: false,
         regions_z0: 0.0,
         feed,
-        // Below ten times the engine's default least volume, the deck sets its own: a thousandth
-        // of the smallest sphere's (above it, the deck stays as it was).
-        volume_limit: {
-            let smallest = std::f64::consts::PI / 6.0 * psd.min_diameter().powi(3);
-            if smallest < 10.0 * ENGINE_VOLUME_LIMIT {
-                1e-3 * smallest
-            } else {
-                0.0
-            }
-        },
+        volume_limit,
         distribution_seed: prime_seed(s.seed, 0),
         insert_seed: prime_seed(s.seed, 1),
         keep_state: settings.warm_start,
