@@ -56,7 +56,7 @@ impl Layout for Conveyor {
             }
         }
         for (k, v) in [
-            ("scene.warmup_s", s.warmup_s),
+            ("scene.warmup_s", s.warmup_s.unwrap_or(0.0)),
             ("scene.mfr_rel_se", s.mfr_rel_se),
             ("scene.mfr_abs_se", s.mfr_abs_se),
         ] {
@@ -115,7 +115,16 @@ impl Layout for Conveyor {
         SetupRows {
             head: vec![
                 ("block of the deposit series, travel (D)", short(sc.block_diameters)),
-                ("warm-up (s)", short(sc.warmup_s)),
+                (
+                    "warm-up (s)",
+                    match sc.warmup_s {
+                        Some(w) => short(w),
+                        None => format!(
+                            "{} √(H/g), H = gap + heap_height (the held heap's fall time)",
+                            short(crate::scene::settings::WARMUP_HEAP_FALLS)
+                        ),
+                    },
+                ),
                 (
                     "precision target: SE of MFR at most",
                     match sc.precision.as_str() {
@@ -221,7 +230,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let x_hi = if powder_bed { heap_x1 + 2.0 * d } else { n_x as f64 * spacing };
     let block_steps = ((settings.block_diameters * d / (v * dt)).ceil() as u64).max(1);
     let blocks = |travel: f64| (travel / settings.block_diameters).ceil() as u64;
-    let warmup_blocks = blocks((settings.warmup_s * v).max(10.0 * d) / d);
+    let warmup_blocks = blocks((settings.warmup_for(heap_height) * v).max(10.0 * d) / d);
     let max_blocks = warmup_blocks + blocks(settings.window_cap_diameters);
     let blade_top = 2.0 * heap_height + 2.0 * d;
     let mean_volume = psd.mean_volume();
@@ -368,23 +377,57 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
 mod tests {
     use std::collections::BTreeMap;
 
-    use crate::scene::settings::SceneSettings;
+    use crate::scene::settings::{SceneSettings, WARMUP_HEAP_FALLS};
+
+    fn scene(values: &[(&str, f64)], settings: &SceneSettings) -> crate::scene::Scene {
+        let values: BTreeMap<String, f64> = values.iter().map(|(k, v)| (k.to_string(), *v)).collect();
+        crate::scenes::build(&values, settings).unwrap()
+    }
+
+    /// The planned warm-up, s, and one block's time.
+    fn warmup(scene: &crate::scene::Scene) -> (f64, f64) {
+        let c = &scene.conveyor;
+        let block_s = c.block_steps as f64 * scene.timestep;
+        (c.warmup_blocks as f64 * block_s, block_s)
+    }
 
     #[test]
     fn the_warm_up_is_whole_however_fine_the_powder_and_the_cap_counts_after_it() {
-        // D 0.5 mm at 1.4 m/s: 0.3 s is 420 mm of travel, 840 D, past a cap of 600 D counted
-        // from the start; the warm-up keeps its 0.3 s and the window its 600 D after it.
-        let values: BTreeMap<String, f64> = [("diameter", 0.5), ("gap", 1.25), ("blade_speed", 1.4)]
-            .iter()
-            .map(|(k, v)| (k.to_string(), *v))
-            .collect();
+        // D 0.5 mm at 1.4 m/s under a 20 mm heap: the warm-up is the heap's 6.5 √(H/g) ≈ 0.3 s,
+        // 420 mm of travel, 840 D, past a cap of 600 D counted from the start; the warm-up is
+        // kept whole and the window gets its 600 D after it.
         let settings = SceneSettings::default();
-        let scene = crate::scenes::build(&values, &settings).unwrap();
-        let c = &scene.conveyor;
-        let block_s = c.block_steps as f64 * scene.timestep;
-        let warmup_s = c.warmup_blocks as f64 * block_s;
-        assert!((0.3..0.3 + block_s).contains(&warmup_s), "warm-up {warmup_s} s");
+        let sc = scene(&[("diameter", 0.5), ("gap", 1.25), ("blade_speed", 1.4)], &settings);
+        let (warmup_s, block_s) = warmup(&sc);
+        let rule = WARMUP_HEAP_FALLS * (0.02125f64 / crate::scene::GRAVITY).sqrt();
+        assert!((rule..rule + block_s).contains(&warmup_s), "warm-up {warmup_s} s against {rule} s");
+        let c = &sc.conveyor;
         let after = (c.max_blocks - c.warmup_blocks) as f64 * settings.block_diameters;
         assert!((600.0..600.0 + settings.block_diameters).contains(&after), "{after} D after the warm-up");
+    }
+
+    #[test]
+    fn the_default_warm_up_keeps_the_thesis_scale_and_shrinks_with_the_heap() {
+        let settings = SceneSettings::default();
+        // The thesis's space (D 1–3 mm, gap 1–5 mm, 20 mm heap, 1.2–1.6 m/s): never under the
+        // 0.3 s its long runs need (docs/study/recoater).
+        for (d, gap, v) in [(2.0, 3.0, 1.4), (1.0, 1.0, 1.6), (3.0, 5.0, 1.2), (2.0, 1.0, 1.2)] {
+            let (w, _) = warmup(&scene(&[("diameter", d), ("gap", gap), ("blade_speed", v)], &settings));
+            assert!((0.3..0.34).contains(&w), "D {d} mm, gap {gap} mm, {v} m/s: warm-up {w} s");
+        }
+        // A real powder's point: 35 µm, a 100 µm gap, a 1 mm heap, 0.08 m/s. Its warm-up is the
+        // heap's, √(1.1 mm / g) × 6.5 ≈ 0.069 s, not the 0.3 s (650,000 steps) of a 20 mm heap.
+        let um = [("diameter", 0.035), ("gap", 0.1), ("heap_height", 1.0), ("blade_speed", 0.08)];
+        let sc = scene(&um, &settings);
+        let (w, block_s) = warmup(&sc);
+        assert!((0.068..0.069 + block_s).contains(&w), "35 µm: warm-up {w} s");
+        assert!(w < 0.25 * 0.3, "35 µm: warm-up {w} s");
+        // A taller heap takes longer, as √H: four times the heap, about twice the warm-up.
+        let (w4, block4) = warmup(&scene(&[um[0], um[1], ("heap_height", 4.3), um[3]], &settings));
+        assert!(((2.0 * w - 2.0 * block_s)..(2.0 * w + block4)).contains(&w4), "{w} s → {w4} s");
+        // A set warmup_s wins over the rule.
+        let set = SceneSettings { warmup_s: Some(0.005), ..SceneSettings::default() };
+        let (w, block_s) = warmup(&scene(&um, &set));
+        assert!((0.005..0.005 + block_s).contains(&w), "set 0.005 s: warm-up {w} s");
     }
 }
