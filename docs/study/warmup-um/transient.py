@@ -20,7 +20,8 @@ reads the same way). For each case:
 import glob, json, math, os, statistics, sys
 
 G = 9.81
-T_G = [0, 1, 2, 3, 4, 5, 6, 8, 10]
+T_G = [0, 1, 2, 3, 4, 5, 6, 6.5, 8, 10]
+RULE = 6.5  # the default warm-up, √(H/g) (src/scene/settings.rs WARMUP_HEAP_FALLS)
 SECONDS = [0.005, 0.01, 0.02, 0.03, 0.05, 0.1, 0.15, 0.2, 0.3]
 
 
@@ -85,6 +86,10 @@ def from_log(case):
     }
 
 
+def fmt(x):
+    return "–" if x is None else f"{x:g}"
+
+
 def load(dirs):
     for runs in dirs:
         for case in sorted(glob.glob(os.path.join(runs, "*"))):
@@ -138,6 +143,24 @@ def bias_at(c, w_s, window):
     return b, s
 
 
+def settled_from(c, window):
+    """The least warm-up, in t_g (a 0.25 t_g grid), from which the bias at every later warm-up
+    up to 10 t_g that the run can judge is within 2 SE of zero; None if the run is too short."""
+    grid = [0.25 * i for i in range(0, 41)]  # to 10 t_g: further on, slow drifts of the tail, not the start
+    judged = [(x, bias_at(c, x * c["tg"], window)) for x in grid]
+    judged = [(x, b) for x, b in judged if b is not None]
+    if not judged:
+        return None
+    last_bad = None
+    for x, (b, s) in judged:
+        if abs(b) > 2 * s:
+            last_bad = x
+    if last_bad is None:
+        return 0.0
+    later = [x for x, _ in judged if x > last_bad]
+    return later[0] if later else None
+
+
 def main():
     args = sys.argv[1:]
     window = 8
@@ -147,8 +170,8 @@ def main():
         del args[i:i + 2]
     cases = list(load(args))
     print("Where MSER cuts the transient (whole block series):\n")
-    print("| case | D µm | v m/s | gap mm | heap mm | γ J/m² | t_g ms | Fr_H | blocks (block ms) | cut blocks | time s | t_g | travel D | heap lengths | turnovers | MFR ± SE after the cut | particles | steps | CPU s |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| case | D µm | v m/s | gap mm | heap mm | γ J/m² | t_g ms | Fr_H | blocks (block ms) | cut blocks | time s | t_g | travel D | heap lengths | turnovers | MFR ± SE after the cut | bias within 2 SE from (t_g) | particles | steps | CPU s |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for c in cases:
         y = c["y"]
         cut = mser(y)
@@ -162,7 +185,7 @@ def main():
         fr = c["v"] / math.sqrt(G * (c["gap"] + c["heap"]) * 1e-3)
         print(f"| {c['name']} | {c['d']*1e3:.1f} | {c['v']} | {c['gap']:g} | {c['heap']:g} | {c['gamma']:g} | {c['tg']*1e3:.1f} | {fr:.2f} | "
               f"{len(y)} ({c['block_s']*1e3:.2f}) | {cut} | {t:.3f} | {t / c['tg']:.1f} | {travel / c['d']:.0f} | {travel / c['heap_len']:.2f} | "
-              f"{t / turn:.2f} | {m:.4f} ± {s:.4f} | {c['particles']} | {c['steps']} | {c['cpu']:.0f} |")
+              f"{t / turn:.2f} | {m:.4f} ± {s:.4f} | {fmt(settled_from(c, window))} | {c['particles'] or '–'} | {c['steps']} | {c['cpu']:.0f} |")
     for unit, grid, to_s in (("t_g = √(H/g)", T_G, lambda c, x: x * c["tg"]), ("s", SECONDS, lambda c, x: x)):
         print(f"\nBias of MFR (%) after a warm-up in {unit}, the next {window} blocks against the run's last half (± its SE):\n")
         print("| case | " + " | ".join(f"{x:g}" for x in grid) + " |")
@@ -173,6 +196,20 @@ def main():
                 b = bias_at(c, to_s(c, x), window)
                 row.append("–" if b is None else f"{100*b[0]:+.0f} ± {100*b[1]:.0f}")
             print(f"| {c['name']} | " + " | ".join(row) + " |")
+        # Over the cases: the mean bias, its SE, and the RMS of bias/SE (1 where only noise is left).
+        mean_row, z_row = [], []
+        for x in grid:
+            b = [bias_at(c, to_s(c, x), window) for c in cases]
+            b = [e for e in b if e is not None]
+            if len(b) < 2:
+                mean_row.append("–"); z_row.append("–")
+                continue
+            m = statistics.fmean(e[0] for e in b)
+            sm = math.sqrt(sum(e[1] ** 2 for e in b)) / len(b)
+            mean_row.append(f"{100*m:+.1f} ± {100*sm:.1f} ({len(b)})")
+            z_row.append(f"{math.sqrt(statistics.fmean((e[0] / e[1]) ** 2 for e in b)):.1f}")
+        print("| mean (cases) | " + " | ".join(mean_row) + " |")
+        print("| RMS bias/SE | " + " | ".join(z_row) + " |")
 
 
 if __name__ == "__main__":
