@@ -103,11 +103,17 @@ def load(dirs):
             else:
                 continue
             st, p = r["steady_state"], r["parameters"]
-            # The scene's diameter (a size distribution's number mean) from the block's length.
-            d_mm = p.get("diameter") or r.get("mean_diameter_mm")
-            if d_mm is None:
-                d_mm = r["block_travel_mm"] / st["block_diameters"]
             v, gap, heap = p["blade_speed"], p["gap"], p.get("heap_height", 20.0)
+            # The scene's diameter: a size distribution's number mean, not the `diameter`
+            # parameter it leaves unused, from the deck's block (5 D of travel) where it is kept.
+            d_mm = p.get("diameter")
+            deck = os.path.join(case, "in.liggghts")
+            if os.path.exists(deck):
+                import re
+                text = open(deck).read()
+                dt = float(re.search(r"^timestep\s+(\S+)", text, re.M).group(1))
+                steps = int(re.search(r"# Blocks of (\d+) steps", text).group(1))
+                d_mm = v * dt * steps * 1e3 / st["block_diameters"]
             h_m = (gap + heap) * 1e-3
             block_mm = st["block_diameters"] * d_mm
             yield dict(
