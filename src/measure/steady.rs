@@ -1,4 +1,4 @@
-//! MFR in a steady state (conveyor layout): the block series of a run, where it became steady,
+//! MFR in a steady state (a layout that holds a heap in front of the blade: the conveyor): the block series of a run, where it became steady,
 //! and the steady deposit rate with its standard error.
 //!
 //! The deck prints one line per block of substrate travel (`demsweep: block ...`): the mass
@@ -184,9 +184,21 @@ pub fn trend_z(y: &[f64]) -> f64 {
     }
 }
 
-/// The steady-state answers of a conveyor run from its log's blocks and its v_x snapshots.
-pub fn compute(scene: &Scene, blocks: &[Block], stop: &str, frames: &[Frame]) -> Steady {
-    let c = &scene.conveyor;
+/// What the steady-state rule reads of a held heap's run, beside the common scene.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeldBlocks {
+    /// Mass of a full flow through the gap over one block, kg.
+    pub ideal_block_mass: f64,
+    /// Blocks of the deck's warm-up: the least transient.
+    pub warmup_blocks: u64,
+    pub block_steps: u64,
+    /// The count the heap is topped up to.
+    pub heap_particles: usize,
+}
+
+/// The steady-state answers of a run that holds a heap (`c`), from its log's blocks and its v_x
+/// snapshots.
+pub fn compute(scene: &Scene, c: &HeldBlocks, blocks: &[Block], stop: &str, frames: &[Frame]) -> Steady {
     let ideal = c.ideal_block_mass;
     let mut before = 0.0;
     let y: Vec<f64> = blocks
@@ -382,7 +394,14 @@ mod tests {
             [("diameter", 2.0), ("gap", 1.7)].iter().map(|(k, v)| (k.to_string(), *v)).collect();
         let settings = SceneSettings { layout: "conveyor".into(), ..SceneSettings::default() };
         let scene = crate::scenes::build(&values, &settings).unwrap();
-        let (c, m) = (&scene.conveyor, scene.conveyor.ideal_block_mass);
+        let cv = &scene.conveyor;
+        let c = HeldBlocks {
+            ideal_block_mass: cv.ideal_block_mass,
+            warmup_blocks: cv.warmup_blocks,
+            block_steps: cv.block_steps,
+            heap_particles: cv.heap_particles,
+        };
+        let m = c.ideal_block_mass;
         let warm = c.warmup_blocks as usize;
         // Blocks of deposit (gone mass only, the strip empty): flowing at 0.08 for the warm-up
         // and 12 blocks after it, then nothing for 14 blocks.
@@ -398,12 +417,12 @@ mod tests {
                 heap_mass: 0.0,
             })
             .collect();
-        let st = compute(&scene, &blocks, "target", &[]);
+        let st = compute(&scene, &c, &blocks, "target", &[]);
         assert_eq!(st.mfr, 0.0);
         assert!(st.unsteady.as_deref().is_some_and(|w| w.contains("the flow stopped")), "{:?}", st.unsteady);
         // A point where nothing ever passes is a steady zero.
         let none: Vec<Block> = blocks.iter().map(|b| Block { gone: 0.0, ..*b }).collect();
-        let st = compute(&scene, &none, "target", &[]);
+        let st = compute(&scene, &c, &none, "target", &[]);
         assert_eq!((st.mfr, st.unsteady), (0.0, None));
     }
 }

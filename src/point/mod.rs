@@ -17,7 +17,6 @@ use crate::error::{hint, Result};
 use crate::outcome::{FailureClass, RunFailure, RunOutcome, WarmStart, RESULT_FORMAT};
 use crate::point::deck::{Deck, Template};
 use crate::scene::{mesh, params, Scene};
-use crate::scenes::conveyor::warm::{STATE_DUMP, WARM_DATA};
 use crate::scenes::{Finished, Layout, Warm};
 use crate::sweep::{ParamKind, Parameter, Sweep};
 use crate::sys::atomic::write_json;
@@ -26,7 +25,6 @@ use crate::sys::process::CancelToken;
 /// File names in a run directory.
 pub const RESULT: &str = "result.json";
 pub const FAILURE: &str = "failure.json";
-pub const DUMP: &str = crate::scenes::moving_blade::DUMP;
 
 /// What every point of a sweep shares: the sweep, the engine, the template.
 pub struct PointContext {
@@ -338,14 +336,15 @@ pub fn execute_from(
         RunOutcome::Failed(f)
     };
     let fail = |class, reason, log_tail, wall| fail_measured(class, reason, log_tail, wall, None);
-    for stale in [RESULT, FAILURE, DUMP, crate::engine::LOG, WARM_DATA, STATE_DUMP] {
-        let _ = std::fs::remove_file(run_dir.join(stale));
+    let stale = [RESULT, FAILURE, crate::engine::LOG].map(String::from);
+    for file in stale.iter().chain(&ctx.layout.run_files(&ctx.sweep.file.scene)) {
+        let _ = std::fs::remove_file(run_dir.join(file));
     }
     let Started { scene, deck, warm, mfr_se_target } = started(ctx, p, start);
     let scene = &scene;
     let written =
         std::fs::create_dir_all(run_dir).and_then(|_| deck.write(run_dir)).and_then(|_| match &warm {
-            Some((w, _)) => std::fs::write(run_dir.join(WARM_DATA), &w.data),
+            Some((w, _)) => std::fs::write(run_dir.join(w.data_file), &w.data),
             None => Ok(()),
         });
     if let Err(e) = written {

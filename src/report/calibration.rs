@@ -9,8 +9,9 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use base64::Engine as _;
+use serde_json::json;
 
+use super::page::FigureView;
 use super::plots::Figure;
 use crate::analysis::calibration::Target;
 use crate::error::Result;
@@ -431,16 +432,6 @@ fn toml_num(v: f64) -> String {
     }
 }
 
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
-}
-
-const STYLE: &str = "body{font-family:sans-serif;max-width:1100px;margin:1em auto;padding:0 1em;color:#222}
-h2{border-bottom:1px solid #ccc;margin-top:1.4em}table{border-collapse:collapse;margin:.5em 0;font-size:.9em}
-td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}th{background:#f2f2f2}td.l,th.l{text-align:left}
-.verdict{padding:.7em 1em;border-radius:6px;margin:1em 0}.converged{background:#e3f5e6;border:1px solid #3a3}
-.open{background:#fff4dc;border:1px solid #d90}figure img{max-width:100%;border:1px solid #eee}figcaption{font-size:.9em;color:#444}";
-
 /// Write `report/report.html` and the maps (SVG and PNG) of the calibration in `dir`.
 fn write_html(dir: &std::path::Path, c: &Calibration, sweep: &Sweep, figures: &[Figure]) -> Result<()> {
     let rdir = dir.join("report");
@@ -454,99 +445,87 @@ fn write_html(dir: &std::path::Path, c: &Calibration, sweep: &Sweep, figures: &[
         }
     }
     let n = fmt;
-    let mut h = format!(
-        "<!doctype html><html><head><meta charset=\"utf-8\"><title>calibration: {}</title><style>{STYLE}</style></head><body>\n<h1>Calibration: {}</h1>\n",
-        esc(&sweep.file.name),
-        esc(&sweep.file.name)
-    );
-    let class = if c.status == "converged" { "converged" } else { "open" };
-    h.push_str(&format!(
-        "<div class=\"verdict {class}\"><b>{}</b>: {}</div>\n",
-        esc(&c.status),
-        esc(&c.reason)
-    ));
-    h.push_str("<h2>Targets</h2><table><tr><th class=\"l\">quantity</th><th>target</th><th>SD</th><th>best run</th><th>residual (SD)</th><th>emulator at the mode</th></tr>\n");
-    for (k, t) in c.targets.iter().enumerate() {
-        let best = c.best_run.as_ref().map(|b| &b.residuals[k]);
-        let mode = c.mode.as_ref().map(|m| &m.residuals[k]);
-        h.push_str(&format!(
-            "<tr><td class=\"l\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
-            esc(&t.name),
-            n(t.value),
-            n(t.sd),
-            best.map_or("–".into(), |r| n(r.simulated)),
-            best.map_or("–".into(), |r| format!("{:+.2}", r.in_sd)),
-            mode.map_or("–".into(), |r| format!("{} ± {}", n(r.simulated), n(r.se.unwrap_or(0.0)))),
-        ));
-    }
-    h.push_str("</table>\n<h2>Posterior</h2><table><tr><th class=\"l\">parameter</th><th>prior range</th><th>median</th><th>95 % credible interval</th><th>posterior SD / prior SD</th><th class=\"l\">identification</th></tr>\n");
-    for p in &c.parameters {
-        h.push_str(&format!(
-            "<tr><td class=\"l\">{} ({})</td><td>{} – {}</td><td>{}</td><td>[{}, {}]</td><td>{:.2}</td><td class=\"l\">{}</td></tr>\n",
-            esc(&p.name),
-            esc(&p.unit),
-            n(p.prior.0),
-            n(p.prior.1),
-            n(p.median),
-            n(p.lo),
-            n(p.hi),
-            p.sd_ratio,
-            esc(&p.identification)
-        ));
-    }
-    h.push_str("</table>\n");
-    for r in &c.ridges {
-        h.push_str(&format!("<p><b>Ridge.</b> {}</p>\n", esc(r)));
-    }
-    for x in &c.noise {
-        h.push_str(&format!("<p><b>Noise of</b> {}.</p>\n", esc(&x.line())));
-    }
-    if let Some(b) = &c.best_run {
+    let targets: Vec<serde_json::Value> = c
+        .targets
+        .iter()
+        .enumerate()
+        .map(|(k, t)| {
+            let best = c.best_run.as_ref().map(|b| &b.residuals[k]);
+            let mode = c.mode.as_ref().map(|m| &m.residuals[k]);
+            json!({
+                "name": t.name,
+                "value": n(t.value),
+                "sd": n(t.sd),
+                "best": best.map_or("–".into(), |r| n(r.simulated)),
+                "residual": best.map_or("–".into(), |r| format!("{:+.2}", r.in_sd)),
+                "mode": mode.map_or("–".into(), |r| format!("{} ± {}", n(r.simulated), n(r.se.unwrap_or(0.0)))),
+            })
+        })
+        .collect();
+    let parameters: Vec<serde_json::Value> = c
+        .parameters
+        .iter()
+        .map(|p| {
+            json!({
+                "name": p.name,
+                "unit": p.unit,
+                "prior_lo": n(p.prior.0),
+                "prior_hi": n(p.prior.1),
+                "median": n(p.median),
+                "lo": n(p.lo),
+                "hi": n(p.hi),
+                "sd_ratio": format!("{:.2}", p.sd_ratio),
+                "identification": p.identification,
+            })
+        })
+        .collect();
+    let best_run = c.best_run.as_ref().map(|b| {
         let vals: Vec<String> =
             sweep.names().iter().zip(&b.values).map(|(k, v)| format!("{k} = {}", n(*v))).collect();
-        h.push_str(&format!("<p>Best run: #{} at {}.</p>\n", b.index.unwrap_or(0), esc(&vals.join(", "))));
-    }
+        json!({ "index": b.index.unwrap_or(0), "values": vals.join(", ") })
+    });
     let cpu = if c.cpu_runs > 0 {
         format!("{:.0} CPU s over the {} runs that record it", c.cpu_s, c.cpu_runs)
     } else {
         "no CPU time recorded".into()
     };
-    h.push_str(&format!(
-        "<p>{} runs done, {} failed; {cpu}. Effective posterior sample: {}.</p>\n",
-        c.runs_done,
-        c.runs_failed,
-        c.effective_samples.map_or("–".into(), |e| format!("{e:.0}"))
-    ));
-    for f in figures {
-        h.push_str(&format!(
-            "<figure><img alt=\"{}\" src=\"data:image/png;base64,{}\"><figcaption>{} (report/{}.svg, .png)</figcaption></figure>\n",
-            esc(&f.caption),
-            base64::engine::general_purpose::STANDARD.encode(&f.png),
-            esc(&f.caption),
-            esc(&f.name)
-        ));
-    }
-    h.push_str("<h2>Batches</h2><table><tr><th class=\"l\">batch</th><th>points</th>");
-    for name in sweep.names() {
-        h.push_str(&format!("<th>{} median [95 %]</th>", esc(name)));
-    }
-    h.push_str("<th>largest move of a bound (share of width)</th></tr>\n");
-    for (k, b) in c.batches.iter().enumerate() {
-        h.push_str(&format!("<tr><td class=\"l\">{} ({})</td><td>{}</td>", k + 1, esc(&b.label), b.points));
-        match &b.intervals {
-            Some(iv) => {
-                for (m, lo, hi) in iv {
-                    h.push_str(&format!("<td>{} [{}, {}]</td>", n(*m), n(*lo), n(*hi)));
-                }
-            }
-            None => h.push_str(&format!("<td colspan=\"{}\">no emulator yet</td>", sweep.dim())),
-        }
-        h.push_str(&format!(
-            "<td>{}</td></tr>\n",
-            b.change.map_or("–".into(), |v| format!("{:.0} %", 100.0 * v))
-        ));
-    }
-    h.push_str("</table>\n<p>Method: docs/calibration.md. Files: posterior.json, calibrated.toml, calibrated-ranges.toml, calibration-batches.csv.</p>\n</body></html>\n");
+    let batches: Vec<serde_json::Value> = c
+        .batches
+        .iter()
+        .enumerate()
+        .map(|(k, b)| {
+            let intervals = b
+                .intervals
+                .as_ref()
+                .map(|iv| iv.iter().map(|(m, lo, hi)| [n(*m), n(*lo), n(*hi)]).collect::<Vec<_>>());
+            json!({
+                "number": k + 1,
+                "label": b.label,
+                "points": b.points,
+                "intervals": intervals,
+                "change": b.change.map_or("–".into(), |v| format!("{:.0} %", 100.0 * v)),
+            })
+        })
+        .collect();
+    let context = json!({
+        "name": sweep.file.name,
+        "class": if c.status == "converged" { "converged" } else { "open" },
+        "status": c.status,
+        "reason": c.reason,
+        "targets": targets,
+        "parameters": parameters,
+        "ridges": c.ridges,
+        "noise": c.noise.iter().map(Noise::line).collect::<Vec<_>>(),
+        "best_run": best_run,
+        "runs_done": c.runs_done,
+        "runs_failed": c.runs_failed,
+        "cpu": cpu,
+        "effective_samples": c.effective_samples.map_or("–".into(), |e| format!("{e:.0}")),
+        "figures": figures.iter().map(FigureView::of).collect::<Vec<_>>(),
+        "names": sweep.names(),
+        "batches": batches,
+    });
+    let h = super::page::render("calibration.html", &context);
     let p = rdir.join("report.html");
     crate::sys::atomic::write(&p, h.as_bytes()).map_err(io(p.clone()))?;
     Ok(())

@@ -19,6 +19,7 @@ mod error;
 mod gallery;
 mod html;
 mod maps;
+mod page;
 mod plots;
 pub mod show;
 pub use error::ReportError;
@@ -192,8 +193,9 @@ pub struct CentreScene {
     pub window_travel_mm: f64,
     pub timestep_s: f64,
     pub rayleigh_time_s: f64,
-    /// The conveyor layout's held heap and window (absent for the other layouts).
-    pub conveyor: Option<crate::scenes::HeldHeap>,
+    /// The held heap and its window, of a layout that holds one (summary.json: `conveyor`).
+    #[serde(rename = "conveyor")]
+    pub held_heap: Option<crate::scenes::HeldHeap>,
 }
 
 impl Setup {
@@ -207,7 +209,6 @@ impl Setup {
             })
             .collect();
         let parameters = crate::point::resolve(sweep, &mid);
-        let layout = crate::scenes::of(&sweep.file.scene).ok();
         let centre = crate::scenes::build(&parameters, &sweep.file.scene).ok().map(|sc| {
             let (t1, t2) = sc.window_steps();
             CentreScene {
@@ -222,7 +223,7 @@ impl Setup {
                 window_travel_mm: (sc.blade_rear_at(t2) - sc.blade_rear_at(t1)) * 1e3,
                 timestep_s: sc.timestep,
                 rayleigh_time_s: sc.rayleigh_time,
-                conveyor: layout.and_then(|l| l.held_heap(&sc)),
+                held_heap: crate::scenes::of(&sweep.file.scene).ok().and_then(|l| l.held_heap(&sc)),
             }
         });
         let id = |k: &str| manifest.identity.get(k).and_then(|v| v.as_str()).unwrap_or("").to_string();

@@ -52,8 +52,6 @@ pub struct Settings {
 pub struct Quantity {
     pub name: &'static str,
     pub unit: &'static str,
-    /// Whether the layout of this name measures it.
-    measured_by: fn(&str) -> bool,
     /// Its value in a result, with the result's SE of it where it gives one.
     read: fn(&RunResult) -> Option<Measured>,
     /// Runs of each setting by default (`--repeats`): 2 for a heap's quantities, whose own SE
@@ -67,12 +65,12 @@ pub struct Quantity {
 /// A measured value and the run's SE of it, where it gives one.
 pub type Measured = (f64, Option<f64>);
 
-/// Every quantity a calibration can target.
+/// Every quantity a calibration can target; a layout says which of them its runs measure
+/// ([`crate::scenes::Layout::calibration_targets`]).
 pub const QUANTITIES: &[Quantity] = &[
     Quantity {
         name: "angle_of_repose",
         unit: "°",
-        measured_by: |l| l == "pour",
         read: |r| r.heap.as_ref().map(|h| (h.angle_deg, Some(h.angle_se_deg).filter(|s| *s > 0.0))),
         repeats: 2,
         possible: (0.0, 90.0),
@@ -80,7 +78,6 @@ pub const QUANTITIES: &[Quantity] = &[
     Quantity {
         name: "bulk_packing",
         unit: "-",
-        measured_by: |l| l == "pour",
         read: |r| r.heap.as_ref().map(|h| (h.packing, None)),
         repeats: 2,
         // Spheres pack no denser than π/√18 (face-centred cubic).
@@ -91,7 +88,6 @@ pub const QUANTITIES: &[Quantity] = &[
     Quantity {
         name: "apparent_density",
         unit: "g/cm³",
-        measured_by: |l| l == "pour",
         read: |r| {
             let density = r.parameters.get("density")?;
             r.heap.as_ref().map(|h| (h.packing * density / 1000.0, None))
@@ -103,7 +99,6 @@ pub const QUANTITIES: &[Quantity] = &[
     Quantity {
         name: "mfr",
         unit: "-",
-        measured_by: |l| l != "pour",
         read: |r| r.mfr.is_finite().then_some((r.mfr, r.mfr_se)),
         repeats: 1,
         possible: (0.0, 1.0),
@@ -132,6 +127,7 @@ pub fn quantity(name: &str) -> Option<&'static Quantity> {
 /// sentence after the flag.
 pub fn check(sweep: &Sweep, targets: &[Target]) -> std::result::Result<(), String> {
     let layout = &sweep.file.scene.layout;
+    let measures = crate::scenes::of(&sweep.file.scene).map_err(|e| e.to_string())?.calibration_targets();
     if sweep.dim() == 0 {
         return Err(format!(
             "{}: no free parameter: give the parameters to calibrate as ranges in [parameters], e.g. friction = {{ lo = 0.1, hi = 0.5 }}",
@@ -141,7 +137,8 @@ pub fn check(sweep: &Sweep, targets: &[Target]) -> std::result::Result<(), Strin
     if targets.is_empty() {
         return Err("--target: expected at least one, e.g. --target angle_of_repose=34.0±1.0".into());
     }
-    let measured: Vec<&str> = QUANTITIES.iter().filter(|q| (q.measured_by)(layout)).map(|q| q.name).collect();
+    let measured: Vec<&str> =
+        QUANTITIES.iter().filter(|q| measures.contains(&q.name)).map(|q| q.name).collect();
     for (k, t) in targets.iter().enumerate() {
         match quantity(&t.name) {
             None => {
@@ -152,7 +149,7 @@ pub fn check(sweep: &Sweep, targets: &[Target]) -> std::result::Result<(), Strin
                     all.join(", ")
                 ));
             }
-            Some(q) if !(q.measured_by)(layout) => {
+            Some(q) if !measures.contains(&q.name) => {
                 return Err(format!(
                     "--target {}: scene.layout \"{layout}\" does not measure it; it measures {}",
                     t.name,

@@ -13,7 +13,6 @@ use std::sync::Mutex;
 
 use crate::outcome::RunResult;
 use crate::point::{Neighbour, RESULT};
-use crate::scenes::conveyor::warm::STATE_DUMP;
 use crate::sweep::space::unit_point;
 use crate::sweep::Sweep;
 
@@ -58,12 +57,13 @@ impl FinishedPoints {
     /// The nearest finished point to `values` (swept values, file order) in `runs_dir` that can
     /// start it, other than `own` (ties: the smaller hash).
     pub fn nearest(&self, sweep: &Sweep, runs_dir: &Path, values: &[f64], own: &str) -> Option<Neighbour> {
+        let state = crate::scenes::of(&sweep.file.scene).ok()?.warm_start_files()?.state;
         let here = unit_point(sweep, values);
         let seen = self.refresh(sweep, runs_dir)?;
         let mut best: Option<(f64, &String, &Point)> = None;
         for (hash, p) in seen.iter().filter(|(h, _)| *h != own) {
             let Some(unit) = &p.start else { continue };
-            if !runs_dir.join(hash).join(STATE_DUMP).is_file() {
+            if !runs_dir.join(hash).join(state).is_file() {
                 continue;
             }
             let d = here.iter().zip(unit).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();

@@ -28,6 +28,7 @@ use crate::outcome::{RunOutcome, RunResult, RESULT_FORMAT, VX_LAYERS};
 use crate::point::deck::Template;
 use crate::point::{resolve, PointError, RESULT};
 use crate::run::pool::Executor;
+use crate::scenes::StandInModel;
 use crate::sweep::{Sweep, SweepError};
 use crate::sys::atomic::write_json;
 use crate::sys::process::CancelToken;
@@ -49,6 +50,8 @@ pub fn selected(sweep: &Sweep) -> bool {
 /// The stand-in executor.
 pub struct StandIn {
     sweep: Sweep,
+    /// What it makes up for the sweep's layout.
+    model: StandInModel,
 }
 
 /// A point for the stand-in: every scene parameter and the hash.
@@ -61,15 +64,15 @@ impl StandIn {
     /// The stand-in for `sweep`, refusing what LIGGGHTS's executor refuses before it runs: a
     /// template that does not load. (Each point's bounds are checked as it is prepared.)
     pub fn new(sweep: Sweep) -> Result<StandIn> {
+        let layout = crate::scenes::of(&sweep.file.scene).map_err(PointError::Layout)?;
         if let Some(path) = sweep.template_path() {
-            let layout = crate::scenes::of(&sweep.file.scene).map_err(PointError::Layout)?;
             Template::load(Some(&path), layout).map_err(|e| SweepError::Key {
                 path: sweep.path.clone(),
                 key: "scene.template".into(),
                 why: e.to_string(),
             })?;
         }
-        Ok(StandIn { sweep })
+        Ok(StandIn { model: layout.stand_in(), sweep })
     }
 }
 
@@ -104,7 +107,7 @@ impl Executor for StandIn {
 
     fn execute(&self, job: &StandInJob, run_dir: &Path, _cancel: &CancelToken) -> RunOutcome {
         let p = |k: &str| job.parameters.get(k).copied().unwrap_or(f64::NAN);
-        if self.sweep.file.scene.layout == "pour" {
+        if let StandInModel::Heap { particles } = self.model {
             let pour = PourPoint {
                 friction: p("friction"),
                 rolling_friction: p("rolling_friction"),
@@ -116,7 +119,7 @@ impl Executor for StandIn {
                 parameters: job.parameters.clone(),
                 mfr: f64::NAN,
                 mfr_flux: f64::NAN,
-                heap: Some(pour.model(&mut Noise::new(&job.hash))),
+                heap: Some(pour.model(particles, &mut Noise::new(&job.hash))),
                 vx: vec![None; VX_LAYERS],
                 engine_version: format!("{NAME} {MODEL_VERSION}"),
                 warnings: vec![format!("{NAME}: a made-up model, not LIGGGHTS")],
@@ -257,14 +260,13 @@ impl PourPoint {
         0.64 - 0.1 * self.friction - 0.05 * self.rolling_friction - 0.05 * self.cohesion()
     }
 
-    /// A heap: the angle and packing with their noise ([`ANGLE_SCATTER`], [`PACKING_NOISE`]),
-    /// reporting [`ANGLE_SE`] as its angle's SE.
-    pub fn model(&self, noise: &mut Noise) -> crate::outcome::heap::Heap {
+    /// A heap of `particles` spheres: the angle and packing with their noise ([`ANGLE_SCATTER`],
+    /// [`PACKING_NOISE`]), reporting [`ANGLE_SE`] as its angle's SE.
+    pub fn model(&self, particles: usize, noise: &mut Noise) -> crate::outcome::heap::Heap {
         let angle = self.mean_angle() + ANGLE_SCATTER * noise.normal();
         let packing = self.mean_packing() + PACKING_NOISE * noise.normal();
-        // The cone of the pour's particles at this angle and packing: V = π r² h / 3, h = r tan θ.
-        let solid =
-            crate::scenes::pour::PARTICLES as f64 * std::f64::consts::PI * self.diameter.powi(3) / 6.0;
+        // The cone of the particles at this angle and packing: V = π r² h / 3, h = r tan θ.
+        let solid = particles as f64 * std::f64::consts::PI * self.diameter.powi(3) / 6.0;
         let tan = angle.to_radians().tan();
         let radius = (3.0 * solid / packing / (std::f64::consts::PI * tan)).cbrt();
         crate::outcome::heap::Heap {
@@ -274,7 +276,7 @@ impl PourPoint {
             height_mm: radius * tan,
             base_radius_mm: radius,
             packing,
-            particles_in_heap: crate::scenes::pour::PARTICLES,
+            particles_in_heap: particles,
             particles_run_out: 0,
         }
     }

@@ -249,6 +249,39 @@ pub struct FeedClass {
     pub seed: u64,
 }
 
+/// The particle templates of a layout that inserts its powder as it runs (the conveyor's
+/// top-up, the layers' doses), and the least particle volume they accept.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Feed {
+    /// One template per size class: its diameter, its share of the mass (its number fraction
+    /// times d³, normalised) and the `i + 2`-th prime seed after the scene's seed.
+    pub classes: Vec<FeedClass>,
+    /// The least particle volume the templates accept, m³: below ten times the engine's default
+    /// ([`ENGINE_VOLUME_LIMIT`], which refuses every sphere below 124 µm), a thousandth of the
+    /// smallest sphere's; above it 0, and the deck keeps the engine's default.
+    pub volume_limit: f64,
+}
+
+impl Feed {
+    /// The feed of `psd` for a scene seeded with `seed`.
+    pub fn of(psd: &SizeDistribution, seed: u64) -> Feed {
+        let total: f64 = psd.classes.iter().map(|c| c.fraction * c.diameter.powi(3)).sum();
+        let classes = psd
+            .classes
+            .iter()
+            .enumerate()
+            .map(|(i, c)| FeedClass {
+                diameter: c.diameter,
+                mass_fraction: c.fraction * c.diameter.powi(3) / total,
+                seed: prime_seed(seed, i + 2),
+            })
+            .collect();
+        let smallest = std::f64::consts::PI / 6.0 * psd.min_diameter().powi(3);
+        let volume_limit = if smallest < 10.0 * ENGINE_VOLUME_LIMIT { 1e-3 * smallest } else { 0.0 };
+        Feed { classes, volume_limit }
+    }
+}
+
 /// The `n`-th prime above 10,000 after `start` (LIGGGHTS wants prime seeds above 10,000).
 pub fn prime_seed(start: u64, n: usize) -> u64 {
     let is_prime = |k: u64| k > 1 && (2..).take_while(|d| d * d <= k).all(|d| !k.is_multiple_of(d));
@@ -449,4 +482,34 @@ impl Scene {
 pub fn rayleigh_time(r: f64, density: f64, youngs: f64, poisson: f64) -> f64 {
     let shear = youngs / (2.0 * (1.0 + poisson));
     std::f64::consts::PI * r * (density / shear).sqrt() / (0.1631 * poisson + 0.8766)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::psd::{SizeClass, SizeDistribution};
+    use super::*;
+
+    fn psd(classes: &[(f64, f64)]) -> SizeDistribution {
+        SizeDistribution {
+            classes: classes.iter().map(|&(diameter, fraction)| SizeClass { diameter, fraction }).collect(),
+            fit_residual: None,
+        }
+    }
+
+    #[test]
+    fn a_feed_weighs_its_classes_by_mass_and_lowers_the_least_volume_only_for_fine_powder() {
+        // Half the particles 20 µm, half 40 µm: the coarse class holds 8/9 of the mass.
+        let fine = Feed::of(&psd(&[(20e-6, 0.5), (40e-6, 0.5)]), 7);
+        let shares: Vec<f64> = fine.classes.iter().map(|c| c.mass_fraction).collect();
+        assert!((shares[0] - 1.0 / 9.0).abs() < 1e-12 && (shares[1] - 8.0 / 9.0).abs() < 1e-12, "{shares:?}");
+        assert_eq!(
+            fine.classes.iter().map(|c| c.seed).collect::<Vec<_>>(),
+            [prime_seed(7, 2), prime_seed(7, 3)]
+        );
+        // A 20 µm sphere is far below the engine's least volume: a thousandth of it is the limit.
+        let smallest = std::f64::consts::PI / 6.0 * 20e-6_f64.powi(3);
+        assert_eq!(fine.volume_limit, 1e-3 * smallest);
+        // 2 mm spheres keep the engine's default.
+        assert_eq!(Feed::of(&psd(&[(2e-3, 1.0)]), 7).volume_limit, 0.0);
+    }
 }

@@ -48,12 +48,15 @@ pub struct SceneSettings {
     /// Conveyor layout: substrate travel per block of the deposit series, in diameters.
     pub block_diameters: f64,
     /// Conveyor layout: simulated time before the precision target is first checked, s (at
-    /// least 10 D of travel). The start-up transient is a time, not a travel: run long, MFR
-    /// settles by 0.1, 0.15 and 0.3 s at 0.1, 0.4 and 1.4 m/s (10, 60 and 420 mm of travel) for
-    /// D 1–3 mm and heaps of 8–40 mm (docs/study/recoater), and 0.15 s leaves it 7–11 % high at
-    /// 1.4 m/s with heaps of 20–40 mm; so 0.3 s. The blocks after it are judged by the stop
-    /// rule's MSER truncation.
-    pub warmup_s: f64,
+    /// least 10 D of travel). Unset (the default): [`WARMUP_HEAP_FALLS`] × √(H/g), H = gap +
+    /// `heap_height`, the held heap's height ([`SceneSettings::warmup_for`]). The start-up
+    /// transient is a time, not a travel, and that time is the heap's: run long, MFR settles
+    /// within 3–6 √(H/g) at D 1–3 mm, heaps of 8–40 mm and 0.1–1.4 m/s (docs/study/recoater)
+    /// and at D 24–35 µm, heaps of 0.3–1 mm and 0.02–0.2 m/s, cohesive or not
+    /// (docs/study/warmup-um.md); 0.3 s at the thesis's heap, 0.04–0.07 s at a real powder's.
+    /// A set value wins. The blocks after it are judged by the stop rule's MSER truncation.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub warmup_s: Option<f64>,
     /// Conveyor layout: the most travel after the warm-up, in diameters (the window's precision
     /// is a number of blocks): where it ends the run before the precision target is met, the
     /// point says so (`stop = "cap"`). The warm-up is never cut short by it.
@@ -140,6 +143,10 @@ pub struct SceneSettings {
     #[serde(skip)]
     pub vtk: bool,
 }
+
+/// The default warm-up in gravity times of the held heap, √(H/g) with H = gap + `heap_height`
+/// (docs/study/warmup-um.md): long runs at D 1–3 mm and 24–35 µm settle within it.
+pub const WARMUP_HEAP_FALLS: f64 = 6.5;
 
 /// The fidelity presets, fastest first.
 pub const FIDELITIES: [&str; 3] = ["fast", "reference", "thesis"];
@@ -285,6 +292,14 @@ pub(crate) fn quoted(names: &[&str]) -> String {
 }
 
 impl SceneSettings {
+    /// The conveyor's warm-up, s, for a held heap `heap_height` tall (m, gap included): the
+    /// set `warmup_s`, or [`WARMUP_HEAP_FALLS`] × √(H/g).
+    pub fn warmup_for(&self, heap_height: f64) -> f64 {
+        self.warmup_s.unwrap_or_else(|| WARMUP_HEAP_FALLS * (heap_height / crate::scene::GRAVITY).sqrt())
+    }
+}
+
+impl SceneSettings {
     /// The defaults on the gated layout (the unit tests of that scene).
     #[cfg(test)]
     pub(crate) fn gated() -> SceneSettings {
@@ -318,7 +333,7 @@ impl Default for SceneSettings {
             full_dump_every_s: 0.0,
             run_to_end: false,
             block_diameters: 5.0,
-            warmup_s: 0.3,
+            warmup_s: None,
             window_cap_diameters: 600.0,
             mfr_rel_se: 0.05,
             mfr_abs_se: 0.005,

@@ -98,6 +98,27 @@ pub struct SetupRows {
     pub tail: Vec<(&'static str, String)>,
 }
 
+/// The files of a warm start in a run directory.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WarmFiles {
+    /// The end-of-run state a finished point leaves for its neighbours to start from.
+    pub state: &'static str,
+    /// The mapped particles a warm-started deck reads.
+    pub data: &'static str,
+}
+
+/// What the stand-in engine (`[run] engine = "stand-in"`) makes up for a point of a layout: the
+/// shape of the layout's result, from a closed form in the point's parameters, not its physics.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StandInModel {
+    /// A flow under the blade: MFR and the v_x profile from friction, diameter, gap and blade
+    /// speed.
+    Flow,
+    /// A heap of `particles` spheres: its angle of repose and packing from sliding and rolling
+    /// friction and surface energy.
+    Heap { particles: usize },
+}
+
 /// One scene layout: everything that differs from one scene to another.
 pub trait Layout: Sync {
     /// Its name in `[scene] layout`.
@@ -176,6 +197,29 @@ pub trait Layout: Sync {
     /// and v_x.
     fn result_lines(&self, _r: &RunResult) -> Option<Vec<String>> {
         None
+    }
+
+    /// The files a run of this layout under `settings` writes into its run directory besides
+    /// the deck, the log and the result: an earlier attempt's are removed before a run, so that
+    /// none is read as this one's.
+    fn run_files(&self, _settings: &SceneSettings) -> Vec<String> {
+        Vec::new()
+    }
+
+    /// The files of its warm starts, if it starts points from a finished neighbour's state.
+    fn warm_start_files(&self) -> Option<WarmFiles> {
+        None
+    }
+
+    /// The quantities of a result a calibration (`sweep calibrate --target NAME=…`) can fit
+    /// this layout's runs to: names of `run::calibrate::QUANTITIES`.
+    fn calibration_targets(&self) -> &'static [&'static str] {
+        &["mfr"]
+    }
+
+    /// What the stand-in engine makes up for a point of this layout.
+    fn stand_in(&self) -> StandInModel {
+        StandInModel::Flow
     }
 }
 

@@ -40,7 +40,7 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
 }
 
 /// The product code of a file: comments and `#[cfg(test)]` modules left out.
-fn code_lines(text: &str) -> Vec<&str> {
+fn production_lines(text: &str) -> Vec<&str> {
     let mut out = Vec::new();
     for line in text.lines() {
         let t = line.trim_start();
@@ -129,7 +129,7 @@ fn graph() -> Graph {
         let text = std::fs::read_to_string(&path).unwrap();
         let binary = module[0] == "main" || module[0] == "cli";
         let top = module[0].clone();
-        let found = imports(&code_lines(&text), &module, binary);
+        let found = imports(&production_lines(&text), &module, binary);
         files.push((top, module, found));
     }
     Graph { files }
@@ -225,4 +225,78 @@ fn no_two_files_import_each_other_in_a_loop() {
             }
         }
     }
+}
+
+/// What of `line` names a layout: a layout's name compared as a string, or a path into a
+/// layout's own folder (`scenes::pour::…`).
+fn names_a_layout(line: &str, names: &[&str], folders: &[String]) -> Option<String> {
+    for name in names {
+        let lit = format!("\"{name}\"");
+        for (i, _) in line.match_indices(&lit) {
+            let before = line[..i].trim_end();
+            let after = line[i + lit.len()..].trim_start();
+            let compared = ["==", "!=", "|", "matches!("].iter().any(|op| before.ends_with(op))
+                || ["==", "!=", "=>", "|"].iter().any(|op| after.starts_with(op));
+            if compared {
+                return Some(format!("compares the layout name {lit}"));
+            }
+        }
+    }
+    folders
+        .iter()
+        .find(|f| line.contains(&format!("scenes::{f}")))
+        .map(|f| format!("reaches into scenes/{f}/"))
+}
+
+#[test]
+fn the_layout_name_test_sees_a_comparison_and_a_reach_into_a_folder() {
+    let (names, folders) = (["pour", "gated", "layers"], ["conveyor".to_string(), "layers".to_string()]);
+    for line in [
+        "if sweep.file.scene.layout == \"pour\" {",
+        "measured_by: |l| l != \"gated\",",
+        "\"pour\" => heap(),",
+        "use crate::scenes::conveyor::warm::STATE_DUMP;",
+        "matches!(layout, \"layers\" | \"pour\")",
+        "let dump = crate::scenes::layers::measure::layer_dump(k);",
+    ] {
+        assert!(names_a_layout(line, &names, &folders).is_some(), "{line}");
+    }
+    for line in ["layout: \"pour\".into(),", "find(\"thesis\")", "crate::scenes::of(&settings)"] {
+        assert_eq!(names_a_layout(line, &names, &folders), None, "{line}");
+    }
+}
+
+#[test]
+fn no_production_line_outside_the_scene_folders_names_a_layout() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let names = demsweep::scenes::names();
+    let mut folders: Vec<String> = std::fs::read_dir(src.join("scenes"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_dir())
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    folders.sort();
+    assert!(folders.len() >= 3 && names.len() >= 4, "layouts {names:?}, folders {folders:?}");
+    let mut paths = Vec::new();
+    rust_files(&src, &mut paths);
+    paths.sort();
+    let mut found = Vec::new();
+    for path in paths {
+        let rel = path.strip_prefix(&src).unwrap().to_string_lossy().replace('\\', "/");
+        if rel.starts_with("scenes/") || rel.starts_with("scene/") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).unwrap();
+        for line in production_lines(&text) {
+            if let Some(why) = names_a_layout(line, &names, &folders) {
+                found.push(format!("src/{rel}: {why}: {}", line.trim()));
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "production lines outside src/scenes/ and src/scene/ that name a layout (ask the `Layout` instead):\n{}",
+        found.join("\n")
+    );
 }

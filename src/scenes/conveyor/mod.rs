@@ -16,11 +16,13 @@ use crate::scene::bed::Bed;
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
 use crate::scene::{
-    prime_seed, Base, Conveyor as Held, FeedClass, Scene, ENGINE_VOLUME_LIMIT, GRAVITY, LAYER_FRACTION_MAX,
-    MIN_INSERT_VOLUME, REPOSE_DEG,
+    prime_seed, Base, Conveyor as Held, Feed, Scene, GRAVITY, LAYER_FRACTION_MAX, MIN_INSERT_VOLUME,
+    REPOSE_DEG,
 };
 use crate::scenes::moving_blade::{self, Dose};
-use crate::scenes::{BadSetting, BuiltinTemplate, Finished, HeldHeap, Layout, Rejected, SetupRows};
+use crate::scenes::{
+    BadSetting, BuiltinTemplate, Finished, HeldHeap, Layout, Rejected, SetupRows, WarmFiles,
+};
 
 /// The conveyor layout (registered in [`crate::scenes::LAYOUTS`]).
 pub struct Conveyor;
@@ -54,7 +56,7 @@ impl Layout for Conveyor {
             }
         }
         for (k, v) in [
-            ("scene.warmup_s", s.warmup_s),
+            ("scene.warmup_s", s.warmup_s.unwrap_or(0.0)),
             ("scene.mfr_rel_se", s.mfr_rel_se),
             ("scene.mfr_abs_se", s.mfr_abs_se),
         ] {
@@ -113,7 +115,16 @@ impl Layout for Conveyor {
         SetupRows {
             head: vec![
                 ("block of the deposit series, travel (D)", short(sc.block_diameters)),
-                ("warm-up (s)", short(sc.warmup_s)),
+                (
+                    "warm-up (s)",
+                    match sc.warmup_s {
+                        Some(w) => short(w),
+                        None => format!(
+                            "{} √(H/g), H = gap + heap_height (the held heap's fall time)",
+                            short(crate::scene::settings::WARMUP_HEAP_FALLS)
+                        ),
+                    },
+                ),
                 (
                     "precision target: SE of MFR at most",
                     match sc.precision.as_str() {
@@ -153,6 +164,14 @@ impl Layout for Conveyor {
         distance: f64,
     ) -> Result<warm::Warm, String> {
         warm::map(from, &from_dir.join(warm::STATE_DUMP), to, to_pile, distance)
+    }
+
+    fn run_files(&self, _settings: &SceneSettings) -> Vec<String> {
+        [moving_blade::DUMP, STRIP_DUMP, warm::STATE_DUMP, warm::WARM_DATA].map(String::from).to_vec()
+    }
+
+    fn warm_start_files(&self) -> Option<WarmFiles> {
+        Some(WarmFiles { state: warm::STATE_DUMP, data: warm::WARM_DATA })
     }
 
     fn with_precision(&self, scene: &Scene, mfr_abs_se: f64) -> Option<Scene> {
@@ -211,22 +230,12 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let x_hi = if powder_bed { heap_x1 + 2.0 * d } else { n_x as f64 * spacing };
     let block_steps = ((settings.block_diameters * d / (v * dt)).ceil() as u64).max(1);
     let blocks = |travel: f64| (travel / settings.block_diameters).ceil() as u64;
-    let warmup_blocks = blocks((settings.warmup_s * v).max(10.0 * d) / d);
+    let warmup_blocks = blocks((settings.warmup_for(heap_height) * v).max(10.0 * d) / d);
     let max_blocks = warmup_blocks + blocks(settings.window_cap_diameters);
     let blade_top = 2.0 * heap_height + 2.0 * d;
     let mean_volume = psd.mean_volume();
     let mass = heap_particles as f64 * s.density * mean_volume;
-    let feed_total: f64 = psd.classes.iter().map(|c| c.fraction * c.diameter.powi(3)).sum();
-    let feed = psd
-        .classes
-        .iter()
-        .enumerate()
-        .map(|(i, c)| FeedClass {
-            diameter: c.diameter,
-            mass_fraction: c.fraction * c.diameter.powi(3) / feed_total,
-            seed: prime_seed(s.seed, i + 2),
-        })
-        .collect();
+    let Feed { classes: feed, volume_limit } = Feed::of(&psd, s.seed);
     s.conveyor = Held {
         heap_height,
         heap_particles,
@@ -244,16 +253,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         powder_bed: false,
         regions_z0: 0.0,
         feed,
-        // Below ten times the engine's default least volume, the deck sets its own: a thousandth
-        // of the smallest sphere's (above it, the deck stays as it was).
-        volume_limit: {
-            let smallest = std::f64::consts::PI / 6.0 * psd.min_diameter().powi(3);
-            if smallest < 10.0 * ENGINE_VOLUME_LIMIT {
-                1e-3 * smallest
-            } else {
-                0.0
-            }
-        },
+        volume_limit,
         distribution_seed: prime_seed(s.seed, 0),
         insert_seed: prime_seed(s.seed, 1),
         keep_state: settings.warm_start,
@@ -318,7 +318,14 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
     let scene = run.scene;
     let (blocks, stop) = steady::parse_log(&run.run.log)
         .map_err(|e| Rejected::new(FailureClass::Unparsable, e.to_string()))?;
-    let st = steady::compute(scene, &blocks, &stop, &frames);
+    let c = &scene.conveyor;
+    let held = steady::HeldBlocks {
+        ideal_block_mass: c.ideal_block_mass,
+        warmup_blocks: c.warmup_blocks,
+        block_steps: c.block_steps,
+        heap_particles: c.heap_particles,
+    };
+    let st = steady::compute(scene, &held, &blocks, &stop, &frames);
     // The steady window in quarters (the moving-blade scenes' sub-windows, for the same readers).
     let w = &st.state.block_mfr[st.state.transient_blocks..];
     let quarter = w.len().div_ceil(4).max(1);
@@ -370,23 +377,57 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
 mod tests {
     use std::collections::BTreeMap;
 
-    use crate::scene::settings::SceneSettings;
+    use crate::scene::settings::{SceneSettings, WARMUP_HEAP_FALLS};
+
+    fn scene(values: &[(&str, f64)], settings: &SceneSettings) -> crate::scene::Scene {
+        let values: BTreeMap<String, f64> = values.iter().map(|(k, v)| (k.to_string(), *v)).collect();
+        crate::scenes::build(&values, settings).unwrap()
+    }
+
+    /// The planned warm-up, s, and one block's time.
+    fn warmup(scene: &crate::scene::Scene) -> (f64, f64) {
+        let c = &scene.conveyor;
+        let block_s = c.block_steps as f64 * scene.timestep;
+        (c.warmup_blocks as f64 * block_s, block_s)
+    }
 
     #[test]
     fn the_warm_up_is_whole_however_fine_the_powder_and_the_cap_counts_after_it() {
-        // D 0.5 mm at 1.4 m/s: 0.3 s is 420 mm of travel, 840 D, past a cap of 600 D counted
-        // from the start; the warm-up keeps its 0.3 s and the window its 600 D after it.
-        let values: BTreeMap<String, f64> = [("diameter", 0.5), ("gap", 1.25), ("blade_speed", 1.4)]
-            .iter()
-            .map(|(k, v)| (k.to_string(), *v))
-            .collect();
+        // D 0.5 mm at 1.4 m/s under a 20 mm heap: the warm-up is the heap's 6.5 √(H/g) ≈ 0.3 s,
+        // 420 mm of travel, 840 D, past a cap of 600 D counted from the start; the warm-up is
+        // kept whole and the window gets its 600 D after it.
         let settings = SceneSettings::default();
-        let scene = crate::scenes::build(&values, &settings).unwrap();
-        let c = &scene.conveyor;
-        let block_s = c.block_steps as f64 * scene.timestep;
-        let warmup_s = c.warmup_blocks as f64 * block_s;
-        assert!((0.3..0.3 + block_s).contains(&warmup_s), "warm-up {warmup_s} s");
+        let sc = scene(&[("diameter", 0.5), ("gap", 1.25), ("blade_speed", 1.4)], &settings);
+        let (warmup_s, block_s) = warmup(&sc);
+        let rule = WARMUP_HEAP_FALLS * (0.02125f64 / crate::scene::GRAVITY).sqrt();
+        assert!((rule..rule + block_s).contains(&warmup_s), "warm-up {warmup_s} s against {rule} s");
+        let c = &sc.conveyor;
         let after = (c.max_blocks - c.warmup_blocks) as f64 * settings.block_diameters;
         assert!((600.0..600.0 + settings.block_diameters).contains(&after), "{after} D after the warm-up");
+    }
+
+    #[test]
+    fn the_default_warm_up_keeps_the_thesis_scale_and_shrinks_with_the_heap() {
+        let settings = SceneSettings::default();
+        // The thesis's space (D 1–3 mm, gap 1–5 mm, 20 mm heap, 1.2–1.6 m/s): never under the
+        // 0.3 s its long runs need (docs/study/recoater).
+        for (d, gap, v) in [(2.0, 3.0, 1.4), (1.0, 1.0, 1.6), (3.0, 5.0, 1.2), (2.0, 1.0, 1.2)] {
+            let (w, _) = warmup(&scene(&[("diameter", d), ("gap", gap), ("blade_speed", v)], &settings));
+            assert!((0.3..0.34).contains(&w), "D {d} mm, gap {gap} mm, {v} m/s: warm-up {w} s");
+        }
+        // A real powder's point: 35 µm, a 100 µm gap, a 1 mm heap, 0.08 m/s. Its warm-up is the
+        // heap's, √(1.1 mm / g) × 6.5 ≈ 0.069 s, not the 0.3 s (650,000 steps) of a 20 mm heap.
+        let um = [("diameter", 0.035), ("gap", 0.1), ("heap_height", 1.0), ("blade_speed", 0.08)];
+        let sc = scene(&um, &settings);
+        let (w, block_s) = warmup(&sc);
+        assert!((0.068..0.069 + block_s).contains(&w), "35 µm: warm-up {w} s");
+        assert!(w < 0.25 * 0.3, "35 µm: warm-up {w} s");
+        // A taller heap takes longer, as √H: four times the heap, about twice the warm-up.
+        let (w4, block4) = warmup(&scene(&[um[0], um[1], ("heap_height", 4.3), um[3]], &settings));
+        assert!(((2.0 * w - 2.0 * block_s)..(2.0 * w + block4)).contains(&w4), "{w} s → {w4} s");
+        // A set warmup_s wins over the rule.
+        let set = SceneSettings { warmup_s: Some(0.005), ..SceneSettings::default() };
+        let (w, block_s) = warmup(&scene(&um, &set));
+        assert!((0.005..0.005 + block_s).contains(&w), "set 0.005 s: warm-up {w} s");
     }
 }

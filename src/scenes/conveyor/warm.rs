@@ -49,6 +49,8 @@ const OVERLAP_TOLERANCE: f64 = 0.02;
 pub struct Warm {
     pub scene: Scene,
     pub data: String,
+    /// The name the deck reads `data` under, in its run directory.
+    pub data_file: &'static str,
     pub particles: usize,
 }
 
@@ -131,7 +133,7 @@ pub fn map(from: &Scene, state: &Path, to: &Scene, to_pile: &str, distance: f64)
     scene.conveyor.warmup_blocks = warmup_blocks;
     scene.conveyor.max_blocks = warmup_blocks + window_blocks;
     scene.window_length_steps = scene.conveyor.max_blocks * c.block_steps;
-    Ok(Warm { scene, data, particles: warm.len() })
+    Ok(Warm { scene, data, data_file: WARM_DATA, particles: warm.len() })
 }
 
 /// The ratio of `to`'s sizes to `from`'s, the same for every class; an error for two powders of

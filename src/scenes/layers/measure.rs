@@ -221,6 +221,11 @@ fn read_grains(path: &Path) -> Result<Vec<Grain>, String> {
         .collect())
 }
 
+/// The dump the deck writes after pass `k` (from 1): the particles over the plate.
+pub fn layer_dump(k: usize) -> String {
+    format!("dump.layer.{k}")
+}
+
 /// The run's result: every pass, the steady layer as the point's answer (MFR: its relative
 /// density on a loose bed, its packing on a fused one). A run not steady by its last pass fails
 /// as `unsteady`, its numbers kept.
@@ -240,7 +245,7 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
     }
     let grains: Vec<Vec<Grain>> = lines
         .iter()
-        .map(|l| read_grains(&run.run_dir.join(format!("dump.layer.{}", l.k))))
+        .map(|l| read_grains(&run.run_dir.join(layer_dump(l.k))))
         .collect::<Result<_, _>>()
         .map_err(|e| Rejected::new(FailureClass::Unparsable, e))?;
     let series = steady_layer(&plan, passes(scene, &plan, &lines, &grains));

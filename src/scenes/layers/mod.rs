@@ -31,7 +31,7 @@ use crate::outcome::RunResult;
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
 use crate::scene::{
-    prime_seed, Base, FeedClass, Scene, ENGINE_VOLUME_LIMIT, GRAVITY, LAYER_FRACTION_MAX, MIN_INSERT_VOLUME,
+    prime_seed, Base, Feed, FeedClass, Scene, GRAVITY, LAYER_FRACTION_MAX, MIN_INSERT_VOLUME,
 };
 use crate::scenes::moving_blade::{self, Dose};
 use crate::scenes::{BadSetting, BuiltinTemplate, Finished, Layout, Rejected, SetupRows};
@@ -281,6 +281,11 @@ impl Layout for Layers {
         ]
     }
 
+    fn run_files(&self, s: &SceneSettings) -> Vec<String> {
+        // One dump per pass; the log is the run's own.
+        (1..=s.layers.max(1)).map(measure::layer_dump).collect()
+    }
+
     fn pile(&self, _scene: &Scene) -> String {
         // The deck creates its box; every particle is inserted by a dose.
         String::new()
@@ -411,18 +416,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
             }
         })
         .collect();
-    let feed_total: f64 = psd.classes.iter().map(|c| c.fraction * c.diameter.powi(3)).sum();
-    let feed = psd
-        .classes
-        .iter()
-        .enumerate()
-        .map(|(i, c)| FeedClass {
-            diameter: c.diameter,
-            mass_fraction: c.fraction * c.diameter.powi(3) / feed_total,
-            seed: prime_seed(settings.seed, i + 2),
-        })
-        .collect();
-    let smallest = std::f64::consts::PI / 6.0 * psd.min_diameter().powi(3);
+    let Feed { classes: feed, volume_limit } = Feed::of(&psd, settings.seed);
     let plan = Plan {
         fused,
         layer_thickness: t,
@@ -449,7 +443,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         wait_steps,
         passes,
         feed,
-        volume_limit: if smallest < 10.0 * ENGINE_VOLUME_LIMIT { 1e-3 * smallest } else { 0.0 },
+        volume_limit,
         distribution_seed: prime_seed(settings.seed, 0),
     };
 

@@ -79,6 +79,15 @@ fn a_fine_powder_in_thin_layers_gets_the_depth_its_dose_region_needs_and_no_more
 }
 
 #[test]
+fn a_run_s_files_are_the_dumps_of_its_passes_as_the_deck_writes_them() {
+    // The deck dumps pass k's plate as dump.layer.k; an earlier attempt's are removed before a run.
+    assert!(TEMPLATE.source.contains("custom 1 dump.layer.{{ p.k }} "));
+    let files = Layers.run_files(&settings());
+    assert_eq!(files, ["dump.layer.1", "dump.layer.2", "dump.layer.3", "dump.layer.4"]);
+    assert_eq!(files[2], measure::layer_dump(3));
+}
+
+#[test]
 fn a_bad_layer_count_bed_or_profile_is_refused_naming_its_key() {
     let cases: [(SceneSettings, &str); 5] = [
         (SceneSettings { layers: 0, ..settings() }, "scene.layers"),

@@ -102,6 +102,10 @@ impl Layout for MovingBlade {
         format!("{} particles, settle + {} steps", scene.particles, scene.spread_steps())
     }
 
+    fn run_files(&self, _settings: &SceneSettings) -> Vec<String> {
+        vec![DUMP.into()]
+    }
+
     fn setup_rows(&self, s: &SceneSettings) -> SetupRows {
         SetupRows {
             head: vec![("heap size (× the planned heap)", short(s.supply_factor))],

@@ -35,7 +35,7 @@ use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT, VX_LAYERS};
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
 use crate::scene::{Base, Conveyor, Scene, GRAVITY, LAYER_FRACTION_MAX, ROLLING_MODEL};
-use crate::scenes::{BadSetting, BuiltinTemplate, Finished, Layout, Rejected, SetupRows};
+use crate::scenes::{BadSetting, BuiltinTemplate, Finished, Layout, Rejected, SetupRows, StandInModel};
 
 /// The pour layout (registered in [`crate::scenes::LAYOUTS`]).
 pub struct Pour;
@@ -142,6 +142,18 @@ impl Layout for Pour {
             ],
             tail: vec![("rest speed (× √(g·D))", short(s.rest_speed))],
         }
+    }
+
+    fn run_files(&self, _settings: &SceneSettings) -> Vec<String> {
+        vec![HEAP_DUMP.into()]
+    }
+
+    fn calibration_targets(&self) -> &'static [&'static str] {
+        &["angle_of_repose", "bulk_packing", "apparent_density"]
+    }
+
+    fn stand_in(&self) -> StandInModel {
+        StandInModel::Heap { particles: PARTICLES }
     }
 
     fn mesh(&self, scene: &Scene) -> String {
