@@ -163,8 +163,9 @@ pub(super) fn render(a: RenderArgs) -> Result<(), Error> {
         .map_err(|source| CliError::WriteTo { path: a.out.clone(), source })?;
     let s = &prepared.scene;
     eprintln!(
-        "wrote {}/{{in.liggghts,blade.stl,pile.data}}: {} on {} substrate spheres, dt = {:.3e} s, hash {}",
+        "wrote {}/{{{}}}: {} on {} substrate spheres, dt = {:.3e} s, hash {}",
         a.out.display(),
+        prepared.deck.file_names().join(","),
         ctx.layout.what_runs(s),
         s.substrate_particles,
         s.timestep,

@@ -126,6 +126,14 @@ impl Deck {
     }
 
     /// Write the deck, mesh and pile into `dir`.
+    /// The files [`Deck::write`] writes, in its order.
+    pub fn file_names(&self) -> Vec<&str> {
+        let mut names = vec![Self::INPUT, Self::MESH];
+        names.extend(self.extra_meshes.iter().map(|(name, _)| *name));
+        names.push(pile::PILE_DATA);
+        names
+    }
+
     pub fn write(&self, dir: &Path) -> std::io::Result<()> {
         std::fs::write(dir.join(Self::INPUT), format!("{}{}", self.header, self.input))?;
         std::fs::write(dir.join(Self::MESH), &self.mesh)?;
@@ -146,6 +154,29 @@ mod tests {
     fn scene(settings: &SceneSettings, pairs: &[(&str, f64)]) -> Scene {
         let values: BTreeMap<String, f64> = pairs.iter().map(|(k, v)| (k.to_string(), *v)).collect();
         crate::scenes::build(&values, settings).unwrap()
+    }
+
+    #[test]
+    fn the_names_it_gives_are_the_files_it_writes() {
+        let deck = Deck {
+            input: "run 0\n".into(),
+            mesh: String::new(),
+            extra_meshes: vec![("feed.stl", String::new()), ("pit.stl", String::new())],
+            pile: String::new(),
+            hash: String::new(),
+            header: String::new(),
+        };
+        let dir = tempfile::tempdir().unwrap();
+        deck.write(dir.path()).unwrap();
+        let mut written: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        written.sort();
+        let mut named: Vec<String> = deck.file_names().iter().map(|n| n.to_string()).collect();
+        named.sort();
+        assert_eq!(written, named);
+        assert!(named.contains(&"feed.stl".to_string()));
     }
 
     #[test]
