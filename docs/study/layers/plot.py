@@ -63,12 +63,16 @@ def gaboriault():
         # too; ours divides the first by its whole gap (drop + clearance).
         rd = [q["deposit_m"] / t for q in p]
         c = colours.get(label, None)
-        ax.plot([q["k"] for q in p], rd, marker="o", color=c, label=f"{label} (ours, per pass)")
-        ax.plot([1], [p[0]["relative_density"]], marker="o", markerfacecolor="none", color=c, linestyle="none",
-                label=f"{label} first layer over its 200 µm gap")
+        # The figure shows the three sets; variants (another seed, another plate) only in the table.
+        on_figure = c is not None
+        if on_figure:
+            ax.plot([q["k"] for q in p], rd, marker="o", color=c, label=f"{label} (ours, per pass)")
+            ax.plot([1], [p[0]["relative_density"]], marker="o", markerfacecolor="none", color=c, linestyle="none",
+                    label=f"{label} first layer over its 200 µm gap")
         s = series["steady_from"]
         m, se = series["relative_density"], series["relative_density_se"]
-        ax.fill_between([s, len(p)], [m - se] * 2, [m + se] * 2, color=c, alpha=0.25)
+        if on_figure:
+            ax.fill_between([s, len(p)], [m - se] * 2, [m + se] * 2, color=c, alpha=0.25)
         cov = sum(q["covered_fraction"] for q in p[s - 1:]) / len(p[s - 1:])
         # Every pass after the first, as the experiment's plateau is read (its layers 2–10).
         later = rd[1:]
