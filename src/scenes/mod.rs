@@ -59,6 +59,23 @@ pub struct Finished<'a> {
     pub engine_version: &'a str,
 }
 
+impl Finished<'_> {
+    /// What every layout's result says of the run itself: the sizes inserted, its steps and
+    /// simulated time, the engine's clocks, version and warnings; the rest at its default.
+    pub fn record(&self, steps: u64) -> RunResult {
+        RunResult {
+            sizes: self.scene.sizes_of_a_distribution(),
+            steps,
+            simulated_time: steps as f64 * self.scene.timestep,
+            wall_time: self.run.wall_time,
+            cpu_time: self.run.cpu_time,
+            engine_version: self.engine_version.to_string(),
+            warnings: self.run.warnings.clone(),
+            ..RunResult::default()
+        }
+    }
+}
+
 /// Why a finished run gives no result; `measured` keeps its numbers where they were measured
 /// (an unsteady or implausible flow), for the record, never for the statistics.
 #[derive(Debug)]

@@ -356,16 +356,8 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         layer_packing_se: Some(scene.layer_packing(st.mfr_se)),
         layers: None,
         heap: None,
-        sizes: scene.sizes_of_a_distribution(),
         settle_steps: 0,
-        steps,
-        simulated_time: steps as f64 * scene.timestep,
-        wall_time: run.run.wall_time,
-        cpu_time: run.run.cpu_time,
-        engine_version: run.engine_version.to_string(),
-        warnings: run.run.warnings.clone(),
-        warm_start: None,
-        mfr_se_target: None,
+        ..run.record(steps)
     };
     if let Some(why) = st.unsteady {
         return Err(Rejected::measured(FailureClass::Unsteady, format!("MFR not steady: {why}"), result));

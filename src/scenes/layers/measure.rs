@@ -284,15 +284,8 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         layer_thickness: Some(series.effective_thickness_m),
         layer_packing: Some(series.packing),
         layer_packing_se: Some(series.packing_se),
-        sizes: scene.sizes_of_a_distribution(),
-        steps,
-        simulated_time: steps as f64 * scene.timestep,
-        wall_time: run.run.wall_time,
-        cpu_time: run.run.cpu_time,
-        engine_version: run.engine_version.to_string(),
-        warnings: run.run.warnings.clone(),
         layers: Some(Box::new(series.clone())),
-        ..RunResult::default()
+        ..run.record(steps)
     };
     if !series.steady {
         let why = if series.passes.len() - (series.steady_from - 1) < MIN_STEADY_PASSES {

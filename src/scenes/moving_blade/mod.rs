@@ -375,16 +375,8 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         layer_packing_se: None,
         layers: None,
         heap: None,
-        sizes: scene.sizes_of_a_distribution(),
         settle_steps,
-        steps,
-        simulated_time: steps as f64 * scene.timestep,
-        wall_time: run.run.wall_time,
-        cpu_time: run.run.cpu_time,
-        engine_version: run.engine_version.to_string(),
-        warnings: run.run.warnings.clone(),
-        warm_start: None,
-        mfr_se_target: None,
+        ..run.record(steps)
     };
     if !result.steady {
         let reason = format!(

@@ -347,17 +347,8 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         layer: None,
         layers: None,
         heap: Some(heap),
-        sizes: scene.sizes_of_a_distribution(),
         settle_steps: steps,
-        steps,
-        simulated_time: steps as f64 * scene.timestep,
-        wall_time: run.run.wall_time,
-        cpu_time: run.run.cpu_time,
-        engine_version: run.engine_version.to_string(),
-        warnings: run.run.warnings.clone(),
-        warm_start: None,
-        mfr_se_target: None,
-        ..RunResult::default()
+        ..run.record(steps)
     })
 }
 
