@@ -40,8 +40,12 @@ use crate::scenes::{BadSetting, BuiltinTemplate, Finished, Layout, Rejected, Set
 /// `scene.supply_factor`): machines feed 1.5–3 times a layer, so that the last of the plate is
 /// covered.
 pub const DOSE_FACTOR: f64 = 2.0;
-/// Volume fraction the dose is inserted at (random placement without overlaps, before it falls).
+/// Volume fraction the dose is inserted at (random placement without overlaps, before it falls);
+/// a dose too small for LIGGGHTS's least insertion region is inserted sparser.
 pub const DOSE_FRACTION: f64 = 0.3;
+/// Fastest a sparse dose is thrown down, m/s: a few times a dense dose's landing speed, well
+/// under a speed at which a fine powder's contacts need a shorter timestep.
+pub const MAX_DOSE_SPEED: f64 = 0.5;
 /// Length of the feed platform the dose lies on, over the plate's length.
 const FEED_OVER_PLATE: f64 = 0.5;
 /// Length of the pit beyond the plate, in diameters: it holds one pass's excess dose.
@@ -139,6 +143,8 @@ pub struct Plan {
     /// The first dose's region height: it fills the clearance too.
     pub first_dose_height: f64,
     pub dose_fraction: f64,
+    /// Downward speed the dose is inserted at, m/s (0 unless it is sparse).
+    pub dose_speed: f64,
     pub dose_particles: usize,
     /// Steps of the first dose's fall before the first pass.
     pub fall_steps: u64,
@@ -363,38 +369,47 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
 
     let dose_x1 = plate_x0 - d;
     // Every dose is DOSE_FACTOR layers of the drop; the first fills the drop and the clearance.
-    // Its region's height does not depend on the depth; its volume does, and LIGGGHTS refuses to
-    // insert into a region under its floor once shrunk by the largest diameter: a fine powder
-    // in thin layers gets the depth its dose's region needs.
-    let per_depth = |drop: f64| DOSE_FACTOR * settings.supply_factor * plate_len * drop * LAYER_FRACTION_MAX;
+    // LIGGGHTS refuses to insert into a region under its floor once shrunk by the largest
+    // diameter (MIN_INSERT_VOLUME): a fine powder in thin layers gets its dose inserted sparser
+    // in a taller region at the same depth, not a wider box (which would multiply the particles
+    // of every layer).
+    let w = s.depth;
+    let dose_for =
+        |drop: f64| DOSE_FACTOR * settings.supply_factor * plate_len * drop * LAYER_FRACTION_MAX * w;
     let d_max = psd.max_diameter();
     let dose_len = dose_x1 - dose_x0;
-    let later_rise = per_depth(t) / (DOSE_FRACTION * dose_len);
-    if (dose_len - d_max) * (s.depth - d_max) * later_rise < MIN_INSERT_VOLUME {
-        s.depth = d_max + MIN_INSERT_VOLUME / ((dose_len - d_max) * later_rise);
-        s.mesh_cell = s.depth / settings.mesh_cells_across as f64;
-    }
-    let w = s.depth;
-    let dose_for = |drop: f64| per_depth(drop) * w;
     let (dose_solid, first_solid) = (dose_for(t), dose_for(t + clearance));
+    let shrunk_area = (dose_len - d_max) * (w - d_max);
+    let dose_fraction = DOSE_FRACTION.min(dose_solid / (dose_len * w) * shrunk_area / MIN_INSERT_VOLUME);
     let dose_particles = (dose_solid / psd.mean_volume()).ceil() as usize;
-    let region_height = |solid: f64| solid / (DOSE_FRACTION * dose_len * w) + d_max;
-    let (dose_height, first_dose_height) = (region_height(dose_solid), region_height(first_solid));
+    let region_height = |solid: f64, fraction: f64| solid / (fraction * dose_len * w) + d_max;
+    let (dose_height, first_dose_height) =
+        (region_height(dose_solid, dose_fraction), region_height(first_solid, dose_fraction));
     let dose_lift = 0.5 * d;
     let last_top = layers as f64 * t;
     let block_depth = last_top + clearance + 2.0 * d;
     // The pit holds a pass's excess dose below the plate.
     let pit_depth = 10.0 * d + first_solid / (LAYER_FRACTION_MAX * PIT_DIAMETERS * d * w);
-    let blade_height = (dose_lift + first_dose_height + 2.0 * d)
+    // The blade stands above the first dose as it would lie at DOSE_FRACTION (a sparse dose
+    // falls in front of it and settles lower).
+    let blade_height = (dose_lift + region_height(first_solid, DOSE_FRACTION) + 2.0 * d)
         .max(radius * (1.0 - (0.5 * ROUND_ARC_SHARE * std::f64::consts::PI).cos()) + 2.0 * d);
-    let z_top = last_top + clearance + blade_height + 2.0 * d;
+    let z_top = last_top + clearance + blade_height.max(dose_lift + first_dose_height) + 2.0 * d;
 
     let steps = |time: f64| ((time / dt).ceil() as u64).max(1);
     // The dose falls from the top of its region, and as long again to come down in a heap. The
     // first dose falls before the first pass; every later one is inserted as soon as the blade
     // has cleared the feed platform, and falls while the blade crosses the plate (what is left
     // of its fall is waited for before the next pass).
-    let fall = |height: f64| steps(2.0 * (2.0 * (dose_lift + height) / GRAVITY).sqrt());
+    // A sparse dose is thrown down so that it lands in about the time the dense one falls (at
+    // most at MAX_DOSE_SPEED): its tall region would otherwise take longer to fall than a pass.
+    let dense_height = dose_lift + region_height(dose_solid, DOSE_FRACTION);
+    let dense_fall = (2.0 * dense_height / GRAVITY).sqrt();
+    let dose_speed = ((dose_lift + dose_height - dense_height).max(0.0) / dense_fall).min(MAX_DOSE_SPEED);
+    let fall = |height: f64| {
+        let h = dose_lift + height;
+        steps(2.0 * ((dose_speed * dose_speed + 2.0 * GRAVITY * h).sqrt() - dose_speed) / GRAVITY)
+    };
     let (fall_steps, later_fall_steps) = (fall(first_dose_height), fall(dose_height));
     let ramp_time = 2.0 * RAMP_DIAMETERS * d / v;
     let ramp_steps = steps(ramp_time);
@@ -434,7 +449,8 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         dose_lift,
         dose_height,
         first_dose_height,
-        dose_fraction: DOSE_FRACTION,
+        dose_fraction,
+        dose_speed,
         dose_particles,
         fall_steps,
         clear_steps,

@@ -55,7 +55,7 @@ fn shrunk_dose_region(sc: &Scene) -> f64 {
 }
 
 #[test]
-fn a_fine_powder_in_thin_layers_gets_the_depth_its_dose_region_needs_and_no_more() {
+fn a_fine_powder_in_thin_layers_gets_a_sparser_dose_at_the_same_depth_not_a_wider_box() {
     let at = |d_mm: f64, t_mm: f64| {
         let v = values(&[
             ("diameter", d_mm),
@@ -65,17 +65,32 @@ fn a_fine_powder_in_thin_layers_gets_the_depth_its_dose_region_needs_and_no_more
         ]);
         crate::scenes::build(&v, &settings()).unwrap()
     };
-    // 65 µm in 100 µm layers: the dose region is above LIGGGHTS's floor at the default depth.
+    // 65 µm in 100 µm layers: the dose region is above LIGGGHTS's floor at the default fraction,
+    // and falls from rest.
     let coarse = at(0.065, 0.1);
-    let default_depth = coarse.depth;
     assert!(shrunk_dose_region(&coarse) > MIN_INSERT_VOLUME);
-    // 24 µm in 30 µm layers: at the default depth in diameters it would be under the floor
-    // (LIGGGHTS stops: "Unable to calculate region volume"); the depth grows to reach it exactly.
+    let plan = plan_of(&coarse);
+    assert_eq!((plan.dose_fraction, plan.dose_speed), (DOSE_FRACTION, 0.0));
+    // 24 µm in 30 µm layers: at that fraction the region would be under the floor (LIGGGHTS
+    // stops: "Unable to calculate region volume"). The depth stays the default in diameters; the
+    // dose is inserted sparser, in a region that reaches the floor exactly, and thrown down.
     let fine = at(0.024, 0.03);
     let r = shrunk_dose_region(&fine);
     assert!(r >= MIN_INSERT_VOLUME * (1.0 - 1e-9), "{r:e}");
     assert!(r <= MIN_INSERT_VOLUME * 1.01, "no more than needed: {r:e}");
-    assert!(fine.depth / fine.diameter > default_depth / coarse.diameter, "widened");
+    assert!((fine.depth / fine.diameter - coarse.depth / coarse.diameter).abs() < 1.0, "not widened");
+    let plan = plan_of(&fine);
+    assert!(plan.dose_fraction < DOSE_FRACTION && plan.dose_speed > 0.0);
+    // The same number of particles as the fraction asks of the region's whole volume.
+    let region = (plan.dose_x1 - plan.dose_x0) * fine.depth * plan.dose_height;
+    let inserted = plan.dose_fraction * region / (std::f64::consts::PI / 6.0 * fine.diameter.powi(3));
+    assert!(
+        (inserted / plan.dose_particles as f64 - 1.0).abs() < 0.15,
+        "{inserted} vs {}",
+        plan.dose_particles
+    );
+    // Thrown down, it lands in about the time the dense dose would fall: no pass waits on it.
+    assert!(plan.wait_steps < plan.pass_steps, "wait {} pass {}", plan.wait_steps, plan.pass_steps);
 }
 
 #[test]
