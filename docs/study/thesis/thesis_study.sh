@@ -51,15 +51,17 @@ record() {
   done
 }
 
-# Pack every run of sweep directory $1 (each result.json or failure.json) into $2/runs.tar.gz,
-# in place of the loose copies.
+# Pack every run of sweep directory $1 (each result.json or failure.json) into $2/runs.tar.xz.NN,
+# parts of at most 900 kB (no committed record file over 1 MB), in place of the loose copies.
 pack_runs() {
   local from=$1 to
   [ -f "$from/manifest.json" ] || return 0
   to=$(cd "$2" && pwd)
+  rm -f "$to"/runs.tar.xz.part.*
   (cd "$from" && find runs \( -name result.json -o -name failure.json \) -print0 | sort -z |
-    tar czf "$to/runs.tar.gz.tmp" --null -T -)
-  mv "$to/runs.tar.gz.tmp" "$to/runs.tar.gz" && rm -rf "$to/runs"
+    tar cf - --null -T - | xz -9e -T1 | split -b 900k -d - "$to/runs.tar.xz.part.")
+  for f in "$to"/runs.tar.xz.part.*; do mv "$f" "${f/.part./.}"; done
+  rm -rf "$to/runs" "$to/runs.tar.gz"
 }
 
 # Unpack the record $1 into a new sweep directory $2.
@@ -68,7 +70,9 @@ restore() {
   mkdir -p "$to"
   for f in "${plain[@]}"; do [ -f "$from/$f" ] && cp "$from/$f" "$to/$f"; done
   for f in "${packed[@]}"; do [ -f "$from/$f.gz" ] && gunzip -c "$from/$f.gz" > "$to/$f"; done
-  [ -f "$from/runs.tar.gz" ] && tar xzf "$from/runs.tar.gz" -C "$to"
+  if compgen -G "$from/runs.tar.xz.[0-9]*" > /dev/null; then
+    cat "$from"/runs.tar.xz.[0-9]* | xz -d | tar xf - -C "$to"
+  fi
   # Runs copied loose by a session that did not reach its end.
   [ -d "$from/runs" ] && cp -r "$from/runs" "$to/"
   return 0

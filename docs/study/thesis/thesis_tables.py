@@ -18,7 +18,7 @@ rule) in the copy's sweep.toml; the figures are copied only with the sweep's own
 Without --weights it copies the report's figures to docs/study/thesis/<name>-figures/; the study's
 page keeps the ones it shows.
 """
-import csv, gzip, json, os, re, shutil, subprocess, sys, tarfile, tempfile
+import csv, glob, gzip, io, json, os, re, shutil, subprocess, sys, tarfile, tempfile
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 BIN = os.environ.get("SWEEP_BIN", os.path.join(ROOT, "target/release/sweep"))
@@ -41,8 +41,11 @@ def copy_sweep(src, d):
         if f.endswith(".gz") and not f.endswith(".tar.gz"):
             with gzip.open(os.path.join(d, f)) as z, open(os.path.join(d, f[:-3]), "wb") as out:
                 shutil.copyfileobj(z, out)
-    if os.path.exists(os.path.join(d, "runs.tar.gz")):
-        with tarfile.open(os.path.join(d, "runs.tar.gz")) as t:
+    parts = sorted(glob.glob(os.path.join(d, "runs.tar.xz.[0-9]*")))
+    if parts:
+        # One xz stream split into parts of at most 900 kB (thesis_study.sh's pack_runs).
+        data = b"".join(open(p, "rb").read() for p in parts)
+        with tarfile.open(fileobj=io.BytesIO(data), mode="r:xz") as t:
             t.extractall(d)
 
 

@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# The layers study's controls for the machine answer (docs/study/layers.md): Ti-6Al-4V 15–45 µm
+# on a fused bed at 50 µm layers and 0.1 m/s (sweeps/ti64-layers.toml; ti64.sh records it as
+# record/ti64-50um-0.1.json), once without cohesion (surface energy 0: is the scene or the powder
+# what keeps the layer thin?) and once with twice the dose (supply_factor 2: is the dose what
+# runs out?). Resumable: a recorded case is skipped. Run from the repository's root with
+# target/release/sweep built (or SWEEP=path).
+#   bash docs/study/layers/ti64-controls.sh [label]
+set -euo pipefail
+cd "$(dirname "$0")/../../.."
+out=docs/study/layers/record
+mkdir -p "$out"
+# label, extra --set values, an extra [scene] line (or "-")
+cases="ti64-50um-0.1-gamma0 surface_energy=0 -
+ti64-50um-0.1-supply2 - supply_factor = 2.0"
+want=${1:-}
+while read -r label set scene; do
+  [ -n "$want" ] && [ "$want" != "$label" ] && continue
+  [ -s "$out/$label.json" ] && { echo "$label: recorded"; continue; }
+  toml=$(mktemp --suffix=.toml)
+  if [ "$scene" = "-" ]; then
+    cp sweeps/ti64-layers.toml "$toml"
+  else
+    sed "s/^layers = 24$/layers = 24\n$scene/" sweeps/ti64-layers.toml > "$toml"
+    grep -q "^$scene$" "$toml"
+  fi
+  values="layer_thickness=0.05,blade_speed=0.1"
+  [ "$set" != "-" ] && values="$values,$set"
+  start=$(date +%s)
+  "${SWEEP:-target/release/sweep}" run "$toml" --json --set "$values" \
+    > "$out/$label.json.part" 2> "$out/$label.err" || true
+  mv "$out/$label.json.part" "$out/$label.json"
+  rm -f "$toml"
+  echo "$label: $(( $(date +%s) - start )) s wall" >&2
+done <<< "$cases"
