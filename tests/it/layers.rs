@@ -103,3 +103,68 @@ fn a_bad_layer_count_or_thickness_is_refused_in_one_line() {
     assert_eq!(out.status.code(), Some(2));
     assert!(support::stderr(&out).contains("layer_thickness"), "{}", support::stderr(&out));
 }
+
+#[test]
+fn a_fine_powder_in_thin_layers_is_dosed_sparser_and_spread_at_the_depth_it_asked_for() {
+    support::require_liggghts!(
+        "a_fine_powder_in_thin_layers_is_dosed_sparser_and_spread_at_the_depth_it_asked_for"
+    );
+    let (_tmp, dir) = support::cwd();
+    // 40 µm in 40 µm layers: at a volume fraction of 0.3 the dose's region would be under
+    // LIGGGHTS's least insertion region ("Unable to calculate region volume").
+    let sweep = support::write_file(
+        &dir.join("fine.toml"),
+        r#"name = "fine"
+[parameters]
+blade_speed     = { lo = 0.08, hi = 0.12, unit = "m/s" }
+diameter        = 0.04
+layer_thickness = { value = 0.04, unit = "mm" }
+density         = 4430
+youngs_modulus  = { value = 5, unit = "MPa" }
+friction        = 0.3
+restitution     = 0.4
+[scene]
+layout = "layers"
+bed = "fused"
+layers = 2
+plate_diameters = 10
+"#,
+    );
+    let deck = dir.join("deck");
+    support::ok(
+        &dir,
+        &["render", support::p(&sweep), "--set", "blade_speed=0.1", "--out", support::p(&deck)],
+    );
+    let input = std::fs::read_to_string(deck.join("in.liggghts")).unwrap();
+    let word_after = |line: &str, word: &str| -> f64 {
+        let mut it = line.split_whitespace().skip_while(|w| *w != word);
+        it.next();
+        it.next().unwrap().parse().unwrap()
+    };
+    let inserts: Vec<&str> = input.lines().filter(|l| l.contains("insert/pack")).collect();
+    assert_eq!(inserts.len(), 2, "one dose a pass");
+    for line in &inserts {
+        let fraction = word_after(line, "volumefraction_region");
+        assert!(fraction > 0.0 && fraction < 0.3, "{line}");
+        // Thrown down: the third velocity component is negative.
+        let vz: f64 =
+            line.split("vel constant ").nth(1).unwrap().split_whitespace().nth(2).unwrap().parse().unwrap();
+        assert!(vz < 0.0 && vz >= -0.5, "{line}");
+    }
+    // The periodic depth stays a few diameters: the box is not widened for the dose.
+    let depth =
+        input.lines().find(|l| l.starts_with("region domain")).unwrap().split_whitespace().nth(6).unwrap();
+    let depth: f64 = depth.parse().unwrap();
+    assert!(depth < 10.0 * 40e-6, "depth {depth}");
+
+    let (code, r, stderr) = run_point(&sweep, "blade_speed=0.1");
+    // Two passes are too few for a steady layer; both are measured either way.
+    let layers: &Value = if code == 0 { &r["layers"] } else { &r["measured"]["layers"] };
+    assert!(layers.is_object(), "exit {code}: {stderr}\n{r}");
+    let passes = layers["passes"].as_array().unwrap();
+    assert_eq!(passes.len(), 2, "{r}");
+    for p in passes {
+        assert!(p["particles"].as_u64().unwrap() > 0, "the pass deposited nothing: {p}");
+        assert!(p["deposit_m"].as_f64().unwrap() > 0.0, "{p}");
+    }
+}

@@ -6,8 +6,9 @@ ti64.sh write. Needs matplotlib.
 
 - gaboriault.png: the layer relative density per layer, ours per property set (each pass, the
   steady layer's mean ± SE as a band) beside the experiment's three repeats (mean, min–max);
-- ti64-fused.png: the fused bed over passes at two layer thicknesses and two blade speeds — the
-  effective layer thickness over the drop, converging to 1 / packing, and the packing;
+- ti64-fused.png: the fused bed over passes (the machine answer, its controls, ti64.sh's lattice
+  of two layer thicknesses and two blade speeds) — each pass's deposit over the drop (1 once the
+  bed is steady) and the powder under the blade over the drop (→ 1 / packing);
 - a Markdown table of each on stdout.
 """
 import glob, json, os, sys
@@ -93,39 +94,59 @@ def gaboriault():
     fig.savefig(os.path.join(HERE, "gaboriault.png"), dpi=110)
 
 
-def ti64():
-    paths = sorted(glob.glob(os.path.join(HERE, "ti64", "runs", "*", "result.json")))
-    if not paths:
-        return
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4.2))
-    print()
-    print("| layer thickness | blade speed | steady from | packing ± SE | effective thickness ± SE | over the drop | 1 / packing | covered |")
-    print("|---|---|---|---|---|---|---|---|")
-    rows = []
-    for path in paths:
+def ti64_runs():
+    """(label, series, failed, cpu) of the machine answer's records and of ti64.sh's lattice."""
+    out = []
+    for path in sorted(glob.glob(os.path.join(HERE, "record", "ti64-*.json"))):
+        series, failed = load(path)
         j = json.load(open(path))
-        series = j.get("layers")
+        cpu = j.get("cpu_time") or (j.get("measured") or {}).get("cpu_time") or float("nan")
+        out.append((os.path.basename(path)[5:-5], series, failed, cpu))
+    for path in sorted(glob.glob(os.path.join(HERE, "ti64", "runs", "*", "*.json"))):
+        if os.path.basename(path) not in ("result.json", "failure.json"):
+            continue
+        series, failed = load(path)
         if not series:
             continue
-        v = j["params"]["blade_speed"] if "params" in j else float("nan")
-        rows.append((series["layer_thickness_m"], v, series))
-    for t, v, s in sorted(rows, key=lambda r: (r[0], r[1])):
-        p = s["passes"]
-        lab = f"{t * 1e6:.0f} µm, {v:g} m/s"
-        a1.plot([q["k"] for q in p], [q["effective_thickness_m"] / t for q in p], marker="o", label=lab)
-        a2.plot([q["k"] for q in p], [q["packing"] for q in p], marker="o", label=lab)
-        cov = sum(q["covered_fraction"] for q in p[s["steady_from"] - 1:]) / len(p[s["steady_from"] - 1:])
-        print(f"| {t * 1e6:.0f} µm | {v:g} m/s | {s['steady_from']} | {s['packing']:.3f} ± {s['packing_se']:.3f} | "
-              f"{s['effective_thickness_m'] * 1e6:.1f} ± {s['effective_thickness_se_m'] * 1e6:.1f} µm | "
-              f"{s['effective_thickness_m'] / t:.2f} | {1 / s['packing']:.2f} | {cov:.2f} |")
-    a1.set_xlabel("pass")
-    a1.set_ylabel("effective layer thickness / layer thickness")
-    a2.set_xlabel("pass")
-    a2.set_ylabel("layer packing")
+        j = json.load(open(path))
+        m = j if "layers" in j else (j.get("measured") or {})
+        v = (m.get("parameters") or {}).get("blade_speed", float("nan"))
+        label = f"{series['layer_thickness_m'] * 1e6:.0f}um-{v:g}"
+        out.append((label, series, failed, m.get("cpu_time") or float("nan")))
+    return out
+
+
+def ti64():
+    runs = ti64_runs()
+    if not runs:
+        return
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.4))
+    print()
+    print("| case | steady | deposit, last 6 passes ± SE (µm) | over the drop | powder under the tip at the last pass (µm) | packing, last 6 | covered, last 6 | CPU s |")
+    print("|---|---|---|---|---|---|---|---|")
+    for label, series, failed, cpu in runs:
+        p = series["passes"]
+        t = series["layer_thickness_m"]
+        ks = [q["k"] for q in p]
+        a1.plot(ks, [q["deposit_m"] / t for q in p], marker=".", label=label)
+        a2.plot(ks, [q["effective_thickness_m"] / t for q in p], marker=".", label=label)
+        last = p[-6:]
+        dep = [q["deposit_m"] * 1e6 for q in last]
+        m = sum(dep) / len(dep)
+        se = (sum((x - m) ** 2 for x in dep) / (len(dep) - 1) / len(dep)) ** 0.5
+        pk = sum(q["packing"] for q in last) / len(last)
+        cov = sum(q["covered_fraction"] for q in last) / len(last)
+        steady = f"from pass {series['steady_from']}" if not failed else "no"
+        print(f"| {label} | {steady} | {m:.1f} ± {se:.1f} | {m * 1e-6 / t:.2f} | "
+              f"{p[-1]['effective_thickness_m'] * 1e6:.0f} | {pk:.3f} | {cov:.2f} | {cpu:.0f} |")
+    a1.axhline(1.0, color="black", linewidth=0.8)
+    a1.set_ylabel("deposit / layer thickness (1: the bed keeps pace)")
+    a2.set_ylabel("powder under the blade / layer thickness")
     for a in (a1, a2):
+        a.set_xlabel("pass")
         a.grid(alpha=0.3)
-        a.legend(fontsize=8)
-    fig.suptitle("Ti-6Al-4V 15–45 µm on a fused bed: the layer converges to the drop over its packing")
+        a.legend(fontsize=7)
+    fig.suptitle("Ti-6Al-4V 15–45 µm on a fused bed: a steady bed deposits the layer thickness each pass")
     fig.tight_layout()
     fig.savefig(os.path.join(HERE, "ti64-fused.png"), dpi=110)
 
