@@ -94,6 +94,16 @@ def gaboriault():
     fig.savefig(os.path.join(HERE, "gaboriault.png"), dpi=110)
 
 
+VARIANTS = {"gamma0": "no cohesion", "supply2": "2 × the dose", "depth12": "depth 12 D",
+            "dt0.165": "timestep halved", "plate20": "plate 20 D", "plate80": "plate 80 D"}
+
+
+def pretty(label):
+    """'50um-0.1-gamma0' → '50 µm, 0.1 m/s, no cohesion'."""
+    t, v, *rest = label.split("-", 2)
+    return ", ".join([t.replace("um", " µm"), v + " m/s"] + [VARIANTS.get(r, r) for r in rest])
+
+
 def ti64_runs():
     """(label, series, failed, cpu) of the machine answer's records and of ti64.sh's lattice."""
     out = []
@@ -101,7 +111,7 @@ def ti64_runs():
         series, failed = load(path)
         j = json.load(open(path))
         cpu = j.get("cpu_time") or (j.get("measured") or {}).get("cpu_time") or float("nan")
-        out.append((os.path.basename(path)[5:-5], series, failed, cpu))
+        out.append((pretty(os.path.basename(path)[5:-5]), series, failed, cpu))
     for path in sorted(glob.glob(os.path.join(HERE, "ti64", "runs", "*", "*.json"))):
         if os.path.basename(path) not in ("result.json", "failure.json"):
             continue
@@ -111,7 +121,7 @@ def ti64_runs():
         j = json.load(open(path))
         m = j if "layers" in j else (j.get("measured") or {})
         v = (m.get("parameters") or {}).get("blade_speed", float("nan"))
-        label = f"{series['layer_thickness_m'] * 1e6:.0f}um-{v:g}"
+        label = pretty(f"{series['layer_thickness_m'] * 1e6:.0f}um-{v:g}")
         out.append((label, series, failed, m.get("cpu_time") or float("nan")))
     return out
 
