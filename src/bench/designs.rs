@@ -17,6 +17,8 @@
 //! emulator fitted to its runs ranks best (the report's "best settings"), scored by its true MFR.
 
 use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
 
 use crate::analysis::adapt as criterion;
 use crate::analysis::convergence::{judge, Criteria, SpaceStats};
@@ -64,6 +66,25 @@ impl StandInSurface {
             blade_speed: p("blade_speed"),
         }
     }
+}
+
+/// Emulator fits of this process and their wall time in ns (what `sweep bench designs` reports
+/// on stderr: the emulator's linear algebra is most of a fit, BENCHMARKS.md).
+static FITS: AtomicU64 = AtomicU64::new(0);
+static FIT_NANOS: AtomicU64 = AtomicU64::new(0);
+
+/// [`Emulator::fit_censored`], timed into [`fit_time`].
+fn fit(x: &[Vec<f64>], y: &[f64], se: &[Option<f64>]) -> Option<Emulator> {
+    let started = Instant::now();
+    let em = Emulator::fit_censored(x, y, se);
+    FIT_NANOS.fetch_add(started.elapsed().as_nanos() as u64, Ordering::Relaxed);
+    FITS.fetch_add(1, Ordering::Relaxed);
+    em
+}
+
+/// The emulator fits this process has made so far, and their total wall time.
+pub fn fit_time() -> (u64, Duration) {
+    (FITS.load(Ordering::Relaxed), Duration::from_nanos(FIT_NANOS.load(Ordering::Relaxed)))
 }
 
 fn key(u: &[f64]) -> String {
@@ -258,7 +279,7 @@ pub fn lds(
     let (y, se) = run_all(s, &x);
     let mut rows = Vec::new();
     for &n in checkpoints {
-        let em = Emulator::fit_censored(&x[..n], &y[..n], &se[..n]);
+        let em = fit(&x[..n], &y[..n], &se[..n]);
         let rec = recommended(s, &x[..n], em.as_ref(), &y[..n]);
         rows.push(Row {
             design: "lds".into(),
@@ -293,7 +314,7 @@ pub fn lattice(s: &dyn Surface, names: &[String], levels: &[usize]) -> Vec<Row> 
             let x = crate::design::lattice::lattice(names.len(), l);
             let (y, se) = run_all(s, &x);
             let w = crate::analysis::weights::trapezoid(&x);
-            let em = Emulator::fit_censored(&x, &y, &se);
+            let em = fit(&x, &y, &se);
             Row {
                 design: "lattice".into(),
                 seed: 0,
@@ -317,7 +338,7 @@ pub fn adapt(s: &dyn Surface, names: &[String], seed: u64, p: &Plan) -> Vec<Row>
     let mut rows = Vec::new();
     let mut k = 0;
     loop {
-        let em = Emulator::fit_censored(&x, &y, &se);
+        let em = fit(&x, &y, &se);
         let (st, r) = emulated(names, x.len(), em.as_ref());
         rows.push(Row {
             design: "adapt".into(),

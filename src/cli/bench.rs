@@ -133,9 +133,16 @@ pub(super) fn bench_designs(a: DesignsArgs) -> Result<(), Error> {
         emulate_to: a.emulate_to,
         levels: a.levels,
     };
+    let started = std::time::Instant::now();
     let truth = designs::truth(surface.as_ref(), &names);
     let rows = designs::compare(surface.as_ref(), &names, &plan);
     print!("{}", designs::tables(&truth, &rows));
+    let (fits, fit) = designs::fit_time();
+    eprintln!(
+        "emulator fits: {fits} in {:.2} s of {:.2} s wall",
+        fit.as_secs_f64(),
+        started.elapsed().as_secs_f64()
+    );
     Ok(())
 }
 
