@@ -9,10 +9,11 @@
 //! their logarithms, on at most [`FIT_POINTS`] of the points, spread over the design; the
 //! prediction then conditions on every point).
 //!
-//! Why our own ~400 lines rather than a crate: `egobox-gp` (the best-kept Rust kriging crate)
+//! Why our own model rather than a kriging crate: `egobox-gp` (the best-kept Rust kriging crate)
 //! takes one scalar nugget, not a noise variance per point, and brings ndarray and linfa for a
 //! model this size; the closed-form leave-one-out residuals (Rasmussen & Williams 2006, Eq.
-//! 5.12) need the inverse covariance, which is a few lines here.
+//! 5.12) need the inverse covariance, which is a few lines here. The dense linear algebra
+//! (Cholesky factor, triangular solves, inverse) is `nalgebra`'s.
 //!
 //! MFR is fitted by [`Emulator::fit_censored`]: its zeros (jammed runs) are a floor of a latent
 //! flow rate that goes on below zero (the censored regression of Tobin 1958, Econometrica 26,
@@ -23,6 +24,7 @@
 //! from many cheap draws, with their uncertainty), [`Emulator::zero_fraction`] (where MFR is
 //! zero) and [`Emulator::rank`] (the best settings among candidates, with SE).
 
+use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -47,8 +49,8 @@ pub struct Emulator {
     pub sigma2: f64,
     pub nugget: f64,
     mu: f64,
-    /// Cholesky factor of K (row-major, lower) and K⁻¹(z − μ).
-    chol: Vec<f64>,
+    /// Cholesky factor of K and K⁻¹(z − μ).
+    chol: Cholesky<f64, Dyn>,
     alpha: Vec<f64>,
     /// The standardised values conditioned on (a floored run's imputed latent value).
     z: Vec<f64>,
@@ -94,63 +96,29 @@ fn dist(a: &[f64], b: &[f64], theta: &[f64]) -> f64 {
     a.iter().zip(b).zip(theta).map(|((p, q), t)| ((p - q) / t).powi(2)).sum::<f64>().sqrt()
 }
 
-/// In-place Cholesky of the n×n row-major `a` (lower triangle); `false` if not positive definite.
-fn cholesky(a: &mut [f64], n: usize) -> bool {
-    for j in 0..n {
-        let mut d = a[j * n + j];
-        for k in 0..j {
-            d -= a[j * n + k] * a[j * n + k];
-        }
-        if d <= 0.0 || !d.is_finite() {
-            return false;
-        }
-        let d = d.sqrt();
-        a[j * n + j] = d;
-        for i in j + 1..n {
-            let mut s = a[i * n + j];
-            for k in 0..j {
-                s -= a[i * n + k] * a[j * n + k];
-            }
-            a[i * n + j] = s / d;
-        }
-        for i in 0..j {
-            a[i * n + j] = 0.0;
-        }
-    }
-    true
+/// The Cholesky factor of `k` (its lower triangle read); `None` when `k` is not positive
+/// definite or its factor not finite.
+fn factor(k: DMatrix<f64>) -> Option<Cholesky<f64, Dyn>> {
+    Cholesky::new(k).filter(|c| c.l_dirty().diagonal().iter().all(|d| d.is_finite()))
 }
 
-/// Solve L·v = b (forward substitution).
-fn forward(l: &[f64], n: usize, b: &[f64]) -> Vec<f64> {
-    let mut v = b.to_vec();
-    for i in 0..n {
-        let s: f64 = (0..i).map(|k| l[i * n + k] * v[k]).sum();
-        v[i] = (v[i] - s) / l[i * n + i];
-    }
-    v
-}
-
-/// Solve Lᵀ·v = b (back substitution).
-fn backward(l: &[f64], n: usize, b: &[f64]) -> Vec<f64> {
-    let mut v = b.to_vec();
-    for i in (0..n).rev() {
-        let s: f64 = (i + 1..n).map(|k| l[k * n + i] * v[k]).sum();
-        v[i] = (v[i] - s) / l[i * n + i];
-    }
-    v
+/// Solve L·v = b (forward substitution) for the lower factor L of `chol`, in place.
+fn forward(chol: &Cholesky<f64, Dyn>, mut b: DVector<f64>) -> DVector<f64> {
+    chol.l_dirty().solve_lower_triangular_unchecked_mut(&mut b);
+    b
 }
 
 /// The covariance matrix of `x` with noise variances `noise` on the diagonal.
-fn covariance(x: &[Vec<f64>], theta: &[f64], sigma2: f64, noise: &[f64]) -> Vec<f64> {
+fn covariance(x: &[Vec<f64>], theta: &[f64], sigma2: f64, noise: &[f64]) -> DMatrix<f64> {
     let n = x.len();
-    let mut k = vec![0.0; n * n];
-    for i in 0..n {
-        for j in 0..i {
+    let mut k = DMatrix::zeros(n, n);
+    for j in 0..n {
+        for i in j + 1..n {
             let v = sigma2 * matern52(dist(&x[i], &x[j], theta));
-            k[i * n + j] = v;
-            k[j * n + i] = v;
+            k[(i, j)] = v;
+            k[(j, i)] = v;
         }
-        k[i * n + i] = sigma2 + noise[i];
+        k[(j, j)] = sigma2 + noise[j];
     }
     k
 }
@@ -162,19 +130,14 @@ fn condition(
     theta: &[f64],
     sigma2: f64,
     noise: &[f64],
-) -> Option<(f64, Vec<f64>, Vec<f64>)> {
+) -> Option<(f64, Vec<f64>, Cholesky<f64, Dyn>)> {
     let n = x.len();
-    let mut l = covariance(x, theta, sigma2, noise);
-    if !cholesky(&mut l, n) {
-        return None;
-    }
-    let ones = vec![1.0; n];
-    let ki1 = backward(&l, n, &forward(&l, n, &ones));
-    let kiz = backward(&l, n, &forward(&l, n, z));
-    let mu = kiz.iter().sum::<f64>() / ki1.iter().sum::<f64>();
-    let r: Vec<f64> = z.iter().map(|v| v - mu).collect();
-    let alpha = backward(&l, n, &forward(&l, n, &r));
-    Some((mu, alpha, l))
+    let chol = factor(covariance(x, theta, sigma2, noise))?;
+    let ki1 = chol.solve(&DVector::from_element(n, 1.0));
+    let kiz = chol.solve(&DVector::from_column_slice(z));
+    let mu = kiz.sum() / ki1.sum();
+    let alpha = chol.solve(&DVector::from_iterator(n, z.iter().map(|v| v - mu)));
+    Some((mu, alpha.as_slice().to_vec(), chol))
 }
 
 /// Negative log marginal likelihood (up to a constant) at log-parameters `p` = (ln θ…, ln σ², ln τ²).
@@ -186,8 +149,7 @@ fn nll(x: &[Vec<f64>], z: &[f64], se2: &[f64], p: &[f64]) -> f64 {
     let Some((mu, alpha, l)) = condition(x, z, &theta, sigma2, &noise) else {
         return f64::INFINITY;
     };
-    let n = x.len();
-    let logdet: f64 = (0..n).map(|i| l[i * n + i].ln()).sum::<f64>() * 2.0;
+    let logdet = l.ln_determinant();
     let quad: f64 = z.iter().zip(&alpha).map(|(v, a)| (v - mu) * a).sum();
     0.5 * (quad + logdet)
 }
@@ -355,20 +317,13 @@ impl Emulator {
     /// their expected value given that bound and every other value: Gauss–Seidel sweeps of the
     /// truncated-normal mean of each one's leave-one-out prediction, with the covariance held.
     fn impute_below(&self, z: &mut [f64], floor: &[usize], c: f64) {
-        let n = self.n();
-        // K⁻¹ column by column; it is symmetric, so column i is row i.
-        let kinv: Vec<Vec<f64>> = (0..n)
-            .map(|j| {
-                let mut e = vec![0.0; n];
-                e[j] = 1.0;
-                backward(&self.chol, n, &forward(&self.chol, n, &e))
-            })
-            .collect();
+        // K⁻¹; it is symmetric, so column i is row i.
+        let kinv = self.chol.inverse();
         let mut alpha = self.alpha.clone();
         for _sweep in 0..100 {
             let mut largest = 0.0f64;
             for &i in floor {
-                let kii = kinv[i][i];
+                let kii = kinv[(i, i)];
                 // The leave-one-out prediction of run i's value (its own noise included).
                 let m = z[i] - alpha[i] / kii;
                 let s = (1.0 / kii).sqrt();
@@ -378,7 +333,7 @@ impl Emulator {
                 let new = (m - s * ratio).min(c);
                 let step = new - z[i];
                 if step != 0.0 {
-                    for (al, k) in alpha.iter_mut().zip(&kinv[i]) {
+                    for (al, k) in alpha.iter_mut().zip(kinv.column(i).iter()) {
                         *al += step * k;
                     }
                     z[i] = new;
@@ -404,8 +359,8 @@ impl Emulator {
     pub fn predict(&self, u: &[f64]) -> (f64, f64) {
         let k = self.kstar(u);
         let mean = self.mu + k.iter().zip(&self.alpha).map(|(a, b)| a * b).sum::<f64>();
-        let v = forward(&self.chol, self.n(), &k);
-        let var = (self.sigma2 - v.iter().map(|t| t * t).sum::<f64>()).max(0.0);
+        let v = forward(&self.chol, DVector::from_vec(k));
+        let var = (self.sigma2 - v.norm_squared()).max(0.0);
         (self.y_mean + self.y_scale * mean, self.y_scale * var.sqrt())
     }
 
@@ -428,7 +383,7 @@ impl Emulator {
     /// L⁻¹k(X, u) in MFR units: the posterior covariance of the latent MFR at `a` and `b` is
     /// `prior_cov(a, b) − whitened(a)·whitened(b)` (what a sequential design updates).
     pub fn whitened(&self, u: &[f64]) -> Vec<f64> {
-        forward(&self.chol, self.n(), &self.kstar(u)).into_iter().map(|v| v * self.y_scale).collect()
+        forward(&self.chol, DVector::from_vec(self.kstar(u))).iter().map(|v| v * self.y_scale).collect()
     }
 
     /// The fitted nugget in MFR units²: the noise no point reports.
@@ -440,13 +395,9 @@ impl Emulator {
     pub fn loo(&self, y: &[f64], se: &[Option<f64>]) -> CrossValidation {
         let n = self.n();
         // K⁻¹ = L⁻ᵀL⁻¹: its diagonal is the column sums of squares of L⁻¹.
-        let mut diag = vec![0.0; n];
-        for j in 0..n {
-            let mut e = vec![0.0; n];
-            e[j] = 1.0;
-            let c = forward(&self.chol, n, &e);
-            diag[j] = c[j..].iter().map(|v| v * v).sum();
-        }
+        let mut linv = DMatrix::identity(n, n);
+        self.chol.l_dirty().solve_lower_triangular_unchecked_mut(&mut linv);
+        let diag: Vec<f64> = linv.column_iter().map(|c| c.norm_squared()).collect();
         let ybar = y.iter().sum::<f64>() / n as f64;
         let (mut ss, mut st, mut inside) = (0.0, 0.0, 0usize);
         for i in 0..n {
@@ -491,37 +442,38 @@ impl Emulator {
         let sub = &pts[..m];
         let n = self.n();
         // Posterior covariance on the sub-design: K** − VᵀV, V = L⁻¹K*.
-        let v: Vec<Vec<f64>> = sub.iter().map(|u| forward(&self.chol, n, &self.kstar(u))).collect();
-        let mut cov = vec![0.0; m * m];
+        let mut v =
+            DMatrix::from_fn(n, m, |i, j| self.sigma2 * matern52(dist(&self.x[i], &sub[j], &self.theta)));
+        self.chol.l_dirty().solve_lower_triangular_unchecked_mut(&mut v);
+        let vtv = v.tr_mul(&v);
+        let mut cov = DMatrix::from_fn(m, m, |i, j| {
+            self.sigma2 * matern52(dist(&sub[i], &sub[j], &self.theta)) - vtv[(i, j)]
+        });
         for i in 0..m {
-            for j in 0..=i {
-                let kij = self.sigma2 * matern52(dist(&sub[i], &sub[j], &self.theta));
-                let c = kij - v[i].iter().zip(&v[j]).map(|(a, b)| a * b).sum::<f64>();
-                cov[i * m + j] = c;
-                cov[j * m + i] = c;
-            }
-            cov[i * m + i] += 1e-10 * self.sigma2;
+            cov[(i, i)] += 1e-10 * self.sigma2;
         }
         let mut jitter = 1e-8 * self.sigma2;
-        while !cholesky(&mut cov.clone(), m) && jitter < self.sigma2 {
+        let mut chol = factor(cov.clone());
+        while chol.is_none() && jitter < self.sigma2 {
             for i in 0..m {
-                cov[i * m + i] += jitter;
+                cov[(i, i)] += jitter;
             }
             jitter *= 10.0;
+            chol = factor(cov.clone());
         }
-        let ok = cholesky(&mut cov, m);
         let mean_sub: Vec<f64> = sub.iter().map(|u| self.predict(u).0).collect();
         let base = crate::analysis::stats::moments(&mean_sub.iter().map(|v| v.max(0.0)).collect::<Vec<_>>());
         let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed);
         let mut shifts: [Vec<f64>; 4] = Default::default();
-        if ok {
+        if let Some(chol) = chol {
+            let l = chol.unpack();
             for _ in 0..paths {
-                let e: Vec<f64> = (0..m).map(|_| normal(&mut rng)).collect();
-                let path: Vec<f64> = (0..m)
-                    .map(|i| {
-                        let c: f64 = (0..=i).map(|k| cov[i * m + k] * e[k]).sum();
-                        (mean_sub[i] + self.y_scale * c).max(0.0)
-                    })
+                let e = DVector::from_iterator(m, (0..m).map(|_| normal(&mut rng)));
+                let c = &l * e;
+                let path: Vec<f64> = mean_sub
+                    .iter()
+                    .zip(c.iter())
+                    .map(|(mean, c)| (mean + self.y_scale * c).max(0.0))
                     .collect();
                 let pm = crate::analysis::stats::moments(&path);
                 for (sh, s) in shifts.iter_mut().zip(STATISTICS) {
@@ -616,17 +568,25 @@ mod tests {
     }
 
     #[test]
-    fn cholesky_solves_a_hand_system() {
+    fn the_factor_solves_a_hand_system_and_refuses_an_indefinite_one() {
         // [[4, 2], [2, 3]] = L Lᵀ with L = [[2, 0], [1, √2]].
-        let mut a = vec![4.0, 2.0, 2.0, 3.0];
-        assert!(cholesky(&mut a, 2));
+        let c = factor(DMatrix::from_row_slice(2, 2, &[4.0, 2.0, 2.0, 3.0])).unwrap();
+        let l = c.l();
         assert!(
-            (a[0] - 2.0).abs() < 1e-15 && (a[2] - 1.0).abs() < 1e-15 && (a[3] - 2f64.sqrt()).abs() < 1e-15
+            (l[(0, 0)] - 2.0).abs() < 1e-15
+                && (l[(1, 0)] - 1.0).abs() < 1e-15
+                && (l[(1, 1)] - 2f64.sqrt()).abs() < 1e-15
         );
-        // Solve [[4, 2], [2, 3]] v = [2, 5]: v = [−0.5, 2].
-        let v = backward(&a, 2, &forward(&a, 2, &[2.0, 5.0]));
+        // Solve [[4, 2], [2, 3]] v = [2, 5]: v = [−0.5, 2]; L w = [2, 5]: w = [1, 4/√2].
+        let v = c.solve(&DVector::from_column_slice(&[2.0, 5.0]));
         assert!((v[0] + 0.5).abs() < 1e-14 && (v[1] - 2.0).abs() < 1e-14, "{v:?}");
-        assert!(!cholesky(&mut [1.0, 2.0, 2.0, 1.0], 2));
+        let w = forward(&c, DVector::from_column_slice(&[2.0, 5.0]));
+        assert!((w[0] - 1.0).abs() < 1e-15 && (w[1] - 4.0 / 2f64.sqrt()).abs() < 1e-14, "{w:?}");
+        // Not positive definite, or not finite: no factor (the fit and the paths' jitter loop
+        // read `None` as "not positive definite").
+        assert!(factor(DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 2.0, 1.0])).is_none());
+        assert!(factor(DMatrix::from_row_slice(2, 2, &[f64::NAN, 0.0, 0.0, 1.0])).is_none());
+        assert!(factor(DMatrix::from_row_slice(2, 2, &[f64::INFINITY, 0.0, 0.0, 1.0])).is_none());
     }
 
     #[test]
