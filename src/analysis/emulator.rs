@@ -25,8 +25,9 @@
 //! zero) and [`Emulator::rank`] (the best settings among candidates, with SE).
 
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
-use rand::SeedableRng;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rand_distr::StandardNormal;
 use serde::Serialize;
 
 use crate::analysis::simplex::minimise;
@@ -468,7 +469,7 @@ impl Emulator {
         if let Some(chol) = chol {
             let l = chol.unpack();
             for _ in 0..paths {
-                let e = DVector::from_iterator(m, (0..m).map(|_| normal(&mut rng)));
+                let e = DVector::from_iterator(m, (&mut rng).sample_iter(StandardNormal).take(m));
                 let c = &l * e;
                 let path: Vec<f64> = mean_sub
                     .iter()
@@ -543,13 +544,6 @@ pub fn subset(n: usize, k: usize, seed: u64) -> Vec<usize> {
     idx
 }
 
-/// A standard normal deviate (Box–Muller).
-fn normal(rng: &mut ChaCha8Rng) -> f64 {
-    use rand::Rng;
-    let (u, v): (f64, f64) = (rng.gen_range(f64::EPSILON..1.0), rng.gen());
-    (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -609,7 +603,7 @@ mod tests {
     fn noisy_data_give_a_nugget_and_honest_loo_coverage() {
         let x = design(150);
         let mut rng = ChaCha8Rng::seed_from_u64(4);
-        let y: Vec<f64> = x.iter().map(|u| smooth(u) + 0.05 * normal(&mut rng)).collect();
+        let y: Vec<f64> = x.iter().map(|u| smooth(u) + 0.05 * rng.sample::<f64, _>(StandardNormal)).collect();
         let se = vec![Some(0.05); 150];
         let e = Emulator::fit(&x, &y, &se).unwrap();
         let cv = e.loo(&y, &se);

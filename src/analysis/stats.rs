@@ -278,21 +278,15 @@ mod tests {
 
     #[test]
     fn kurtosis_of_a_large_normal_sample_is_three_not_zero() {
-        let x: Vec<f64> = rand_distr_free_normal(20_000, 3);
+        let x: Vec<f64> = normal_sample(20_000, 3);
         let m = moments(&x);
         assert!((m.kurtosis.unwrap() - 3.0).abs() < 0.1, "{:?}", m.kurtosis);
         assert!(m.skewness.unwrap().abs() < 0.05);
     }
 
-    /// Box–Muller normal deviates (the tests do not need another crate for them).
-    fn rand_distr_free_normal(n: usize, seed: u64) -> Vec<f64> {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        (0..n)
-            .map(|_| {
-                let (u, v): (f64, f64) = (rng.gen_range(f64::EPSILON..1.0), rng.gen());
-                (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
-            })
-            .collect()
+    /// `n` standard normal deviates, seeded.
+    fn normal_sample(n: usize, seed: u64) -> Vec<f64> {
+        ChaCha8Rng::seed_from_u64(seed).sample_iter(rand_distr::StandardNormal).take(n).collect()
     }
 
     #[test]
@@ -318,7 +312,7 @@ mod tests {
 
     #[test]
     fn bootstrap_is_seeded_and_brackets_the_statistic() {
-        let x: Vec<f64> = rand_distr_free_normal(400, 5).iter().map(|v| 0.3 + 0.1 * v).collect();
+        let x: Vec<f64> = normal_sample(400, 5).iter().map(|v| 0.3 + 0.1 * v).collect();
         let b = Bootstrap::default();
         let a = bootstrap(&x, &b);
         assert_eq!(a, bootstrap(&x, &b), "same seed, same intervals");

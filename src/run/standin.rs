@@ -21,6 +21,9 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::StandardNormal;
 use sha2::{Digest, Sha256};
 
 use crate::error::Result;
@@ -282,30 +285,20 @@ impl PourPoint {
     }
 }
 
-/// Normal deviates from a point's hash: deterministic per point.
+/// Normal deviates from a point's hash: deterministic per point (ChaCha8 seeded with the
+/// hash's SHA-256).
 pub struct Noise {
-    state: u64,
+    rng: ChaCha8Rng,
 }
 
 impl Noise {
     pub fn new(hash: &str) -> Noise {
-        let digest = Sha256::digest(hash.as_bytes());
-        Noise { state: u64::from_le_bytes(digest[..8].try_into().expect("8 bytes")) | 1 }
+        Noise { rng: ChaCha8Rng::from_seed(Sha256::digest(hash.as_bytes()).into()) }
     }
 
-    fn uniform(&mut self) -> f64 {
-        // xorshift64*: plenty for noise; the hash fixes the seed.
-        self.state ^= self.state >> 12;
-        self.state ^= self.state << 25;
-        self.state ^= self.state >> 27;
-        let x = self.state.wrapping_mul(0x2545_f491_4f6c_dd1d);
-        ((x >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-
-    /// A standard normal deviate (Box–Muller).
+    /// A standard normal deviate.
     pub fn normal(&mut self) -> f64 {
-        let (u, v) = (self.uniform(), self.uniform());
-        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+        self.rng.sample(StandardNormal)
     }
 }
 
