@@ -14,6 +14,7 @@ mod advice;
 pub mod answer;
 pub mod calibration;
 mod calibration_map;
+mod columns;
 pub mod emulation;
 mod error;
 mod gallery;
@@ -21,9 +22,14 @@ mod html;
 mod maps;
 mod page;
 mod plots;
+mod setup;
 pub mod show;
+mod timing;
+pub use columns::{read_columns, CsvColumns};
 pub use error::ReportError;
 pub use plots::to_png;
+pub use setup::{CentreScene, Setup};
+pub use timing::Timing;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -149,94 +155,6 @@ pub struct SummaryCounts {
     /// Spaces whose every point finished, of all spaces.
     pub spaces_complete: usize,
     pub spaces: usize,
-}
-
-#[derive(Debug, Clone, Serialize)]
-pub struct Timing {
-    /// Time during which at least one run was going (union of the joblog's attempts), s.
-    pub wall_time_s: f64,
-    /// Sum of every attempt's run time, s.
-    pub core_seconds: f64,
-    pub attempts: usize,
-}
-
-/// What every point of the sweep shares: the fixed parameters, the scene's settings, the scene
-/// at the centre of the space, and the engine.
-#[derive(Debug, Clone, Serialize)]
-pub struct Setup {
-    /// Every catalogue parameter the design does not sweep, written or default.
-    pub fixed: Vec<crate::point::FixedValue>,
-    /// The resolved `[scene]` settings: layout, substrate, heap size, size distribution, the
-    /// fidelity preset and every numerical knob it set.
-    pub scene: crate::sweep::SceneSettings,
-    /// The scene built at the centre of the swept ranges (the sizes scale with the point).
-    pub centre: Option<CentreScene>,
-    pub engine_version: String,
-    pub engine_path: String,
-    /// The precision the sweep chose for its points after its first batch (if it chose one), and
-    /// how many of the done runs started from a finished neighbour's steady state.
-    pub precision: Option<crate::run::precision::SweepPrecision>,
-    pub warm_started: usize,
-}
-
-/// The scene at the centre of the space, in mm, s and counts: what one run looks like.
-#[derive(Debug, Clone, Serialize)]
-pub struct CentreScene {
-    pub parameters: BTreeMap<String, f64>,
-    pub particles: usize,
-    pub substrate_particles: usize,
-    pub domain_length_mm: f64,
-    pub domain_depth_mm: f64,
-    pub domain_height_mm: f64,
-    pub heap_length_mm: f64,
-    pub heap_height_mm: f64,
-    pub window_travel_mm: f64,
-    pub timestep_s: f64,
-    pub rayleigh_time_s: f64,
-    /// The held heap and its window, of a layout that holds one (summary.json: `conveyor`).
-    #[serde(rename = "conveyor")]
-    pub held_heap: Option<crate::scenes::HeldHeap>,
-}
-
-impl Setup {
-    fn of(sweep: &Sweep, manifest: &Manifest, dir: &Path, done: &[&RunResult]) -> Setup {
-        let mid: Vec<f64> = sweep
-            .swept
-            .iter()
-            .map(|p| match p.kind {
-                crate::sweep::ParamKind::Swept { lo, hi, .. } => 0.5 * (lo + hi),
-                crate::sweep::ParamKind::Fixed(v) => v,
-            })
-            .collect();
-        let parameters = crate::point::resolve(sweep, &mid);
-        let centre = crate::scenes::build(&parameters, &sweep.file.scene).ok().map(|sc| {
-            let (t1, t2) = sc.window_steps();
-            CentreScene {
-                parameters: sweep.swept.iter().map(|p| (p.name.clone(), parameters[&p.name])).collect(),
-                particles: sc.particles,
-                substrate_particles: sc.substrate_particles,
-                domain_length_mm: sc.x_hi * 1e3,
-                domain_depth_mm: sc.depth * 1e3,
-                domain_height_mm: (sc.z_hi - sc.z_lo) * 1e3,
-                heap_length_mm: (sc.pile_x1 - sc.pile_x0) * 1e3,
-                heap_height_mm: sc.pile_z1 * 1e3,
-                window_travel_mm: (sc.blade_rear_at(t2) - sc.blade_rear_at(t1)) * 1e3,
-                timestep_s: sc.timestep,
-                rayleigh_time_s: sc.rayleigh_time,
-                held_heap: crate::scenes::of(&sweep.file.scene).ok().and_then(|l| l.held_heap(&sc)),
-            }
-        });
-        let id = |k: &str| manifest.identity.get(k).and_then(|v| v.as_str()).unwrap_or("").to_string();
-        Setup {
-            fixed: crate::point::fixed_values(sweep),
-            scene: sweep.file.scene.clone(),
-            centre,
-            engine_version: id("engine_version"),
-            engine_path: id("engine_path"),
-            precision: crate::run::precision::read(dir),
-            warm_started: done.iter().filter(|r| r.warm_start.is_some()).count(),
-        }
-    }
 }
 
 /// A failed point: where it is, why it failed, where its files are.
@@ -417,7 +335,7 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
         screen,
         statistics,
         counts,
-        timing: timing(dir),
+        timing: timing::of(dir),
         spaces,
         sensitivity,
         sensitivity_reliable,
@@ -630,47 +548,6 @@ fn verdict(spaces: &[SpaceRow], counts: &SummaryCounts, c: &Criteria) -> Verdict
     }
 }
 
-/// Wall time (union of attempts) and core-seconds from `joblog.tsv`, read by column name.
-fn timing(dir: &Path) -> Timing {
-    let text = crate::sys::read::read_text_capped(&dir.join("joblog.tsv"), crate::store::JOBLOG_CAP)
-        .unwrap_or_default();
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap_or("").split('\t').collect();
-    let col = |name: &str| header.iter().position(|h| *h == name);
-    // The columns of GNU parallel's joblog, or of an earlier version's.
-    let (Some(si), Some(ri)) = (col("Starttime").or(col("start")), col("JobRuntime").or(col("runtime_s")))
-    else {
-        return Timing { wall_time_s: 0.0, core_seconds: 0.0, attempts: 0 };
-    };
-    let mut spans: Vec<(f64, f64)> = lines
-        .filter_map(|l| {
-            let f: Vec<&str> = l.split('\t').collect();
-            let s: f64 = f.get(si)?.parse().ok()?;
-            let r: f64 = f.get(ri)?.parse().ok()?;
-            (s.is_finite() && r.is_finite()).then_some((s, s + r.max(0.0)))
-        })
-        .collect();
-    let core_seconds = spans.iter().map(|(a, b)| b - a).sum();
-    let attempts = spans.len();
-    spans.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut wall = 0.0;
-    let mut cur: Option<(f64, f64)> = None;
-    for (a, b) in spans {
-        cur = match cur {
-            Some((ca, cb)) if a <= cb => Some((ca, cb.max(b))),
-            Some((ca, cb)) => {
-                wall += cb - ca;
-                Some((a, b))
-            }
-            None => Some((a, b)),
-        };
-    }
-    if let Some((a, b)) = cur {
-        wall += b - a;
-    }
-    Timing { wall_time_s: wall, core_seconds, attempts }
-}
-
 /// Write `convergence.csv`, `summary.json` and `report/` into the analysed directory; returns
 /// the path of `report.html`.
 pub fn write(a: &Analysis) -> Result<PathBuf, ReportError> {
@@ -692,68 +569,6 @@ pub fn write(a: &Analysis) -> Result<PathBuf, ReportError> {
     crate::sys::atomic::write(&html_path, html::render(a, &figures).as_bytes())
         .map_err(|e| io(&html_path, e))?;
     Ok(html_path)
-}
-
-/// Columns of a CSV file, by header name, for `sweep stats`.
-#[derive(Debug, Clone)]
-pub struct CsvColumns {
-    /// The described column: its numbers, with empty and non-numeric cells counted.
-    pub column: stats::Column,
-    /// Rows where the column and every `by` column are numbers: (by values, column value).
-    pub xy: Vec<(Vec<f64>, f64)>,
-}
-
-/// Read `column` (and the `by` columns) of a CSV file by header name: empty cells and
-/// non-numbers are skipped and counted. A missing file or column, or a column with no numbers,
-/// is bad input, named in one line.
-pub fn read_columns(path: &Path, column: &str, by: &[String]) -> Result<CsvColumns, ReportError> {
-    let bad = |why: String| ReportError::Csv { path: path.to_path_buf(), why };
-    let bytes = std::fs::read(path).map_err(|e| ReportError::Read {
-        path: path.to_path_buf(),
-        why: if e.kind() == std::io::ErrorKind::NotFound {
-            "no such file".to_string()
-        } else {
-            e.to_string()
-        },
-    })?;
-    let mut r = csv::ReaderBuilder::new().flexible(true).from_reader(bytes.as_slice());
-    let header = r.headers().map_err(|e| bad(format!("not a CSV file: {e}")))?.clone();
-    if header.is_empty() || header.iter().all(|h| h.trim().is_empty()) {
-        return Err(bad(format!("empty file; expected a header row with a column `{column}`")));
-    }
-    let find = |name: &str| {
-        header.iter().position(|h| h.trim() == name).ok_or_else(|| {
-            bad(format!(
-                "no column `{name}`{}; columns: {}",
-                crate::error::hint(name, header.iter()),
-                header.iter().collect::<Vec<_>>().join(", ")
-            ))
-        })
-    };
-    let i = find(column)?;
-    let js: Vec<usize> = by.iter().map(|b| find(b)).collect::<Result<_, _>>()?;
-    let mut cells = Vec::new();
-    let mut xy = Vec::new();
-    let num = |s: &str| s.trim().parse::<f64>().ok().filter(|v| v.is_finite());
-    for (line, rec) in r.records().enumerate() {
-        let rec = rec.map_err(|e| bad(format!("row {}: {e}", line + 2)))?;
-        let cell = rec.get(i).unwrap_or("");
-        if let Some(y) = num(cell) {
-            let x: Option<Vec<f64>> = js.iter().map(|&j| num(rec.get(j).unwrap_or(""))).collect();
-            if let Some(x) = x {
-                xy.push((x, y));
-            }
-        }
-        cells.push(cell.to_string());
-    }
-    let c = stats::parse_cells(cells.iter().map(String::as_str));
-    if c.values.is_empty() {
-        return Err(bad(format!(
-            "column `{column}` has no numbers ({} empty, {} not numbers)",
-            c.empty, c.non_numeric
-        )));
-    }
-    Ok(CsvColumns { column: c, xy })
 }
 
 /// `convergence.csv`: one row per complete space. Empty cells where a value is undefined.
