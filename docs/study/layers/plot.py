@@ -94,14 +94,15 @@ def gaboriault():
     fig.savefig(os.path.join(HERE, "gaboriault.png"), dpi=110)
 
 
-VARIANTS = {"gamma0": "no cohesion", "supply2": "2 × the dose", "depth12": "depth 12 D",
+VARIANTS = {"flat": "flat blade", "gamma0": "no cohesion", "supply2": "2 × the dose", "depth12": "depth 12 D",
             "dt0.165": "timestep halved", "plate20": "plate 20 D", "plate80": "plate 80 D"}
 
 
 def pretty(label):
     """'50um-0.1-gamma0' → '50 µm, 0.1 m/s, no cohesion'."""
-    t, v, *rest = label.split("-", 2)
-    return ", ".join([t.replace("um", " µm"), v + " m/s"] + [VARIANTS.get(r, r) for r in rest])
+    t, v, *rest = label.split("-")
+    # The sweep's own blade is round; variants say what they change.
+    return ", ".join([t.replace("um", " µm"), v + " m/s"] + [VARIANTS.get(r, r) for r in rest or ["round blade"]])
 
 
 def ti64_runs():

@@ -1,29 +1,27 @@
 #!/usr/bin/env bash
 # The layers study's controls for the machine answer (docs/study/layers.md): Ti-6Al-4V 15–45 µm
-# on a fused bed at 50 µm layers and 0.1 m/s (sweeps/ti64-layers.toml; ti64.sh records it as
-# record/ti64-50um-0.1.json), once without cohesion (surface energy 0: is the scene or the powder
-# what keeps the layer thin?) and once with twice the dose (supply_factor 2: is the dose what
-# runs out?). Resumable: a recorded case is skipped. Run from the repository's root with
-# target/release/sweep built (or SWEEP=path).
+# on a fused bed at 50 µm layers and 0.1 m/s (sweeps/ti64-layers.toml, round blade; ti64.sh
+# records it as record/ti64-50um-0.1.json), spread instead with the flat blade (a box one
+# diameter thick: the thesis's blade, a knife edge at 31 µm), and with the flat blade once without
+# cohesion (surface energy 0: the scene or the powder?) and once with twice the dose
+# (supply_factor 2: the dose?). Resumable: a recorded case is skipped. Run from the repository's
+# root with target/release/sweep built (or SWEEP=path).
 #   bash docs/study/layers/ti64-controls.sh [label]
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 out=docs/study/layers/record
 mkdir -p "$out"
-# label, extra --set values, an extra [scene] line (or "-")
-cases="ti64-50um-0.1-gamma0 surface_energy=0 -
-ti64-50um-0.1-supply2 - supply_factor = 2.0"
+# label, extra --set values (or "-"), extra [scene] lines separated by ";"
+cases="ti64-50um-0.1-flat - blade_profile = \"flat\"
+ti64-50um-0.1-flat-gamma0 surface_energy=0 blade_profile = \"flat\"
+ti64-50um-0.1-flat-supply2 - blade_profile = \"flat\";supply_factor = 2.0"
 want=${1:-}
 while read -r label set scene; do
   [ -n "$want" ] && [ "$want" != "$label" ] && continue
   [ -s "$out/$label.json" ] && { echo "$label: recorded"; continue; }
   toml=$(mktemp --suffix=.toml)
-  if [ "$scene" = "-" ]; then
-    cp sweeps/ti64-layers.toml "$toml"
-  else
-    sed "s/^layers = 24$/layers = 24\n$scene/" sweeps/ti64-layers.toml > "$toml"
-    grep -q "^$scene$" "$toml"
-  fi
+  sed "s/^blade_profile = \"round\"$/${scene//;/\\n}/" sweeps/ti64-layers.toml > "$toml"
+  grep -q "^blade_profile = \"flat\"$" "$toml"
   values="layer_thickness=0.05,blade_speed=0.1"
   [ "$set" != "-" ] && values="$values,$set"
   start=$(date +%s)
