@@ -68,7 +68,8 @@ pub(super) enum BenchCommand {
     /// kurtosis within 5 % of their scale, the first-order sensitivity ranking the truth's (every
     /// pair whose indices the truth tells apart, by non-overlapping 95 % intervals, in its order), the
     /// recommended run's true MFR within one SE of the truth's best. Runs in process (no sweep
-    /// directory) with the functions the sweeps use; prints the tables of BENCHMARKS.md.
+    /// directory) with the functions the sweeps use; prints the tables of BENCHMARKS.md, and on
+    /// stderr the time its emulator fits took ("emulator fits: N in T s of W s wall").
     Designs(DesignsArgs),
 }
 
