@@ -54,6 +54,51 @@ fn more_rolling_friction_gives_a_steeper_heap_with_a_small_standard_error() {
     assert!(printed.contains(&format!("angle of repose  {a_high:.2} ± {se_high:.2}°")), "{printed}");
 }
 
+/// One pour of half the example's column (1,000 spheres, about 45 CPU seconds): the heap, its
+/// angle with a standard error and its packing, in the suite on every run.
+#[test]
+fn a_half_column_pour_heaps_at_a_physical_angle_with_its_standard_error() {
+    support::require_liggghts!("a_half_column_pour_heaps_at_a_physical_angle_with_its_standard_error");
+    let dir = tempfile::tempdir().unwrap();
+    let example = std::fs::read_to_string(POUR).unwrap();
+    assert!(example.contains("\n[scene]\n"), "the example has a [scene] table");
+    let half = example.replacen("\n[scene]\n", "\n[scene]\nsupply_factor = 0.5\n", 1);
+    let file = dir.path().join("half.toml");
+    std::fs::write(&file, half).unwrap();
+    let out = dir.path().join("out");
+    let o = sweep_bin()
+        .args(["run", support::p(&file), "--set", "rolling_friction=0.3", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("result.json")).unwrap()).unwrap();
+    let h = &r["heap"];
+    assert_eq!(
+        h["particles_in_heap"].as_u64().unwrap() + h["particles_run_out"].as_u64().unwrap(),
+        1000,
+        "{r}"
+    );
+    let (a, se) = (h["angle_deg"].as_f64().unwrap(), h["angle_se_deg"].as_f64().unwrap());
+    // Monosized spheres with sliding friction 0.3 and rolling resistance heap at 20–40° (Zhou et
+    // al. 2001, Phys. Rev. E 64, 021301); a heap of 1,000 measures it to a few degrees.
+    assert!((15.0..45.0).contains(&a), "angle {a}: {r}");
+    assert!(se.is_finite() && se > 0.0 && se < 3.0, "SE {se}: {r}");
+    // The eight sectors it is the mean of, and an SE that is their scatter over √8.
+    let sectors: Vec<f64> =
+        h["sector_angles_deg"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    assert_eq!(sectors.len(), 8);
+    let mean = sectors.iter().sum::<f64>() / 8.0;
+    let sd = (sectors.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / 7.0).sqrt();
+    assert!((mean - a).abs() < 1e-6 && (sd / 8f64.sqrt() - se).abs() < 1e-6, "{r}");
+    // A heap's bulk: looser than random close packing, denser than a loose pour.
+    let packing = h["packing"].as_f64().unwrap();
+    assert!((0.5..0.64).contains(&packing), "packing {packing}: {r}");
+    let printed = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(printed.contains(&format!("angle of repose  {a:.2} ± {se:.2}°")), "{printed}");
+}
+
 #[test]
 fn a_sweep_of_a_pour_is_refused_with_what_to_do_and_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
