@@ -8,6 +8,10 @@ use serde::{Deserialize, Serialize};
 pub struct PassRecord {
     /// The pass, from 1.
     pub k: usize,
+    /// A fused bed's search pass: the solid under it was set to search for the steady depth, not
+    /// laid by the pass before (its deposit is measured all the same).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub search: bool,
     /// Solid volume the pass added to the plate over the plate's area, m: the deposit as a
     /// height of solid.
     pub deposit_m: f64,

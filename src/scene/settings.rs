@@ -107,6 +107,12 @@ pub struct SceneSettings {
     /// of its packing times its height before the next, as in laser or electron-beam fusion).
     #[serde(skip_serializing_if = "is_loose")]
     pub bed: String,
+    /// Layers layout, fused bed: the first passes search for the steady depth of powder under
+    /// the blade instead of building it up layer by layer — after each, the solid is set so that
+    /// the next pass meets its own depth times the layer thickness over its deposit; 0: every
+    /// pass is a layer on the one before, from the bare plate.
+    #[serde(skip_serializing_if = "is_zero_passes")]
+    pub search_passes: usize,
     /// Layers layout: the blade's profile, `"flat"` (default: a box, the thesis's) or `"round"`
     /// (a cylinder of `blade_radius_mm`, its lowest line the tip).
     #[serde(skip_serializing_if = "is_flat")]
@@ -252,6 +258,7 @@ impl SceneSettings {
         s.supply_factor = self.supply_factor;
         s.layers = self.layers;
         s.bed = self.bed.clone();
+        s.search_passes = self.search_passes;
         s.blade_profile = self.blade_profile.clone();
         s.blade_radius_mm = self.blade_radius_mm;
         s.blade_clearance_mm = self.blade_clearance_mm;
@@ -350,6 +357,7 @@ impl Default for SceneSettings {
             supply_factor: 1.0,
             layers: DEFAULT_LAYERS,
             bed: "loose".into(),
+            search_passes: 0,
             blade_profile: "flat".into(),
             blade_radius_mm: DEFAULT_BLADE_RADIUS_MM,
             blade_clearance_mm: 0.0,
@@ -376,6 +384,9 @@ pub const DEFAULT_PLATE_DIAMETERS: f64 = 40.0;
 
 fn is_default_layers(n: &usize) -> bool {
     *n == DEFAULT_LAYERS
+}
+fn is_zero_passes(n: &usize) -> bool {
+    *n == 0
 }
 fn is_loose(b: &str) -> bool {
     b == "loose"

@@ -79,6 +79,37 @@ fn each_layer_lies_on_the_one_before_and_the_platform_drops_by_the_layer_thickne
 }
 
 #[test]
+fn a_fused_bed_s_search_pass_sets_the_next_depth_by_its_deposit_and_the_layers_after_it_are_laid() {
+    support::require_liggghts!(
+        "a_fused_bed_s_search_pass_sets_the_next_depth_by_its_deposit_and_the_layers_after_it_are_laid"
+    );
+    let (_tmp, dir) = support::cwd();
+    let sweep = bed(&dir, "bed = \"fused\"\nlayers = 4\nsearch_passes = 1");
+    let (code, r, stderr) = run_point(&sweep, "blade_speed=0.5");
+    let layers: &Value = if code == 0 { &r["layers"] } else { &r["measured"]["layers"] };
+    assert!(layers.is_object(), "exit {code}: {stderr}\n{r}");
+    let passes = layers["passes"].as_array().unwrap();
+    assert_eq!(passes.len(), 4);
+    let f = |k: usize, key: &str| passes[k - 1][key].as_f64().unwrap_or_else(|| panic!("{key} in {r}"));
+    let t = 3e-3;
+    assert_eq!(passes[0]["search"], true, "{r}");
+    assert!(passes[1..].iter().all(|p| p.get("search").is_none()), "{r}");
+    // The search: pass 2 meets pass 1's depth times the drop over its deposit (a deposit under
+    // a third of a drop counted as a third, the depth kept within 1 and 20 drops) — LIGGGHTS's
+    // arithmetic in the deck against ours.
+    let counted = f(1, "deposit_m").max(t / 3.0);
+    let asked = (f(1, "effective_thickness_m") * t / counted).clamp(t, 20.0 * t);
+    assert!((f(2, "effective_thickness_m") - asked).abs() < 1e-9, "asked {asked}: {r}");
+    // Then layers on the one before: the solid rises by each deposit, the platform by a drop.
+    for k in 3..=4 {
+        let expected = f(k - 1, "effective_thickness_m") + t - f(k - 1, "deposit_m");
+        assert!((f(k, "effective_thickness_m") - expected).abs() < 1e-9, "pass {k}: {r}");
+    }
+    // The search pass is never the steady layer.
+    assert!(layers["steady_from"].as_u64().unwrap() >= 2, "{r}");
+}
+
+#[test]
 fn a_bad_layer_count_or_thickness_is_refused_in_one_line() {
     let (_tmp, dir) = support::cwd();
     for (extra, key) in [("layers = 0", "scene.layers"), ("bed = \"molten\"", "scene.bed")] {

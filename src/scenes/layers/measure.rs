@@ -76,6 +76,20 @@ pub fn parse_log(log: &str) -> Vec<PassLine> {
         .collect()
 }
 
+/// The solid's top after each pass of a fused bed's log (`demsweep: solid k top Z`), by pass.
+pub fn parse_solids(log: &str) -> Vec<(usize, f64)> {
+    log.lines()
+        .filter_map(|l| {
+            let rest = l.trim().strip_prefix("demsweep: solid ")?;
+            let f: Vec<&str> = rest.split_whitespace().collect();
+            if f.len() < 3 || f[1] != "top" {
+                return None;
+            }
+            Some((f[0].parse().ok()?, f[2].parse().ok()?))
+        })
+        .collect()
+}
+
 /// The top surface over the plate's inner part: per grid cell the top of the highest sphere over
 /// it, or `floor` where none is. Returns (cells, covered cells of `mine`), `mine` selecting the
 /// spheres whose discs count as covering.
@@ -132,8 +146,16 @@ fn mean_se(y: &[f64]) -> (f64, f64) {
     (m, (var / y.len() as f64).sqrt())
 }
 
-/// Every pass's record from the log's masses and each pass's particles over the plate.
-pub fn passes(scene: &Scene, plan: &Plan, lines: &[PassLine], grains: &[Vec<Grain>]) -> Vec<PassRecord> {
+/// Every pass's record from the log's masses and each pass's particles over the plate. A fused
+/// bed's floor under pass k is the solid the log printed after pass k − 1 (`solids`); where it
+/// printed none, the deposits so far.
+pub fn passes(
+    scene: &Scene,
+    plan: &Plan,
+    lines: &[PassLine],
+    solids: &[(usize, f64)],
+    grains: &[Vec<Grain>],
+) -> Vec<PassRecord> {
     let d = scene.diameter;
     let area = plan.plate_area;
     let mut out = Vec::with_capacity(lines.len());
@@ -156,6 +178,7 @@ pub fn passes(scene: &Scene, plan: &Plan, lines: &[PassLine], grains: &[Vec<Grai
         }
         out.push(PassRecord {
             k,
+            search: k <= plan.search_passes,
             deposit_m: deposit,
             relative_density: deposit / plan.drop_before(k),
             effective_thickness_m: effective,
@@ -168,7 +191,7 @@ pub fn passes(scene: &Scene, plan: &Plan, lines: &[PassLine], grains: &[Vec<Grai
         });
         mass_before = line.plate_mass;
         if plan.fused {
-            floor_before += deposit;
+            floor_before = solids.iter().find(|(j, _)| *j == k).map_or(floor_before + deposit, |s| s.1);
         }
         surface_before = m;
         ids_before = gs.iter().map(|g| g.id).collect();
@@ -176,12 +199,14 @@ pub fn passes(scene: &Scene, plan: &Plan, lines: &[PassLine], grains: &[Vec<Grai
     out
 }
 
-/// The steady layer over `passes`.
+/// The steady layer over `passes`: a fused bed's search passes are never part of it.
 pub fn steady_layer(plan: &Plan, passes: Vec<PassRecord>) -> LayerSeries {
     let answer: Vec<f64> =
         passes.iter().map(|p| if plan.fused { p.packing } else { p.relative_density }).collect();
     let depth: Vec<f64> = passes.iter().map(|p| p.effective_thickness_m).collect();
-    let cut = if plan.fused { mser(&answer).max(mser(&depth)) } else { mser(&answer) };
+    let first = plan.search_passes.min(passes.len());
+    let (answer_laid, depth_laid) = (&answer[first..], &depth[first..]);
+    let cut = first + if plan.fused { mser(answer_laid).max(mser(depth_laid)) } else { mser(answer_laid) };
     let kept = &passes[cut..];
     let pick = |f: &dyn Fn(&PassRecord) -> f64| mean_se(&kept.iter().map(f).collect::<Vec<f64>>());
     let (packing, packing_se) = pick(&|p| p.packing);
@@ -248,7 +273,8 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         .map(|l| read_grains(&run.run_dir.join(layer_dump(l.k))))
         .collect::<Result<_, _>>()
         .map_err(|e| Rejected::new(FailureClass::Unparsable, e))?;
-    let series = steady_layer(&plan, passes(scene, &plan, &lines, &grains));
+    let solids = parse_solids(&run.run.log);
+    let series = steady_layer(&plan, passes(scene, &plan, &lines, &solids, &grains));
     let (answer, answer_se) = if plan.fused {
         (series.packing, series.packing_se)
     } else {

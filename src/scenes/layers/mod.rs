@@ -59,6 +59,11 @@ pub const MAX_TREND_Z: f64 = 2.5;
 pub const MIN_STEADY_PASSES: usize = 3;
 /// Most passes a point may ask for (each is a whole spread; 30 is hours at 20–40 µm).
 pub const MAX_LAYERS: usize = 100;
+/// Deepest powder under the blade a fused bed's search may ask for, in layer thicknesses (a
+/// layer packed at 0.05).
+pub const SEARCH_MAX_DEPTH_LAYERS: f64 = 20.0;
+/// Most a search pass may multiply the depth by (a pass that deposited almost nothing).
+pub const SEARCH_MAX_GROWTH: f64 = 3.0;
 /// Share of a round blade's half circle that is meshed, centred on its lowest line (Gaboriault
 /// et al.'s case generator meshes 0.75 of it; above it the blade's faces are vertical).
 pub const ROUND_ARC_SHARE: f64 = 0.75;
@@ -119,6 +124,16 @@ pub struct Pass {
 pub struct Plan {
     pub fused: bool,
     pub layer_thickness: f64,
+    /// Fused bed: the first passes that search for the steady depth (not layers on the one
+    /// before), and the deepest powder under the tip they may ask for.
+    #[serde(default)]
+    pub search_passes: usize,
+    #[serde(default)]
+    pub search_max_depth: f64,
+    /// Least deposit a search pass counts (a pass that left almost nothing multiplies the depth
+    /// by at most [`SEARCH_MAX_GROWTH`]).
+    #[serde(default)]
+    pub search_least_deposit: f64,
     /// The blade's tip over the machine's top surface.
     pub clearance: f64,
     pub plate_x0: f64,
@@ -200,6 +215,25 @@ impl Layout for Layers {
                 why: format!("\"{}\": expected \"loose\" or \"fused\"", s.bed),
             });
         }
+        if s.search_passes > 0 && Bed::parse(&s.bed) != Some(Bed::Fused) {
+            return Err(BadSetting {
+                key: "scene.search_passes",
+                why: format!(
+                    "{}: a search for the steady depth needs bed = \"fused\" (a loose bed's depth is the powder it keeps); expected 0",
+                    s.search_passes
+                ),
+            });
+        }
+        if s.search_passes > 0 && s.search_passes + MIN_STEADY_PASSES > s.layers {
+            return Err(BadSetting {
+                key: "scene.search_passes",
+                why: format!(
+                    "{}: expected at most scene.layers − {MIN_STEADY_PASSES} = {} (the steady layer needs {MIN_STEADY_PASSES} passes after the search)",
+                    s.search_passes,
+                    s.layers.saturating_sub(MIN_STEADY_PASSES)
+                ),
+            });
+        }
         if !matches!(s.blade_profile.as_str(), "flat" | "round") {
             return Err(BadSetting {
                 key: "scene.blade_profile",
@@ -256,7 +290,17 @@ impl Layout for Layers {
         SetupRows {
             head: vec![
                 ("passes", s.layers.to_string()),
-                ("bed", s.bed.clone()),
+                (
+                    "bed",
+                    if s.search_passes > 0 {
+                        format!(
+                            "{}, the first {} passes a search for its steady depth",
+                            s.bed, s.search_passes
+                        )
+                    } else {
+                        s.bed.clone()
+                    },
+                ),
                 (
                     "blade profile",
                     if s.blade_profile == "round" {
@@ -387,7 +431,11 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         (region_height(dose_solid, dose_fraction), region_height(first_solid, dose_fraction));
     let dose_lift = 0.5 * d;
     let last_top = layers as f64 * t;
-    let block_depth = last_top + clearance + 2.0 * d;
+    // A search may set the solid below the plate (the depth it asks for deeper than the layers so
+    // far): the feed platform's and the wall's faces reach that far down too.
+    let search_passes = if fused { settings.search_passes } else { 0 };
+    let search_max_depth = if search_passes > 0 { SEARCH_MAX_DEPTH_LAYERS * t } else { 0.0 };
+    let block_depth = last_top + clearance + 2.0 * d + search_max_depth;
     // The pit holds a pass's excess dose below the plate.
     let pit_depth = 10.0 * d + first_solid / (LAYER_FRACTION_MAX * PIT_DIAMETERS * d * w);
     // The blade stands above the first dose as it would lie at DOSE_FRACTION (a sparse dose
@@ -435,6 +483,9 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let plan = Plan {
         fused,
         layer_thickness: t,
+        search_passes,
+        search_max_depth,
+        search_least_deposit: t / SEARCH_MAX_GROWTH,
         clearance,
         plate_x0,
         plate_x1,

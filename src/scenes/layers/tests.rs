@@ -1,6 +1,6 @@
 use std::collections::BTreeMap;
 
-use super::measure::{parse_log, passes, steady_layer, Grain, PassLine};
+use super::measure::{parse_log, parse_solids, passes, steady_layer, Grain, PassLine};
 use super::*;
 use crate::scene::settings::SceneSettings;
 
@@ -104,7 +104,17 @@ fn a_run_s_files_are_the_dumps_of_its_passes_as_the_deck_writes_them() {
 
 #[test]
 fn a_bad_layer_count_bed_or_profile_is_refused_naming_its_key() {
-    let cases: [(SceneSettings, &str); 5] = [
+    let fused = |layers: usize, search_passes: usize| SceneSettings {
+        bed: "fused".into(),
+        layers,
+        search_passes,
+        ..settings()
+    };
+    let cases: [(SceneSettings, &str); 7] = [
+        // A loose bed keeps its powder: there is no depth to search for.
+        (SceneSettings { search_passes: 1, ..settings() }, "scene.search_passes"),
+        // The steady layer needs three passes after the search.
+        (fused(6, 4), "scene.search_passes"),
         (SceneSettings { layers: 0, ..settings() }, "scene.layers"),
         (SceneSettings { layers: 1000, ..settings() }, "scene.layers"),
         (SceneSettings { bed: "sintered".into(), ..settings() }, "scene.bed"),
@@ -117,6 +127,7 @@ fn a_bad_layer_count_bed_or_profile_is_refused_naming_its_key() {
         assert!(!err.why.contains('\n'));
     }
     assert!(Layers.check_settings(&settings()).is_ok());
+    assert!(Layers.check_settings(&fused(7, 4)).is_ok());
     let v = values(&[("diameter", 0.065), ("layer_thickness", -0.05)]);
     let err = crate::scenes::build(&v, &settings()).unwrap_err().to_string();
     assert!(err.contains("layer_thickness") && err.contains("domain"), "{err}");
@@ -155,7 +166,7 @@ fn a_second_layer_on_the_first_is_measured_as_its_own_deposit_and_cover() {
         PassLine { k: 1, step: 10, plate_mass: first.len() as f64 * m },
         PassLine { k: 2, step: 20, plate_mass: both.len() as f64 * m },
     ];
-    let recs = passes(&sc, &plan, &lines, &[first.clone(), both.clone()]);
+    let recs = passes(&sc, &plan, &lines, &[], &[first.clone(), both.clone()]);
     let sphere_volume = std::f64::consts::PI / 6.0 * d.powi(3);
     let expected = first.len() as f64 * sphere_volume / plan.plate_area;
     for r in &recs {
@@ -193,6 +204,7 @@ fn the_log_gives_each_pass_its_plate_mass() {
 
 fn record(k: usize, y: f64) -> crate::outcome::layers::PassRecord {
     crate::outcome::layers::PassRecord {
+        search: false,
         k,
         deposit_m: y * 1e-4,
         relative_density: y,
@@ -264,4 +276,55 @@ fn the_round_blade_is_an_arc_whose_lowest_line_is_the_tip() {
     // The extra meshes: the feed platform, the wall after the plate, the plate, the pit's wall.
     let names: Vec<&str> = Layers.extra_meshes(&sc).iter().map(|(n, _)| *n).collect();
     assert_eq!(names, ["feed.stl", "wall.stl", "plate.stl", "pit.stl"]);
+}
+
+#[test]
+fn a_fused_bed_s_search_sets_each_next_depth_to_its_own_times_the_drop_over_its_deposit() {
+    let s = SceneSettings { bed: "fused".into(), layers: 6, search_passes: 2, ..settings() };
+    let sc = scene(&s);
+    let plan = plan_of(&sc);
+    assert_eq!(plan.search_passes, 2);
+    // The faces below the top reach past the deepest solid a search may set.
+    assert!(plan.block_depth >= plan.passes[5].top + plan.search_max_depth);
+    let mut tera = tera::Tera::default();
+    tera.add_raw_template("layers", TEMPLATE.source).unwrap();
+    let mut context = tera::Context::new();
+    context.insert("scene", &sc);
+    let deck = tera.render("layers", &context).unwrap();
+    // LIGGGHTS evaluates the rule: pass 1 met the drop and the clearance (1.5e-4 m) under its
+    // tip; the next solid is set below pass 2's tip (2.5e-4 m) by that depth times the drop over
+    // pass 1's deposit, and pass 2's depth is measured from that solid.
+    let line = |name: &str| {
+        let head = format!("variable {name} equal ");
+        deck.lines().find_map(|l| l.strip_prefix(head.as_str())).unwrap_or_else(|| panic!("{name}: {deck}"))
+    };
+    let number_before = |expr: &str, rest: &str| -> f64 { expr.strip_suffix(rest).unwrap().parse().unwrap() };
+    assert!((number_before(line("depth1"), "-0.0") - 1.5e-4).abs() < 1e-15);
+    assert!((number_before(line("solid1"), "-${kept1}") - 2.5e-4).abs() < 1e-15);
+    assert_eq!(line("asked1"), "${depth1}*0.0001/${counted1}");
+    assert!(line("depth2").ends_with("-${solid1}"), "{}", line("depth2"));
+    // Pass 3 is the first laid on the one before: its solid is the last plus its deposit.
+    assert!(deck.contains("variable solid3 equal ${solid2}+${platemass}"), "{deck}");
+    assert!(!deck.contains("variable depth3 "));
+
+    // Measured: the floor under each pass is the solid the log printed, and the search passes
+    // are never the steady layer.
+    let d = sc.diameter;
+    let layer = lattice(&sc, &plan, d, 0.5 * d, 1);
+    let m = sc.density * std::f64::consts::PI / 6.0 * d.powi(3) * layer.len() as f64;
+    let lines: Vec<PassLine> = (1..=6).map(|k| PassLine { k, step: 10 * k as u64, plate_mass: m }).collect();
+    let log = "demsweep: solid 1 top -0.00025\ndemsweep: solid 2 top -0.0001\n";
+    let solids = parse_solids(log);
+    assert_eq!(solids, [(1, -2.5e-4), (2, -1e-4)]);
+    let grains: Vec<Vec<Grain>> =
+        (0..6).map(|k| lattice(&sc, &plan, d, 0.5 * d, 1 + 10_000 * k as u64)).collect();
+    let recs = passes(&sc, &plan, &lines, &solids, &grains);
+    assert!((recs[1].effective_thickness_m - (plan.passes[1].tip + 2.5e-4)).abs() < 1e-15);
+    assert!((recs[2].effective_thickness_m - (plan.passes[2].tip + 1e-4)).abs() < 1e-15);
+    // After the search the solid rises by the deposit.
+    let deposit = recs[2].deposit_m;
+    assert!((recs[3].effective_thickness_m - (plan.passes[3].tip + 1e-4 - deposit)).abs() < 1e-15);
+    assert_eq!(recs.iter().filter(|r| r.search).count(), 2);
+    let series = steady_layer(&plan, recs);
+    assert!(series.steady_from >= 3, "steady from {}", series.steady_from);
 }
