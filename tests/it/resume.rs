@@ -16,7 +16,7 @@ use demsweep::sys::process::CancelToken;
 
 use crate::support::{
     self, assert_unique_seq, attempts, done_per_hash, hashes, joblog, lds, now, output, p, plant_claim,
-    results, run_two_at_once, standin, stderr, sweep, wait_until, MS,
+    results, standin, stderr, sweep, wait_until, MS,
 };
 
 // ---- on LIGGGHTS ----
@@ -151,18 +151,6 @@ fn killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert_done_once(&interrupted);
     assert_eq!(results(&interrupted), want);
-
-    // Two resumes at once on a directory with nothing run yet: each point runs once.
-    let pair = tmp.path().join("pair");
-    std::fs::create_dir(&pair).unwrap();
-    for f in ["sweep.toml", "manifest.json"] {
-        std::fs::copy(reference.join(f), pair.join(f)).unwrap();
-    }
-    run_two_at_once(&["resume", "--jobs", "1", "-q"], &pair);
-    let a = attempts(&pair);
-    assert_eq!(a.len(), 3);
-    assert!(a.values().all(|v| v == &vec!["done".to_string()]), "{a:?}");
-    assert_eq!(results(&pair), want);
 }
 
 // ---- on the fake executor ----

@@ -84,8 +84,8 @@ fn bad_bench_input_is_one_line_and_writes_nothing() {
     assert!(!out.exists());
 }
 
-/// The default timestep and 1.5× it, at the harshest corner (D 1 mm, gap 5 mm, v 1.6 m/s,
-/// μ 0.3), two pile seeds each, on a window of 20 D starting 15 D past the gate (about half the
+/// 1.5× the default timestep (the default itself runs in every other LIGGGHTS test) at the
+/// harshest corner (D 1 mm, gap 5 mm, v 1.6 m/s, μ 0.3), two pile seeds, on a window of 20 D starting 15 D past the gate (about half the
 /// default run's CPU): every run must end cleanly — no lost atoms, no exploding energy, no
 /// LIGGGHTS error, a pile that comes to rest — with a positive MFR. The MFR drift is not judged
 /// here: two seeds on a 20 D window scatter by more than the drift the bench resolves with three
@@ -105,7 +105,7 @@ fn the_default_timestep_has_a_margin_of_1_5_below_the_edge_at_the_harshest_corne
     let tmp = tempfile::tempdir().unwrap();
     let file = thesis_space(tmp.path(), "window_diameters = 20\nwindow_start_diameters = 15");
     let out = tmp.path().join("bench");
-    let fractions = format!("{default},{margin}");
+    let fractions = format!("{margin}");
     let r = sweep(&[
         "bench",
         "stability",
@@ -126,7 +126,7 @@ fn the_default_timestep_has_a_margin_of_1_5_below_the_edge_at_the_harshest_corne
     assert!(stdout.contains("diameter=1 gap=5 blade_speed=1.6 friction=0.3"), "{stdout}");
     let csv = std::fs::read_to_string(out.join("stability.csv")).unwrap();
     let timestep: Vec<&str> = csv.lines().filter(|l| l.starts_with("timestep,")).collect();
-    assert_eq!(timestep.len(), 2, "{csv}");
+    assert_eq!(timestep.len(), 1, "{csv}");
     for row in timestep {
         let cells: Vec<&str> = row.split(',').collect();
         // ladder,rayleigh_fraction,youngs_modulus_mpa,timestep_s,runs,failed,mfr_mean,...
