@@ -282,10 +282,58 @@ impl Feed {
     }
 }
 
-/// The `n`-th prime above 10,000 after `start` (LIGGGHTS wants prime seeds above 10,000).
-pub fn prime_seed(start: u64, n: usize) -> u64 {
-    let is_prime = |k: u64| k > 1 && (2..).take_while(|d| d * d <= k).all(|d| !k.is_multiple_of(d));
-    (10_007 + start % 1_000_000..).filter(|&k| is_prime(k)).nth(n).expect("primes are infinite")
+/// The prime seed of stream `n` of a scene seeded with `seed` (LIGGGHTS wants primes above
+/// 10,000): the first prime at or after a point drawn by SHA-256 from both, below 2³¹. Distinct
+/// seeds give distinct streams (two pairs share a prime only if their draws fall in one gap
+/// between primes, about one in 10⁸); neighbouring seeds must not, as repeats run with seed,
+/// seed + 1, ….
+pub fn prime_seed(seed: u64, n: usize) -> u64 {
+    use sha2::{Digest, Sha256};
+    const LEAST: u64 = 10_007;
+    // Room below 2³¹ for the longest gap between primes there (under 300).
+    const SPAN: u64 = (1 << 31) - LEAST - 1_000;
+    let digest = Sha256::digest(format!("demsweep prime seed {seed} stream {n}").as_bytes());
+    let draw = u64::from_le_bytes(digest[..8].try_into().expect("8 bytes"));
+    (LEAST + draw % SPAN..).find(|&k| is_prime_u32(k)).expect("a prime below 2^31")
+}
+
+/// Deterministic Miller–Rabin for k < 2³² (bases 2, 7 and 61 suffice there).
+fn is_prime_u32(k: u64) -> bool {
+    if k < 2 {
+        return false;
+    }
+    for p in [2, 3, 5, 7, 11, 13, 61] {
+        if k % p == 0 {
+            return k == p;
+        }
+    }
+    let (mut d, mut r) = (k - 1, 0);
+    while d % 2 == 0 {
+        d /= 2;
+        r += 1;
+    }
+    let mul = |a: u64, b: u64| a * b % k; // k < 2³², so a·b < 2⁶⁴
+    let pow = |mut b: u64, mut e: u64| {
+        let mut acc = 1;
+        while e > 0 {
+            if e & 1 == 1 {
+                acc = mul(acc, b);
+            }
+            b = mul(b, b);
+            e >>= 1;
+        }
+        acc
+    };
+    [2u64, 7, 61].iter().all(|&a| {
+        let mut x = pow(a % k, d);
+        if x == 1 || x == k - 1 {
+            return true;
+        }
+        (1..r).any(|_| {
+            x = mul(x, x);
+            x == k - 1
+        })
+    })
 }
 
 /// What every layout derives its scene from: the point's material, sizes and timestep, in SI.
@@ -488,6 +536,30 @@ pub fn rayleigh_time(r: f64, density: f64, youngs: f64, poisson: f64) -> f64 {
 mod tests {
     use super::psd::{SizeClass, SizeDistribution};
     use super::*;
+
+    #[test]
+    fn neighbouring_seeds_and_streams_get_distinct_prime_seeds() {
+        // The old rule (the n-th prime after 10,007 + seed) gave seeds 12345–12354 one prime.
+        let mut seen = std::collections::HashSet::new();
+        for seed in (12_345..12_445).chain(0..100) {
+            for n in 0..8 {
+                let p = prime_seed(seed, n);
+                assert!((10_007..1 << 31).contains(&p), "{p}");
+                assert!(seen.insert(p), "seed {seed} stream {n}: {p} again");
+            }
+        }
+        assert_eq!(prime_seed(7, 3), prime_seed(7, 3));
+    }
+
+    #[test]
+    fn the_primality_test_agrees_with_trial_division() {
+        let trial = |k: u64| k > 1 && (2..).take_while(|d| d * d <= k).all(|d| k % d != 0);
+        for k in (0..20_000).chain(2_147_383_000..2_147_483_648) {
+            assert_eq!(is_prime_u32(k), trial(k), "{k}");
+        }
+        // Strong pseudoprimes to single bases (2047 to base 2; 3215031751 is past 2³²'s bases).
+        assert!(!is_prime_u32(2047) && !is_prime_u32(1_373_653) && !is_prime_u32(25_326_001));
+    }
 
     fn psd(classes: &[(f64, f64)]) -> SizeDistribution {
         SizeDistribution {
