@@ -303,12 +303,12 @@ fn is_prime_u32(k: u64) -> bool {
         return false;
     }
     for p in [2, 3, 5, 7, 11, 13, 61] {
-        if k % p == 0 {
+        if k.is_multiple_of(p) {
             return k == p;
         }
     }
     let (mut d, mut r) = (k - 1, 0);
-    while d % 2 == 0 {
+    while d.is_multiple_of(2) {
         d /= 2;
         r += 1;
     }
@@ -553,7 +553,7 @@ mod tests {
 
     #[test]
     fn the_primality_test_agrees_with_trial_division() {
-        let trial = |k: u64| k > 1 && (2..).take_while(|d| d * d <= k).all(|d| k % d != 0);
+        let trial = |k: u64| k > 1 && (2..).take_while(|d| d * d <= k).all(|d| !k.is_multiple_of(d));
         for k in (0..20_000).chain(2_147_383_000..2_147_483_648) {
             assert_eq!(is_prime_u32(k), trial(k), "{k}");
         }

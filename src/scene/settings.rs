@@ -110,9 +110,10 @@ pub struct SceneSettings {
     /// Layers layout, fused bed: the first passes search for the steady depth of powder under
     /// the blade instead of building it up layer by layer — after each, the solid is set so that
     /// the next pass meets its own depth times the layer thickness over its deposit; 0: every
-    /// pass is a layer on the one before, from the bare plate.
-    #[serde(skip_serializing_if = "is_zero_passes")]
-    pub search_passes: usize,
+    /// pass is a layer on the one before, from the bare plate. Not set: a fused bed searches
+    /// for [`DEFAULT_SEARCH_PASSES`] passes (at most `layers` less three), a loose bed never.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub search_passes: Option<usize>,
     /// Layers layout: the blade's profile, `"flat"` (default: a box, the thesis's) or `"round"`
     /// (a cylinder of `blade_radius_mm`, its lowest line the tip).
     #[serde(skip_serializing_if = "is_flat")]
@@ -357,7 +358,7 @@ impl Default for SceneSettings {
             supply_factor: 1.0,
             layers: DEFAULT_LAYERS,
             bed: "loose".into(),
-            search_passes: 0,
+            search_passes: None,
             blade_profile: "flat".into(),
             blade_radius_mm: DEFAULT_BLADE_RADIUS_MM,
             blade_clearance_mm: 0.0,
@@ -377,6 +378,9 @@ impl Default for SceneSettings {
 /// Layers layout: passes by default; enough for the steady layer of every case measured
 /// (docs/study/layers.md).
 pub const DEFAULT_LAYERS: usize = 10;
+/// Layers layout, fused bed: search passes by default (docs/study/layers.md: Ti-6Al-4V's depth
+/// came within 3 % of its steady value in six).
+pub const DEFAULT_SEARCH_PASSES: usize = 6;
 /// Layers layout: a round blade's radius by default, mm (Gaboriault et al. 2025's blade).
 pub const DEFAULT_BLADE_RADIUS_MM: f64 = 2.5;
 /// Layers layout: the build plate's length by default, in diameters.
@@ -384,9 +388,6 @@ pub const DEFAULT_PLATE_DIAMETERS: f64 = 40.0;
 
 fn is_default_layers(n: &usize) -> bool {
     *n == DEFAULT_LAYERS
-}
-fn is_zero_passes(n: &usize) -> bool {
-    *n == 0
 }
 fn is_loose(b: &str) -> bool {
     b == "loose"

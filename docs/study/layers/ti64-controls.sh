@@ -20,7 +20,10 @@ while read -r label set scene; do
   [ -n "$want" ] && [ "$want" != "$label" ] && continue
   [ -s "$out/$label.json" ] && { echo "$label: recorded"; continue; }
   toml=$(mktemp --suffix=.toml)
-  sed "s/^blade_profile = \"round\"$/${scene//;/\\n}/" sweeps/ti64-layers.toml > "$toml"
+  # As recorded: 24 passes, each a layer on the one before (no search).
+  sed -e "s/^blade_profile = \"round\"$/${scene//;/\\n}/" \
+    -e "s/^layers = [0-9]*$/layers = 24\nsearch_passes = 0/" sweeps/ti64-layers.toml > "$toml"
+  grep -q "^search_passes = 0$" "$toml"
   grep -q "^blade_profile = \"flat\"$" "$toml"
   values="layer_thickness=0.05,blade_speed=0.1"
   [ "$set" != "-" ] && values="$values,$set"

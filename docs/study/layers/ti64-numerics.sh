@@ -19,7 +19,7 @@ while read -r label key eq value; do
   [ -n "$want" ] && [ "$want" != "$label" ] && continue
   [ -s "$out/$label.json" ] && { echo "$label: recorded"; continue; }
   toml=$(mktemp --suffix=.toml)
-  sed "s/^layers = 24$/layers = 24\n$key = $value/" sweeps/ti64-layers.toml > "$toml"
+  sed "s/^layers = \([0-9]*\)$/layers = \1\n$key = $value/" sweeps/ti64-layers.toml > "$toml"
   grep -q "^$key = $value$" "$toml"
   start=$(date +%s)
   "${SWEEP:-target/release/sweep}" run "$toml" --json --set layer_thickness=0.05,blade_speed=0.1 \

@@ -11,13 +11,17 @@ cd "$(dirname "$0")/../../.."
 out=docs/study/layers/record
 mkdir -p "$out"
 cases="ti64-50um-0.1-search4 12 4 0.05 0.1
-ti64-50um-0.1-search4-supply2 12 4 0.05 0.1 supply_factor=2.0"
+ti64-50um-0.1-search6 14 6 0.05 0.1
+ti64-30um-0.1-search6 14 6 0.03 0.1
+ti64-80um-0.1-search6 14 6 0.08 0.1
+ti64-50um-0.2-search6 14 6 0.05 0.2
+ti64-50um-0.05-search6 14 6 0.05 0.05"
 want=${1:-}
 while read -r label layers search thickness speed extra; do
   [ -n "$want" ] && [ "$want" != "$label" ] && continue
   [ -s "$out/$label.json" ] && { echo "$label: recorded"; continue; }
   toml=$(mktemp --suffix=.toml)
-  sed "s/^layers = 24$/layers = $layers\nsearch_passes = $search\n${extra/=/ = }/" sweeps/ti64-layers.toml > "$toml"
+  sed "s/^layers = [0-9]*$/layers = $layers\nsearch_passes = $search\n${extra/=/ = }/" sweeps/ti64-layers.toml > "$toml"
   grep -q "^search_passes = $search$" "$toml"
   start=$(date +%s)
   "${SWEEP:-target/release/sweep}" run "$toml" --json \

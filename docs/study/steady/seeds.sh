@@ -1,15 +1,16 @@
 #!/usr/bin/env bash
-# A point's MFR across pile seeds against the SE it reports (issue 47 item 16): one thesis-space
-# point (sweeps/thesis-lds.toml's scene at its defaults; friction 0.2, D 2 mm, gap 4.2 mm (2.1 D),
-# 1.3 m/s) run with scene seeds 1…N, each result kept as seeds/<point>/seed-<n>.json.
-# Resumable: a recorded seed is skipped. Run from the repository's root with target/release/sweep
-# built (or SWEEP=path).
-#   bash docs/study/steady/seeds.sh [N]
+# A point's MFR across pile seeds against the SE it reports: thesis-space points
+# (sweeps/thesis-lds.toml's scene at its defaults) run with scene seeds 1…N, each result kept as
+# seeds/<point>/seed-<n>.json. The default point is friction 0.2, D 2 mm, gap 4.2 mm (2.1 D),
+# 1.3 m/s. Resumable: a recorded seed is skipped. Run from the repository's root with
+# target/release/sweep built (or SWEEP=path).
+#   bash docs/study/steady/seeds.sh [N [friction diameter gap blade_speed]]
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 n=${1:-30}
-point="friction=0.2,diameter=2.0,gap=4.2,blade_speed=1.3"
-out=docs/study/steady/seeds/f0.2-D2-g4.2-v1.3
+f=${2:-0.2} d=${3:-2.0} g=${4:-4.2} v=${5:-1.3}
+point="friction=$f,diameter=$d,gap=$g,blade_speed=$v"
+out=docs/study/steady/seeds/f$f-D$d-g$g-v$v
 mkdir -p "$out"
 for seed in $(seq 1 "$n"); do
   [ -s "$out/seed-$seed.json" ] && continue

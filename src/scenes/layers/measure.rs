@@ -24,7 +24,7 @@
 //! on a loose bed, packing on a fused one — and the effective thickness too on a fused bed,
 //! which converges geometrically), then mean and SE (SD / √n) of what is left. It is steady when
 //! at least [`MIN_STEADY_PASSES`] passes remain and their least-squares trend is within
-//! [`MAX_TREND_Z`] SE of flat.
+//! [`MAX_TREND_Z`] SE of flat (on a fused bed, the effective thickness's too).
 
 use std::collections::HashSet;
 use std::path::Path;
@@ -212,7 +212,11 @@ pub fn steady_layer(plan: &Plan, passes: Vec<PassRecord>) -> LayerSeries {
     let (packing, packing_se) = pick(&|p| p.packing);
     let (relative_density, relative_density_se) = pick(&|p| p.relative_density);
     let (effective, effective_se) = pick(&|p| p.effective_thickness_m);
-    let steady = kept.len() >= MIN_STEADY_PASSES && trend_z(&answer[cut..]).abs() <= MAX_TREND_Z;
+    // A fused bed is steady once its depth has stopped growing too: its packing can settle
+    // passes before the depth reaches the drop over it.
+    let flat = |y: &[f64]| trend_z(y).abs() <= MAX_TREND_Z;
+    let steady =
+        kept.len() >= MIN_STEADY_PASSES && flat(&answer[cut..]) && (!plan.fused || flat(&depth[cut..]));
     LayerSeries {
         bed: if plan.fused { "fused" } else { "loose" }.into(),
         layer_thickness_m: plan.layer_thickness,

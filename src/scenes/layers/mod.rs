@@ -29,7 +29,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::outcome::RunResult;
 use crate::scene::plausible::short;
-use crate::scene::settings::SceneSettings;
+use crate::scene::settings::{SceneSettings, DEFAULT_SEARCH_PASSES};
 use crate::scene::{
     prime_seed, Base, Feed, FeedClass, Scene, GRAVITY, LAYER_FRACTION_MAX, MIN_INSERT_VOLUME,
 };
@@ -215,21 +215,20 @@ impl Layout for Layers {
                 why: format!("\"{}\": expected \"loose\" or \"fused\"", s.bed),
             });
         }
-        if s.search_passes > 0 && Bed::parse(&s.bed) != Some(Bed::Fused) {
+        let asked = s.search_passes.unwrap_or(0);
+        if asked > 0 && Bed::parse(&s.bed) != Some(Bed::Fused) {
             return Err(BadSetting {
                 key: "scene.search_passes",
                 why: format!(
-                    "{}: a search for the steady depth needs bed = \"fused\" (a loose bed's depth is the powder it keeps); expected 0",
-                    s.search_passes
+                    "{asked}: a search for the steady depth needs bed = \"fused\" (a loose bed's depth is the powder it keeps); expected 0"
                 ),
             });
         }
-        if s.search_passes > 0 && s.search_passes + MIN_STEADY_PASSES > s.layers {
+        if asked > 0 && asked + MIN_STEADY_PASSES > s.layers {
             return Err(BadSetting {
                 key: "scene.search_passes",
                 why: format!(
-                    "{}: expected at most scene.layers − {MIN_STEADY_PASSES} = {} (the steady layer needs {MIN_STEADY_PASSES} passes after the search)",
-                    s.search_passes,
+                    "{asked}: expected at most scene.layers − {MIN_STEADY_PASSES} = {} (the steady layer needs {MIN_STEADY_PASSES} passes after the search)",
                     s.layers.saturating_sub(MIN_STEADY_PASSES)
                 ),
             });
@@ -292,10 +291,11 @@ impl Layout for Layers {
                 ("passes", s.layers.to_string()),
                 (
                     "bed",
-                    if s.search_passes > 0 {
+                    if search_passes(s) > 0 {
                         format!(
                             "{}, the first {} passes a search for its steady depth",
-                            s.bed, s.search_passes
+                            s.bed,
+                            search_passes(s)
                         )
                     } else {
                         s.bed.clone()
@@ -378,6 +378,15 @@ impl Layout for Layers {
     }
 }
 
+/// The passes that search for a fused bed's steady depth: as set, or by default
+/// [`DEFAULT_SEARCH_PASSES`] less what the steady layer needs after them; none on a loose bed.
+pub fn search_passes(s: &SceneSettings) -> usize {
+    if Bed::parse(&s.bed) != Some(Bed::Fused) {
+        return 0;
+    }
+    s.search_passes.unwrap_or_else(|| DEFAULT_SEARCH_PASSES.min(s.layers.saturating_sub(MIN_STEADY_PASSES)))
+}
+
 /// The plan a scene of this layout carries.
 pub fn plan_of(scene: &Scene) -> Plan {
     scene.own().expect("a layers scene carries its plan")
@@ -433,7 +442,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let last_top = layers as f64 * t;
     // A search may set the solid below the plate (the depth it asks for deeper than the layers so
     // far): the feed platform's and the wall's faces reach that far down too.
-    let search_passes = if fused { settings.search_passes } else { 0 };
+    let search_passes = search_passes(settings);
     let search_max_depth = if search_passes > 0 { SEARCH_MAX_DEPTH_LAYERS * t } else { 0.0 };
     let block_depth = last_top + clearance + 2.0 * d + search_max_depth;
     // The pit holds a pass's excess dose below the plate.

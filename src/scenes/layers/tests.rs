@@ -107,12 +107,12 @@ fn a_bad_layer_count_bed_or_profile_is_refused_naming_its_key() {
     let fused = |layers: usize, search_passes: usize| SceneSettings {
         bed: "fused".into(),
         layers,
-        search_passes,
+        search_passes: Some(search_passes),
         ..settings()
     };
     let cases: [(SceneSettings, &str); 7] = [
         // A loose bed keeps its powder: there is no depth to search for.
-        (SceneSettings { search_passes: 1, ..settings() }, "scene.search_passes"),
+        (SceneSettings { search_passes: Some(1), ..settings() }, "scene.search_passes"),
         // The steady layer needs three passes after the search.
         (fused(6, 4), "scene.search_passes"),
         (SceneSettings { layers: 0, ..settings() }, "scene.layers"),
@@ -280,7 +280,7 @@ fn the_round_blade_is_an_arc_whose_lowest_line_is_the_tip() {
 
 #[test]
 fn a_fused_bed_s_search_sets_each_next_depth_to_its_own_times_the_drop_over_its_deposit() {
-    let s = SceneSettings { bed: "fused".into(), layers: 6, search_passes: 2, ..settings() };
+    let s = SceneSettings { bed: "fused".into(), layers: 6, search_passes: Some(2), ..settings() };
     let sc = scene(&s);
     let plan = plan_of(&sc);
     assert_eq!(plan.search_passes, 2);
@@ -327,4 +327,39 @@ fn a_fused_bed_s_search_sets_each_next_depth_to_its_own_times_the_drop_over_its_
     assert_eq!(recs.iter().filter(|r| r.search).count(), 2);
     let series = steady_layer(&plan, recs);
     assert!(series.steady_from >= 3, "steady from {}", series.steady_from);
+}
+
+#[test]
+fn a_fused_bed_whose_depth_still_grows_is_not_steady_though_its_packing_is() {
+    let plan = plan_of(&scene(&SceneSettings {
+        bed: "fused".into(),
+        layers: 8,
+        search_passes: Some(0),
+        ..settings()
+    }));
+    // The packing settles at 0.225 by pass 4 while the depth still creeps toward the drop over
+    // it (as Ti-6Al-4V on a round blade did, docs/study/layers.md).
+    let packing = [0.39, 0.33, 0.29, 0.226, 0.224, 0.227, 0.225, 0.226];
+    let depth: [f64; 8] = [50.0, 128.0, 152.0, 194.0, 203.0, 207.0, 211.0, 214.0];
+    let passes = |grow: bool| {
+        (0..8)
+            .map(|i| crate::outcome::layers::PassRecord {
+                effective_thickness_m: if grow { depth[i] } else { depth[i].min(203.0) } * 1e-6,
+                ..record(i + 1, packing[i])
+            })
+            .collect::<Vec<_>>()
+    };
+    assert!(!steady_layer(&plan, passes(true)).steady);
+    assert!(steady_layer(&plan, passes(false)).steady);
+}
+
+#[test]
+fn a_fused_bed_searches_by_default_as_far_as_its_passes_allow_and_a_loose_one_never() {
+    let fused = |layers: usize| SceneSettings { bed: "fused".into(), layers, ..settings() };
+    assert_eq!(search_passes(&fused(24)), DEFAULT_SEARCH_PASSES);
+    assert_eq!(search_passes(&fused(7)), 4);
+    assert_eq!(search_passes(&fused(2)), 0);
+    assert_eq!(search_passes(&SceneSettings { search_passes: Some(0), ..fused(24) }), 0);
+    assert_eq!(search_passes(&SceneSettings { layers: 24, ..settings() }), 0);
+    assert!(Layers.check_settings(&fused(2)).is_ok());
 }
