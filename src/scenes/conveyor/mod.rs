@@ -162,7 +162,7 @@ impl Layout for Conveyor {
         to: &Scene,
         to_pile: &str,
         distance: f64,
-    ) -> Result<warm::Warm, String> {
+    ) -> Result<warm::Warm, super::ColdStart> {
         warm::map(from, &from_dir.join(warm::STATE_DUMP), to, to_pile, distance)
     }
 
