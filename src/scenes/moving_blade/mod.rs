@@ -403,6 +403,9 @@ pub fn check_result(scene: &Scene, result: RunResult) -> Result<RunResult, Rejec
 }
 
 #[cfg(test)]
+mod scene_tests;
+
+#[cfg(test)]
 mod tests {
     use super::*;
     use crate::scene::{rayleigh_time, MIN_YOUNGS_MPA, THESIS_TIMESTEP};
