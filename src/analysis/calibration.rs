@@ -77,6 +77,25 @@ const ZOOM_STREAM: u64 = 21;
 const CANDIDATE_STREAM: u64 = 22;
 const ZOOM_CANDIDATE_STREAM: u64 = 23;
 
+/// What a `--target` should look like, said after each way it can be wrong.
+const TARGET_FORM: &str = "expected NAME=VALUE±SD (or +-), e.g. angle_of_repose=34.0±1.0";
+
+/// Why a `--target` is not one ([`Target::parse`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TargetError {
+    #[error("{TARGET_FORM}")]
+    NoEquals,
+    #[error("no ± SD: {TARGET_FORM}")]
+    NoSd,
+    /// The value or the SD (`what`) is not a finite number.
+    #[error("{what} {text:?} is not a number: {TARGET_FORM}")]
+    NotANumber { what: &'static str, text: String },
+    #[error("no name: {TARGET_FORM}")]
+    NoName,
+    #[error("SD {sd}: expected a positive uncertainty (the measurement's SD)")]
+    Sd { sd: f64 },
+}
+
 /// A measured value to reproduce: `name = value ± sd`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Target {
@@ -88,26 +107,22 @@ pub struct Target {
 impl Target {
     /// `name=value±sd` (or `+-`), e.g. `angle_of_repose=34.0±1.0`; the error says what was
     /// expected.
-    pub fn parse(s: &str) -> Result<Target, String> {
-        let expected = "expected NAME=VALUE±SD (or +-), e.g. angle_of_repose=34.0±1.0";
-        let (name, rest) = s.split_once('=').ok_or_else(|| expected.to_string())?;
-        let (value, sd) = rest
-            .split_once('±')
-            .or_else(|| rest.split_once("+-"))
-            .ok_or_else(|| format!("no ± SD: {expected}"))?;
-        let num = |t: &str, what: &str| {
+    pub fn parse(s: &str) -> Result<Target, TargetError> {
+        let (name, rest) = s.split_once('=').ok_or(TargetError::NoEquals)?;
+        let (value, sd) = rest.split_once('±').or_else(|| rest.split_once("+-")).ok_or(TargetError::NoSd)?;
+        let num = |t: &str, what: &'static str| {
             t.trim()
                 .parse::<f64>()
                 .ok()
                 .filter(|v| v.is_finite())
-                .ok_or_else(|| format!("{what} {t:?} is not a number: {expected}"))
+                .ok_or_else(|| TargetError::NotANumber { what, text: t.to_string() })
         };
         let (name, value, sd) = (name.trim(), num(value, "value")?, num(sd, "SD")?);
         if name.is_empty() {
-            return Err(format!("no name: {expected}"));
+            return Err(TargetError::NoName);
         }
         if sd <= 0.0 {
-            return Err(format!("SD {sd}: expected a positive uncertainty (the measurement's SD)"));
+            return Err(TargetError::Sd { sd });
         }
         Ok(Target { name: name.to_string(), value, sd })
     }
@@ -575,7 +590,7 @@ mod tests {
         assert_eq!(Target::parse("bulk_packing = 0.58 +- 0.01").unwrap().sd, 0.01);
         for bad in ["angle", "angle=34", "angle=x±1", "=34±1", "angle=34±0", "angle=34±-1", "angle=34±nan"]
         {
-            let e = Target::parse(bad).unwrap_err();
+            let e = Target::parse(bad).unwrap_err().to_string();
             assert!(e.contains("expected"), "{bad}: {e}");
         }
     }

@@ -60,7 +60,7 @@ pub fn variants(sweep: &Sweep, presets: &[String], extra: &[String]) -> Result<V
         for set in sets.split(',').filter(|s| !s.trim().is_empty()) {
             let (k, v) =
                 set.split_once('=').ok_or_else(|| variant(format!("`{set}`: expected key=value")))?;
-            scene = scene.with_knob(k.trim(), v.trim()).map_err(variant)?;
+            scene = scene.with_knob(k.trim(), v.trim()).map_err(|e| variant(e.to_string()))?;
         }
         scene.fidelity = format!("fast+{name}");
         // Validation checks the preset's name; the variant's knobs are what it checks.

@@ -56,7 +56,7 @@ pub(super) struct CalibrateArgs {
 pub(super) fn calibrate(a: CalibrateArgs) -> Result<(), Error> {
     let mut targets = Vec::new();
     for t in &a.targets {
-        targets.push(Target::parse(t).map_err(|why| flag(format!("--target {t}"), why))?);
+        targets.push(Target::parse(t).map_err(|why| flag(format!("--target {t}"), why.to_string()))?);
     }
     let mut sweep = Sweep::load(&a.sweep)?;
     check_timestep(&mut sweep, a.force)?;

@@ -33,7 +33,7 @@ impl From<CliError> for Error {
     }
 }
 
-/// A refused flag: `flag("--jobs 0", "expected at least 1")`.
-pub(super) fn flag(given: impl Into<String>, why: impl Into<String>) -> Error {
-    CliError::Flag { given: given.into(), why: why.into() }.into()
+/// A refused flag: `flag("--jobs 0", "expected at least 1")`; `why` may be a library's error.
+pub(super) fn flag(given: impl Into<String>, why: impl std::fmt::Display) -> Error {
+    CliError::Flag { given: given.into(), why: why.to_string() }.into()
 }

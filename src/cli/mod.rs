@@ -276,7 +276,11 @@ fn check_timestep(sweep: &mut Sweep, force: bool) -> Result<(), Error> {
     }
     if sweep.file.scene.timestep_s == 0.0 {
         demsweep::scene::check_rayleigh_fraction(sweep.file.scene.rayleigh_fraction).map_err(|why| {
-            SweepError::Key { path: sweep.path.clone(), key: "scene.rayleigh_fraction".into(), why }
+            SweepError::Key {
+                path: sweep.path.clone(),
+                key: "scene.rayleigh_fraction".into(),
+                why: why.to_string(),
+            }
         })?;
     }
     Ok(())

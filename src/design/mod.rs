@@ -19,24 +19,38 @@ pub type Points = Vec<Vec<f64>>;
 /// 10,000), small enough that a mistyped level count is an error instead of exhausting memory.
 pub const MAX_POINTS: usize = 1_000_000;
 
+/// Why a design of the size asked for cannot be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DesignError {
+    #[error("expected at least 2 values per dimension")]
+    TooFewLevels,
+    /// A lattice of `levels^dim` points, more than [`MAX_POINTS`].
+    #[error("{levels}^{dim} points: expected at most {MAX_POINTS}")]
+    LargeLattice { levels: usize, dim: usize },
+    #[error("expected a positive number of points")]
+    NoPoints,
+    #[error("expected at most {MAX_POINTS} points")]
+    TooManyPoints,
+}
+
 /// The number of points of the lattice with `levels` values per dimension in `dim`
 /// dimensions, or why it cannot be built (fewer than 2 levels, more than [`MAX_POINTS`]).
-pub fn lattice_size(dim: usize, levels: usize) -> Result<usize, String> {
+pub fn lattice_size(dim: usize, levels: usize) -> Result<usize, DesignError> {
     if levels < 2 {
-        return Err("expected at least 2 values per dimension".into());
+        return Err(DesignError::TooFewLevels);
     }
     match levels.checked_pow(dim as u32) {
         Some(n) if n <= MAX_POINTS => Ok(n),
-        _ => Err(format!("{levels}^{dim} points: expected at most {MAX_POINTS}")),
+        _ => Err(DesignError::LargeLattice { levels, dim }),
     }
 }
 
 /// Check a Halton design size: at least 1 and at most [`MAX_POINTS`] points.
-pub fn lds_size(n: usize) -> Result<usize, String> {
+pub fn lds_size(n: usize) -> Result<usize, DesignError> {
     if n == 0 {
-        Err("expected a positive number of points".into())
+        Err(DesignError::NoPoints)
     } else if n > MAX_POINTS {
-        Err(format!("expected at most {MAX_POINTS} points"))
+        Err(DesignError::TooManyPoints)
     } else {
         Ok(n)
     }

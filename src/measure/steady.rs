@@ -319,8 +319,6 @@ pub fn compute(scene: &Scene, c: &HeldBlocks, blocks: &[Block], stop: &str, fram
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::settings::SceneSettings;
-    use std::collections::BTreeMap;
 
     #[test]
     fn mser_drops_a_ramp_and_keeps_a_flat_series() {
@@ -386,43 +384,5 @@ mod tests {
         assert_eq!(b[1], Block { step: 400, gone: 0.0005, strip: 0.0012, heap: 901, heap_mass: 0.03 });
         assert_eq!(parse_log("demsweep: stop target at step 3\n").unwrap_err(), SteadyError::TooFewBlocks(0));
         assert!(parse_log("demsweep: block 1 step x\n").is_err());
-    }
-
-    #[test]
-    fn a_flow_that_stops_is_a_jam_not_a_steady_zero() {
-        let values: BTreeMap<String, f64> =
-            [("diameter", 2.0), ("gap", 1.7)].iter().map(|(k, v)| (k.to_string(), *v)).collect();
-        let settings = SceneSettings { layout: "conveyor".into(), ..SceneSettings::default() };
-        let scene = crate::scenes::build(&values, &settings).unwrap();
-        let cv = &scene.conveyor;
-        let c = HeldBlocks {
-            ideal_block_mass: cv.ideal_block_mass,
-            warmup_blocks: cv.warmup_blocks,
-            block_steps: cv.block_steps,
-            heap_particles: cv.heap_particles,
-        };
-        let m = c.ideal_block_mass;
-        let warm = c.warmup_blocks as usize;
-        // Blocks of deposit (gone mass only, the strip empty): flowing at 0.08 for the warm-up
-        // and 12 blocks after it, then nothing for 14 blocks.
-        let mfr: Vec<f64> = (0..warm + 26).map(|k| if k < warm + 12 { 0.08 } else { 0.0 }).collect();
-        let blocks: Vec<Block> = mfr
-            .iter()
-            .enumerate()
-            .map(|(k, y)| Block {
-                step: 100 * (k as u64 + 1),
-                gone: y * m,
-                strip: 0.0,
-                heap: c.heap_particles as u64,
-                heap_mass: 0.0,
-            })
-            .collect();
-        let st = compute(&scene, &c, &blocks, "target", &[]);
-        assert_eq!(st.mfr, 0.0);
-        assert!(st.unsteady.as_deref().is_some_and(|w| w.contains("the flow stopped")), "{:?}", st.unsteady);
-        // A point where nothing ever passes is a steady zero.
-        let none: Vec<Block> = blocks.iter().map(|b| Block { gone: 0.0, ..*b }).collect();
-        let st = compute(&scene, &c, &none, "target", &[]);
-        assert_eq!((st.mfr, st.unsteady), (0.0, None));
     }
 }

@@ -122,20 +122,69 @@ pub fn quantity(name: &str) -> Option<&'static Quantity> {
     QUANTITIES.iter().find(|q| q.name == name)
 }
 
+/// Why a sweep cannot be calibrated against its targets: the sentence after the flag.
+#[derive(Debug, thiserror::Error)]
+pub enum TargetsRefused {
+    /// The sweep's layout is not one (refused when the sweep file is read, so internal here).
+    #[error(transparent)]
+    Layout(#[from] crate::scene::SceneError),
+    #[error(
+        "{}: no free parameter: give the parameters to calibrate as ranges in [parameters], e.g. friction = {{ lo = 0.1, hi = 0.5 }}",
+        path.display()
+    )]
+    NoFreeParameter { path: std::path::PathBuf },
+    #[error("--target: expected at least one, e.g. --target angle_of_repose=34.0±1.0")]
+    NoTarget,
+    /// Not one of [`QUANTITIES`] (`all`: their names).
+    #[error("--target {name}: not a quantity a run measures; expected one of {all}")]
+    Unknown { name: String, all: String },
+    /// A quantity the sweep's layout does not measure (`measured`: those it does).
+    #[error("--target {name}: scene.layout \"{layout}\" does not measure it; it measures {measured}")]
+    NotMeasured { name: String, layout: String, measured: String },
+    #[error("--target {name}: given twice")]
+    Twice { name: String },
+    /// A value outside what its quantity can be, `lo`–`hi`.
+    #[error("--target {name}={}: outside {lo}–{hi}{unit}, the values it can take", shown(*.value, 1e6))]
+    Outside { name: String, value: f64, lo: f64, hi: f64, unit: &'static str },
+    /// An SD outside `min`–`max`, the least measurement and the whole range.
+    #[error(
+        "--target {name}: SD {}{unit}: expected {} to {}{unit} (the measurement's SD, at most the whole range)",
+        shown_sd(*.sd),
+        crate::scene::plausible::show(*.min),
+        crate::scene::plausible::show(*.max)
+    )]
+    Sd { name: String, sd: f64, unit: &'static str, min: f64, max: f64 },
+}
+
+/// `v` as written below `big`, in exponent form beyond it.
+fn shown(v: f64, big: f64) -> String {
+    if v.abs() < big {
+        v.to_string()
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// An SD as written between 1e-4 and 1e6, in exponent form outside.
+fn shown_sd(sd: f64) -> String {
+    if (1e-4..1e6).contains(&sd) {
+        sd.to_string()
+    } else {
+        format!("{sd:e}")
+    }
+}
+
 /// Refuse targets the sweep cannot be calibrated against: a sweep with no free parameter, a
 /// quantity nobody measures or its layout does not, a target given twice. The error is the
 /// sentence after the flag.
-pub fn check(sweep: &Sweep, targets: &[Target]) -> std::result::Result<(), String> {
+pub fn check(sweep: &Sweep, targets: &[Target]) -> std::result::Result<(), TargetsRefused> {
     let layout = &sweep.file.scene.layout;
-    let measures = crate::scenes::of(&sweep.file.scene).map_err(|e| e.to_string())?.calibration_targets();
+    let measures = crate::scenes::of(&sweep.file.scene)?.calibration_targets();
     if sweep.dim() == 0 {
-        return Err(format!(
-            "{}: no free parameter: give the parameters to calibrate as ranges in [parameters], e.g. friction = {{ lo = 0.1, hi = 0.5 }}",
-            sweep.path.display()
-        ));
+        return Err(TargetsRefused::NoFreeParameter { path: sweep.path.clone() });
     }
     if targets.is_empty() {
-        return Err("--target: expected at least one, e.g. --target angle_of_repose=34.0±1.0".into());
+        return Err(TargetsRefused::NoTarget);
     }
     let measured: Vec<&str> =
         QUANTITIES.iter().filter(|q| measures.contains(&q.name)).map(|q| q.name).collect();
@@ -143,23 +192,19 @@ pub fn check(sweep: &Sweep, targets: &[Target]) -> std::result::Result<(), Strin
         match quantity(&t.name) {
             None => {
                 let all: Vec<&str> = QUANTITIES.iter().map(|q| q.name).collect();
-                return Err(format!(
-                    "--target {}: not a quantity a run measures; expected one of {}",
-                    t.name,
-                    all.join(", ")
-                ));
+                return Err(TargetsRefused::Unknown { name: t.name.clone(), all: all.join(", ") });
             }
             Some(q) if !measures.contains(&q.name) => {
-                return Err(format!(
-                    "--target {}: scene.layout \"{layout}\" does not measure it; it measures {}",
-                    t.name,
-                    measured.join(", ")
-                ))
+                return Err(TargetsRefused::NotMeasured {
+                    name: t.name.clone(),
+                    layout: layout.clone(),
+                    measured: measured.join(", "),
+                })
             }
             Some(q) => check_possible(q, t)?,
         }
         if targets[..k].iter().any(|o| o.name == t.name) {
-            return Err(format!("--target {}: given twice", t.name));
+            return Err(TargetsRefused::Twice { name: t.name.clone() });
         }
     }
     Ok(())
@@ -171,25 +216,15 @@ const MIN_SD_OF_RANGE: f64 = 1e-6;
 
 /// A target inside what its quantity can be, with an SD between [`MIN_SD_OF_RANGE`] of that
 /// range and the whole range.
-fn check_possible(q: &Quantity, t: &Target) -> std::result::Result<(), String> {
+fn check_possible(q: &Quantity, t: &Target) -> std::result::Result<(), TargetsRefused> {
     let (lo, hi) = q.possible;
     let unit = if q.unit == "-" { "" } else { q.unit };
     if !(t.value >= lo && t.value <= hi) {
-        return Err(format!(
-            "--target {}={}: outside {lo}–{hi}{unit}, the values it can take",
-            t.name,
-            if t.value.abs() < 1e6 { t.value.to_string() } else { format!("{:e}", t.value) }
-        ));
+        return Err(TargetsRefused::Outside { name: t.name.clone(), value: t.value, lo, hi, unit });
     }
     let (min_sd, max_sd) = ((hi - lo) * MIN_SD_OF_RANGE, hi - lo);
     if !(t.sd >= min_sd && t.sd <= max_sd) {
-        let sd = if (1e-4..1e6).contains(&t.sd) { t.sd.to_string() } else { format!("{:e}", t.sd) };
-        return Err(format!(
-            "--target {}: SD {sd}{unit}: expected {} to {}{unit} (the measurement's SD, at most the whole range)",
-            t.name,
-            crate::scene::plausible::show(min_sd),
-            crate::scene::plausible::show(max_sd)
-        ));
+        return Err(TargetsRefused::Sd { name: t.name.clone(), sd: t.sd, unit, min: min_sd, max: max_sd });
     }
     Ok(())
 }

@@ -64,14 +64,21 @@ pub const MAX_RAYLEIGH_FRACTION: f64 = 0.5;
 /// LIGGGHTS's least Young's modulus without `hard_particles yes`, MPa (global_properties.cpp).
 pub const MIN_YOUNGS_MPA: f64 = 5.0;
 
+/// A timestep beyond [`MAX_RAYLEIGH_FRACTION`] of the Rayleigh time: the fraction it is.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error(
+    "timestep {fraction:.3} × the Rayleigh time is beyond the measured safe bound \
+     {MAX_RAYLEIGH_FRACTION} (at 0.6 every seed lost atoms at the harshest corner of the thesis \
+     space, BENCHMARKS.md \"Stability edge\"); lower scene.rayleigh_fraction, or pass --force"
+)]
+pub struct UnsafeTimestep {
+    pub fraction: f64,
+}
+
 /// Refuse a timestep beyond [`MAX_RAYLEIGH_FRACTION`] of the Rayleigh time, saying why.
-pub fn check_rayleigh_fraction(fraction: f64) -> Result<(), String> {
+pub fn check_rayleigh_fraction(fraction: f64) -> Result<(), UnsafeTimestep> {
     if fraction > MAX_RAYLEIGH_FRACTION * (1.0 + 1e-9) {
-        return Err(format!(
-            "timestep {fraction:.3} × the Rayleigh time is beyond the measured safe bound \
-             {MAX_RAYLEIGH_FRACTION} (at 0.6 every seed lost atoms at the harshest corner of the thesis \
-             space, BENCHMARKS.md \"Stability edge\"); lower scene.rayleigh_fraction, or pass --force"
-        ));
+        return Err(UnsafeTimestep { fraction });
     }
     Ok(())
 }
@@ -81,8 +88,8 @@ pub enum SceneError {
     #[error("parameter `{name}` = {value}: {why}")]
     Invalid { name: String, value: f64, why: String },
     /// Far outside what the scene is built for ([`plausible`]); the message names the slip.
-    #[error("{0}")]
-    Implausible(String),
+    #[error(transparent)]
+    Implausible(#[from] plausible::OutOfBounds),
 }
 
 /// Every number the deck and the metrics need for one point.
@@ -416,7 +423,11 @@ impl Base {
         };
         if !settings.force_bounds {
             if let Err(why) = check_rayleigh_fraction(timestep / rayleigh_time) {
-                return Err(SceneError::Invalid { name: "timestep".into(), value: timestep, why });
+                return Err(SceneError::Invalid {
+                    name: "timestep".into(),
+                    value: timestep,
+                    why: why.to_string(),
+                });
             }
         }
 

@@ -115,8 +115,6 @@ pub fn pile_data(s: &Scene) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::settings::{SceneSettings, SizeDistributionSpec};
-    use std::collections::BTreeMap;
 
     #[test]
     fn class_counts_sum_to_n_and_follow_the_fractions() {
@@ -124,62 +122,5 @@ mod tests {
         assert_eq!(c.iter().sum::<usize>(), 1000);
         assert_eq!(c, vec![44, 228, 408, 269, 51]);
         assert_eq!(class_counts(&[1.0], 7), vec![7]);
-    }
-
-    fn atoms(data: &str) -> Vec<[f64; 7]> {
-        let body = data.split("Atoms\n\n").nth(1).unwrap();
-        body.lines()
-            .map(|l| {
-                let v: Vec<f64> = l.split_whitespace().map(|t| t.parse().unwrap()).collect();
-                [v[0], v[1], v[2], v[3], v[4], v[5], v[6]]
-            })
-            .collect()
-    }
-
-    #[test]
-    fn the_pile_has_the_planned_count_no_overlaps_and_lies_inside_the_box() {
-        let settings = SceneSettings {
-            size_distribution: SizeDistributionSpec::Weibull { bins: 5 },
-            ..SceneSettings::gated()
-        };
-        let s = crate::scenes::build(&BTreeMap::new(), &settings).unwrap();
-        let a = atoms(&pile_data(&s));
-        assert_eq!(a.len(), s.atoms());
-        assert!(s.substrate_particles > 0);
-        for (n, p) in a.iter().enumerate() {
-            assert_eq!(p[0] as usize, n + 1);
-            let r = p[2] / 2.0;
-            assert!(p[4] - r >= 0.0 && p[4] + r < s.x_hi);
-            if n < s.particles {
-                assert_eq!(p[1], 1.0);
-                assert!(p[6] - r > 0.0 && p[6] + r < s.z_hi);
-                assert!(p[4] + r < s.gate_x, "the dose lies behind the gate");
-            } else {
-                // The substrate: tops at z = 0, standing on the plate.
-                assert_eq!(p[1], 3.0);
-                assert!((p[6] + r).abs() < 1e-12 && (p[6] - r - s.z_lo).abs() < 1e-12);
-            }
-        }
-        // No sphere of the dose overlaps another or the substrate (a brute-force sample).
-        for i in (0..s.particles).step_by(7) {
-            for j in 0..a.len() {
-                if i == j {
-                    continue;
-                }
-                let d2: f64 = (4..7).map(|k| (a[i][k] - a[j][k]).powi(2)).sum();
-                let contact = (a[i][2] + a[j][2]) / 2.0;
-                assert!(d2.sqrt() > contact, "atoms {} and {} overlap", i + 1, j + 1);
-            }
-        }
-    }
-
-    #[test]
-    fn the_pile_is_reproducible_and_changes_with_the_seed() {
-        let s = crate::scenes::build(&BTreeMap::new(), &SceneSettings::gated()).unwrap();
-        assert_eq!(pile_data(&s), pile_data(&s));
-        let other =
-            crate::scenes::build(&BTreeMap::new(), &SceneSettings { seed: 7, ..SceneSettings::gated() })
-                .unwrap();
-        assert_ne!(pile_data(&s), pile_data(&other));
     }
 }

@@ -32,10 +32,119 @@ pub const DENSITY_KG_M3: (f64, f64) = (100.0, 25_000.0);
 /// Smallest timestep, as a fraction of the Rayleigh time: 10× finer than the reference fidelity.
 pub const MIN_RAYLEIGH_FRACTION: f64 = 0.01;
 
+/// What a refusal says after it: the way past it.
+const FORCE: &str = "(--force runs it anyway)";
+
+/// A point far outside what the scene is built for: the value in its unit, the bound, and what
+/// was probably meant. Lengths in mm, as written.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum OutOfBounds {
+    /// The mean diameter (set by `name`, written as `value`) below [`MIN_DIAMETER_MM`].
+    #[error(
+        "{name} {} mm: below the {} µm the scene is built for; values are in mm — did you mean {}? {FORCE}",
+        show(*.value),
+        show(MIN_DIAMETER_MM * 1e3),
+        show(*.value * 1e3)
+    )]
+    SmallDiameter { name: &'static str, value: f64 },
+    /// The mean diameter above [`MAX_DIAMETER_MM`].
+    #[error(
+        "{name} {} mm: above the {} mm the scene is built for; values are in mm — did you mean {}? {FORCE}",
+        show(*.value),
+        show(MAX_DIAMETER_MM),
+        show(*.value / 1e3)
+    )]
+    LargeDiameter { name: &'static str, value: f64 },
+    /// A gap below [`MIN_GAP_DIAMETERS`] of the mean diameter `d`.
+    #[error(
+        "gap {} mm: below {} D (D = {} mm), where nothing passes under the blade; values are in \
+         mm — did you mean {}? {FORCE}",
+        show(*.gap),
+        show(MIN_GAP_DIAMETERS),
+        show(*.d),
+        show(*.gap * 1e3)
+    )]
+    Gap { gap: f64, d: f64 },
+    /// More than [`MAX_PARTICLES`] in the dose (or the held heap of height `heap` above the
+    /// gap), at the diameter written as `value` of `name`.
+    #[error(
+        "{} particles at gap {} mm{} and {name} {} mm (gap = {} D): more than the {MAX_PARTICLES} the \
+         scene is built for; values are in mm — lower the {} or raise the diameter {FORCE}",
+        count(.particles),
+        show(*.gap),
+        heap_of(.heap),
+        show(*.value),
+        show(ratio(.gap, .d)),
+        lower(.heap)
+    )]
+    Particles { particles: usize, gap: f64, d: f64, heap: Option<f64>, name: &'static str, value: f64 },
+    /// A timestep below [`MIN_RAYLEIGH_FRACTION`] of the Rayleigh time; `steps` the run would take.
+    #[error(
+        "timestep {timestep:.3e} s: {} of the Rayleigh time ({rayleigh_time:.3e} s), below the {} the scene is built \
+         for (a run would take {steps:.1e} steps); scene.timestep_s is in seconds {FORCE}",
+        show(*.fraction),
+        show(MIN_RAYLEIGH_FRACTION)
+    )]
+    Timestep { timestep: f64, fraction: f64, rayleigh_time: f64, steps: f64 },
+    /// A blade speed or density outside its range `lo`–`hi`, with the value it would be in the
+    /// unit it was probably written in, if that is inside.
+    #[error(
+        "{name} {} {unit}: outside the {}–{} {unit} the scene is built for; values are in \
+         {unit}{} {FORCE}",
+        show(*.value),
+        show(*.lo),
+        show(*.hi),
+        did_you_mean(.meant)
+    )]
+    Range {
+        name: &'static str,
+        unit: &'static str,
+        value: f64,
+        lo: f64,
+        hi: f64,
+        meant: Option<(f64, &'static str)>,
+    },
+}
+
+/// A particle count; a count that saturated is past anything countable.
+fn count(particles: &usize) -> String {
+    if *particles == usize::MAX {
+        "more than 1e19".to_string()
+    } else {
+        particles.to_string()
+    }
+}
+
+/// `", a heap of H mm"` for a held heap, or nothing.
+fn heap_of(heap: &Option<f64>) -> String {
+    heap.map(|h| format!(", a heap of {} mm", show(h))).unwrap_or_default()
+}
+
+fn ratio(a: &f64, b: &f64) -> f64 {
+    a / b
+}
+
+/// What to lower for fewer particles: the held heap's height, or the gap.
+fn lower(heap: &Option<f64>) -> &'static str {
+    if heap.is_some() {
+        "heap_height"
+    } else {
+        "gap"
+    }
+}
+
+/// `" — did you mean V (written in UNIT)?"` for a value that is in range in another unit.
+fn did_you_mean(meant: &Option<(f64, &'static str)>) -> String {
+    meant.map(|(v, slip)| format!(" — did you mean {} (written in {slip})?", show(v))).unwrap_or_default()
+}
+
 /// Refuse a point outside the bounds above, saying which value, in which unit, and what was
 /// probably meant. `values` are the catalogue parameters in catalogue units.
-pub fn check(scene: &Scene, values: &BTreeMap<String, f64>, settings: &SceneSettings) -> Result<(), String> {
-    const FORCE: &str = "(--force runs it anyway)";
+pub fn check(
+    scene: &Scene,
+    values: &BTreeMap<String, f64>,
+    settings: &SceneSettings,
+) -> Result<(), OutOfBounds> {
     let mm = |m: f64| m * 1e3;
     let d = mm(scene.diameter);
     // The parameter that sets the mean diameter.
@@ -47,89 +156,46 @@ pub fn check(scene: &Scene, values: &BTreeMap<String, f64>, settings: &SceneSett
     };
     let d_value = values.get(d_name).copied().unwrap_or(d);
     if d < MIN_DIAMETER_MM {
-        return Err(format!(
-            "{d_name} {} mm: below the {} µm the scene is built for; values are in mm — did you mean {}? {FORCE}",
-            show(d_value),
-            show(MIN_DIAMETER_MM * 1e3),
-            show(d_value * 1e3)
-        ));
+        return Err(OutOfBounds::SmallDiameter { name: d_name, value: d_value });
     }
     if d > MAX_DIAMETER_MM {
-        return Err(format!(
-            "{d_name} {} mm: above the {} mm the scene is built for; values are in mm — did you mean {}? {FORCE}",
-            show(d_value),
-            show(MAX_DIAMETER_MM),
-            show(d_value / 1e3)
-        ));
+        return Err(OutOfBounds::LargeDiameter { name: d_name, value: d_value });
     }
     check_speed_and_density(values)?;
     let gap = mm(scene.gap);
     if gap < MIN_GAP_DIAMETERS * d {
-        return Err(format!(
-            "gap {} mm: below {} D (D = {} mm), where nothing passes under the blade; values are in \
-             mm — did you mean {}? {FORCE}",
-            show(gap),
-            show(MIN_GAP_DIAMETERS),
-            show(d),
-            show(gap * 1e3)
-        ));
+        return Err(OutOfBounds::Gap { gap, d });
     }
     // The conveyor holds its heap at a count instead of placing a dose: then the heap sets it.
     let particles = scene.powder_particles();
-    let held_heap =
+    let heap =
         (scene.conveyor.heap_particles > scene.particles).then(|| mm(scene.conveyor.heap_height - scene.gap));
     if particles > MAX_PARTICLES {
-        return Err(format!(
-            "{} particles at gap {} mm{} and {d_name} {} mm (gap = {} D): more than the {} the \
-             scene is built for; values are in mm — lower the {} or raise the diameter {FORCE}",
-            // A count that saturated is past anything countable.
-            if particles == usize::MAX { "more than 1e19".to_string() } else { particles.to_string() },
-            show(gap),
-            held_heap.map(|h| format!(", a heap of {} mm", show(h))).unwrap_or_default(),
-            show(d_value),
-            show(gap / d),
-            MAX_PARTICLES,
-            if held_heap.is_some() { "heap_height" } else { "gap" }
-        ));
+        return Err(OutOfBounds::Particles { particles, gap, d, heap, name: d_name, value: d_value });
     }
     let fraction = scene.timestep / scene.rayleigh_time;
     if fraction < MIN_RAYLEIGH_FRACTION {
-        return Err(format!(
-            "timestep {:.3e} s: {} of the Rayleigh time ({:.3e} s), below the {} the scene is built \
-             for (a run would take {:.1e} steps); scene.timestep_s is in seconds {FORCE}",
-            scene.timestep,
-            show(fraction),
-            scene.rayleigh_time,
-            show(MIN_RAYLEIGH_FRACTION),
-            scene.spread_steps() as f64
-        ));
+        return Err(OutOfBounds::Timestep {
+            timestep: scene.timestep,
+            fraction,
+            rayleigh_time: scene.rayleigh_time,
+            steps: scene.spread_steps() as f64,
+        });
     }
     Ok(())
 }
 
 /// Blade speed and density within [`BLADE_SPEED_M_S`] and [`DENSITY_KG_M3`], naming the slip.
-fn check_speed_and_density(values: &BTreeMap<String, f64>) -> Result<(), String> {
-    const FORCE: &str = "(--force runs it anyway)";
+fn check_speed_and_density(values: &BTreeMap<String, f64>) -> Result<(), OutOfBounds> {
     let checks = [
         ("blade_speed", "m/s", BLADE_SPEED_M_S, "mm/s", 1e-3),
         ("density", "kg/m3", DENSITY_KG_M3, "g/cm³", 1e3),
     ];
     for (name, unit, (lo, hi), slip, factor) in checks {
-        let Some(&v) = values.get(name) else { continue };
-        let meant = v * factor;
-        let guess = if (lo..=hi).contains(&meant) {
-            format!(" — did you mean {} (written in {slip})?", show(meant))
-        } else {
-            String::new()
-        };
-        if v < lo || v > hi {
-            return Err(format!(
-                "{name} {} {unit}: outside the {}–{} {unit} the scene is built for; values are in \
-                 {unit}{guess} {FORCE}",
-                show(v),
-                show(lo),
-                show(hi)
-            ));
+        let Some(&value) = values.get(name) else { continue };
+        let meant = Some((value * factor, slip)).filter(|(m, _)| (lo..=hi).contains(m));
+        if value < lo || value > hi {
+            return Err(OutOfBounds::Range { name, unit, value, lo, hi, meant });
         }
     }
     Ok(())

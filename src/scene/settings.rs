@@ -230,17 +230,17 @@ impl SceneSettings {
 
     /// These settings with every knob the file did not write (`written`: keys of `[scene]`)
     /// taken from the preset named by `fidelity`.
-    pub fn resolve_preset(&self, written: &[String]) -> std::result::Result<SceneSettings, String> {
+    pub fn resolve_preset(&self, written: &[String]) -> std::result::Result<SceneSettings, KnobError> {
         let preset = SceneSettings::preset(&self.fidelity)
-            .ok_or_else(|| format!("\"{}\": expected one of {}", self.fidelity, quoted(&FIDELITIES)))?;
-        let mut table = toml::Table::try_from(&preset).map_err(|e| e.to_string())?;
-        let mine = toml::Table::try_from(self).map_err(|e| e.to_string())?;
+            .ok_or_else(|| KnobError::UnknownFidelity { fidelity: self.fidelity.clone() })?;
+        let mut table = toml::Table::try_from(&preset)?;
+        let mine = toml::Table::try_from(self)?;
         for key in written {
             if let Some(v) = mine.get(key) {
                 table.insert(key.clone(), v.clone());
             }
         }
-        let mut resolved: SceneSettings = table.try_into().map_err(|e: toml::de::Error| e.to_string())?;
+        let mut resolved: SceneSettings = table.try_into()?;
         resolved.force_bounds = self.force_bounds;
         Ok(resolved)
     }
@@ -275,24 +275,44 @@ impl SceneSettings {
     }
 
     /// These settings with `key = value` (TOML syntax) set, for a knob only.
-    pub fn with_knob(&self, key: &str, value: &str) -> std::result::Result<SceneSettings, String> {
-        if !KNOBS.contains(&key) {
-            return Err(format!(
-                "`{key}` is not a numerical knob{}; knobs: {}",
-                hint(key, KNOBS),
-                KNOBS.join(", ")
-            ));
+    pub fn with_knob(&self, key: &str, value: &str) -> std::result::Result<SceneSettings, KnobError> {
+        let (key, value) = (key.to_string(), value.to_string());
+        if !KNOBS.contains(&key.as_str()) {
+            return Err(KnobError::NotAKnob { key });
         }
-        let parsed: toml::Table = toml::from_str(&format!("{key} = {value}"))
-            .map_err(|_| format!("{key} = {value}: not a TOML value"))?;
-        let mut table = toml::Table::try_from(self).map_err(|e| e.to_string())?;
+        let Ok(parsed) = toml::from_str::<toml::Table>(&format!("{key} = {value}")) else {
+            return Err(KnobError::NotToml { key, value });
+        };
+        let mut table = toml::Table::try_from(self)?;
         table.extend(parsed);
-        let mut s: SceneSettings = table
-            .try_into()
-            .map_err(|e: toml::de::Error| format!("{key} = {value}: {}", e.message().trim()))?;
+        let mut s: SceneSettings = table.try_into().map_err(|e: toml::de::Error| {
+            let why = e.message().trim().to_string();
+            KnobError::Value { key, value, why }
+        })?;
         s.force_bounds = self.force_bounds;
         Ok(s)
     }
+}
+
+/// Why settings cannot take a preset's knobs or a knob's value.
+#[derive(Debug, thiserror::Error)]
+pub enum KnobError {
+    /// A `fidelity` that names no preset.
+    #[error("\"{fidelity}\": expected one of {}", quoted(&FIDELITIES))]
+    UnknownFidelity { fidelity: String },
+    /// The settings would not go through TOML (a broken invariant).
+    #[error(transparent)]
+    Write(#[from] toml::ser::Error),
+    #[error(transparent)]
+    Read(#[from] toml::de::Error),
+    /// Not one of [`KNOBS`].
+    #[error("`{key}` is not a numerical knob{}; knobs: {}", hint(.key, KNOBS), KNOBS.join(", "))]
+    NotAKnob { key: String },
+    #[error("{key} = {value}: not a TOML value")]
+    NotToml { key: String, value: String },
+    /// A value the knob cannot take; `why` is TOML's message.
+    #[error("{key} = {value}: {why}")]
+    Value { key: String, value: String, why: String },
 }
 
 pub(crate) fn quoted(names: &[&str]) -> String {

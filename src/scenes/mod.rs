@@ -20,6 +20,24 @@ use crate::scene::settings::SceneSettings;
 use crate::scene::{plausible, Base, Scene, SceneError};
 pub use conveyor::warm::Warm;
 
+/// Why a point starts cold instead of from a finished neighbour's state ([`Layout::warm_start`]).
+#[derive(Debug, thiserror::Error)]
+pub enum ColdStart {
+    /// A layout with no steady state to carry.
+    #[error("the {layout} layout starts every point cold")]
+    NoWarmStart { layout: &'static str },
+    /// The neighbour's state dump cannot be read.
+    #[error(transparent)]
+    Dump(#[from] crate::engine::dump::DumpError),
+    #[error("the state dump is empty")]
+    EmptyDump,
+    /// The neighbour's powder is not this point's scaled.
+    #[error("another size distribution")]
+    OtherSizes,
+    #[error("nothing of its heap fits this point")]
+    NothingFits,
+}
+
 /// Every layout, in the order `scene.layout`'s error lists them.
 pub const LAYOUTS: &[&dyn Layout] =
     &[&moving_blade::GATED, &moving_blade::THESIS, &conveyor::Conveyor, &pour::Pour, &layers::Layers];
@@ -183,8 +201,8 @@ pub trait Layout: Sync {
         _to: &Scene,
         _to_pile: &str,
         _distance: f64,
-    ) -> Result<Warm, String> {
-        Err(format!("the {} layout starts every point cold", self.name()))
+    ) -> Result<Warm, ColdStart> {
+        Err(ColdStart::NoWarmStart { layout: self.name() })
     }
 
     /// `scene` run until the SE of its MFR is at most `mfr_abs_se` (the sweep's choice), if
@@ -256,7 +274,7 @@ pub fn build(values: &BTreeMap<String, f64>, settings: &SceneSettings) -> Result
     let layout = of(settings)?;
     let scene = layout.derive(Base::new(values, settings)?, settings);
     if !settings.force_bounds {
-        plausible::check(&scene, values, settings).map_err(SceneError::Implausible)?;
+        plausible::check(&scene, values, settings)?;
     }
     Ok(scene)
 }

@@ -8,7 +8,7 @@
 use std::collections::HashMap;
 use std::path::PathBuf;
 
-use super::{Manifest, PointRecord, RunState, Store, StoreError};
+use super::{Manifest, PointRecord, RunDamage, RunState, Store, StoreError};
 use crate::outcome::RunResult;
 
 /// Relative difference below which two parameter values are the same (they went through JSON
@@ -21,11 +21,11 @@ fn same(a: f64, b: f64) -> bool {
 
 /// Whether `r` holds the swept `values` under `names`. A parameter the result does not name
 /// is not compared (results of the test executors name only what they know).
-fn holds(r: &RunResult, names: &[String], values: &[f64]) -> Result<(), String> {
+fn holds(r: &RunResult, names: &[String], values: &[f64]) -> Result<(), RunDamage> {
     for (n, v) in names.iter().zip(values) {
         if let Some(&got) = r.parameters.get(n) {
             if !same(got, *v) {
-                return Err(format!("its parameters are not this point's ({n} = {got}, expected {v})"));
+                return Err(RunDamage::OtherPoint { name: n.clone(), got, expected: *v });
             }
         }
     }
@@ -35,15 +35,15 @@ fn holds(r: &RunResult, names: &[String], values: &[f64]) -> Result<(), String> 
 /// Whether `r` holds the sweep's `fixed` values. A result that names the swept parameters
 /// (every real run names them all) must name each fixed one with its value; one that names none
 /// of them (a test executor's) is not compared.
-fn holds_fixed(r: &RunResult, swept: &[String], fixed: &[(String, f64)]) -> Result<(), String> {
+fn holds_fixed(r: &RunResult, swept: &[String], fixed: &[(String, f64)]) -> Result<(), RunDamage> {
     if !swept.iter().any(|n| r.parameters.contains_key(n)) {
         return Ok(());
     }
     for (n, v) in fixed {
         match r.parameters.get(n) {
             Some(&got) if same(got, *v) => {}
-            Some(&got) => return Err(format!("its fixed {n} = {got} is not the sweep's {v}")),
-            None => return Err(format!("it does not give the fixed {n} (the sweep's is {v})")),
+            Some(&got) => return Err(RunDamage::OtherFixed { name: n.clone(), got, sweep: *v }),
+            None => return Err(RunDamage::NoFixed { name: n.clone(), sweep: *v }),
         }
     }
     Ok(())

@@ -184,12 +184,45 @@ pub enum RunState {
     /// older format): the file and why. Re-run it, saying so.
     Damaged {
         file: PathBuf,
-        reason: String,
+        reason: RunDamage,
     },
     /// A directory without a result, not claimed by a live process: re-run it.
     Incomplete,
     /// Never started.
     Pending,
+}
+
+/// Why a `result.json` or `failure.json` does not count: read after the file's name.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RunDamage {
+    /// Not readable as its type; `why` is the reader's or the parser's message.
+    #[error("unreadable ({why})")]
+    Unreadable { why: String },
+    /// The result of another run directory: its hash (shortened) and this directory's name.
+    #[error("holds the result of another run ({theirs}), not of {ours}")]
+    OtherRun { theirs: String, ours: String },
+    #[error(
+        "format {format}: expected {RESULT_FORMAT} (written by another version of sweep, which this one cannot read)"
+    )]
+    Format { format: u32 },
+    #[error(
+        "steady = false: a done run is steady (an unsteady run is a failure); the file was edited or is damaged"
+    )]
+    Unsteady,
+    /// `vx` or `vx_se` with another number of layers than [`VX_LAYERS`].
+    #[error("{what}: {layers} layers, expected {VX_LAYERS}")]
+    Layers { what: &'static str, layers: usize },
+    /// A number no run can produce.
+    #[error(transparent)]
+    Implausible(#[from] crate::measure::plausible::Implausible),
+    /// A swept parameter whose value is not the point's.
+    #[error("its parameters are not this point's ({name} = {got}, expected {expected})")]
+    OtherPoint { name: String, got: f64, expected: f64 },
+    /// A fixed parameter whose value is not the sweep's.
+    #[error("its fixed {name} = {got} is not the sweep's {sweep}")]
+    OtherFixed { name: String, got: f64, sweep: f64 },
+    #[error("it does not give the fixed {name} (the sweep's is {sweep})")]
+    NoFixed { name: String, sweep: f64 },
 }
 
 /// The outcome of [`Store::claim`].
@@ -211,26 +244,24 @@ pub struct Claim {
 /// Done, failed, or damaged (a result file that is there but cannot be read); `None` when the
 /// directory holds neither file.
 pub(super) fn finished_state(dir: &Path) -> Option<RunState> {
-    fn read<T: serde::de::DeserializeOwned>(path: &Path) -> Option<Result<T, String>> {
+    fn read<T: serde::de::DeserializeOwned>(path: &Path) -> Option<Result<T, RunDamage>> {
+        let unreadable = |why: String| RunDamage::Unreadable { why };
         match crate::sys::read::read_capped(path, super::OUTCOME_CAP) {
-            Ok(bytes) => Some(serde_json::from_slice(&bytes).map_err(|e| format!("unreadable ({e})"))),
+            Ok(bytes) => Some(serde_json::from_slice(&bytes).map_err(|e| unreadable(e.to_string()))),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
-            Err(e) => Some(Err(format!("unreadable ({e})"))),
+            Err(e) => Some(Err(unreadable(e.to_string()))),
         }
     }
     let mut damaged = None;
     let result = dir.join("result.json");
     // A result counts only if it is this directory's run and every number in it is possible.
-    let own = |r: &RunResult| -> Result<(), String> {
+    let own = |r: &RunResult| -> Result<(), RunDamage> {
         let name = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         if r.hash != name {
-            return Err(format!(
-                "holds the result of another run ({}), not of {name}",
-                super::short(&r.hash)
-            ));
+            return Err(RunDamage::OtherRun { theirs: super::short(&r.hash).to_string(), ours: name });
         }
         well_formed(r)?;
-        crate::measure::plausible::check_result(r)
+        Ok(crate::measure::plausible::check_result(r)?)
     };
     match read::<RunResult>(&result).map(|r| r.and_then(|r| own(&r).map(|()| r))) {
         Some(Ok(r)) => return Some(RunState::Done(Box::new(r))),
@@ -240,7 +271,7 @@ pub(super) fn finished_state(dir: &Path) -> Option<RunState> {
     let failure = dir.join("failure.json");
     let failure_format = |f: RunFailure| match f.format {
         RESULT_FORMAT => Ok(f),
-        n => Err(other_format(n)),
+        format => Err(RunDamage::Format { format }),
     };
     match read::<RunFailure>(&failure).map(|f| f.and_then(failure_format)) {
         Some(Ok(f)) => return Some(RunState::Failed(Box::new(f))),
@@ -252,26 +283,20 @@ pub(super) fn finished_state(dir: &Path) -> Option<RunState> {
 
 /// What the types of a `result.json` cannot say: it is of this version's format, a done run is
 /// steady (an unsteady one is a failure), and it has one v_x per layer.
-fn well_formed(r: &RunResult) -> Result<(), String> {
+fn well_formed(r: &RunResult) -> Result<(), RunDamage> {
     if r.format != RESULT_FORMAT {
-        return Err(other_format(r.format));
+        return Err(RunDamage::Format { format: r.format });
     }
     if !r.steady {
-        return Err("steady = false: a done run is steady (an unsteady run is a failure); \
-                    the file was edited or is damaged"
-            .into());
+        return Err(RunDamage::Unsteady);
     }
     for (what, n) in [("vx", r.vx.len()), ("vx_se", r.vx_se.len())] {
         // vx_se is absent from results of the gated layouts.
         if n != VX_LAYERS && !(what == "vx_se" && n == 0) {
-            return Err(format!("{what}: {n} layers, expected {VX_LAYERS}"));
+            return Err(RunDamage::Layers { what, layers: n });
         }
     }
     Ok(())
-}
-
-fn other_format(n: u32) -> String {
-    format!("format {n}: expected {RESULT_FORMAT} (written by another version of sweep, which this one cannot read)")
 }
 
 /// The first entry of `dir` that a sweep does not write (a user's file), if any: a directory

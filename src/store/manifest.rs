@@ -8,6 +8,61 @@ use serde::{Deserialize, Serialize};
 
 use super::{io, DirLock, Store, StoreError, LOCK};
 
+/// What is wrong inside a `manifest.json` that parsed: the field, and what was expected. Read
+/// after "the manifest …"; [`Store::read_manifest`] adds the file and "was edited or is damaged".
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ManifestError {
+    #[error("parameters: expected at least one swept parameter")]
+    NoParameters,
+    #[error("points[{point}].index = {index}: expected {point}")]
+    Index { point: usize, index: usize },
+    #[error("points[{point}].values: {values} values for {parameters} parameters")]
+    Values { point: usize, values: usize, parameters: usize },
+    /// The hash names a directory under `runs/`: 64 hex digits, nothing else.
+    #[error("points[{point}].hash = {hash:?}: expected 64 hex digits")]
+    Hash { point: usize, hash: String },
+    #[error("points[{point}].hash: the same as points[{first}].hash")]
+    SameHash { point: usize, first: usize },
+    #[error("spaces: expected at least one space")]
+    NoSpaces,
+    #[error("spaces[{space}].points: empty")]
+    EmptySpace { space: usize },
+    #[error("spaces[{space}].points[{at}] = {point}: no such point (the manifest has {points})")]
+    NoSuchPoint { space: usize, at: usize, point: usize, points: usize },
+    #[error("design: lds step {step}, max {max}: expected 1 ≤ step ≤ max")]
+    LdsSteps { step: usize, max: usize },
+    #[error(
+        "design: adapt first {first}, batch {batch}, max {max}, repeats {repeats}: expected 1 ≤ first × repeats ≤ max, batch ≥ 1, repeats ≥ 1"
+    )]
+    AdaptSizes { first: usize, batch: usize, max: usize, repeats: usize },
+    #[error("design: lattice levels {levels:?}: expected each at least 2")]
+    LatticeLevels { levels: Vec<usize> },
+    #[error("seals: expected one per point ({points})")]
+    SealCount { points: usize },
+    /// Two points each holding the other's hash.
+    #[error(
+        "points: the hashes of points {first} and {second} are swapped: each names the run of the \
+         other (swap them back, or start the sweep in a new directory)"
+    )]
+    Swapped { first: usize, second: usize },
+    /// Points whose values or hash no longer match their seal: the first, and how many more.
+    #[error(
+        "points[{first}].values or points[{first}].hash: edited since the sweep wrote them (they no \
+         longer match seals[{first}]){}; restore it from a copy, or start the sweep in a new directory",
+        and_more(.more)
+    )]
+    Edited { first: usize, more: usize },
+}
+
+/// `" (and N more points)"`, or nothing when there are none.
+fn and_more(more: &usize) -> String {
+    if *more > 0 {
+        format!(" (and {more} more points)")
+    } else {
+        String::new()
+    }
+}
+
 impl Store {
     pub fn manifest_path(dir: &Path) -> PathBuf {
         dir.join("manifest.json")
@@ -102,7 +157,7 @@ impl Store {
         manifest
             .validate()
             .and_then(|()| check_seals(&manifest, value.get("seals")))
-            .map_err(|e| not_a_sweep(format!("{e}; the manifest was edited or is damaged")))?;
+            .map_err(|source| StoreError::Damaged { path: path.clone(), source })?;
         let toml_path = dir.join("sweep.toml");
         let sweep = read_text(&toml_path, super::SWEEP_TOML_CAP).map_err(|e| StoreError::NotASweep {
             path: toml_path.clone(),
@@ -148,11 +203,11 @@ fn seals(m: &Manifest) -> Vec<String> {
 
 /// Every point matches its seal (a manifest written before seals has none); the error names
 /// the point, or the two points whose hashes were swapped.
-fn check_seals(m: &Manifest, seals: Option<&serde_json::Value>) -> Result<(), String> {
+fn check_seals(m: &Manifest, seals: Option<&serde_json::Value>) -> Result<(), ManifestError> {
     let Some(seals) = seals else { return Ok(()) };
     let seals: Vec<&str> = match seals.as_array() {
         Some(a) if a.len() == m.points.len() => a.iter().map(|s| s.as_str().unwrap_or("")).collect(),
-        _ => return Err(format!("seals: expected one per point ({})", m.points.len())),
+        _ => return Err(ManifestError::SealCount { points: m.points.len() }),
     };
     let ours = self::seals(m);
     let wrong: Vec<usize> = (0..seals.len()).filter(|&i| seals[i] != ours[i]).collect();
@@ -166,20 +221,11 @@ fn check_seals(m: &Manifest, seals: Option<&serde_json::Value>) -> Result<(), St
                 j != i && seal(i, &p.values, &q.hash) == seals[i] && seal(j, &q.values, &p.hash) == seals[j]
             });
             if let Some(&j) = partner {
-                let (i, j) = (i.min(j), i.max(j));
-                return Err(format!(
-                    "points: the hashes of points {i} and {j} are swapped: each names the run of the \
-                     other (swap them back, or start the sweep in a new directory)"
-                ));
+                return Err(ManifestError::Swapped { first: i.min(j), second: i.max(j) });
             }
         }
     }
-    let more =
-        if wrong.len() > 1 { format!(" (and {} more points)", wrong.len() - 1) } else { String::new() };
-    Err(format!(
-        "points[{first}].values or points[{first}].hash: edited since the sweep wrote them (they no \
-         longer match seals[{first}]){more}; restore it from a copy, or start the sweep in a new directory"
-    ))
+    Err(ManifestError::Edited { first, more: wrong.len() - 1 })
 }
 
 /// `key: a → b` for every leaf that differs between two sweep files, design, convergence and
@@ -303,53 +349,53 @@ pub struct Manifest {
 impl Manifest {
     /// Check what the types cannot: every index in range, one hash per point, as many values
     /// as parameters. The error names the field.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), ManifestError> {
         let n = self.points.len();
         if self.parameters.is_empty() {
-            return Err("parameters: expected at least one swept parameter".into());
+            return Err(ManifestError::NoParameters);
         }
         let mut hashes: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
         for (i, p) in self.points.iter().enumerate() {
             if p.index != i {
-                return Err(format!("points[{i}].index = {}: expected {i}", p.index));
+                return Err(ManifestError::Index { point: i, index: p.index });
             }
             if p.values.len() != self.parameters.len() {
-                return Err(format!(
-                    "points[{i}].values: {} values for {} parameters",
-                    p.values.len(),
-                    self.parameters.len()
-                ));
+                return Err(ManifestError::Values {
+                    point: i,
+                    values: p.values.len(),
+                    parameters: self.parameters.len(),
+                });
             }
             // The hash names a directory under runs/: 64 hex digits, nothing else.
             if p.hash.len() != 64 || !p.hash.bytes().all(|b| b.is_ascii_hexdigit()) {
-                return Err(format!("points[{i}].hash = {:?}: expected 64 hex digits", p.hash));
+                return Err(ManifestError::Hash { point: i, hash: p.hash.clone() });
             }
             if let Some(j) = hashes.insert(&p.hash, i) {
-                return Err(format!("points[{i}].hash: the same as points[{j}].hash"));
+                return Err(ManifestError::SameHash { point: i, first: j });
             }
         }
         if self.spaces.is_empty() {
-            return Err("spaces: expected at least one space".into());
+            return Err(ManifestError::NoSpaces);
         }
         for (k, s) in self.spaces.iter().enumerate() {
             if s.points.is_empty() {
-                return Err(format!("spaces[{k}].points: empty"));
+                return Err(ManifestError::EmptySpace { space: k });
             }
             if let Some((j, &v)) = s.points.iter().enumerate().find(|(_, &v)| v >= n) {
-                return Err(format!("spaces[{k}].points[{j}] = {v}: no such point (the manifest has {n})"));
+                return Err(ManifestError::NoSuchPoint { space: k, at: j, point: v, points: n });
             }
         }
         match &self.design {
             DesignRecord::Lds { step, max, .. } if *step == 0 || max < step => {
-                Err(format!("design: lds step {step}, max {max}: expected 1 ≤ step ≤ max"))
+                Err(ManifestError::LdsSteps { step: *step, max: *max })
             }
             DesignRecord::Adapt { first, batch, max, repeats, .. }
                 if *first == 0 || *batch == 0 || *repeats == 0 || *max < first * repeats =>
             {
-                Err(format!("design: adapt first {first}, batch {batch}, max {max}, repeats {repeats}: expected 1 ≤ first × repeats ≤ max, batch ≥ 1, repeats ≥ 1"))
+                Err(ManifestError::AdaptSizes { first: *first, batch: *batch, max: *max, repeats: *repeats })
             }
             DesignRecord::Lattice { levels } if levels.iter().any(|&l| l < 2) => {
-                Err(format!("design: lattice levels {levels:?}: expected each at least 2"))
+                Err(ManifestError::LatticeLevels { levels: levels.clone() })
             }
             _ => Ok(()),
         }

@@ -38,11 +38,11 @@ mod results;
 pub mod retry;
 
 pub use claim::{
-    foreign_entry, lease_alive, set_default_lease, Claim, ClaimAttempt, ClaimInfo, Heartbeat, RunState,
-    DEFAULT_LEASE,
+    foreign_entry, lease_alive, set_default_lease, Claim, ClaimAttempt, ClaimInfo, Heartbeat, RunDamage,
+    RunState, DEFAULT_LEASE,
 };
 pub use joblog::{logged_outcomes, read_joblog, AttemptRecord, Joblog, JoblogLine, JOBLOG_HEADER};
-pub use manifest::{DesignRecord, Manifest, PointRecord, SpaceRecord, MANIFEST_FORMAT};
+pub use manifest::{DesignRecord, Manifest, ManifestError, PointRecord, SpaceRecord, MANIFEST_FORMAT};
 pub use results::{write_results, PointStatus};
 
 use std::fs::{self, File, OpenOptions};
@@ -74,6 +74,9 @@ pub enum StoreError {
     /// The directory is not a sweep directory this version can read.
     #[error("{}: {reason}", path.display())]
     NotASweep { path: PathBuf, reason: String },
+    /// `manifest.json` parsed but contradicts itself or its seals: a hand edit or a damaged copy.
+    #[error("{}: {source}; the manifest was edited or is damaged", path.display())]
+    Damaged { path: PathBuf, source: ManifestError },
 }
 
 /// A write that failed is internal (exit 4; a full disk says so); a directory that is not a
@@ -82,7 +85,7 @@ impl From<StoreError> for crate::Error {
     fn from(e: StoreError) -> Self {
         match e {
             StoreError::Io { .. } => crate::Error::Internal(Box::new(e)),
-            StoreError::NotASweep { .. } => crate::Error::Input(Box::new(e)),
+            StoreError::NotASweep { .. } | StoreError::Damaged { .. } => crate::Error::Input(Box::new(e)),
         }
     }
 }

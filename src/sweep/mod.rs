@@ -69,7 +69,7 @@ impl Sweep {
         file.scene = file.scene.resolve_preset(&written).map_err(|e| SweepError::Key {
             path: path.to_path_buf(),
             key: "scene.fidelity".into(),
-            why: e,
+            why: e.to_string(),
         })?;
         include(&mut file, path)?;
         // A target the user wrote is the one the points run to.
@@ -264,7 +264,11 @@ mod preset_tests {
         assert_eq!(r.depth_diameters, 12.0);
         let k = mine.with_knob("rayleigh_fraction", "0.3").unwrap();
         assert_eq!((k.rayleigh_fraction, k.supply_factor), (0.3, 1.5));
-        assert!(mine.with_knob("supply_factor", "2").unwrap_err().contains("not a numerical knob"));
+        assert!(mine
+            .with_knob("supply_factor", "2")
+            .unwrap_err()
+            .to_string()
+            .contains("not a numerical knob"));
         assert!(mine.with_knob("run_to_end", "maybe").is_err());
     }
 }

@@ -2,8 +2,9 @@
 //! and no two files import each other in a loop. The table is read from the document, so the
 //! document cannot go stale without this test failing.
 //!
-//! An import is any `crate::NAME` (or `demsweep::NAME` in the binary) outside comments and
-//! outside `#[cfg(test)]` modules, which may build whatever they test with.
+//! An import is any `crate::NAME` (or `demsweep::NAME` in the binary) outside comments, in
+//! production code and in test modules alike: a test that builds its case from a stage above
+//! belongs at that stage (or in `tests/it/`), not below it.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -55,6 +56,34 @@ fn production_lines(text: &str) -> Vec<&str> {
     out
 }
 
+/// Every line of code of a file, comments left out, each with the module it is in: the file's
+/// own, or after a `#[cfg(test)]` on an inline `mod NAME {`, that test module (so that its
+/// `super::` is the file). Test modules close the file, as they do throughout `src/`.
+fn code_lines<'a>(text: &'a str, module: &[String]) -> Vec<(&'a str, Vec<String>)> {
+    let mut out = Vec::new();
+    let mut current = module.to_vec();
+    let mut after_cfg_test = false;
+    for line in text.lines() {
+        let t = line.trim_start();
+        if t.starts_with("//") {
+            continue;
+        }
+        if after_cfg_test && !t.starts_with("#[") {
+            let decl = t.strip_prefix("pub ").unwrap_or(t);
+            if let Some(name) = decl.strip_prefix("mod ").and_then(|r| r.strip_suffix('{')) {
+                current = module.to_vec();
+                current.push(name.trim().to_string());
+            }
+            after_cfg_test = false;
+        }
+        if t.starts_with("#[cfg(test)]") {
+            after_cfg_test = true;
+        }
+        out.push((line.split("//").next().unwrap_or(""), current.clone()));
+    }
+    out
+}
+
 /// The module path of a file under `src/`: `run/pool.rs` → ["run", "pool"].
 fn module_of(src: &Path, file: &Path) -> Vec<String> {
     let rel = file.strip_prefix(src).unwrap().with_extension("");
@@ -67,11 +96,11 @@ fn module_of(src: &Path, file: &Path) -> Vec<String> {
 }
 
 /// The paths a file names: `crate::a::b` (and `demsweep::a::b`), as segments.
-fn imports(lines: &[&str], module: &[String], in_binary: bool) -> Vec<Vec<String>> {
+fn imports(lines: &[(&str, Vec<String>)], in_binary: bool) -> Vec<Vec<String>> {
     let mut out = Vec::new();
     let roots: &[&str] =
         if in_binary { &["demsweep::", "crate::", "super::"] } else { &["crate::", "super::"] };
-    for line in lines {
+    for (line, module) in lines {
         for root in roots {
             for (i, _) in line.match_indices(root) {
                 let before = line[..i].chars().last();
@@ -129,7 +158,7 @@ fn graph() -> Graph {
         let text = std::fs::read_to_string(&path).unwrap();
         let binary = module[0] == "main" || module[0] == "cli";
         let top = module[0].clone();
-        let found = imports(&production_lines(&text), &module, binary);
+        let found = imports(&code_lines(&text, &module), binary);
         files.push((top, module, found));
     }
     Graph { files }

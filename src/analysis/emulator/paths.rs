@@ -134,7 +134,7 @@ mod tests {
             assert!(iv.lo.unwrap() <= v && v <= iv.hi.unwrap(), "{}: {v} {iv:?}", st.name());
         }
         // The case this guards: the plain skewness of the mean surface misses the interval.
-        let pts = crate::design::halton::halton(2, 4096, crate::sweep::Scrambling::Random, 14);
+        let pts = crate::design::halton::halton(2, 4096, crate::design::halton::Scrambling::Random, 14);
         let plain =
             crate::analysis::stats::moments(&pts.iter().map(|u| e.predict(u).0.max(0.0)).collect::<Vec<_>>());
         let (p, iv) = (plain.skewness.unwrap(), s.intervals[2]);

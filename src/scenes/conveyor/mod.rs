@@ -162,7 +162,7 @@ impl Layout for Conveyor {
         to: &Scene,
         to_pile: &str,
         distance: f64,
-    ) -> Result<warm::Warm, String> {
+    ) -> Result<warm::Warm, super::ColdStart> {
         warm::map(from, &from_dir.join(warm::STATE_DUMP), to, to_pile, distance)
     }
 
@@ -421,5 +421,44 @@ mod tests {
         let set = SceneSettings { warmup_s: Some(0.005), ..SceneSettings::default() };
         let (w, block_s) = warmup(&scene(&um, &set));
         assert!((0.005..0.005 + block_s).contains(&w), "set 0.005 s: warm-up {w} s");
+    }
+
+    #[test]
+    fn a_flow_that_stops_is_a_jam_not_a_steady_zero() {
+        use crate::measure::steady::{compute, Block, HeldBlocks};
+        let values: BTreeMap<String, f64> =
+            [("diameter", 2.0), ("gap", 1.7)].iter().map(|(k, v)| (k.to_string(), *v)).collect();
+        let settings = SceneSettings { layout: "conveyor".into(), ..SceneSettings::default() };
+        let scene = crate::scenes::build(&values, &settings).unwrap();
+        let cv = &scene.conveyor;
+        let c = HeldBlocks {
+            ideal_block_mass: cv.ideal_block_mass,
+            warmup_blocks: cv.warmup_blocks,
+            block_steps: cv.block_steps,
+            heap_particles: cv.heap_particles,
+        };
+        let m = c.ideal_block_mass;
+        let warm = c.warmup_blocks as usize;
+        // Blocks of deposit (gone mass only, the strip empty): flowing at 0.08 for the warm-up
+        // and 12 blocks after it, then nothing for 14 blocks.
+        let mfr: Vec<f64> = (0..warm + 26).map(|k| if k < warm + 12 { 0.08 } else { 0.0 }).collect();
+        let blocks: Vec<Block> = mfr
+            .iter()
+            .enumerate()
+            .map(|(k, y)| Block {
+                step: 100 * (k as u64 + 1),
+                gone: y * m,
+                strip: 0.0,
+                heap: c.heap_particles as u64,
+                heap_mass: 0.0,
+            })
+            .collect();
+        let st = compute(&scene, &c, &blocks, "target", &[]);
+        assert_eq!(st.mfr, 0.0);
+        assert!(st.unsteady.as_deref().is_some_and(|w| w.contains("the flow stopped")), "{:?}", st.unsteady);
+        // A point where nothing ever passes is a steady zero.
+        let none: Vec<Block> = blocks.iter().map(|b| Block { gone: 0.0, ..*b }).collect();
+        let st = compute(&scene, &c, &none, "target", &[]);
+        assert_eq!((st.mfr, st.unsteady), (0.0, None));
     }
 }

@@ -15,6 +15,7 @@ use std::path::Path;
 
 use crate::engine::dump::read_dump;
 use crate::scene::Scene;
+use crate::scenes::ColdStart;
 
 /// The end-of-run snapshot a warm start reads.
 pub const STATE_DUMP: &str = "dump.state";
@@ -64,10 +65,10 @@ struct Sphere {
 /// Map the state `from` left in `state` onto `to`, whose particle file is `to_pile` (its
 /// substrate spheres, the ids the warm particles follow), `distance` apart in the design's unit
 /// cube. `Err` says why the point starts cold.
-pub fn map(from: &Scene, state: &Path, to: &Scene, to_pile: &str, distance: f64) -> Result<Warm, String> {
+pub fn map(from: &Scene, state: &Path, to: &Scene, to_pile: &str, distance: f64) -> Result<Warm, ColdStart> {
     let ratio = size_ratio(from, to)?;
-    let snaps = read_dump(state, &STATE_COLUMNS).map_err(|e| e.to_string())?;
-    let snap = snaps.last().ok_or("the state dump is empty")?;
+    let snaps = read_dump(state, &STATE_COLUMNS)?;
+    let snap = snaps.last().ok_or(ColdStart::EmptyDump)?;
     let col: Vec<_> = STATE_COLUMNS.iter().map(|c| snap.column(c).expect("required column")).collect();
     let (sy, sv) = (to.depth / from.depth, to.blade_speed / from.blade_speed);
     let c = &to.conveyor;
@@ -120,7 +121,7 @@ pub fn map(from: &Scene, state: &Path, to: &Scene, to_pile: &str, distance: f64)
         warm.remove(i);
     }
     if warm.is_empty() {
-        return Err("nothing of its heap fits this point".into());
+        return Err(ColdStart::NothingFits);
     }
     let first_id = substrate.len() + 1;
     let data = data_file(&warm, first_id, to.density);
@@ -138,7 +139,7 @@ pub fn map(from: &Scene, state: &Path, to: &Scene, to_pile: &str, distance: f64)
 
 /// The ratio of `to`'s sizes to `from`'s, the same for every class; an error for two powders of
 /// another shape.
-fn size_ratio(from: &Scene, to: &Scene) -> Result<f64, String> {
+fn size_ratio(from: &Scene, to: &Scene) -> Result<f64, ColdStart> {
     let (a, b) = (&from.size_classes, &to.size_classes);
     let ratio = to.diameter / from.diameter;
     let same_shape = a.len() == b.len()
@@ -146,7 +147,7 @@ fn size_ratio(from: &Scene, to: &Scene) -> Result<f64, String> {
             (q.diameter / p.diameter / ratio - 1.0).abs() < 1e-9 && (q.fraction - p.fraction).abs() < 1e-9
         });
     if !same_shape || !ratio.is_finite() || ratio <= 0.0 {
-        return Err("another size distribution".into());
+        return Err(ColdStart::OtherSizes);
     }
     Ok(ratio)
 }
@@ -371,7 +372,7 @@ mod tests {
         };
         let values: BTreeMap<String, f64> = [("diameter".to_string(), 1.0)].into();
         let to = crate::scenes::build(&values, &weibull).unwrap();
-        let err = map(&from, &state, &to, &crate::scene::pile::pile_data(&to), 0.1).unwrap_err();
+        let err = map(&from, &state, &to, &crate::scene::pile::pile_data(&to), 0.1).unwrap_err().to_string();
         assert!(err.contains("size distribution"), "{err}");
     }
 }

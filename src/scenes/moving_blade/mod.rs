@@ -394,13 +394,16 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
 /// (its numbers kept), and no impossible number.
 pub fn check_result(scene: &Scene, result: RunResult) -> Result<RunResult, Rejected> {
     if let Err(e) = plausible::check_squeezed(scene, result.mfr) {
-        return Err(Rejected::measured(FailureClass::Implausible, e, result));
+        return Err(Rejected::measured(FailureClass::Implausible, e.to_string(), result));
     }
     if let Err(e) = plausible::check_result(&result) {
-        return Err(Rejected::new(FailureClass::Implausible, e));
+        return Err(Rejected::new(FailureClass::Implausible, e.to_string()));
     }
     Ok(result)
 }
+
+#[cfg(test)]
+mod scene_tests;
 
 #[cfg(test)]
 mod tests {

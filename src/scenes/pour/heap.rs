@@ -32,16 +32,35 @@ pub struct Grain {
     pub r: f64,
 }
 
+/// Why a heap cannot be measured: too low, or a sector without a slope to fit. Heights in m.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum HeapError {
+    #[error("the heap is {:.2} mm tall, under 5 diameters: nothing to fit", .height * 1e3)]
+    Low { height: f64 },
+    /// A sector whose slope spans fewer than 3 rings.
+    #[error("sector {sector} of {SECTORS}: its slope spans {rings} rings of one diameter, under the 3 a line needs")]
+    ShortSlope { sector: usize, rings: usize },
+    #[error("sector {sector} of {SECTORS}: the surface does not fall away from the axis")]
+    NoSlope { sector: usize },
+    /// A core narrower than [`CORE_MIN_RADIUS`] diameters where it is [`CORE_MIN_TOP`] tall.
+    #[error(
+        "the heap stands {:.2} mm tall: its core is under 2 diameters wide where it is {CORE_MIN_TOP} \
+         diameters tall, no packing to measure",
+        .height * 1e3
+    )]
+    NarrowCore { height: f64 },
+}
+
 /// The heap of `grains` around the vertical axis at `axis`, on the plate z = 0, profiled in
 /// rings `ring` wide; an error says why the heap cannot be measured.
-pub fn measure(grains: &[Grain], axis: [f64; 2], ring: f64) -> Result<Heap, String> {
+pub fn measure(grains: &[Grain], axis: [f64; 2], ring: f64) -> Result<Heap, HeapError> {
     let polar = |g: &Grain| {
         let (dx, dy) = (g.x - axis[0], g.y - axis[1]);
         (dx.hypot(dy), dy.atan2(dx).rem_euclid(std::f64::consts::TAU))
     };
     let height = grains.iter().map(|g| g.z + g.r).fold(0.0, f64::max);
     if height < 5.0 * ring {
-        return Err(format!("the heap is {:.2} mm tall, under 5 diameters: nothing to fit", height * 1e3));
+        return Err(HeapError::Low { height });
     }
     let rings = grains.iter().map(|g| (polar(g).0 / ring) as usize + 1).max().unwrap_or(0);
     let mut profile = vec![vec![0.0f64; rings]; SECTORS];
@@ -65,14 +84,11 @@ pub fn measure(grains: &[Grain], axis: [f64; 2], ring: f64) -> Result<Heap, Stri
         let b = first_under(a, FIT_FOOT);
         let points: Vec<(f64, f64)> = (a..b).map(|k| ((k as f64 + 0.5) * ring, p[k])).collect();
         if points.len() < 3 {
-            return Err(format!(
-                "sector {s} of {SECTORS}: its slope spans {} rings of one diameter, under the 3 a line needs",
-                points.len()
-            ));
+            return Err(HeapError::ShortSlope { sector: s, rings: points.len() });
         }
         let (intercept, slope) = fit_line(&points);
         if slope >= 0.0 {
-            return Err(format!("sector {s} of {SECTORS}: the surface does not fall away from the axis"));
+            return Err(HeapError::NoSlope { sector: s });
         }
         angles.push((-slope).atan().to_degrees());
         feet.push(-intercept / slope);
@@ -87,11 +103,7 @@ pub fn measure(grains: &[Grain], axis: [f64; 2], ring: f64) -> Result<Heap, Stri
     let tall_enough = lines.iter().map(|(a, b)| (a - CORE_MIN_TOP * ring) / -b).fold(f64::INFINITY, f64::min);
     let core = (CORE_FRACTION * foot).min(tall_enough);
     if core < CORE_MIN_RADIUS * ring {
-        return Err(format!(
-            "the heap stands {:.2} mm tall: its core is under 2 diameters wide where it is {CORE_MIN_TOP} \
-             diameters tall, no packing to measure",
-            height * 1e3
-        ));
+        return Err(HeapError::NarrowCore { height });
     }
     let z_top = lines.iter().map(|(a, b)| a + b * core).fold(height, f64::min) - ring;
     let (z_bottom, cylinder) = (ring, std::f64::consts::PI * core * core * (z_top - ring));
@@ -193,7 +205,7 @@ mod tests {
         let flat: Vec<Grain> = (0..400)
             .map(|i| Grain { x: (i % 20) as f64 * d, y: (i / 20) as f64 * d, z: 0.5 * d, r: 0.5 * d })
             .collect();
-        let e = measure(&flat, [0.01, 0.01], d).unwrap_err();
+        let e = measure(&flat, [0.01, 0.01], d).unwrap_err().to_string();
         assert!(e.contains("under 5 diameters"), "{e}");
     }
 
