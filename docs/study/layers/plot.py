@@ -102,40 +102,34 @@ def pretty(label):
     """'50um-0.1-gamma0' → '50 µm, 0.1 m/s, no cohesion'."""
     t, v, *rest = label.split("-")
     # The sweep's own blade is round; variants say what they change.
+    if rest and rest[0].startswith("search"):
+        # The search's records: the round blade unless a variant follows.
+        return ", ".join([t.replace("um", " µm"), v + " m/s", f"search {rest[0][6:]}"]
+                         + [VARIANTS.get(r, r) for r in rest[1:]])
     return ", ".join([t.replace("um", " µm"), v + " m/s"] + [VARIANTS.get(r, r) for r in rest or ["round blade"]])
 
 
 def ti64_runs():
-    """(label, series, failed, cpu) of the machine answer's records and of ti64.sh's lattice."""
+    """(name, label, series, failed, cpu) of the machine answer's records."""
     out = []
     for path in sorted(glob.glob(os.path.join(HERE, "record", "ti64-*.json"))):
-        series, failed = load(path)
-        j = json.load(open(path))
-        cpu = j.get("cpu_time") or (j.get("measured") or {}).get("cpu_time") or float("nan")
-        out.append((pretty(os.path.basename(path)[5:-5]), series, failed, cpu))
-    for path in sorted(glob.glob(os.path.join(HERE, "ti64", "runs", "*", "*.json"))):
-        if os.path.basename(path) not in ("result.json", "failure.json"):
-            continue
         series, failed = load(path)
         if not series:
             continue
         j = json.load(open(path))
-        m = j if "layers" in j else (j.get("measured") or {})
-        v = (m.get("parameters") or {}).get("blade_speed", float("nan"))
-        label = pretty(f"{series['layer_thickness_m'] * 1e6:.0f}um-{v:g}")
-        out.append((label, series, failed, m.get("cpu_time") or float("nan")))
+        cpu = j.get("cpu_time") or (j.get("measured") or {}).get("cpu_time") or float("nan")
+        name = os.path.basename(path)[5:-5]
+        out.append((name, pretty(name), series, failed, cpu))
     return out
 
 
-def ti64():
-    runs = ti64_runs()
-    if not runs:
-        return
+def ti64_laid(runs):
+    """The 50 µm point laid layer on layer from the bare plate: ti64-fused.png and its table."""
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.4))
     print()
     print("| case | steady | deposit, last 6 passes ± SE (µm) | over the drop | powder under the tip at the last pass (µm) | packing, last 6 | covered, last 6 | CPU s |")
     print("|---|---|---|---|---|---|---|---|")
-    for label, series, failed, cpu in runs:
+    for _, label, series, failed, cpu in runs:
         p = series["passes"]
         t = series["layer_thickness_m"]
         ks = [q["k"] for q in p]
@@ -160,6 +154,49 @@ def ti64():
     fig.suptitle("Ti-6Al-4V 15–45 µm on a fused bed: a steady bed deposits the layer thickness each pass")
     fig.tight_layout()
     fig.savefig(os.path.join(HERE, "ti64-fused.png"), dpi=110)
+
+
+def ti64_searched(runs):
+    """The points whose first passes searched for the steady depth: ti64-search.png and the
+    steady layer of each (mean ± SE over the passes from `steady_from`)."""
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.4))
+    print()
+    print("| case | passes (search) | steady from | packing ± SE | powder under the tip ± SE (µm) | over the drop | deposit over the drop ± SE | covered | CPU s | CPU s a pass |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for _, label, series, failed, cpu in runs:
+        p = series["passes"]
+        t = series["layer_thickness_m"]
+        search = sum(1 for q in p if q.get("search"))
+        line = a1.plot([q["k"] for q in p], [q["effective_thickness_m"] / t for q in p], marker=".", label=label)[0]
+        a2.plot([q["k"] for q in p], [q["packing"] for q in p], marker=".", color=line.get_color(), label=label)
+        for a, key in ((a1, "effective_thickness_m"), (a2, "packing")):
+            s = [q for q in p if q.get("search")]
+            a.plot([q["k"] for q in s], [q[key] / (t if key != "packing" else 1) for q in s], "o",
+                   mfc="white", color=line.get_color())
+        steady = f"{series['steady_from']}" if not failed else f"not steady ({series['steady_from']})"
+        print(f"| {label} | {len(p)} ({search}) | {steady} | {series['packing']:.3f} ± {series['packing_se']:.3f} | "
+              f"{series['effective_thickness_m'] * 1e6:.0f} ± {series['effective_thickness_se_m'] * 1e6:.1f} | "
+              f"{series['effective_thickness_m'] / t:.1f} | {series['relative_density']:.3f} ± {series['relative_density_se']:.3f} | "
+              f"{series['covered_fraction']:.2f} | {cpu:.0f} | {cpu / len(p):.0f} |")
+    a1.set_ylabel("powder under the blade / layer thickness")
+    a2.set_ylabel("packing of the pass's layer")
+    for a in (a1, a2):
+        a.set_xlabel("pass (open: searching for the steady depth)")
+        a.grid(alpha=0.3)
+        a.legend(fontsize=7)
+    fig.suptitle("Ti-6Al-4V 15–45 µm on a fused bed, round blade: the steady layer after a search")
+    fig.tight_layout()
+    fig.savefig(os.path.join(HERE, "ti64-search.png"), dpi=110)
+
+
+def ti64():
+    runs = ti64_runs()
+    laid = [r for r in runs if "search" not in r[0]]
+    searched = [r for r in runs if "search" in r[0]]
+    if laid:
+        ti64_laid(laid)
+    if searched:
+        ti64_searched(searched)
 
 
 if __name__ == "__main__":

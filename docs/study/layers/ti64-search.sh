@@ -12,10 +12,12 @@ out=docs/study/layers/record
 mkdir -p "$out"
 cases="ti64-50um-0.1-search4 12 4 0.05 0.1
 ti64-50um-0.1-search6 14 6 0.05 0.1
+ti64-50um-0.1-search6-supply2 14 6 0.05 0.1 supply_factor=2.0
 ti64-30um-0.1-search6 14 6 0.03 0.1
 ti64-80um-0.1-search6 14 6 0.08 0.1
 ti64-50um-0.2-search6 14 6 0.05 0.2
-ti64-50um-0.05-search6 14 6 0.05 0.05"
+ti64-50um-0.05-search6 14 6 0.05 0.05
+ti64-50um-0.2-search6-depth12 14 6 0.05 0.2 depth_diameters=12.0"
 want=${1:-}
 while read -r label layers search thickness speed extra; do
   [ -n "$want" ] && [ "$want" != "$label" ] && continue
