@@ -184,7 +184,7 @@ def ti64_searched(runs):
         a.set_xlabel("pass (open: searching for the steady depth)")
         a.grid(alpha=0.3)
         a.legend(fontsize=7)
-    fig.suptitle("Ti-6Al-4V 15–45 µm on a fused bed, round blade: the steady layer after a search")
+    fig.suptitle("Ti-6Al-4V 15–45 µm on a fused bed, round blade: searching for the steady layer")
     fig.tight_layout()
     fig.savefig(os.path.join(HERE, "ti64-search.png"), dpi=110)
 
