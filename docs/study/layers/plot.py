@@ -145,15 +145,22 @@ def ti64_laid(runs):
         print(f"| {label} | {steady} | {m:.1f} ± {se:.1f} | {m * 1e-6 / t:.2f} | "
               f"{p[-1]['effective_thickness_m'] * 1e6:.0f} | {pk:.3f} | {cov:.2f} | {cpu:.0f} |")
     a1.axhline(1.0, color="black", linewidth=0.8)
-    a1.set_ylabel("deposit / layer thickness (1: the bed keeps pace)")
-    a2.set_ylabel("powder under the blade / layer thickness")
-    for a in (a1, a2):
-        a.set_xlabel("pass")
+    finish(fig, {a1: "deposit / layer thickness (1: the bed keeps pace)",
+                 a2: "powder under the blade / layer thickness"}, "pass",
+           "Ti-6Al-4V 15–45 µm on a fused bed: a steady bed deposits the layer thickness each pass",
+           "ti64-fused.png")
+
+
+def finish(fig, ylabels, xlabel, title, name):
+    """Label, grid and save a figure of passes."""
+    for a, y in ylabels.items():
+        a.set_ylabel(y)
+        a.set_xlabel(xlabel)
         a.grid(alpha=0.3)
         a.legend(fontsize=7)
-    fig.suptitle("Ti-6Al-4V 15–45 µm on a fused bed: a steady bed deposits the layer thickness each pass")
+    fig.suptitle(title)
     fig.tight_layout()
-    fig.savefig(os.path.join(HERE, "ti64-fused.png"), dpi=110)
+    fig.savefig(os.path.join(HERE, name), dpi=110)
 
 
 def ti64_searched(runs):
@@ -178,15 +185,10 @@ def ti64_searched(runs):
               f"{series['effective_thickness_m'] * 1e6:.0f} ± {series['effective_thickness_se_m'] * 1e6:.1f} | "
               f"{series['effective_thickness_m'] / t:.1f} | {series['relative_density']:.3f} ± {series['relative_density_se']:.3f} | "
               f"{series['covered_fraction']:.2f} | {cpu:.0f} | {cpu / len(p):.0f} |")
-    a1.set_ylabel("powder under the blade / layer thickness")
-    a2.set_ylabel("packing of the pass's layer")
-    for a in (a1, a2):
-        a.set_xlabel("pass (open: searching for the steady depth)")
-        a.grid(alpha=0.3)
-        a.legend(fontsize=7)
-    fig.suptitle("Ti-6Al-4V 15–45 µm on a fused bed, round blade: searching for the steady layer")
-    fig.tight_layout()
-    fig.savefig(os.path.join(HERE, "ti64-search.png"), dpi=110)
+    finish(fig, {a1: "powder under the blade / layer thickness", a2: "packing of the pass's layer"},
+           "pass (open: searching for the steady depth)",
+           "Ti-6Al-4V 15–45 µm on a fused bed, round blade: searching for the steady layer",
+           "ti64-search.png")
 
 
 def ti64():
