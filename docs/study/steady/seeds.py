@@ -49,7 +49,8 @@ for d in sys.argv[1:]:
         z = (v - mo) / math.sqrt(s * s + sdo * sdo / len(others))
         zs.append((abs(z), seed, v, s, w, z))
     beyond = [z for z in zs if z[0] > 2.5]
-    print(f"  |z| > 2.5: {len(beyond)} of {len(zs)} (a normal: {len(zs) * 0.0124:.1f})")
+    rms = math.sqrt(sum(z[0] ** 2 for z in zs) / len(zs))
+    print(f"  RMS z {rms:.2f}; |z| > 2.5: {len(beyond)} of {len(zs)} (a normal: {len(zs) * 0.0124:.1f})")
     for _, seed, v, s, w, z in sorted(zs, reverse=True)[:5]:
         print(f"  seed {seed:>3}: MFR {v:.4f} ± {s:.4f}, {w} windows, z {z:+.2f}")
     n = len(runs)
