@@ -255,6 +255,25 @@ pub fn layer_dump(k: usize) -> String {
     format!("dump.layer.{k}")
 }
 
+/// Why a series is not steady. A fused bed whose passes after the transient each leave less
+/// than the drop, by more than [`MAX_TREND_Z`] SE, falls behind the platform: that is said first,
+/// with what may make it keep pace.
+pub fn unsteady_why(plan: &Plan, series: &LayerSeries) -> String {
+    let (from, to) = (series.steady_from, series.passes.len());
+    let behind = 1.0 - series.relative_density;
+    if plan.fused && to + 1 - from >= 2 && behind > MAX_TREND_Z * series.relative_density_se {
+        return format!(
+            "the bed falls behind: passes {from}–{to} each leave {:.2} ± {:.2} of the drop, where a steady fused bed keeps all of it (a larger dose, scene.supply_factor, or a slower blade may keep pace)",
+            series.relative_density, series.relative_density_se
+        );
+    }
+    if to + 1 - from < MIN_STEADY_PASSES {
+        format!("fewer than {MIN_STEADY_PASSES} passes after the transient (MSER kept passes {from}–{to})")
+    } else {
+        format!("a trend over passes {from}–{to} beyond {MAX_TREND_Z} SE")
+    }
+}
+
 /// The run's result: every pass, the steady layer as the point's answer (MFR: its relative
 /// density on a loose bed, its packing on a fused one). A run not steady by its last pass fails
 /// as `unsteady`, its numbers kept.
@@ -318,19 +337,7 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         ..run.record(steps)
     };
     if !series.steady {
-        let why = if series.passes.len() - (series.steady_from - 1) < MIN_STEADY_PASSES {
-            format!(
-                "fewer than {MIN_STEADY_PASSES} passes after the transient (MSER kept passes {}–{})",
-                series.steady_from,
-                series.passes.len()
-            )
-        } else {
-            format!(
-                "a trend over passes {}–{} beyond {MAX_TREND_Z} SE",
-                series.steady_from,
-                series.passes.len()
-            )
-        };
+        let why = unsteady_why(&plan, &series);
         return Err(Rejected::measured(
             FailureClass::Unsteady,
             format!("layers not steady by pass {}: {why}", series.passes.len()),

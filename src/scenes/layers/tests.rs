@@ -354,6 +354,34 @@ fn a_fused_bed_whose_depth_still_grows_is_not_steady_though_its_packing_is() {
 }
 
 #[test]
+fn a_fused_bed_that_leaves_less_than_the_drop_is_said_to_fall_behind() {
+    let plan = plan_of(&scene(&SceneSettings {
+        bed: "fused".into(),
+        layers: 8,
+        search_passes: Some(0),
+        ..settings()
+    }));
+    // Each pass leaves 0.65 of the drop (the round blade at 0.2 m/s at 50 µm), the depth growing.
+    let passes: Vec<_> = (0..8)
+        .map(|i| crate::outcome::layers::PassRecord {
+            relative_density: 0.65 + 0.01 * (i % 2) as f64,
+            effective_thickness_m: (1000.0 + 17.0 * i as f64) * 1e-6,
+            ..record(i + 1, 0.03)
+        })
+        .collect();
+    let series = steady_layer(&plan, passes);
+    assert!(!series.steady);
+    let why = super::measure::unsteady_why(&plan, &series);
+    assert!(
+        why.starts_with("the bed falls behind") && why.contains("0.65") && why.contains("supply_factor"),
+        "{why}"
+    );
+    // A loose bed's relative density is its packing, not a share it must keep.
+    let loose = plan_of(&scene(&settings()));
+    assert!(!super::measure::unsteady_why(&loose, &series).contains("falls behind"));
+}
+
+#[test]
 fn a_fused_bed_searches_by_default_as_far_as_its_passes_allow_and_a_loose_one_never() {
     let fused = |layers: usize| SceneSettings { bed: "fused".into(), layers, ..settings() };
     assert_eq!(search_passes(&fused(24)), DEFAULT_SEARCH_PASSES);
