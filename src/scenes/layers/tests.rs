@@ -364,7 +364,7 @@ fn a_fused_bed_that_leaves_less_than_the_drop_is_said_to_fall_behind() {
     // Each pass leaves 0.65 of the drop (the round blade at 0.2 m/s at 50 µm), the depth growing.
     let passes: Vec<_> = (0..8)
         .map(|i| crate::outcome::layers::PassRecord {
-            relative_density: 0.65 + 0.01 * (i % 2) as f64,
+            relative_density: 0.645 + 0.01 * (i % 2) as f64,
             effective_thickness_m: (1000.0 + 17.0 * i as f64) * 1e-6,
             ..record(i + 1, 0.03)
         })
