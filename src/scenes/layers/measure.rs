@@ -61,12 +61,15 @@ pub struct PassLine {
     pub plate_mass: f64,
 }
 
+/// The fields after `prefix` on each log line that starts with it.
+fn lines_after<'a>(log: &'a str, prefix: &'a str) -> impl Iterator<Item = Vec<&'a str>> + 'a {
+    log.lines().filter_map(move |l| Some(l.trim().strip_prefix(prefix)?.split_whitespace().collect()))
+}
+
 /// The pass lines of a log, in order.
 pub fn parse_log(log: &str) -> Vec<PassLine> {
-    log.lines()
-        .filter_map(|l| {
-            let rest = l.trim().strip_prefix("demsweep: layer ")?;
-            let f: Vec<&str> = rest.split_whitespace().collect();
+    lines_after(log, "demsweep: layer ")
+        .filter_map(|f| {
             // k step S plate M count N
             if f.len() < 5 || f[1] != "step" || f[3] != "plate" {
                 return None;
@@ -78,10 +81,8 @@ pub fn parse_log(log: &str) -> Vec<PassLine> {
 
 /// The solid's top after each pass of a fused bed's log (`demsweep: solid k top Z`), by pass.
 pub fn parse_solids(log: &str) -> Vec<(usize, f64)> {
-    log.lines()
-        .filter_map(|l| {
-            let rest = l.trim().strip_prefix("demsweep: solid ")?;
-            let f: Vec<&str> = rest.split_whitespace().collect();
+    lines_after(log, "demsweep: solid ")
+        .filter_map(|f| {
             if f.len() < 3 || f[1] != "top" {
                 return None;
             }
