@@ -94,8 +94,8 @@ def gaboriault():
     fig.savefig(os.path.join(HERE, "gaboriault.png"), dpi=110)
 
 
-VARIANTS = {"flat": "flat blade", "gamma0": "no cohesion", "supply2": "2 × the dose", "depth12": "depth 12 D",
-            "dt0.165": "timestep halved", "plate20": "plate 20 D", "plate80": "plate 80 D"}
+VARIANTS = {"flat": "flat blade", "gamma0": "no cohesion", "halfdose": "half the dose", "depth12": "depth 12 D",
+            "dt0.165": "timestep halved", "plate20": "plate 20 D", "plate80": "plate 80 D", "seed2": "seed 2"}
 
 
 def pretty(label):
@@ -106,7 +106,8 @@ def pretty(label):
         # The search's records: the round blade unless a variant follows.
         return ", ".join([t.replace("um", " µm"), v + " m/s", f"search {rest[0][6:]}"]
                          + [VARIANTS.get(r, r) for r in rest[1:]])
-    return ", ".join([t.replace("um", " µm"), v + " m/s"] + [VARIANTS.get(r, r) for r in rest or ["round blade"]])
+    blade = [] if "flat" in rest else ["round blade"]
+    return ", ".join([t.replace("um", " µm"), v + " m/s"] + blade + [VARIANTS.get(r, r) for r in rest])
 
 
 def ti64_runs():

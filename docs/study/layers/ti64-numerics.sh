@@ -1,19 +1,21 @@
 #!/usr/bin/env bash
-# The layers study's numerical check of the machine answer (docs/study/layers.md): Ti-6Al-4V
-# 15–45 µm on a fused bed at 50 µm layers and 0.1 m/s (sweeps/ti64-layers.toml, recorded by
-# ti64.sh as record/ti64-50um-0.1.json) with each numerical choice halved or doubled: the periodic
-# depth doubled (12 D), the timestep halved (0.165 Rayleigh times), the build plate halved (20 D)
-# and doubled (80 D). Resumable: a recorded case is skipped. Run from the repository's root with
-# target/release/sweep built (or SWEEP=path).
+# The layers study's numerical check of the machine answer (docs/study/layers.md): the steady
+# layer of Ti-6Al-4V 15–45 µm on a fused bed at 50 µm layers and 0.1 m/s (sweeps/ti64-layers.toml
+# at its defaults, recorded by ti64-search.sh as record/ti64-50um-0.1-search6.json) with each
+# numerical choice halved or doubled — the build plate halved (20 D) and doubled (80 D), the
+# periodic depth doubled (12 D), the timestep halved (0.165 Rayleigh times) — and a second seed,
+# the scatter they are judged against. Resumable: a recorded case is skipped. Run from the
+# repository's root with target/release/sweep built (or SWEEP=path).
 #   bash docs/study/layers/ti64-numerics.sh [label]
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 out=docs/study/layers/record
 mkdir -p "$out"
-cases="ti64-50um-0.1-depth12 depth_diameters = 12.0
-ti64-50um-0.1-dt0.165 rayleigh_fraction = 0.165
-ti64-50um-0.1-plate20 plate_diameters = 20.0
-ti64-50um-0.1-plate80 plate_diameters = 80.0"
+cases="ti64-50um-0.1-search6-seed2 seed = 2
+ti64-50um-0.1-search6-plate20 plate_diameters = 20.0
+ti64-50um-0.1-search6-depth12 depth_diameters = 12.0
+ti64-50um-0.1-search6-dt0.165 rayleigh_fraction = 0.165
+ti64-50um-0.1-search6-plate80 plate_diameters = 80.0"
 want=${1:-}
 while read -r label key eq value; do
   [ -n "$want" ] && [ "$want" != "$label" ] && continue

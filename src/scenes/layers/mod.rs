@@ -36,10 +36,25 @@ use crate::scene::{
 use crate::scenes::moving_blade::{self, Dose};
 use crate::scenes::{BadSetting, BuiltinTemplate, Finished, Layout, Rejected, SetupRows};
 
-/// Dose of one pass over what the plate's layer can hold at [`LAYER_FRACTION_MAX`] (times
-/// `scene.supply_factor`): machines feed 1.5–3 times a layer, so that the last of the plate is
-/// covered.
+/// Dose of one pass on a loose bed over what the plate's layer can hold at
+/// [`LAYER_FRACTION_MAX`] (times `scene.supply_factor`): twice what a steady loose pass leaves,
+/// so that the last of the plate is covered.
 pub const DOSE_FACTOR: f64 = 2.0;
+/// The same on a fused bed, whose steady pass must leave a whole drop of solid (a loose one
+/// about 0.6 of it): at [`DOSE_FACTOR`] Ti-6Al-4V 15–45 µm at 50 µm fell behind by 7 % a pass,
+/// at twice it kept pace (docs/study/layers.md); the measured machine of Gaboriault et al. 2025
+/// feeds about 5.7 layers of bulk powder a pass.
+pub const FUSED_DOSE_FACTOR: f64 = 4.0;
+
+/// The dose of one pass over what the plate's layer holds at [`LAYER_FRACTION_MAX`], before
+/// `scene.supply_factor`.
+fn dose_factor(s: &SceneSettings) -> f64 {
+    if Bed::parse(&s.bed) == Some(Bed::Fused) {
+        FUSED_DOSE_FACTOR
+    } else {
+        DOSE_FACTOR
+    }
+}
 /// Volume fraction the dose is inserted at (random placement without overlaps, before it falls);
 /// a dose too small for LIGGGHTS's least insertion region is inserted sparser.
 pub const DOSE_FRACTION: f64 = 0.3;
@@ -311,7 +326,7 @@ impl Layout for Layers {
                 ),
                 ("blade clearance over the top surface (mm)", short(s.blade_clearance_mm)),
                 ("build plate length (D)", short(s.plate_diameters)),
-                ("dose (× the plate's layer)", short(DOSE_FACTOR * s.supply_factor)),
+                ("dose (× the plate's layer)", short(dose_factor(s) * s.supply_factor)),
             ],
             tail: Vec::new(),
         }
@@ -421,14 +436,14 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let x_hi = plate_x1 + 2.0 * d + ahead + PIT_DIAMETERS * d;
 
     let dose_x1 = plate_x0 - d;
-    // Every dose is DOSE_FACTOR layers of the drop; the first fills the drop and the clearance.
+    // Every dose is dose_factor layers of the drop; the first fills the drop and the clearance.
     // LIGGGHTS refuses to insert into a region under its floor once shrunk by the largest
     // diameter (MIN_INSERT_VOLUME): a fine powder in thin layers gets its dose inserted sparser
     // in a taller region at the same depth, not a wider box (which would multiply the particles
     // of every layer).
     let w = s.depth;
     let dose_for =
-        |drop: f64| DOSE_FACTOR * settings.supply_factor * plate_len * drop * LAYER_FRACTION_MAX * w;
+        |drop: f64| dose_factor(settings) * settings.supply_factor * plate_len * drop * LAYER_FRACTION_MAX * w;
     let d_max = psd.max_diameter();
     let dose_len = dose_x1 - dose_x0;
     let (dose_solid, first_solid) = (dose_for(t), dose_for(t + clearance));

@@ -391,3 +391,20 @@ fn a_fused_bed_searches_by_default_as_far_as_its_passes_allow_and_a_loose_one_ne
     assert_eq!(search_passes(&SceneSettings { layers: 24, ..settings() }), 0);
     assert!(Layers.check_settings(&fused(2)).is_ok());
 }
+
+#[test]
+fn a_fused_bed_s_dose_is_twice_a_loose_one_s_and_supply_factor_scales_both() {
+    let dose = |bed: &str, supply: f64| {
+        let s = SceneSettings { bed: bed.into(), supply_factor: supply, ..settings() };
+        plan_of(&scene(&s)).dose_particles as f64
+    };
+    // A steady fused pass must leave a whole drop of solid, a loose one about 0.6 of it.
+    let (loose, fused) = (dose("loose", 1.0), dose("fused", 1.0));
+    assert!((fused / loose - 2.0).abs() < 0.02, "fused {fused} against loose {loose}");
+    // The loose dose holds DOSE_FACTOR layers at LAYER_FRACTION_MAX (mono spheres of 65 µm).
+    let sc = scene(&settings());
+    let layer = (20.0 * sc.diameter) * 1e-4 * LAYER_FRACTION_MAX * sc.depth;
+    let sphere = std::f64::consts::PI / 6.0 * sc.diameter.powi(3);
+    assert!((loose - DOSE_FACTOR * layer / sphere).abs() <= 1.0, "{loose}");
+    assert!((dose("fused", 0.5) / fused - 0.5).abs() < 0.02);
+}
