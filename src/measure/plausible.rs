@@ -80,12 +80,22 @@ pub fn check_result(r: &RunResult) -> Result<(), Implausible> {
     if let Some(p) = r.layer_packing {
         check_within("layer_packing", p, PACKING_MAX)?;
     }
-    let mfr_max = PACKING_MAX * thicker;
+    // Layer after layer, the answer and the windows are the passes' packing or relative density
+    // (deposit over the drop): at most the packing bound times the powder under the blade over
+    // the drop.
+    let deepest = r.layers.as_ref().map_or(1.0, |l| {
+        l.passes.iter().map(|p| p.effective_thickness_m / l.layer_thickness_m).fold(1.0, f64::max)
+    });
+    let mfr_max = PACKING_MAX * thicker * deepest;
     let within = format!("within ±{}", crate::scene::plausible::round_to(mfr_max, 4));
-    // A pour's heap: nothing flows, so its flow's numbers are NaN (not measured).
+    // A pour's heap: nothing flows, so its flow's numbers are NaN (not measured); layer after
+    // layer measures no flux past the blade and no steadiness p-value (its passes are its test).
     let flows = !(r.heap.is_some() && r.mfr.is_nan());
+    let flux = flows && r.layers.is_none();
     if flows {
         check_within("mfr", r.mfr, mfr_max)?;
+    }
+    if flux {
         check_within("mfr_flux", r.mfr_flux.abs(), mfr_max)
             .map_err(|_| bad("mfr_flux", r.mfr_flux, &within))?;
     }
@@ -93,7 +103,7 @@ pub fn check_result(r: &RunResult) -> Result<(), Implausible> {
         check_within(&format!("mfr_windows[{i}]"), w.abs(), mfr_max)
             .map_err(|_| bad(&format!("mfr_windows[{i}]"), *w, &within))?;
     }
-    if flows && !(r.steady_p.is_finite() && (0.0..=1.0).contains(&r.steady_p)) {
+    if flux && !(r.steady_p.is_finite() && (0.0..=1.0).contains(&r.steady_p)) {
         return Err(bad("steady_p", r.steady_p, "a p-value in [0, 1]"));
     }
     let speed = r.parameters.get("blade_speed").copied();
@@ -209,5 +219,55 @@ mod tests {
         for v in [14.1, -14.1, 1e300, f64::INFINITY] {
             assert!(check_frame(&frame(4.4e-6, v), 1.4).unwrap_err().to_string().contains("vx"), "{v}");
         }
+    }
+
+    #[test]
+    fn a_layers_result_is_checked_on_what_it_measures_and_not_on_the_flux_it_does_not() {
+        use crate::outcome::layers::{LayerSeries, PassRecord};
+        let pass = |k: usize, relative_density: f64| PassRecord {
+            k,
+            search: false,
+            deposit_m: relative_density * 5e-5,
+            relative_density,
+            effective_thickness_m: 1.07e-4,
+            packing: relative_density * 5e-5 / 1.07e-4,
+            covered_fraction: 0.84,
+            roughness_d: 0.5,
+            bed_relative_density: None,
+            particles: 400,
+        };
+        let passes: Vec<PassRecord> =
+            [0.4, 1.14, 0.99, 1.03].iter().enumerate().map(|(i, &d)| pass(i + 1, d)).collect();
+        let r = |mfr: f64| RunResult {
+            parameters: [("blade_speed".to_string(), 0.1)].into_iter().collect(),
+            mfr,
+            mfr_flux: f64::NAN,
+            steady_p: f64::NAN,
+            mfr_windows: passes.iter().map(|p| p.relative_density).collect(),
+            layers: Some(Box::new(LayerSeries {
+                bed: "loose".into(),
+                layer_thickness_m: 5e-5,
+                passes: passes.clone(),
+                steady_from: 2,
+                steady: true,
+                packing: 0.46,
+                packing_se: 0.002,
+                relative_density: 1.0,
+                relative_density_se: 0.01,
+                effective_thickness_m: 1.07e-4,
+                effective_thickness_se_m: 7e-7,
+                covered_fraction: 0.84,
+                roughness_d: 0.5,
+            })),
+            ..RunResult::default()
+        };
+        // A pass may deposit more than the drop at the packing bound: the powder under the
+        // blade is 2.1 drops deep.
+        assert!(check_result(&r(1.0)).is_ok(), "{:?}", check_result(&r(1.0)));
+        assert!(check_result(&r(f64::NAN)).is_err());
+        assert!(check_result(&r(0.74 * 2.2)).is_err(), "beyond the packing bound over the deepest pass");
+        // A flow's result still needs its flux.
+        let flow = RunResult { mfr: 0.3, mfr_flux: f64::NAN, ..RunResult::default() };
+        assert!(check_result(&flow).unwrap_err().to_string().contains("mfr_flux"));
     }
 }

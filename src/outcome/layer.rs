@@ -6,9 +6,20 @@ use serde::{Deserialize, Serialize};
 /// The layer measures of one run.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Layer {
-    /// Coefficient of variation of the deposited mass per bin (–).
+    /// Coefficient of variation of the deposited mass per bin (–); NaN, and absent from the
+    /// file, where the layout measures none (layers).
+    #[serde(
+        default = "super::not_measured",
+        deserialize_with = "super::nan_if_null",
+        skip_serializing_if = "super::is_not_measured"
+    )]
     pub layer_cv: f64,
     /// The same for independently placed particles: its counting noise (–).
+    #[serde(
+        default = "super::not_measured",
+        deserialize_with = "super::nan_if_null",
+        skip_serializing_if = "super::is_not_measured"
+    )]
     pub layer_cv_noise: f64,
     /// Share of the strip's area under the deposit (–).
     pub covered_fraction: f64,

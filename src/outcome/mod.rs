@@ -169,12 +169,18 @@ pub struct SizeSummary {
     pub fit_residual: Option<f64>,
 }
 
+/// Reads `null` — how serde_json writes NaN — back as NaN: a measure a pass could not take (a
+/// pass that left nothing on the plate has no packing or roughness).
+pub(crate) fn nan_if_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
 /// A number the scene does not measure: NaN in memory, absent from `result.json`.
-fn not_measured() -> f64 {
+pub(crate) fn not_measured() -> f64 {
     f64::NAN
 }
 
-fn is_not_measured(v: &f64) -> bool {
+pub(crate) fn is_not_measured(v: &f64) -> bool {
     v.is_nan()
 }
 

@@ -51,6 +51,9 @@ pub struct Recommended {
     /// Counting noise of the MFR: MFR/√n over the n particles counted.
     pub mfr_se: f64,
     pub layer: Option<Layer>,
+    /// What the layout adds after the answer (a layers point: the powder under the blade and
+    /// the steady layer's passes).
+    pub detail: Option<String>,
 }
 
 /// One of the thesis's conclusions against this sweep.
@@ -113,7 +116,12 @@ pub fn spearman(x: &[f64], y: &[f64]) -> Option<f64> {
     (sxx > 0.0 && syy > 0.0).then(|| sxy / (sxx * syy).sqrt())
 }
 
-pub fn advise(parameters: &[String], points: &[PointRow], sensitivity: &[Index]) -> Advice {
+pub fn advise(
+    parameters: &[String],
+    points: &[PointRow],
+    sensitivity: &[Index],
+    layout: Option<&dyn crate::scenes::Layout>,
+) -> Advice {
     let done: Vec<(&PointRow, &crate::outcome::RunResult, Quality)> =
         points.iter().filter_map(|p| p.done().map(|(r, q)| (p, r, q))).collect();
     let classes = class_check(&done);
@@ -125,8 +133,10 @@ pub fn advise(parameters: &[String], points: &[PointRow], sensitivity: &[Index])
          (batch means over the steady window), else its counting noise, MFR/√n over the n particles counted",
         full = show(FULL_COVER)
     );
-    let even =
-        |r: &crate::outcome::RunResult| r.layer.is_none_or(|l| l.layer_cv <= EVEN_FACTOR * l.layer_cv_noise);
+    // A layout that measures no CV along the travel (layers) leaves it NaN: not uneven.
+    let even = |r: &crate::outcome::RunResult| {
+        r.layer.is_none_or(|l| l.layer_cv.is_nan() || l.layer_cv <= EVEN_FACTOR * l.layer_cv_noise)
+    };
     let mut ranked: Vec<&(&PointRow, &crate::outcome::RunResult, Quality)> =
         done.iter().filter(|(_, r, _)| even(r) && r.mfr.is_finite() && r.mfr > 0.0).collect();
     // A process engineer wants the plate covered before a denser patchy layer.
@@ -141,6 +151,7 @@ pub fn advise(parameters: &[String], points: &[PointRow], sensitivity: &[Index])
             mfr: r.mfr,
             mfr_se: r.mfr_se.unwrap_or(r.mfr / (r.mfr_particles.max(1) as f64).sqrt()),
             layer: r.layer,
+            detail: layout.and_then(|l| l.answer_detail(r)),
         })
         .collect();
     let best_is_distinct = (recommended.len() >= 2).then(|| {
@@ -444,5 +455,67 @@ mod tests {
         // x ranks 1 2 3 4, y ranks 2 1 4 3: Σd² = 4, ρ = 1 − 6·4/(4·15) = 0.6.
         assert!((spearman(&[1.0, 2.0, 3.0, 4.0], &[2.0, 1.0, 4.0, 3.0]).unwrap() - 0.6).abs() < 1e-12);
         assert_eq!(spearman(&[1.0, 1.0], &[1.0, 2.0]), None);
+    }
+
+    #[test]
+    fn a_layers_point_is_recommended_by_its_steady_layer_with_the_powder_under_the_blade() {
+        use crate::outcome::layers::LayerSeries;
+        // A layers point measures no CV along the travel (NaN): it is not thereby uneven.
+        let point = |index: usize, packing: f64, covered: f64| {
+            let series = LayerSeries {
+                bed: "fused".into(),
+                layer_thickness_m: 5e-5,
+                passes: Vec::new(),
+                steady_from: 11,
+                steady: true,
+                packing,
+                packing_se: 0.002,
+                relative_density: 0.99,
+                relative_density_se: 0.01,
+                effective_thickness_m: 1.07e-4,
+                effective_thickness_se_m: 7e-7,
+                covered_fraction: covered,
+                roughness_d: 0.5,
+            };
+            let result = crate::outcome::RunResult {
+                mfr: packing,
+                mfr_se: Some(0.002),
+                layer: Some(Layer {
+                    layer_cv: f64::NAN,
+                    layer_cv_noise: f64::NAN,
+                    covered_fraction: covered,
+                    roughness_d: 0.5,
+                    height_d: 3.4,
+                    particles: 400,
+                }),
+                layers: Some(Box::new(series)),
+                ..crate::outcome::RunResult::default()
+            };
+            PointRow {
+                index,
+                values: vec![0.1 * (index + 1) as f64],
+                hash: String::new(),
+                state: PointState::Done { result: Box::new(result), quality: Quality::Unknown },
+                mfr_se: Some(0.002),
+            }
+        };
+        let points = vec![point(0, 0.46, 0.84), point(1, 0.39, 0.77)];
+        let layout = crate::scenes::lookup("layers").unwrap();
+        let advice = advise(&["blade_speed".to_string()], &points, &[], Some(layout));
+        assert_eq!(advice.recommended.len(), 2);
+        let best = &advice.recommended[0];
+        assert_eq!(best.index, 0, "the denser steady layer first");
+        let detail = best.detail.as_deref().unwrap();
+        assert!(
+            detail.contains("107 ± 1 µm of powder under the blade (2.1 × the layer thickness)"),
+            "{detail}"
+        );
+        assert!(detail.contains("steady from pass 11"), "{detail}");
+        let names = |bed: &str| {
+            let s = crate::scene::settings::SceneSettings { bed: bed.into(), ..Default::default() };
+            layout.answer_name(&s)
+        };
+        assert_eq!(names("fused"), "steady-layer packing");
+        assert_eq!(names("loose"), "steady-layer relative density");
     }
 }

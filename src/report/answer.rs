@@ -64,6 +64,11 @@ fn setting(a: &Analysis, values: &dyn Fn(&str) -> Option<f64>) -> String {
         .join(", ")
 }
 
+/// What each point answers with, in words (`MFR` unless the layout says otherwise).
+fn answer_name(a: &Analysis) -> &'static str {
+    crate::scenes::lookup(&a.setup.scene.layout).map_or("MFR", |l| l.answer_name(&a.setup.scene))
+}
+
 /// Three significant digits: a setting to dial in, not a record.
 fn show_3(v: f64) -> String {
     crate::scene::plausible::round_to(v, 3)
@@ -76,23 +81,34 @@ pub fn answer(a: &Analysis) -> Answer {
 
 fn recommendation(a: &Analysis) -> (String, Option<String>) {
     let Some(r) = a.advice.recommended.first() else {
-        let why = if a.counts.done == 0 {
+        let why = if a.counts.done == 0 && a.counts.failed > 0 {
+            let classes: Vec<String> =
+                a.counts.failures_by_class.iter().map(|(c, n)| format!("{n} {c}")).collect();
+            format!(
+                "no point is done: {} failed ({}; `sweep status` says why)",
+                a.counts.failed,
+                classes.join(", ")
+            )
+        } else if a.counts.done == 0 {
             "no point has run yet".to_string()
         } else {
-            "no done point with MFR > 0 has an even layer".to_string()
+            format!("no done point with {} > 0 has an even layer", answer_name(a))
         };
         return (format!("none: {why}"), None);
     };
     let covered = r.layer.map(|l| l.covered_fraction);
     let text = format!(
-        "{} (point #{}): MFR {:.3} ± {:.3} (SE){}",
+        "{} (point #{}): {} {:.3} ± {:.3} (SE){}{}",
         setting(a, &|p| r.parameters.get(p).copied()),
         r.index,
+        answer_name(a),
         r.mfr,
         r.mfr_se,
+        r.detail.as_ref().map_or(String::new(), |d| format!(", {d}")),
         covered.map_or(String::new(), |c| format!(", covered fraction {c:.2}"))
     );
     let warning = covered.filter(|&c| c < FULL_COVER).map(|c| {
+        let name = answer_name(a);
         let bare = format!(
             "this setting leaves {:.0}% of the plate bare (covered fraction {c:.2}; a full layer covers at least {})",
             (1.0 - c) * 100.0,
@@ -109,7 +125,7 @@ fn recommendation(a: &Analysis) -> (String, Option<String>) {
         };
         match full.iter().max_by(|x, y| x.1.total_cmp(&y.1)) {
             Some((p, mfr, c)) => format!(
-                "{bare}; {} of {} tested settings give a full layer, the highest-MFR one point #{} ({}): MFR {mfr:.3}, covered fraction {c:.2}",
+                "{bare}; {} of {} tested settings give a full layer, the one of highest {name} point #{} ({}): {name} {mfr:.3}, covered fraction {c:.2}",
                 full.len(),
                 layers.len(),
                 p.index,
@@ -149,15 +165,17 @@ fn matters(a: &Analysis) -> Option<String> {
         a.sensitivity.iter().filter(|s| s.first_order.is_some()).all(|s| s.lo.is_some_and(|lo| lo < 0.005));
     if unranked {
         return Some(format!(
-            "cannot rank yet: every parameter's first-order index of MFR has a 95% interval that reaches 0 ({}); more \
+            "cannot rank yet: every parameter's first-order index of {} has a 95% interval that reaches 0 ({}); more \
              points narrow them",
+            answer_name(a),
             ranked.join(", ")
         ));
     }
     let trust = if a.sensitivity_reliable { String::new() } else { format!("; {}", a.sensitivity_note) };
     Some(format!(
-        "{} (first-order index of MFR: the share of its variance each explains alone, 95% interval){trust}",
-        ranked.join(" > ")
+        "{} (first-order index of {}: the share of its variance each explains alone, 95% interval){trust}",
+        ranked.join(" > "),
+        answer_name(a)
     ))
 }
 
@@ -165,9 +183,10 @@ fn verdict(a: &Analysis) -> String {
     let v = &a.verdict;
     match v.status {
         "converged" => format!(
-            "converged at N = {} ({}): the MFR statistics have settled by rule \"{}\"",
+            "converged at N = {} ({}): the {} statistics have settled by rule \"{}\"",
             v.n.unwrap_or(0),
             v.space.as_deref().unwrap_or("?"),
+            answer_name(a),
             rule_name(a.criteria.rule)
         ),
         "unfinished" => format!(

@@ -312,7 +312,8 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
         })
         .collect();
     let setup = Setup::of(&sweep, &manifest, dir, &done.iter().map(|(_, r, _)| *r).collect::<Vec<_>>());
-    let advice = advice::advise(&manifest.parameters, &points, &sensitivity);
+    let layout = crate::scenes::lookup(&sweep.file.scene.layout);
+    let advice = advice::advise(&manifest.parameters, &points, &sensitivity, layout);
     let engine = manifest
         .identity
         .get("engine")

@@ -228,6 +228,17 @@ pub trait Layout: Sync {
         None
     }
 
+    /// The point's answer in words: what `mfr` in result.json holds for this layout, the number
+    /// a sweep's statistics, emulator and report read.
+    fn answer_name(&self, _settings: &SceneSettings) -> &'static str {
+        "MFR"
+    }
+
+    /// What the report's recommendation says of a done point after its answer, if anything.
+    fn answer_detail(&self, _r: &RunResult) -> Option<String> {
+        None
+    }
+
     /// What `sweep run` prints of a result above its particles, steps and times, if not MFR
     /// and v_x.
     fn result_lines(&self, _r: &RunResult) -> Option<Vec<String>> {

@@ -356,6 +356,26 @@ impl Layout for Layers {
         String::new()
     }
 
+    fn answer_name(&self, settings: &SceneSettings) -> &'static str {
+        if Bed::parse(&settings.bed) == Some(Bed::Fused) {
+            "steady-layer packing"
+        } else {
+            "steady-layer relative density"
+        }
+    }
+
+    fn answer_detail(&self, r: &RunResult) -> Option<String> {
+        let l = r.layers.as_ref()?;
+        Some(format!(
+            "{:.0} ± {:.0} µm of powder under the blade ({:.1} × the layer thickness), steady from pass {} of {}",
+            l.effective_thickness_m * 1e6,
+            l.effective_thickness_se_m * 1e6,
+            l.effective_thickness_m / l.layer_thickness_m,
+            l.steady_from,
+            l.passes.len()
+        ))
+    }
+
     fn result_lines(&self, r: &RunResult) -> Option<Vec<String>> {
         let l = r.layers.as_ref()?;
         let mut lines = vec![format!(
@@ -442,8 +462,9 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     // in a taller region at the same depth, not a wider box (which would multiply the particles
     // of every layer).
     let w = s.depth;
-    let dose_for =
-        |drop: f64| dose_factor(settings) * settings.supply_factor * plate_len * drop * LAYER_FRACTION_MAX * w;
+    let dose_for = |drop: f64| {
+        dose_factor(settings) * settings.supply_factor * plate_len * drop * LAYER_FRACTION_MAX * w
+    };
     let d_max = psd.max_diameter();
     let dose_len = dose_x1 - dose_x0;
     let (dose_solid, first_solid) = (dose_for(t), dose_for(t + clearance));
