@@ -110,6 +110,39 @@ fn a_fused_bed_s_search_pass_sets_the_next_depth_by_its_deposit_and_the_layers_a
 }
 
 #[test]
+fn a_layers_lattice_reports_every_point_done_or_failed_and_answers_in_the_layer_s_terms() {
+    support::require_liggghts!(
+        "a_layers_lattice_reports_every_point_done_or_failed_and_answers_in_the_layer_s_terms"
+    );
+    let (_tmp, dir) = support::cwd();
+    let sweep = bed(&dir, "bed = \"fused\"\nlayers = 5\nsearch_passes = 1");
+    let out = support::sweep(&[
+        "lattice",
+        support::p(&sweep),
+        "--levels",
+        "2",
+        "--out",
+        support::p(&dir.join("s")),
+    ]);
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), support::stderr(&out));
+    // No point's record is unreadable or refused (a layers result measures no flux past the
+    // blade, and a failed one's passes may hold measures it could not take).
+    assert!(!stderr.contains("left out"), "{stderr}");
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("s/summary.json")).unwrap()).unwrap();
+    let counts = &summary["counts"];
+    assert_eq!(counts["done"].as_u64().unwrap() + counts["failed"].as_u64().unwrap(), 2, "{counts}");
+    let recommended =
+        stdout.lines().find(|l| l.starts_with("recommended:")).unwrap_or_else(|| panic!("{stdout}"));
+    if counts["done"].as_u64().unwrap() > 0 {
+        assert!(recommended.contains("steady-layer packing"), "{recommended}");
+        assert!(recommended.contains("µm of powder under the blade"), "{recommended}");
+    } else {
+        assert!(recommended.contains("no point is done: 2 failed"), "{recommended}");
+    }
+}
+
+#[test]
 fn a_bad_layer_count_or_thickness_is_refused_in_one_line() {
     let (_tmp, dir) = support::cwd();
     for (extra, key) in [("layers = 0", "scene.layers"), ("bed = \"molten\"", "scene.bed")] {
