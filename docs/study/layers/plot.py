@@ -186,7 +186,8 @@ def ti64_searched(runs):
               f"{series['effective_thickness_m'] * 1e6:.0f} ± {series['effective_thickness_se_m'] * 1e6:.1f} | "
               f"{series['effective_thickness_m'] / t:.1f} | {series['relative_density']:.3f} ± {series['relative_density_se']:.3f} | "
               f"{series['covered_fraction']:.2f} | {cpu:.0f} | {cpu / len(p):.0f} |")
-    finish(fig, {a1: "powder under the blade / layer thickness", a2: "packing of the pass's layer"},
+    a1.set_yscale("log")
+    finish(fig, {a1: "powder under the blade / layer thickness (log)", a2: "packing of the pass's layer"},
            "pass (open: searching for the steady depth)",
            "Ti-6Al-4V 15–45 µm on a fused bed, round blade: searching for the steady layer",
            "ti64-search.png")
@@ -202,6 +203,36 @@ def ti64():
         ti64_searched(searched)
 
 
+def loose():
+    """PS1's loose bed at two blade speeds and two layer thicknesses: loose.png and its table."""
+    cases = [("PS1", "100 µm, 0.1 m/s"), ("PS1-0.2", "100 µm, 0.2 m/s"), ("PS1-150um", "150 µm, 0.1 m/s")]
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.4))
+    print()
+    print("| case | steady from | layer relative density ± SE | bed relative density, last 3 passes | powder under the blade (µm) | packing ± SE | covered | CPU s |")
+    print("|---|---|---|---|---|---|---|---|")
+    for name, label in cases:
+        path = os.path.join(HERE, "record", name + ".json")
+        if not os.path.exists(path):
+            continue
+        series, failed = load(path)
+        p = series["passes"]
+        ks = [q["k"] for q in p]
+        line = a1.plot(ks, [q["relative_density"] for q in p], marker=".", label=label)[0]
+        s, m, se = series["steady_from"], series["relative_density"], series["relative_density_se"]
+        a1.fill_between([s, len(p)], [m - se] * 2, [m + se] * 2, color=line.get_color(), alpha=0.2)
+        bed = [(q["k"], q["bed_relative_density"]) for q in p if q.get("bed_relative_density") is not None]
+        a2.plot([k for k, _ in bed], [b for _, b in bed], marker=".", color=line.get_color(), label=label)
+        last = [b for _, b in bed[-3:]]
+        cpu = json.load(open(path)).get("cpu_time") or float("nan")
+        print(f"| {label} | {s}{'' if series['steady'] else ' (not steady)'} | {m:.3f} ± {se:.3f} | "
+              f"{min(last):.3f}–{max(last):.3f} | {series['effective_thickness_m'] * 1e6:.0f} ± "
+              f"{series['effective_thickness_se_m'] * 1e6:.0f} | {series['packing']:.3f} ± {series['packing_se']:.3f} | "
+              f"{series['covered_fraction']:.2f} | {cpu:.0f} |")
+    finish(fig, {a1: "layer relative density (deposit / drop)", a2: "bed relative density (all passes so far)"},
+           "pass", "Ti-6Al-4V 45–106 µm (PS1) on a loose bed: the layer and the bed over passes", "loose.png")
+
+
 if __name__ == "__main__":
     gaboriault()
+    loose()
     ti64()
