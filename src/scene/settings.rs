@@ -111,7 +111,7 @@ pub struct SceneSettings {
     /// the blade instead of building it up layer by layer — after each, the solid is set so that
     /// the next pass meets its own depth times the layer thickness over its deposit; 0: every
     /// pass is a layer on the one before, from the bare plate. Not set: a fused bed searches
-    /// for [`DEFAULT_SEARCH_PASSES`] passes (at most `layers` less three), a loose bed never.
+    /// for [`DEFAULT_SEARCH_PASSES`] passes (at most `layers` less six), a loose bed never.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub search_passes: Option<usize>,
     /// Layers layout: the blade's profile, `"flat"` (default: a box, the thesis's) or `"round"`

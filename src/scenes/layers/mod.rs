@@ -413,13 +413,18 @@ impl Layout for Layers {
     }
 }
 
+/// Laid passes a default search leaves after it: the steady layer's [`MIN_STEADY_PASSES`] and as
+/// many again for MSER to cut a transient from (with only three left, a point of eight passes
+/// failed as unsteady whenever MSER cut one).
+const MIN_LAID_PASSES: usize = 2 * MIN_STEADY_PASSES;
+
 /// The passes that search for a fused bed's steady depth: as set, or by default
-/// [`DEFAULT_SEARCH_PASSES`] less what the steady layer needs after them; none on a loose bed.
+/// [`DEFAULT_SEARCH_PASSES`] less what [`MIN_LAID_PASSES`] needs after them; none on a loose bed.
 pub fn search_passes(s: &SceneSettings) -> usize {
     if Bed::parse(&s.bed) != Some(Bed::Fused) {
         return 0;
     }
-    s.search_passes.unwrap_or_else(|| DEFAULT_SEARCH_PASSES.min(s.layers.saturating_sub(MIN_STEADY_PASSES)))
+    s.search_passes.unwrap_or_else(|| DEFAULT_SEARCH_PASSES.min(s.layers.saturating_sub(MIN_LAID_PASSES)))
 }
 
 /// The plan a scene of this layout carries.

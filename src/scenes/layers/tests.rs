@@ -385,8 +385,12 @@ fn a_fused_bed_that_leaves_less_than_the_drop_is_said_to_fall_behind() {
 fn a_fused_bed_searches_by_default_as_far_as_its_passes_allow_and_a_loose_one_never() {
     let fused = |layers: usize| SceneSettings { bed: "fused".into(), layers, ..settings() };
     assert_eq!(search_passes(&fused(24)), DEFAULT_SEARCH_PASSES);
-    assert_eq!(search_passes(&fused(7)), 4);
-    assert_eq!(search_passes(&fused(2)), 0);
+    assert_eq!(search_passes(&fused(14)), DEFAULT_SEARCH_PASSES);
+    // Six laid passes are left after a default search: three for the steady layer and three
+    // for MSER to cut.
+    assert_eq!(search_passes(&fused(10)), 4);
+    assert_eq!(search_passes(&fused(7)), 1);
+    assert_eq!(search_passes(&fused(6)), 0);
     assert_eq!(search_passes(&SceneSettings { search_passes: Some(0), ..fused(24) }), 0);
     assert_eq!(search_passes(&SceneSettings { layers: 24, ..settings() }), 0);
     assert!(Layers.check_settings(&fused(2)).is_ok());
