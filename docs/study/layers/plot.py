@@ -171,23 +171,25 @@ def ti64_searched(runs):
     print()
     print("| case | passes (search) | steady from | packing ± SE | powder under the tip ± SE (µm) | over the drop | deposit over the drop ± SE | covered | CPU s | CPU s a pass |")
     print("|---|---|---|---|---|---|---|---|---|---|")
-    for _, label, series, failed, cpu in runs:
+    for name, label, series, failed, cpu in runs:
         p = series["passes"]
         t = series["layer_thickness_m"]
         search = sum(1 for q in p if q.get("search"))
-        line = a1.plot([q["k"] for q in p], [q["effective_thickness_m"] / t for q in p], marker=".", label=label)[0]
-        a2.plot([q["k"] for q in p], [q["packing"] for q in p], marker=".", color=line.get_color(), label=label)
-        for a, key in ((a1, "effective_thickness_m"), (a2, "packing")):
-            s = [q for q in p if q.get("search")]
-            a.plot([q["k"] for q in s], [q[key] / (t if key != "packing" else 1) for q in s], "o",
-                   mfc="white", color=line.get_color())
+        # The figure: the machine's cases (and one at half the dose); the numerical variants and
+        # the other half-dose runs only in the table.
+        if name.endswith("search6") or name == "50um-0.1-search6-halfdose":
+            line = a1.plot([q["k"] for q in p], [q["effective_thickness_m"] / t for q in p], marker=".", label=label)[0]
+            a2.plot([q["k"] for q in p], [q["packing"] for q in p], marker=".", color=line.get_color(), label=label)
+            for a, key in ((a1, "effective_thickness_m"), (a2, "packing")):
+                s = [q for q in p if q.get("search")]
+                a.plot([q["k"] for q in s], [q[key] / (t if key != "packing" else 1) for q in s], "o",
+                       mfc="white", color=line.get_color())
         steady = f"{series['steady_from']}" if not failed else f"not steady ({series['steady_from']})"
         print(f"| {label} | {len(p)} ({search}) | {steady} | {series['packing']:.3f} ± {series['packing_se']:.3f} | "
               f"{series['effective_thickness_m'] * 1e6:.0f} ± {series['effective_thickness_se_m'] * 1e6:.1f} | "
               f"{series['effective_thickness_m'] / t:.1f} | {series['relative_density']:.3f} ± {series['relative_density_se']:.3f} | "
               f"{series['covered_fraction']:.2f} | {cpu:.0f} | {cpu / len(p):.0f} |")
-    a1.set_yscale("log")
-    finish(fig, {a1: "powder under the blade / layer thickness (log)", a2: "packing of the pass's layer"},
+    finish(fig, {a1: "powder under the blade / layer thickness", a2: "packing of the pass's layer"},
            "pass (open: searching for the steady depth)",
            "Ti-6Al-4V 15–45 µm on a fused bed, round blade: searching for the steady layer",
            "ti64-search.png")
