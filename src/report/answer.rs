@@ -125,7 +125,7 @@ fn recommendation(a: &Analysis) -> (String, Option<String>) {
         };
         match full.iter().max_by(|x, y| x.1.total_cmp(&y.1)) {
             Some((p, mfr, c)) => format!(
-                "{bare}; {} of {} tested settings give a full layer, the one of highest {name} point #{} ({}): {name} {mfr:.3}, covered fraction {c:.2}",
+                "{bare}; {} of {} tested settings give a full layer, the one of highest {name} is point #{} ({}): {name} {mfr:.3}, covered fraction {c:.2}",
                 full.len(),
                 layers.len(),
                 p.index,
