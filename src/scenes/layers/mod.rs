@@ -46,10 +46,15 @@ pub const DOSE_FACTOR: f64 = 2.0;
 /// feeds about 5.7 layers of bulk powder a pass.
 pub const FUSED_DOSE_FACTOR: f64 = 4.0;
 
+/// Whether the settings ask for a fused bed.
+fn fused(s: &SceneSettings) -> bool {
+    Bed::parse(&s.bed) == Some(Bed::Fused)
+}
+
 /// The dose of one pass over what the plate's layer holds at [`LAYER_FRACTION_MAX`], before
 /// `scene.supply_factor`.
 fn dose_factor(s: &SceneSettings) -> f64 {
-    if Bed::parse(&s.bed) == Some(Bed::Fused) {
+    if fused(s) {
         FUSED_DOSE_FACTOR
     } else {
         DOSE_FACTOR
@@ -231,7 +236,7 @@ impl Layout for Layers {
             });
         }
         let asked = s.search_passes.unwrap_or(0);
-        if asked > 0 && Bed::parse(&s.bed) != Some(Bed::Fused) {
+        if asked > 0 && !fused(s) {
             return Err(BadSetting {
                 key: "scene.search_passes",
                 why: format!(
@@ -357,7 +362,7 @@ impl Layout for Layers {
     }
 
     fn answer_name(&self, settings: &SceneSettings) -> &'static str {
-        if Bed::parse(&settings.bed) == Some(Bed::Fused) {
+        if fused(settings) {
             "steady-layer packing"
         } else {
             "steady-layer relative density"
@@ -421,7 +426,7 @@ const MIN_LAID_PASSES: usize = 2 * MIN_STEADY_PASSES;
 /// The passes that search for a fused bed's steady depth: as set, or by default
 /// [`DEFAULT_SEARCH_PASSES`] less what [`MIN_LAID_PASSES`] needs after them; none on a loose bed.
 pub fn search_passes(s: &SceneSettings) -> usize {
-    if Bed::parse(&s.bed) != Some(Bed::Fused) {
+    if !fused(s) {
         return 0;
     }
     s.search_passes.unwrap_or_else(|| DEFAULT_SEARCH_PASSES.min(s.layers.saturating_sub(MIN_LAID_PASSES)))
@@ -439,7 +444,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let clearance = settings.blade_clearance_mm * 1e-3;
     let mut s = moving_blade::derive(base.clone(), settings, Dose::Free);
     let Base { psd, d, speed: v, timestep: dt, .. } = base;
-    let fused = Bed::parse(&settings.bed) == Some(Bed::Fused);
+    let fused = fused(settings);
     let layers = settings.layers.max(1);
     let plate_len = settings.plate_diameters.max(10.0) * d;
     let feed_len = FEED_OVER_PLATE * plate_len;
