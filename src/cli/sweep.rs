@@ -371,7 +371,14 @@ pub(super) fn finish(s: &Summary, sweep: &Sweep, progress: ProgressMode) -> Resu
     }
     let criteria = Criteria::from_settings(&sweep.file.convergence);
     let analysis = demsweep::report::analyse(&s.dir, &criteria, &Bootstrap::default())?;
+    // A report faster than the interrupt's grace still ends as told.
+    demsweep::sys::process::end_if_interrupted();
     let html = demsweep::report::write(&analysis)?;
+    demsweep::sys::process::on_interrupt_say(format!(
+        "the runs are kept and the report written: {}",
+        html.display()
+    ));
+    demsweep::sys::process::end_if_interrupted();
     let ended = finish_runs(s);
     eprintln!("{}: {}", analysis.verdict.status, analysis.verdict.reason);
     eprintln!("report: {}", html.display());

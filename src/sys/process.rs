@@ -356,6 +356,19 @@ fn watchdog() {
         }
         std::thread::sleep(tick);
     }
+    end_interrupted(sig)
+}
+
+/// If an interrupt has come, end the process now as the watchdog would: for a step that
+/// finishes faster than [`INTERRUPT_GRACE`] but must not end as if it had not been told to stop.
+pub fn end_if_interrupted() {
+    if let Some(sig) = interrupt_signal() {
+        end_interrupted(sig);
+    }
+}
+
+/// Say "interrupted by SIG…" and the note set by [`on_interrupt_say`], and exit with 128 + `sig`.
+fn end_interrupted(sig: i32) -> ! {
     let note = INTERRUPT_NOTE.lock().map(|n| n.clone()).unwrap_or_default();
     let name = if sig == libc::SIGTERM { "SIGTERM" } else { "SIGINT" };
     if note.is_empty() {

@@ -357,10 +357,11 @@ fn catches(pid: u32, sig: i32) -> bool {
         .is_some_and(|m| m & (1 << (sig - 1)) != 0)
 }
 
-/// SIGINT or SIGTERM while `resume` writes the report of a finished 400-point sweep (several
-/// seconds, and no step of it looks at the interrupt flag): the process ends within the
-/// interrupt's grace with 128 + the signal, before the report is written, and says how to get
-/// it. It used to finish the report and exit 0 three to five seconds later.
+/// SIGINT or SIGTERM while `resume` writes the report of a finished 400-point sweep (about a
+/// second on a quiet machine, several on a busy one): the process ends within the interrupt's
+/// grace with 128 + the signal, and says how to get the report if it was not written. It used to
+/// finish the report and exit 0 three to five seconds later, and on a quiet machine, where the
+/// report takes less than the grace, it still exited 0.
 #[test]
 fn an_interrupt_during_the_final_report_ends_the_process_within_its_grace() {
     let tmp = tempfile::tempdir().unwrap();
@@ -400,10 +401,15 @@ fn an_interrupt_during_the_final_report_ends_the_process_within_its_grace() {
             err.push('\n');
         }
         assert_eq!(status.code(), Some(128 + sig), "signal {sig}: {err}");
-        // Ended by the interrupt, not by finishing: the report was never written.
-        assert!(!out.join("report/report.html").exists(), "signal {sig}: the report was finished first");
+        // Ended by the interrupt, not by finishing; a report that was written before the signal
+        // landed is said to be, one that was not says how to get it.
         let name = if sig == libc::SIGINT { "SIGINT" } else { "SIGTERM" };
-        assert!(err.contains(&format!("interrupted by {name}: ")) && err.contains("`sweep report "), "{err}");
+        assert!(err.contains(&format!("interrupted by {name}: ")), "{err}");
+        if out.join("report/report.html").exists() {
+            assert!(err.contains("the report written: "), "signal {sig}: {err}");
+        } else {
+            assert!(err.contains("`sweep report "), "signal {sig}: {err}");
+        }
         let grace = demsweep::sys::process::INTERRUPT_GRACE;
         assert!(took < grace + Duration::from_secs(3), "signal {sig} obeyed after {took:?}");
     }
