@@ -121,18 +121,29 @@ pub fn advise(
     points: &[PointRow],
     sensitivity: &[Index],
     layout: Option<&dyn crate::scenes::Layout>,
+    answer_name: &str,
 ) -> Advice {
     let done: Vec<(&PointRow, &crate::outcome::RunResult, Quality)> =
         points.iter().filter_map(|p| p.done().map(|(r, q)| (p, r, q))).collect();
     let classes = class_check(&done);
-    let criterion = format!(
-        "a whole layer before a higher MFR: the points whose layer covers at least {full} of the plate first, then the \
-         rest, each by highest MFR (the layer's packing over the gap), among the points whose layer is even along the \
-         travel (CV of the deposited mass along the travel within {EVEN_FACTOR}× its counting noise); points without \
-         layer measures are ranked by MFR alone. Uncertainty: the MFR's standard error where the run measured one \
-         (batch means over the steady window), else its counting noise, MFR/√n over the n particles counted",
-        full = show(FULL_COVER)
-    );
+    let criterion = if answer_name == "MFR" {
+        format!(
+            "a whole layer before a higher MFR: the points whose layer covers at least {full} of the plate first, then \
+             the rest, each by highest MFR (the layer's packing over the gap), among the points whose layer is even \
+             along the travel (CV of the deposited mass along the travel within {EVEN_FACTOR}× its counting noise); \
+             points without layer measures are ranked by MFR alone. Uncertainty: the MFR's standard error where the \
+             run measured one (batch means over the steady window), else its counting noise, MFR/√n over the n \
+             particles counted",
+            full = show(FULL_COVER)
+        )
+    } else {
+        format!(
+            "a whole layer before a higher {answer_name}: the points whose own pass covers at least {full} of the \
+             plate first, then the rest, each by highest {answer_name}. Uncertainty: its standard error over the \
+             steady passes",
+            full = show(FULL_COVER)
+        )
+    };
     // A layout that measures no CV along the travel (layers) leaves it NaN: not uneven.
     let even = |r: &crate::outcome::RunResult| {
         r.layer.is_none_or(|l| l.layer_cv.is_nan() || l.layer_cv <= EVEN_FACTOR * l.layer_cv_noise)
@@ -501,7 +512,7 @@ mod tests {
         };
         let points = vec![point(0, 0.46, 0.84), point(1, 0.39, 0.77)];
         let layout = crate::scenes::lookup("layers").unwrap();
-        let advice = advise(&["blade_speed".to_string()], &points, &[], Some(layout));
+        let advice = advise(&["blade_speed".to_string()], &points, &[], Some(layout), "steady-layer packing");
         assert_eq!(advice.recommended.len(), 2);
         let best = &advice.recommended[0];
         assert_eq!(best.index, 0, "the denser steady layer first");

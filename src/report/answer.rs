@@ -64,11 +64,6 @@ fn setting(a: &Analysis, values: &dyn Fn(&str) -> Option<f64>) -> String {
         .join(", ")
 }
 
-/// What each point answers with, in words (`MFR` unless the layout says otherwise).
-fn answer_name(a: &Analysis) -> &'static str {
-    crate::scenes::lookup(&a.setup.scene.layout).map_or("MFR", |l| l.answer_name(&a.setup.scene))
-}
-
 /// Three significant digits: a setting to dial in, not a record.
 fn show_3(v: f64) -> String {
     crate::scene::plausible::round_to(v, 3)
@@ -92,7 +87,7 @@ fn recommendation(a: &Analysis) -> (String, Option<String>) {
         } else if a.counts.done == 0 {
             "no point has run yet".to_string()
         } else {
-            format!("no done point with {} > 0 has an even layer", answer_name(a))
+            format!("no done point with {} > 0 has an even layer", a.answer_name())
         };
         return (format!("none: {why}"), None);
     };
@@ -101,14 +96,14 @@ fn recommendation(a: &Analysis) -> (String, Option<String>) {
         "{} (point #{}): {} {:.3} ± {:.3} (SE){}{}",
         setting(a, &|p| r.parameters.get(p).copied()),
         r.index,
-        answer_name(a),
+        a.answer_name(),
         r.mfr,
         r.mfr_se,
         r.detail.as_ref().map_or(String::new(), |d| format!(", {d}")),
         covered.map_or(String::new(), |c| format!(", covered fraction {c:.2}"))
     );
     let warning = covered.filter(|&c| c < FULL_COVER).map(|c| {
-        let name = answer_name(a);
+        let name = a.answer_name();
         let bare = format!(
             "this setting leaves {:.0}% of the plate bare (covered fraction {c:.2}; a full layer covers at least {})",
             (1.0 - c) * 100.0,
@@ -167,7 +162,7 @@ fn matters(a: &Analysis) -> Option<String> {
         return Some(format!(
             "cannot rank yet: every parameter's first-order index of {} has a 95% interval that reaches 0 ({}); more \
              points narrow them",
-            answer_name(a),
+            a.answer_name(),
             ranked.join(", ")
         ));
     }
@@ -175,7 +170,7 @@ fn matters(a: &Analysis) -> Option<String> {
     Some(format!(
         "{} (first-order index of {}: the share of its variance each explains alone, 95% interval){trust}",
         ranked.join(" > "),
-        answer_name(a)
+        a.answer_name()
     ))
 }
 
@@ -186,7 +181,7 @@ fn verdict(a: &Analysis) -> String {
             "converged at N = {} ({}): the {} statistics have settled by rule \"{}\"",
             v.n.unwrap_or(0),
             v.space.as_deref().unwrap_or("?"),
-            answer_name(a),
+            a.answer_name(),
             rule_name(a.criteria.rule)
         ),
         "unfinished" => format!(

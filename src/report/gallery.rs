@@ -23,9 +23,10 @@ pub fn draw_all(a: &Analysis) -> Res<Vec<Figure>> {
     }
     out.push(plots::scatter(a)?);
     let mfr = |p: &PointRow| p.mfr();
+    let label = format!("{} (–)", a.answer_name());
     out.extend(maps::pair_maps(
         a,
-        &maps::MapSpec { stem: "mfr", label: "MFR (–)", value: &mfr, cells: maps::CellValue::Points },
+        &maps::MapSpec { stem: "mfr", label: &label, value: &mfr, cells: maps::CellValue::Points },
     )?);
     let covered = |p: &PointRow| p.done().and_then(|(r, _)| r.layer.map(|l| l.covered_fraction));
     out.extend(maps::pair_maps(

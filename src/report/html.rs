@@ -72,6 +72,8 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
     });
     let context = json!({
         "name": a.name,
+        // What each point answers with: MFR, or the layout's own measure.
+        "q": a.answer_name(),
         "description": a.description,
         "design": design,
         "parameter_list": a.parameters.iter().zip(&a.units).map(|(p, u)| format!("{p} ({u})")).collect::<Vec<_>>().join(", "),

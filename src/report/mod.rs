@@ -222,6 +222,13 @@ pub struct Analysis {
     pub points: Vec<PointRow>,
 }
 
+impl Analysis {
+    /// What each point answers with, in words (`MFR` unless the layout says otherwise).
+    pub fn answer_name(&self) -> &'static str {
+        crate::scenes::lookup(&self.setup.scene.layout).map_or("MFR", |l| l.answer_name(&self.setup.scene))
+    }
+}
+
 /// A sweep directory's manifest, sweep file and points (with their states and `mfr_se`), and
 /// what the screen did.
 pub fn read_points(dir: &Path) -> Result<(Manifest, Sweep, Vec<PointRow>, ScreenReport)> {
@@ -313,7 +320,8 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
         .collect();
     let setup = Setup::of(&sweep, &manifest, dir, &done.iter().map(|(_, r, _)| *r).collect::<Vec<_>>());
     let layout = crate::scenes::lookup(&sweep.file.scene.layout);
-    let advice = advice::advise(&manifest.parameters, &points, &sensitivity, layout);
+    let answer_name = layout.map_or("MFR", |l| l.answer_name(&sweep.file.scene));
+    let advice = advice::advise(&manifest.parameters, &points, &sensitivity, layout, answer_name);
     let engine = manifest
         .identity
         .get("engine")

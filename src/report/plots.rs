@@ -137,7 +137,8 @@ pub(super) fn histogram(a: &Analysis, k: usize, members: &[usize]) -> Res<Figure
         counts[((v / width) as usize).min(bins - 1)] += 1;
     }
     let ymax = counts.iter().copied().max().unwrap_or(1).max(1) as f64 * 1.1;
-    let caption = format!("MFR distribution of {} (N = {}, {} with an MFR)", s.label, s.n, s.done);
+    let q = a.answer_name();
+    let caption = format!("{q} distribution of {} (N = {}, {} with a value)", s.label, s.n, s.done);
     figure(format!("histogram-{}", k + 1), caption.clone(), (560, 380), |root| {
         let mut c = ChartBuilder::on(root)
             .caption(&caption, (FONT, AXIS_FONT))
@@ -149,7 +150,7 @@ pub(super) fn histogram(a: &Analysis, k: usize, members: &[usize]) -> Res<Figure
             .max_light_lines(0)
             .label_style((FONT, TICK_FONT))
             .axis_desc_style((FONT, AXIS_FONT))
-            .x_desc("MFR (–)")
+            .x_desc(format!("{q} (–)"))
             .y_desc("runs")
             .y_label_formatter(&integer)
             .draw()?;
@@ -167,8 +168,9 @@ pub(super) fn statistics(a: &Analysis) -> Res<Figure> {
     } else {
         "95% bootstrap intervals"
     };
+    let q = a.answer_name();
     let caption = format!(
-        "MFR statistics against N, with {interval}; band: ±{}% of the last value",
+        "{q} statistics against N, with {interval}; band: ±{}% of the last value",
         a.criteria.tolerance * 100.0
     );
     let conv_n = a.verdict.n;
@@ -194,9 +196,10 @@ pub(super) fn statistics(a: &Analysis) -> Res<Figure> {
                     .flatten()
                     .chain(band.into_iter().flat_map(|(l, h)| [l, h])),
             );
-            let unit = if st.name() == "std" || st.name() == "mean" { "MFR (–)" } else { "(–)" };
+            let unit =
+                if st.name() == "std" || st.name() == "mean" { format!("{q} (–)") } else { "(–)".into() };
             let mut c = ChartBuilder::on(panel)
-                .caption(format!("{} of MFR", st.name()), (FONT, AXIS_FONT))
+                .caption(format!("{} of {q}", st.name()), (FONT, AXIS_FONT))
                 .margin(10)
                 .x_label_area_size(44)
                 .y_label_area_size(72)
@@ -243,13 +246,15 @@ pub(super) fn scatter(a: &Analysis) -> Res<Figure> {
         .filter_map(|p| p.mfr().map(|m| (p, m, p.done().map_or(Quality::Unknown, |(_, q)| q))))
         .collect();
     let (mlo, mhi) = range(done.iter().map(|p| p.1));
-    let caption = "MFR against each parameter; colour: spreading quality (green ideal, orange \
-                   inefficient, red unstable, grey unknown or screened)"
-        .to_string();
+    let name = a.answer_name();
+    let caption = format!(
+        "{name} against each parameter; colour: spreading quality (green ideal, orange inefficient, red \
+         unstable, grey unknown or screened)"
+    );
     let radius = if done.len() > 2000 { 2 } else { 3 };
     let classes = [Quality::Ideal, Quality::Inefficient, Quality::Unstable, Quality::Unknown];
     figure("scatter".into(), caption, (480 * cols as u32, 330 * rows as u32 + 70), |root| {
-        let root = root.titled("MFR against each swept parameter", (FONT, TITLE_FONT))?;
+        let root = root.titled(&format!("{name} against each swept parameter"), (FONT, TITLE_FONT))?;
         let h = root.dim_in_pixel().1;
         let (grid, legend) = root.split_vertically(h - 36);
         let style = (FONT, AXIS_FONT).into_font().color(&BLACK);
@@ -271,7 +276,7 @@ pub(super) fn scatter(a: &Analysis) -> Res<Figure> {
                 .label_style((FONT, TICK_FONT))
                 .axis_desc_style((FONT, AXIS_FONT))
                 .x_desc(format!("{} ({})", a.parameters[j], a.units[j]))
-                .y_desc("MFR (–)")
+                .y_desc(format!("{name} (–)"))
                 .draw()?;
             c.draw_series(
                 done.iter().map(|p| {

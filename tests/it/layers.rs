@@ -137,8 +137,23 @@ fn a_layers_lattice_reports_every_point_done_or_failed_and_answers_in_the_layer_
     if counts["done"].as_u64().unwrap() > 0 {
         assert!(recommended.contains("steady-layer packing"), "{recommended}");
         assert!(recommended.contains("µm of powder under the blade"), "{recommended}");
+        // The page speaks of what was measured: its statistics, distribution and emulator are of
+        // the packing, not of an MFR no layers run measures.
+        let html = std::fs::read_to_string(dir.join("s/report/report.html")).unwrap();
+        assert!(
+            html.contains("steady-layer packing of the runs")
+                || html.contains("steady-layer packing distribution")
+        );
+        for mfr in ["MFR distribution", "Emulator of MFR", "statistic of MFR", "<th>MFR"] {
+            assert!(!html.contains(mfr), "the layers report says {mfr:?}");
+        }
     } else {
         assert!(recommended.contains("no point is done: 2 failed"), "{recommended}");
+        let html = std::fs::read_to_string(dir.join("s/report/report.html")).unwrap();
+        assert!(
+            html.contains("No steady-layer packing was measured"),
+            "the layers report names another measure"
+        );
     }
 }
 
