@@ -39,7 +39,7 @@ pub fn measure(scene: &Scene, frame: &Frame, x0: f64, x1: f64) -> Option<Layer> 
     if x1 - x0 < 2.0 * BIN_DIAMETERS * d {
         return None;
     }
-    let radius = |m: f64| (3.0 * m / (4.0 * std::f64::consts::PI * scene.density)).cbrt();
+    let radius = |m: f64| (3.0 * m / (4.0 * std::f64::consts::PI * scene.material.density)).cbrt();
     let deposit: Vec<usize> =
         (0..frame.len()).filter(|&i| frame.x[i] >= x0 && frame.x[i] < x1 && frame.z[i] < scene.gap).collect();
 

@@ -68,7 +68,7 @@ pub fn compute(scene: &Scene, frames: &[Frame]) -> Result<Metrics, MetricsError>
     let rear: Vec<Crossing> = window.windows(2).map(|p| crossing(scene, p[0], p[1], Face::Rear)).collect();
     let front: Vec<Crossing> = window.windows(2).map(|p| crossing(scene, p[0], p[1], Face::Front)).collect();
     // Ideal mass per metre of strip: ρ · w · h (thesis Eq. 16 with v·Δt the strip length).
-    let ideal_per_length = scene.density * scene.depth * scene.gap;
+    let ideal_per_length = scene.material.density * scene.depth * scene.gap;
     let mfr_of = |c: &[Crossing], a: u64, b: u64| -> f64 {
         c.iter().map(|x| x.mass).sum::<f64>()
             / (ideal_per_length * (scene.blade_rear_at(b) - scene.blade_rear_at(a)))

@@ -226,7 +226,7 @@ pub fn compute(scene: &Scene, c: &HeldBlocks, blocks: &[Block], stop: &str, fram
     let drift = if mfr > 0.0 { (mean(&w[w.len() - q..]) - mean(&w[..q])) / mfr } else { 0.0 };
     let window = &blocks[d..];
     let gone: f64 = window.iter().map(|b| b.gone).sum();
-    let particle_mass = scene.density * std::f64::consts::PI / 6.0 * scene.diameter.powi(3);
+    let particle_mass = scene.material.density * std::f64::consts::PI / 6.0 * scene.diameter.powi(3);
     // The heap at the window's start is the count at the end of the last dropped block.
     let heap_start = if d > 0 { blocks[d - 1].heap } else { blocks[0].heap };
     let heap_end = blocks.last().map(|b| b.heap).unwrap_or(0);

@@ -92,11 +92,12 @@ pub enum SceneError {
     Implausible(#[from] plausible::OutOfBounds),
 }
 
-/// Every number the deck and the metrics need for one point.
+/// The powder's material and contact law as the deck sets them (SI), the same for every layout.
 #[derive(Debug, Clone, Serialize)]
-pub struct Scene {
-    // Material (SI).
+pub struct PowderMaterial {
     pub density: f64,
+    /// Young's modulus as the deck sets it (the stiffness factor applied, at least LIGGGHTS's
+    /// floor), Pa.
     pub youngs_modulus: f64,
     pub poisson: f64,
     pub restitution: f64,
@@ -106,6 +107,14 @@ pub struct Scene {
     pub rolling_model: &'static str,
     /// SJKR cohesion energy density, J/m³ ([`cohesion`]); 0: no cohesion.
     pub cohesion_energy_density: f64,
+}
+
+/// Every number the deck and the metrics need for one point.
+#[derive(Debug, Clone, Serialize)]
+pub struct Scene {
+    /// The powder's material and contact law; its fields are the deck's names (`density`, …).
+    #[serde(flatten)]
+    pub material: PowderMaterial,
     /// The layout's name (see [`crate::scenes`]).
     pub layout: String,
     /// The blade stands still (the substrate moves under it) instead of travelling.
@@ -356,16 +365,7 @@ pub struct Base {
     /// How far the platform drops between passes (layers layout), m.
     pub layer_thickness: f64,
     pub speed: f64,
-    pub density: f64,
-    /// Young's modulus as the deck sets it (the stiffness factor applied, at least LIGGGHTS's
-    /// floor), Pa.
-    pub youngs: f64,
-    pub poisson: f64,
-    pub restitution: f64,
-    pub friction: f64,
-    pub rolling_friction: f64,
-    /// SJKR cohesion energy density from the surface energy ([`cohesion`]), J/m³.
-    pub cohesion_energy_density: f64,
+    pub material: PowderMaterial,
     pub rayleigh_time: f64,
     pub timestep: f64,
 }
@@ -439,13 +439,16 @@ impl Base {
             heap_height: get("heap_height") * mm,
             layer_thickness: get("layer_thickness") * mm,
             speed,
-            density,
-            youngs,
-            poisson,
-            restitution: get("restitution"),
-            friction: get("friction"),
-            rolling_friction: get("rolling_friction"),
-            cohesion_energy_density,
+            material: PowderMaterial {
+                density,
+                youngs_modulus: youngs,
+                poisson,
+                restitution: get("restitution"),
+                friction: get("friction"),
+                rolling_friction: get("rolling_friction"),
+                rolling_model: ROLLING_MODEL,
+                cohesion_energy_density,
+            },
             rayleigh_time,
             timestep,
         })

@@ -62,9 +62,9 @@ impl Scene {
     /// the same against its support (a substrate sphere, or the plate). Metres.
     pub fn load_margin(&self) -> f64 {
         let r = 0.5 * self.min_diameter();
-        let m = self.density * std::f64::consts::PI * (2.0 * r).powi(3) / 6.0;
+        let m = self.material.density * std::f64::consts::PI * (2.0 * r).powi(3) / 6.0;
         // The blade, plate and substrate are of the particles' material (the deck's types 2, 3).
-        let material = Material { youngs: self.youngs_modulus, poisson: self.poisson };
+        let material = Material { youngs: self.material.youngs_modulus, poisson: self.material.poisson };
         let pair = |r_eff: f64| Pair {
             y_eff: effective_youngs(material, material),
             g_eff: 0.0,

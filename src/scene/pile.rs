@@ -81,7 +81,7 @@ pub fn pile_data(s: &Scene) -> String {
                     "{} 1 {} {} {:.9e} {:.9e} {:.9e}",
                     id + 1,
                     diameters[id],
-                    s.density,
+                    s.material.density,
                     c[0],
                     c[1],
                     c[2]
@@ -93,7 +93,7 @@ pub fn pile_data(s: &Scene) -> String {
     if let Some(bed) = &s.substrate_bed {
         for &[x, y, z, d] in &bed.spheres {
             id += 1;
-            let _ = writeln!(out, "{id} 3 {d} {} {x:.9e} {y:.9e} {z:.9e}", s.density);
+            let _ = writeln!(out, "{id} 3 {d} {} {x:.9e} {y:.9e} {z:.9e}", s.material.density);
         }
     }
     let [sx, sy] = s.substrate_n;
@@ -105,7 +105,7 @@ pub fn pile_data(s: &Scene) -> String {
             let _ = writeln!(
                 out,
                 "{id} 3 {} {} {:.9e} {:.9e} {:.9e}",
-                s.substrate_diameter, s.density, c[0], c[1], c[2]
+                s.substrate_diameter, s.material.density, c[0], c[1], c[2]
             );
         }
     }

@@ -234,7 +234,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let max_blocks = warmup_blocks + blocks(settings.window_cap_diameters);
     let blade_top = 2.0 * heap_height + 2.0 * d;
     let mean_volume = psd.mean_volume();
-    let mass = heap_particles as f64 * s.density * mean_volume;
+    let mass = heap_particles as f64 * s.material.density * mean_volume;
     let Feed { classes: feed, volume_limit } = Feed::of(&psd, s.seed);
     s.conveyor = Held {
         heap_height,
@@ -247,7 +247,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         warmup_blocks,
         min_window_blocks: settings.min_window_blocks as u64,
         max_blocks,
-        ideal_block_mass: s.density * s.depth * gap * v * dt * block_steps as f64,
+        ideal_block_mass: s.material.density * s.depth * gap * v * dt * block_steps as f64,
         mfr_rel_se: settings.mfr_rel_se,
         mfr_abs_se: settings.mfr_abs_se,
         powder_bed: false,
@@ -302,7 +302,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
 fn conveyor_layer(scene: &Scene, frame: &Frame, st: &SteadyState) -> Option<Layer> {
     let c = &scene.conveyor;
     let mut l = layer::measure(scene, frame, c.delete_x1, scene.blade_x0)?;
-    let particle_mass = |d: f64| scene.density * std::f64::consts::PI / 6.0 * d.powi(3);
+    let particle_mass = |d: f64| scene.material.density * std::f64::consts::PI / 6.0 * d.powi(3);
     let weighted: f64 = c.feed.iter().map(|f| f.mass_fraction * particle_mass(f.diameter)).sum::<f64>()
         / c.feed.iter().map(|f| f.mass_fraction).sum::<f64>();
     let block_mass: Vec<f64> =

@@ -124,7 +124,7 @@ pub fn map(from: &Scene, state: &Path, to: &Scene, to_pile: &str, distance: f64)
         return Err(ColdStart::NothingFits);
     }
     let first_id = substrate.len() + 1;
-    let data = data_file(&warm, first_id, to.density);
+    let data = data_file(&warm, first_id, to.material.density);
     let mut scene = to.clone();
     let window_blocks = c.max_blocks - c.warmup_blocks;
     let share = (distance / FULL_WARMUP_DISTANCE).clamp(LEAST_WARMUP_SHARE, 1.0);

@@ -166,14 +166,14 @@ pub fn passes(
     for (line, gs) in lines.iter().zip(grains) {
         let k = line.k;
         let tip = plan.passes.get(k - 1).map_or(f64::NAN, |p| p.tip);
-        let deposit =
-            if plan.fused { line.plate_mass } else { line.plate_mass - mass_before } / (scene.density * area);
+        let deposit = if plan.fused { line.plate_mass } else { line.plate_mass - mass_before }
+            / (scene.material.density * area);
         let effective = tip - if plan.fused { floor_before } else { surface_before };
         let new = |g: &Grain| !ids_before.contains(&g.id);
         let (top, covered) = surface(scene, plan, gs, floor_before, &new);
         let m = mean(&top);
         let roughness = (top.iter().map(|z| (z - m).powi(2)).sum::<f64>() / top.len() as f64).sqrt() / d;
-        let volume = line.plate_mass / (scene.density * area);
+        let volume = line.plate_mass / (scene.material.density * area);
         if k == 1 {
             volume_after_first = volume;
         }

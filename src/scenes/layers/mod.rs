@@ -570,7 +570,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     };
 
     let mass = (first_solid / psd.mean_volume() + dose_particles as f64 * layers as f64)
-        * s.density
+        * s.material.density
         * psd.mean_volume();
     let v_ref = v.max((2.0 * GRAVITY * z_top).sqrt());
     s.gap = t + clearance;

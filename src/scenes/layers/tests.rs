@@ -161,7 +161,7 @@ fn a_second_layer_on_the_first_is_measured_as_its_own_deposit_and_cover() {
     let first = lattice(&sc, &plan, d, 0.5 * d, 1);
     let mut both = first.clone();
     both.extend(lattice(&sc, &plan, d, 1.5 * d, 10_000));
-    let m = sc.density * std::f64::consts::PI / 6.0 * d.powi(3);
+    let m = sc.material.density * std::f64::consts::PI / 6.0 * d.powi(3);
     let lines = [
         PassLine { k: 1, step: 10, plate_mass: first.len() as f64 * m },
         PassLine { k: 2, step: 20, plate_mass: both.len() as f64 * m },
@@ -311,7 +311,7 @@ fn a_fused_bed_s_search_sets_each_next_depth_to_its_own_times_the_drop_over_its_
     // are never the steady layer.
     let d = sc.diameter;
     let layer = lattice(&sc, &plan, d, 0.5 * d, 1);
-    let m = sc.density * std::f64::consts::PI / 6.0 * d.powi(3) * layer.len() as f64;
+    let m = sc.material.density * std::f64::consts::PI / 6.0 * d.powi(3) * layer.len() as f64;
     let lines: Vec<PassLine> = (1..=6).map(|k| PassLine { k, step: 10 * k as u64, plate_mass: m }).collect();
     let log = "demsweep: solid 1 top -0.00025\ndemsweep: solid 2 top -0.0001\n";
     let solids = parse_solids(log);

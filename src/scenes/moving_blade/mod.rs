@@ -21,8 +21,8 @@ use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT};
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
 use crate::scene::{
-    Base, Conveyor, Scene, GRAVITY, LAYER_FRACTION_MAX, REPOSE_DEG, ROLLING_MODEL, SNAPSHOTS_PER_SUB_WINDOW,
-    SUB_WINDOWS, THESIS_BAND, VTK_EVERY_S,
+    Base, Conveyor, Scene, GRAVITY, LAYER_FRACTION_MAX, REPOSE_DEG, SNAPSHOTS_PER_SUB_WINDOW, SUB_WINDOWS,
+    THESIS_BAND, VTK_EVERY_S,
 };
 use crate::scenes::{BadSetting, BuiltinTemplate, Finished, Layout, Rejected, SetupRows};
 
@@ -131,8 +131,8 @@ pub enum Dose {
 
 /// The scene of a moving-blade point: the pile, the blade's travel, the window, the timing.
 pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
-    let Base { psd, d, d_min, gap, speed, density, youngs, poisson, rayleigh_time, timestep, .. } =
-        base.clone();
+    let Base { psd, d, d_min, gap, speed, rayleigh_time, timestep, .. } = base.clone();
+    let density = base.material.density;
     // Geometry in units of the mean diameter, so the particle count barely changes with D.
     // The dose starts as a jittered simple-cubic block (an exact, reproducible count; no
     // random insertion to fall short). The depth is a whole number of lattice spacings so
@@ -265,14 +265,7 @@ pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
     let rest_ke = if gated { 0.5 * mass * rest_speed * rest_speed } else { 0.0 };
 
     Scene {
-        density,
-        youngs_modulus: youngs,
-        poisson,
-        restitution: base.restitution,
-        friction: base.friction,
-        rolling_friction: base.rolling_friction,
-        rolling_model: ROLLING_MODEL,
-        cohesion_energy_density: base.cohesion_energy_density,
+        material: base.material.clone(),
         layout: settings.layout.clone(),
         blade_fixed: false,
         size_classes: psd.classes.clone(),
@@ -446,12 +439,12 @@ mod tests {
             &SceneSettings { stiffness_factor: 0.25, ..SceneSettings::gated() },
         )
         .unwrap();
-        assert!((soft.youngs_modulus - 5.25e6).abs() < 1e-6);
+        assert!((soft.material.youngs_modulus - 5.25e6).abs() < 1e-6);
         assert!((soft.rayleigh_time / full.rayleigh_time - 2.0).abs() < 1e-12);
         let floor =
             crate::scenes::build(&values, &SceneSettings { stiffness_factor: 0.1, ..SceneSettings::gated() })
                 .unwrap();
-        assert_eq!(floor.youngs_modulus, MIN_YOUNGS_MPA * 1e6);
+        assert_eq!(floor.material.youngs_modulus, MIN_YOUNGS_MPA * 1e6);
     }
 
     #[test]

@@ -209,7 +209,7 @@ mod metrics {
         // The blade sweeping over a resting layer sees exactly its mass pass under the tip:
         // MFR = λ / (ρ w h), on the rear and the front face alike.
         let s = scene();
-        let ideal = s.density * s.depth * s.gap;
+        let ideal = s.material.density * s.depth * s.gap;
         let m = compute(&s, &resting_layer(&s, 0.5 * ideal, 1e-7, s.gap / 2.0)).unwrap();
         assert!((m.mfr - 0.5).abs() < 0.01, "{}", m.mfr);
         assert!((m.mfr_flux - 0.5).abs() < 0.01, "{}", m.mfr_flux);
@@ -223,7 +223,7 @@ mod metrics {
     fn particles_above_the_tip_do_not_count() {
         // The same layer, but every particle above the tip (thrown over the blade).
         let s = scene();
-        let ideal = s.density * s.depth * s.gap;
+        let ideal = s.material.density * s.depth * s.gap;
         let m = compute(&s, &resting_layer(&s, 0.5 * ideal, 1e-7, s.gap * 1.01)).unwrap();
         assert_eq!(m.mfr, 0.0);
         assert_eq!(m.mfr_flux, 0.0);
@@ -309,7 +309,7 @@ mod layer {
 
     /// Spheres of diameter D resting on z = 0 at the given (x, y) centres.
     fn frame(s: &Scene, xy: &[(f64, f64)]) -> Frame {
-        let m = s.density * std::f64::consts::PI / 6.0 * s.diameter.powi(3);
+        let m = s.material.density * std::f64::consts::PI / 6.0 * s.diameter.powi(3);
         Frame {
             step: 0,
             id: (1..=xy.len() as u64).collect(),

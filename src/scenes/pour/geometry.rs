@@ -69,7 +69,7 @@ pub fn column_data(s: &Scene) -> String {
             "{} 1 {} {} {:.9e} {:.9e} {:.9e}",
             id + 1,
             diameters[id],
-            s.density,
+            s.material.density,
             cx + c[0],
             cy + c[1],
             c[2]

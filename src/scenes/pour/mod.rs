@@ -34,7 +34,7 @@ use crate::engine::dump::read_dump;
 use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT, VX_LAYERS};
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
-use crate::scene::{Base, Conveyor, Scene, GRAVITY, LAYER_FRACTION_MAX, ROLLING_MODEL};
+use crate::scene::{Base, Conveyor, Scene, GRAVITY, LAYER_FRACTION_MAX};
 use crate::scenes::{BadSetting, BuiltinTemplate, Finished, Layout, Rejected, SetupRows, StandInModel};
 
 /// The pour layout (registered in [`crate::scenes::LAYOUTS`]).
@@ -196,7 +196,8 @@ pub fn column_particles(supply_factor: f64) -> usize {
 
 /// The pour's scene from the point's common part.
 fn derive(base: Base, settings: &SceneSettings) -> Scene {
-    let Base { psd, d, d_min, density, youngs, poisson, rayleigh_time, timestep, .. } = base.clone();
+    let Base { psd, d, d_min, rayleigh_time, timestep, .. } = base.clone();
+    let density = base.material.density;
     let particles = column_particles(settings.supply_factor);
     let spacing = LATTICE_CLEARANCE * psd.max_diameter();
     let radius = CYLINDER_RADIUS_D * d;
@@ -227,14 +228,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         ((settings.settle_max_s - settle_least).max(0.0) / SETTLE_CHECK_S).ceil().max(1.0) as u64;
     let v_ref = (2.0 * GRAVITY * z_hi).sqrt();
     Scene {
-        density,
-        youngs_modulus: youngs,
-        poisson,
-        restitution: base.restitution,
-        friction: base.friction,
-        rolling_friction: base.rolling_friction,
-        rolling_model: ROLLING_MODEL,
-        cohesion_energy_density: base.cohesion_energy_density,
+        material: base.material.clone(),
         layout: settings.layout.clone(),
         blade_fixed: false,
         size_classes: psd.classes.clone(),
@@ -442,11 +436,11 @@ mod tests {
         assert!(deck.contains("run ${liftsteps}") && deck.contains("compute ztop powder reduce max v_top"));
         // A cohesive powder: cohesive between particles, not against plate, walls or tube.
         let c = ti64_with(1.0, 1e-4);
-        assert!(c.cohesion_energy_density > 0.0);
+        assert!(c.material.cohesion_energy_density > 0.0);
         let mut context = tera::Context::new();
         context.insert("scene", &c);
         let deck = tera::Tera::one_off(Pour.template().source, &context, false).unwrap();
-        let k = c.cohesion_energy_density;
+        let k = c.material.cohesion_energy_density;
         assert!(
             deck.contains(&format!("cohesionEnergyDensity peratomtypepair 2 {k} 0.0 0.0 0.0\n")),
             "{deck}"
