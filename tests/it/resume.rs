@@ -167,15 +167,17 @@ fn an_interrupted_sweep_resumes_without_rerunning_finished_points() {
         .unwrap();
 
     let out = tmp.path().join("out");
-    let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(200 * MS));
+    // Interrupted as the fifth run starts (three have finished by then with two at a time): an
+    // event, not a clock, so a busy machine cannot turn it into "nothing done yet".
     let cancel = CancelToken::new();
-    let c2 = cancel.clone();
-    let t = std::thread::spawn(move || {
-        std::thread::sleep(Duration::from_millis(700));
-        c2.cancel();
+    let (c2, started) = (cancel.clone(), std::sync::atomic::AtomicUsize::new(0));
+    let exec = FakeExecutor::new(move |_, _| {
+        if started.fetch_add(1, std::sync::atomic::Ordering::SeqCst) == 4 {
+            c2.cancel();
+        }
+        Behaviour::Succeed(200 * MS)
     });
     let sum = run::start(&s, design, &out, &exec, &support::quiet(2), &mut RunAll, &cancel).unwrap();
-    t.join().unwrap();
     assert!(sum.interrupted);
     assert_eq!(sum.exit_code(), 130);
     assert!(sum.done > 0 && sum.done < 12, "{sum:?}");
