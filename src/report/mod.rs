@@ -225,8 +225,14 @@ pub struct Analysis {
 impl Analysis {
     /// What each point answers with, in words (`MFR` unless the layout says otherwise).
     pub fn answer_name(&self) -> &'static str {
-        crate::scenes::lookup(&self.setup.scene.layout).map_or("MFR", |l| l.answer_name(&self.setup.scene))
+        answer_name(&self.setup.scene)
     }
+}
+
+/// What a point of a sweep with these scene settings answers with (`MFR` unless its layout says
+/// otherwise).
+fn answer_name(scene: &crate::scene::settings::SceneSettings) -> &'static str {
+    crate::scenes::lookup(&scene.layout).map_or("MFR", |l| l.answer_name(scene))
 }
 
 /// A sweep directory's manifest, sweep file and points (with their states and `mfr_se`), and
@@ -320,8 +326,8 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
         .collect();
     let setup = Setup::of(&sweep, &manifest, dir, &done.iter().map(|(_, r, _)| *r).collect::<Vec<_>>());
     let layout = crate::scenes::lookup(&sweep.file.scene.layout);
-    let answer_name = layout.map_or("MFR", |l| l.answer_name(&sweep.file.scene));
-    let advice = advice::advise(&manifest.parameters, &points, &sensitivity, layout, answer_name);
+    let advice =
+        advice::advise(&manifest.parameters, &points, &sensitivity, layout, answer_name(&sweep.file.scene));
     let engine = manifest
         .identity
         .get("engine")

@@ -24,15 +24,5 @@ for f in posterior.json calibration-batches.csv results.csv calibrated.toml cali
 done
 [ -f "$OUT/report/map-posterior-rolling_friction.png" ] && cp "$OUT/report/"*.png "$REC/" || true
 # Each done pour: its rolling friction, seed's angle with SE, packing and CPU s.
-python3 - "$OUT" >"$REC/pours.tsv" <<'PY'
-import csv, json, os, sys
-out = sys.argv[1]
-print("index	rolling_friction	angle_deg	angle_se_deg	packing	apparent_density_g_cm3	cpu_s")
-for r in csv.DictReader(open(os.path.join(out, "results.csv"))):
-    path = os.path.join(out, "runs", r["hash"], "result.json")
-    if r["status"] != "done" or not os.path.exists(path):
-        continue
-    j = json.load(open(path)); h = j["heap"]
-    print(f"{r['index']}	{float(r['rolling_friction']):.4f}	{h['angle_deg']:.2f}	{h['angle_se_deg']:.2f}	{h['packing']:.3f}	{7.78 * h['packing']:.3f}	{j.get('cpu_time', 0):.0f}")
-PY
+python3 docs/study/calibration/pours.py "$OUT" rolling_friction >"$REC/pours.tsv"
 exit $status

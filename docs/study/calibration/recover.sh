@@ -47,15 +47,5 @@ for f in posterior.json calibration-batches.csv results.csv calibrated.toml cali
   [ -f "$OUT/$f" ] && cp "$OUT/$f" "$REC/$f"
 done
 # Each done pour: its sliding and rolling friction, seed, angle with SE, packing and CPU s.
-python3 - "$OUT" >"$REC/pours.tsv" <<'PY'
-import csv, json, os, sys
-out = sys.argv[1]
-print("index	friction	rolling_friction	angle_deg	angle_se_deg	packing	cpu_s")
-for r in csv.DictReader(open(os.path.join(out, "results.csv"))):
-    path = os.path.join(out, "runs", r["hash"], "result.json")
-    if r["status"] != "done" or not os.path.exists(path):
-        continue
-    j = json.load(open(path)); h = j["heap"]
-    print(f"{r['index']}	{j['parameters']['friction']:.4f}	{float(r['rolling_friction']):.4f}	{h['angle_deg']:.2f}	{h['angle_se_deg']:.2f}	{h['packing']:.3f}	{j.get('cpu_time', 0):.0f}")
-PY
+python3 docs/study/calibration/pours.py "$OUT" friction rolling_friction >"$REC/pours.tsv"
 exit $status
