@@ -30,27 +30,36 @@ pub fn class_counts(fractions: &[f64], n: usize) -> Vec<usize> {
     counts
 }
 
-/// The diameters of the scene's `particles`, class by class in the counts of their number
-/// fractions ([`class_counts`]), shuffled with `rng`.
-pub fn shuffled_diameters(s: &Scene, rng: &mut ChaCha8Rng) -> Vec<f64> {
-    let fractions: Vec<f64> = s.size_classes.iter().map(|c| c.fraction).collect();
-    let mut diameters: Vec<f64> = class_counts(&fractions, s.particles)
-        .iter()
-        .zip(&s.size_classes)
-        .flat_map(|(&n, c)| std::iter::repeat_n(c.diameter, n))
-        .collect();
-    diameters.shuffle(rng);
-    diameters
+/// The seeded draw of a pile's spheres: the diameters of the scene's `particles`, class by class
+/// in the counts of their number fractions ([`class_counts`]) and shuffled, the generator
+/// that goes on to jitter their positions, and the jitter's bound (0.45 of the clearance
+/// between the largest sphere and its cell).
+pub struct Draw {
+    pub rng: ChaCha8Rng,
+    pub diameters: Vec<f64>,
+    pub jitter: f64,
+}
+
+impl Draw {
+    pub fn of(s: &Scene) -> Draw {
+        let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
+        let fractions: Vec<f64> = s.size_classes.iter().map(|c| c.fraction).collect();
+        let mut diameters: Vec<f64> = class_counts(&fractions, s.particles)
+            .iter()
+            .zip(&s.size_classes)
+            .flat_map(|(&n, c)| std::iter::repeat_n(c.diameter, n))
+            .collect();
+        diameters.shuffle(&mut rng);
+        let d_max = s.size_classes.iter().map(|c| c.diameter).fold(0.0, f64::max);
+        Draw { rng, diameters, jitter: 0.45 * (s.pile_spacing - d_max) }
+    }
 }
 
 /// The LIGGGHTS data file (atom style granular: id type diameter density x y z) of the pile,
 /// with the simulation box. Atom type 1; type 2 is the walls'; type 3 the fixed spheres of a
 /// rough substrate, numbered after the pile.
 pub fn pile_data(s: &Scene) -> String {
-    let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
-    let diameters = shuffled_diameters(s, &mut rng);
-    let d_max = s.size_classes.iter().map(|c| c.diameter).fold(0.0, f64::max);
-    let jitter = 0.45 * (s.pile_spacing - d_max);
+    let Draw { mut rng, diameters, jitter } = Draw::of(s);
     let [nx, ny, nz] = s.pile_n;
 
     let mut out = String::with_capacity(64 * s.particles + 256);

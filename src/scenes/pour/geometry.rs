@@ -5,10 +5,9 @@
 use std::f64::consts::PI;
 use std::fmt::Write;
 
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+use rand::Rng;
 
-use crate::scene::pile::shuffled_diameters;
+use crate::scene::pile::Draw;
 use crate::scene::Scene;
 
 /// Flat faces around the tube: the inscribed polygon's flats lie within 0.2 % of the radius.
@@ -46,10 +45,7 @@ pub fn layer_sites(radius: f64, spacing: f64) -> Vec<[f64; 2]> {
 /// each sphere jittered by at most 0.45 of the clearance to its cell, the diameters assigned by
 /// the size classes' number fractions and shuffled (seeded, reproducible).
 pub fn column_data(s: &Scene) -> String {
-    let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
-    let diameters = shuffled_diameters(s, &mut rng);
-    let d_max = s.size_classes.iter().map(|c| c.diameter).fold(0.0, f64::max);
-    let jitter = 0.45 * (s.pile_spacing - d_max);
+    let Draw { mut rng, diameters, jitter } = Draw::of(s);
     let sites = layer_sites(cylinder_radius(s), s.pile_spacing);
     let [cx, cy] = axis(s);
 
