@@ -211,6 +211,9 @@ fn setup_section(a: &Analysis) -> Value {
             "length": format!("{:.1}", c.domain_length_mm),
             "depth": format!("{:.1}", c.domain_depth_mm),
             "height": format!("{:.1}", c.domain_height_mm),
+            // A layout that starts from a pile (not one dosed pass by pass) says how long it is
+            // and over how much travel it measured.
+            "pile": c.heap_length_mm > 0.0,
             "heap_length": format!("{:.1}", c.heap_length_mm),
             "heap_height": format!("{:.1}", c.heap_height_mm),
             "window_travel": format!("{:.1}", c.window_travel_mm),

@@ -61,6 +61,10 @@ impl Setup {
         let parameters = crate::point::resolve(sweep, &mid);
         let centre = crate::scenes::build(&parameters, &sweep.file.scene).ok().map(|sc| {
             let (t1, t2) = sc.window_steps();
+            // A layout dosed pass by pass (layers) starts from no pile and measures no window
+            // of travel: its pile and window are 0.
+            let piled = sc.pile_n.iter().product::<usize>() > 0;
+            let if_piled = |v: f64| if piled { v } else { 0.0 };
             CentreScene {
                 parameters: sweep.swept.iter().map(|p| (p.name.clone(), parameters[&p.name])).collect(),
                 particles: sc.particles,
@@ -68,9 +72,9 @@ impl Setup {
                 domain_length_mm: sc.x_hi * 1e3,
                 domain_depth_mm: sc.depth * 1e3,
                 domain_height_mm: (sc.z_hi - sc.z_lo) * 1e3,
-                heap_length_mm: (sc.pile_x1 - sc.pile_x0) * 1e3,
-                heap_height_mm: sc.pile_z1 * 1e3,
-                window_travel_mm: (sc.blade_rear_at(t2) - sc.blade_rear_at(t1)) * 1e3,
+                heap_length_mm: if_piled((sc.pile_x1 - sc.pile_x0) * 1e3),
+                heap_height_mm: if_piled(sc.pile_z1 * 1e3),
+                window_travel_mm: if_piled((sc.blade_rear_at(t2) - sc.blade_rear_at(t1)) * 1e3),
                 timestep_s: sc.timestep,
                 rayleigh_time_s: sc.rayleigh_time,
                 held_heap: crate::scenes::of(&sweep.file.scene).ok().and_then(|l| l.held_heap(&sc)),

@@ -135,6 +135,12 @@ fn a_layers_lattice_reports_every_point_done_or_failed_and_answers_in_the_layer_
     assert_eq!(counts["done"].as_u64().unwrap() + counts["failed"].as_u64().unwrap(), 2, "{counts}");
     let recommended =
         stdout.lines().find(|l| l.starts_with("recommended:")).unwrap_or_else(|| panic!("{stdout}"));
+    // Done or not, the setup speaks of a bed dosed pass by pass: no initial pile, no window of
+    // travel, no MFR.
+    let page = std::fs::read_to_string(dir.join("s/report/report.html")).unwrap();
+    for pile in ["initial pile", "measured over", "MFR = 0"] {
+        assert!(!page.contains(pile), "the layers report says {pile:?}");
+    }
     if counts["done"].as_u64().unwrap() > 0 {
         assert!(recommended.contains("steady-layer packing"), "{recommended}");
         assert!(recommended.contains("µm of powder under the blade"), "{recommended}");
