@@ -95,7 +95,8 @@ def gaboriault():
 
 
 VARIANTS = {"flat": "flat blade", "gamma0": "no cohesion", "halfdose": "half the dose", "depth12": "depth 12 D",
-            "dt0.165": "timestep halved", "plate20": "plate 20 D", "plate80": "plate 80 D", "seed2": "seed 2"}
+            "dt0.165": "timestep halved", "plate20": "plate 20 D", "plate80": "plate 80 D", "seed2": "seed 2",
+            "back": "the blade's back cut (0.1 D)"}
 
 
 def pretty(label):

@@ -2,8 +2,7 @@
 //! re-creates them moved up to its heights (`fix mesh/surface ... move`).
 //!
 //! - `blade.stl`: the blade with its lowest line at z = 0 — a box one diameter thick (flat) or
-//!   a cylinder's arc about a y axis, [`ROUND_ARC_SHARE`] of the quarter circle ahead of the
-//!   lowest line and up to a rise of [`super::ROUND_BACK_RISE`] diameters behind it, with vertical
+//!   the lowest [`ROUND_ARC_SHARE`] of a cylinder's half circle about a y axis with vertical
 //!   faces above (round);
 //! - `feed.stl`: the feed platform, top at z = 0, from the box's back to the plate;
 //! - `wall.stl`: the wall after the plate, one diameter thick, top at z = 0;
@@ -35,24 +34,17 @@ pub fn blade_stl(s: &Scene, plan: &Plan) -> String {
             s.mesh_cell,
         );
     }
-    // The arc from angle −β behind the lowest line (angle 0) to +φ ahead of it, φ = share ×
-    // 90°, β where the arc has risen ROUND_BACK_RISE diameters; then vertical faces from its
-    // ends up to the blade's top, and a lid.
+    // The arc from angle −φ to +φ about the lowest line (angle 0), φ = share × 90°, then
+    // vertical faces from its ends up to the blade's top, and a lid.
     let r = plan.blade_radius;
     let (xc, zc) = (plan.tip_x0, r);
     let phi = 0.5 * ROUND_ARC_SHARE * std::f64::consts::PI;
-    let beta = (plan.blade_behind / r).clamp(0.0, 1.0).asin();
     let point = |a: f64| [xc + r * a.sin(), zc - r * a.cos()];
     let mut profile: Vec<[f64; 2]> = Vec::new();
     let top = s.blade_top.max(point(phi)[1] + s.diameter);
-    profile.push([point(-beta)[0], top]);
-    // The lowest line is a vertex, so the blade's tip is exactly where the plan puts it.
-    let back_segments = ((ARC_SEGMENTS as f64 * beta / phi).ceil() as usize).max(1);
-    for i in 0..back_segments {
-        profile.push(point(-beta + beta * i as f64 / back_segments as f64));
-    }
+    profile.push([point(-phi)[0], top]);
     for i in 0..=ARC_SEGMENTS {
-        profile.push(point(phi * i as f64 / ARC_SEGMENTS as f64));
+        profile.push(point(-phi + 2.0 * phi * i as f64 / ARC_SEGMENTS as f64));
     }
     profile.push([point(phi)[0], top]);
     profile.push(profile[0]);

@@ -84,15 +84,9 @@ pub const MAX_LAYERS: usize = 100;
 pub const SEARCH_MAX_DEPTH_LAYERS: f64 = 20.0;
 /// Most a search pass may multiply the depth by (a pass that deposited almost nothing).
 pub const SEARCH_MAX_GROWTH: f64 = 3.0;
-/// Share of a round blade's quarter circle ahead of its lowest line that is meshed (Gaboriault
-/// et al.'s case generator meshes 0.75 of the half circle; above it the front face is vertical).
+/// Share of a round blade's half circle that is meshed, centred on its lowest line (Gaboriault
+/// et al.'s case generator meshes 0.75 of it; above it the blade's faces are vertical).
 pub const ROUND_ARC_SHARE: f64 = 0.75;
-/// How far a round blade's arc rises behind its lowest line before its back face goes up
-/// vertically, in mean diameters. Behind the tip lies the layer it has just spread, below the
-/// tip: a full back arc touches nothing, but its width (2.3 mm at Gaboriault et al.'s 2.5 mm
-/// radius) would hold the next dose out of the feed until the blade's back had cleared it — a
-/// fifth of every pass (BENCHMARKS.md "Layers").
-pub const ROUND_BACK_RISE: f64 = 0.1;
 
 /// The built-in deck.
 const TEMPLATE: BuiltinTemplate = BuiltinTemplate {
@@ -173,8 +167,6 @@ pub struct Plan {
     pub block_depth: f64,
     /// The round blade's radius (0: flat).
     pub blade_radius: f64,
-    /// How far the blade reaches behind its tip, m (the round blade's back face; 0 when flat).
-    pub blade_behind: f64,
     /// x of the blade's lowest line at the start (flat: its rear face), and its travel in a pass.
     pub tip_x0: f64,
     pub travel: f64,
@@ -459,9 +451,8 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let radius = if settings.blade_profile == "round" { settings.blade_radius_mm * 1e-3 } else { 0.0 };
     // The blade's x extent about its lowest line: behind and ahead of it.
     let (behind, ahead) = if radius > 0.0 {
-        let rise = (ROUND_BACK_RISE * d).min(radius);
-        let back_angle = (1.0 - rise / radius).acos();
-        (radius * back_angle.sin(), radius * (0.5 * ROUND_ARC_SHARE * std::f64::consts::PI).sin())
+        let half = radius * (0.5 * ROUND_ARC_SHARE * std::f64::consts::PI).sin();
+        (half, half)
     } else {
         (0.0, d)
     };
@@ -557,7 +548,6 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         feed_x0: 0.5 * d,
         block_depth,
         blade_radius: radius,
-        blade_behind: behind,
         tip_x0,
         travel,
         dose_x0,
