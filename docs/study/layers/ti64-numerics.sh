@@ -7,6 +7,10 @@
 # the scatter they are judged against. Resumable: a recorded case is skipped. Run from the
 # repository's root with target/release/sweep built (or SWEEP=path).
 #   bash docs/study/layers/ti64-numerics.sh [label]
+# The `-back` cases are a cost saving tried and not kept (docs/study/layers.md "The blade's back
+# cut"): the blade built at the commit that had it, run by label,
+#   git worktree add /tmp/blade-back dc712f2 && (cd /tmp/blade-back && cargo build --release)
+#   SWEEP=/tmp/blade-back/target/release/sweep bash docs/study/layers/ti64-numerics.sh ti64-50um-0.1-search6-back
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 out=docs/study/layers/record
@@ -15,10 +19,14 @@ cases="ti64-50um-0.1-search6-seed2 seed = 2
 ti64-50um-0.1-search6-plate20 plate_diameters = 20.0
 ti64-50um-0.1-search6-depth12 depth_diameters = 12.0
 ti64-50um-0.1-search6-dt0.165 rayleigh_fraction = 0.165
-ti64-50um-0.1-search6-plate80 plate_diameters = 80.0"
+ti64-50um-0.1-search6-plate80 plate_diameters = 80.0
+ti64-50um-0.1-search6-back seed = 12345
+ti64-50um-0.1-search6-back-seed2 seed = 2"
 want=${1:-}
 while read -r label key eq value; do
   [ -n "$want" ] && [ "$want" != "$label" ] && continue
+  # The blade's back is not in the product: those cases run only when asked for by name.
+  [ -z "$want" ] && [[ $label == *-back* ]] && continue
   [ -s "$out/$label.json" ] && { echo "$label: recorded"; continue; }
   toml=$(mktemp --suffix=.toml)
   sed "s/^layers = \([0-9]*\)$/layers = \1\n$key = $value/" sweeps/ti64-layers.toml > "$toml"
