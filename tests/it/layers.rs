@@ -84,7 +84,7 @@ fn a_fused_bed_s_search_pass_sets_the_next_depth_by_its_deposit_and_the_layers_a
         "a_fused_bed_s_search_pass_sets_the_next_depth_by_its_deposit_and_the_layers_after_it_are_laid"
     );
     let (_tmp, dir) = support::cwd();
-    // The round blade (the machine sweeps'), whose next dose goes in while it crosses the plate.
+    // The round blade (the machine sweeps'), which no other LIGGGHTS test spreads with.
     let sweep = bed(&dir, "bed = \"fused\"\nlayers = 4\nsearch_passes = 1\nblade_profile = \"round\"");
     let (code, r, stderr) = run_point(&sweep, "blade_speed=0.5");
     let layers: &Value = if code == 0 { &r["layers"] } else { &r["measured"]["layers"] };
