@@ -157,9 +157,14 @@ fn started_line(st: &crate::report::Setup, done: usize) -> Option<String> {
 
 fn setup_section(a: &Analysis) -> Value {
     let st = &a.setup;
+    let sc = &st.scene;
+    // Only what the points read: a layers sweep's page lists no gap, a mono-sized powder's no
+    // Weibull parameters.
+    let read = |name: &str| crate::scenes::ignored(sc, name).is_none();
     let fixed: Vec<Value> = st
         .fixed
         .iter()
+        .filter(|f| read(&f.name))
         .map(|f| {
             json!({
                 "name": f.name,
@@ -170,14 +175,14 @@ fn setup_section(a: &Analysis) -> Value {
             })
         })
         .collect();
-    let sc = &st.scene;
-    let psd = serde_json::to_value(&sc.size_distribution).map(|v| v.to_string()).unwrap_or_default();
     let layout_rows = crate::scenes::lookup(&sc.layout).map(|l| l.setup_rows(sc)).unwrap_or_default();
-    let mut rows: Vec<(&str, String)> =
-        vec![("layout", sc.layout.clone()), ("substrate", sc.substrate.clone())];
+    let mut rows: Vec<(&str, String)> = vec![("layout", sc.layout.clone())];
+    if read("scene.substrate") {
+        rows.push(("substrate", sc.substrate.clone()));
+    }
     rows.extend(layout_rows.head);
     rows.extend([
-        ("size distribution", psd),
+        ("size distribution", sc.size_distribution.describe()),
         ("fidelity preset", sc.fidelity.clone()),
         (
             "timestep (× Rayleigh time; fixed step if > 0: s)",
@@ -188,12 +193,14 @@ fn setup_section(a: &Analysis) -> Value {
         ("domain depth (D)", fmt_short(sc.depth_diameters)),
     ]);
     rows.extend(layout_rows.tail);
-    rows.extend([
-        ("neighbour skin (D)", fmt_short(sc.skin_diameters)),
-        (
+    rows.push(("neighbour skin (D)", fmt_short(sc.skin_diameters)));
+    if read("scene.vx_band_diameters") {
+        rows.push((
             "v_x band half-height (D)",
             if sc.thesis_band { "±1 mm (thesis)".into() } else { fmt_short(sc.vx_band_diameters) },
-        ),
+        ));
+    }
+    rows.extend([
         ("seed", sc.seed.to_string()),
         ("engine", format!("{} ({})", st.engine_version, st.engine_path)),
     ]);

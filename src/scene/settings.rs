@@ -467,6 +467,56 @@ pub enum SizeDistributionSpec {
     },
 }
 
+impl SizeDistributionSpec {
+    /// The sizes in a few words, for the report's setup.
+    pub fn describe(&self) -> String {
+        let basis = |b: &Basis| if *b == Basis::Volume { "by volume" } else { "by number" };
+        match self {
+            SizeDistributionSpec::Mono => "one size (diameter)".into(),
+            SizeDistributionSpec::Classes { classes, relative, basis: b } => {
+                let (lo, hi) = classes
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| (lo.min(c[0]), hi.max(c[0])));
+                let unit = if *relative { "× diameter" } else { "mm" };
+                format!("{} classes, {lo}–{hi} {unit}, fractions {}", classes.len(), basis(b))
+            }
+            SizeDistributionSpec::Weibull { bins } => {
+                format!("Weibull (weibull_shape, weibull_scale), {bins} classes")
+            }
+            SizeDistributionSpec::Lognormal { d10_um, d50_um, d90_um, cut_um, basis: b, bins, relative } => {
+                let mut out =
+                    format!("lognormal fitted to D10/D50/D90 = {d10_um}/{d50_um}/{d90_um} µm {}", basis(b));
+                if let Some([lo, hi]) = cut_um {
+                    out += &format!(", sieved to {lo}–{hi} µm");
+                }
+                out += &format!(", {bins} classes");
+                if *relative {
+                    out += ", scaled by diameter / D50";
+                }
+                out
+            }
+        }
+    }
+
+    /// Why the size parameter `name` (`diameter`, `weibull_shape`, `weibull_scale`) plays no part
+    /// in these sizes, if it plays none.
+    pub fn ignores(&self, name: &str) -> Option<&'static str> {
+        use SizeDistributionSpec::*;
+        match (name, self) {
+            ("diameter", Classes { relative: false, .. } | Lognormal { relative: false, .. }) => Some(
+                "the size distribution's sizes are absolute; set `relative = true` in [scene.size_distribution] to scale them by `diameter`, or fix `diameter`",
+            ),
+            ("diameter", Weibull { .. }) => Some(
+                "a Weibull size distribution takes its sizes from weibull_scale and weibull_shape; sweep those instead",
+            ),
+            ("weibull_shape" | "weibull_scale", Mono | Classes { .. } | Lognormal { .. }) => {
+                Some("only a Weibull size distribution reads it (kind = \"weibull\" in [scene.size_distribution])")
+            }
+            _ => None,
+        }
+    }
+}
+
 /// What the fractions of a size distribution count.
 #[derive(Debug, Clone, Copy, Default, Serialize, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]

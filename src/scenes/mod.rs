@@ -52,6 +52,16 @@ pub fn names() -> Vec<&'static str> {
     LAYOUTS.iter().map(|l| l.name()).collect()
 }
 
+/// Why the parameter or `[scene]` key `name` plays no part in a point of `settings`, if it plays
+/// none: the layout does not read it, or the size distribution takes its sizes elsewhere.
+pub fn ignored(settings: &SceneSettings, name: &str) -> Option<String> {
+    if let Some(why) = settings.size_distribution.ignores(name) {
+        return Some(why.to_string());
+    }
+    let layout = lookup(&settings.layout)?;
+    layout.ignores(name).map(|why| format!("the {} layout {why}", layout.name()))
+}
+
 /// A built-in deck template.
 #[derive(Debug, Clone, Copy)]
 pub struct BuiltinTemplate {
@@ -179,6 +189,13 @@ pub trait Layout: Sync {
 
     /// The report's setup rows of this layout's own settings.
     fn setup_rows(&self, settings: &SceneSettings) -> SetupRows;
+
+    /// Why a catalogue parameter, or a `[scene]` key named `scene.…`, plays no part in this
+    /// layout's scene, if it plays none: a sweep of such a parameter is refused, and the report
+    /// leaves it out of the setup every point shares.
+    fn ignores(&self, _name: &str) -> Option<&'static str> {
+        None
+    }
 
     /// The heap it holds in front of the blade, if it holds one.
     fn held_heap(&self, _scene: &Scene) -> Option<HeldHeap> {

@@ -191,9 +191,9 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<Params, SweepErr
     if swept.is_empty() {
         return Err(bad("parameters", "expected at least one swept parameter { lo, hi }".into()));
     }
-    if swept.iter().any(|p| p.name == "diameter") {
-        if let Some(why) = sizes_without_diameter(&file.scene.size_distribution) {
-            return Err(bad("parameters.diameter", format!("swept, but {why}")));
+    for p in &swept {
+        if let Some(why) = crate::scenes::ignored(&file.scene, &p.name) {
+            return Err(bad(&format!("parameters.{}", p.name), format!("swept, but {why}")));
         }
     }
     let d = &file.design;
@@ -494,16 +494,3 @@ fn check_classes(classes: &[[f64; 2]], relative: bool) -> Result<(), (String, St
 
 /// The largest relative miss of D10/D50/D90 a lognormal fit may leave.
 const MAX_FIT_MISS: f64 = 0.05;
-
-/// Why a size distribution's sizes do not follow the `diameter` parameter, if they do not.
-fn sizes_without_diameter(spec: &SizeDistributionSpec) -> Option<&'static str> {
-    match spec {
-        SizeDistributionSpec::Classes { relative: false, .. } | SizeDistributionSpec::Lognormal { relative: false, .. } => {
-            Some("the size distribution's sizes are absolute; set `relative = true` in [scene.size_distribution] to scale them by `diameter`, or fix `diameter`")
-        }
-        SizeDistributionSpec::Weibull { .. } => {
-            Some("a Weibull size distribution takes its sizes from weibull_scale and weibull_shape; sweep those instead")
-        }
-        _ => None,
-    }
-}

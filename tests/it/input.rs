@@ -62,6 +62,46 @@ fn unknown_keys_are_named_with_a_suggestion() {
 }
 
 #[test]
+fn sweeping_a_parameter_the_scene_does_not_read_is_refused() {
+    // Each would have run points differing only in a number no deck reads.
+    rejects(
+        "name = \"t\"\n[parameters]\ngap = { lo = 0.1, hi = 0.3 }\n[scene]\nlayout = \"layers\"\n",
+        &["--lds", "2"],
+        &["bad-sweep.toml", "parameters.gap", "swept, but the layers layout", "layer_thickness"],
+    );
+    rejects(
+        "name = \"t\"\n[parameters]\nheap_height = { lo = 1.0, hi = 3.0 }\n[scene]\nlayout = \"gated\"\n",
+        &["--lds", "2"],
+        &["parameters.heap_height", "swept, but the gated layout", "conveyor"],
+    );
+    rejects(
+        "name = \"t\"\n[parameters]\nlayer_thickness = { lo = 0.05, hi = 0.1 }\n",
+        &["--lds", "2"],
+        &["parameters.layer_thickness", "swept, but the conveyor layout", "layers layout"],
+    );
+    rejects(
+        "name = \"t\"\n[parameters]\nweibull_shape = { lo = 2.0, hi = 6.0 }\n",
+        &["--lds", "2"],
+        &["parameters.weibull_shape", "swept, but only a Weibull size distribution reads it"],
+    );
+    // What each layout does read is still swept.
+    for (param, layout) in [
+        ("layer_thickness = { lo = 0.05, hi = 0.1 }", "layers"),
+        ("heap_height = { lo = 1.0, hi = 3.0 }", "conveyor"),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("ok.toml");
+        std::fs::write(
+            &file,
+            format!("name = \"t\"\n[parameters]\n{param}\n[scene]\nlayout = \"{layout}\"\n"),
+        )
+        .unwrap();
+        let out = points(&file, &["--lds", "2"]);
+        assert!(out.status.success(), "{layout}: {}", stderr(&out));
+    }
+}
+
+#[test]
 fn values_that_make_no_sense_are_named() {
     let one = |param: &str| format!("name = \"t\"\n[parameters]\n{param}\n");
     // lo ≥ hi

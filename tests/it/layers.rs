@@ -141,6 +141,19 @@ fn a_layers_lattice_reports_every_point_done_or_failed_and_answers_in_the_layer_
     for pile in ["initial pile", "measured over", "MFR = 0"] {
         assert!(!page.contains(pile), "the layers report says {pile:?}");
     }
+    // Its setup lists what a layers point reads: the layer thickness, not the gap above a plate,
+    // a held heap's height, a mono-sized powder's Weibull parameters, the plate's substrate or the
+    // v_x band in front of the blade.
+    assert!(page.contains(r#"<td class="l">layer_thickness</td>"#), "no layer_thickness row");
+    for unread in ["gap", "heap_height", "weibull_shape", "weibull_scale"] {
+        assert!(
+            !page.contains(&format!(r#"<td class="l">{unread}</td>"#)),
+            "the layers report lists {unread}"
+        );
+    }
+    for row in [r#"<th class="l">substrate</th>"#, "v_x band"] {
+        assert!(!page.contains(row), "the layers report lists {row:?}");
+    }
     if counts["done"].as_u64().unwrap() > 0 {
         assert!(recommended.contains("steady-layer packing"), "{recommended}");
         assert!(recommended.contains("µm of powder under the blade"), "{recommended}");

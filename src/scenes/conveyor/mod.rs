@@ -111,6 +111,13 @@ impl Layout for Conveyor {
         )
     }
 
+    fn ignores(&self, name: &str) -> Option<&'static str> {
+        match name {
+            "layer_thickness" => Some("spreads one layer at `gap`; only the layers layout drops a platform"),
+            _ => None,
+        }
+    }
+
     fn setup_rows(&self, sc: &SceneSettings) -> SetupRows {
         SetupRows {
             head: vec![

@@ -305,6 +305,16 @@ impl Layout for Layers {
         )
     }
 
+    fn ignores(&self, name: &str) -> Option<&'static str> {
+        match name {
+            "gap" => Some("sets its blade layer_thickness (and scene.blade_clearance_mm) above the bed"),
+            "heap_height" => Some("doses each pass by scene.supply_factor; only the conveyor layout holds a heap of a set height"),
+            "scene.substrate" => Some("spreads onto its own bed of the powder (scene.bed)"),
+            "scene.vx_band_diameters" => Some("measures the layers it leaves, not the speed in front of the blade"),
+            _ => None,
+        }
+    }
+
     fn setup_rows(&self, s: &SceneSettings) -> SetupRows {
         SetupRows {
             head: vec![
@@ -312,11 +322,10 @@ impl Layout for Layers {
                 (
                     "bed",
                     if search_passes(s) > 0 {
-                        format!(
-                            "{}, the first {} passes a search for its steady depth",
-                            s.bed,
-                            search_passes(s)
-                        )
+                        match search_passes(s) {
+                            1 => format!("{}, the first pass a search for its steady depth", s.bed),
+                            n => format!("{}, the first {n} passes a search for its steady depth", s.bed),
+                        }
                     } else {
                         s.bed.clone()
                     },

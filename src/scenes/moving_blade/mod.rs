@@ -106,6 +106,17 @@ impl Layout for MovingBlade {
         vec![DUMP.into()]
     }
 
+    fn ignores(&self, name: &str) -> Option<&'static str> {
+        match name {
+            "heap_height" => {
+                Some("pushes the heap its pile leaves; only the conveyor layout holds one of a set height")
+            }
+            "layer_thickness" => Some("spreads one layer at `gap`; only the layers layout drops a platform"),
+            "scene.substrate" if self.0 == Dose::Free => Some("spreads on the thesis's smooth plate"),
+            _ => None,
+        }
+    }
+
     fn setup_rows(&self, s: &SceneSettings) -> SetupRows {
         SetupRows {
             head: vec![("heap size (× the planned heap)", short(s.supply_factor))],

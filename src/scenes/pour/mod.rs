@@ -134,6 +134,17 @@ impl Layout for Pour {
         )
     }
 
+    fn ignores(&self, name: &str) -> Option<&'static str> {
+        match name {
+            "gap" | "heap_height" | "layer_thickness" | "scene.vx_band_diameters" => {
+                Some("pours a heap on the plate: it has no blade")
+            }
+            "blade_speed" => Some("lifts its cylinder at a fixed speed in √(g·D)"),
+            "scene.substrate" => Some("pours its heap on the smooth plate"),
+            _ => None,
+        }
+    }
+
     fn setup_rows(&self, s: &SceneSettings) -> SetupRows {
         SetupRows {
             head: vec![
