@@ -55,11 +55,25 @@ impl Draw {
     }
 }
 
+impl Draw {
+    /// `p` moved by the jitter, each coordinate in turn.
+    pub fn jittered(&mut self, p: [f64; 3]) -> [f64; 3] {
+        let jitter = self.jitter;
+        p.map(|x| x + self.rng.gen_range(-jitter..=jitter))
+    }
+}
+
+/// One sphere's line of a LIGGGHTS data file in atom style granular: id type diameter density
+/// x y z (positions to ten significant digits).
+pub fn atom_line(out: &mut String, id: usize, kind: u8, diameter: f64, density: f64, [x, y, z]: [f64; 3]) {
+    let _ = writeln!(out, "{id} {kind} {diameter} {density} {x:.9e} {y:.9e} {z:.9e}");
+}
+
 /// The LIGGGHTS data file (atom style granular: id type diameter density x y z) of the pile,
 /// with the simulation box. Atom type 1; type 2 is the walls'; type 3 the fixed spheres of a
 /// rough substrate, numbered after the pile.
 pub fn pile_data(s: &Scene) -> String {
-    let Draw { mut rng, diameters, jitter } = Draw::of(s);
+    let mut draw = Draw::of(s);
     let [nx, ny, nz] = s.pile_n;
 
     let mut out = String::with_capacity(64 * s.particles + 256);
@@ -77,24 +91,12 @@ pub fn pile_data(s: &Scene) -> String {
     for k in 0..nz {
         for j in 0..ny {
             for i in 0..nx {
-                let mut c = [
+                let c = draw.jittered([
                     s.pile_x0 + (i as f64 + 0.5) * s.pile_spacing,
                     (j as f64 + 0.5) * s.pile_spacing,
                     (k as f64 + 0.5) * s.pile_spacing,
-                ];
-                for x in &mut c {
-                    *x += rng.gen_range(-jitter..=jitter);
-                }
-                let _ = writeln!(
-                    out,
-                    "{} 1 {} {} {:.9e} {:.9e} {:.9e}",
-                    id + 1,
-                    diameters[id],
-                    s.material.density,
-                    c[0],
-                    c[1],
-                    c[2]
-                );
+                ]);
+                atom_line(&mut out, id + 1, 1, draw.diameters[id], s.material.density, c);
                 id += 1;
             }
         }
@@ -102,7 +104,7 @@ pub fn pile_data(s: &Scene) -> String {
     if let Some(bed) = &s.substrate_bed {
         for &[x, y, z, d] in &bed.spheres {
             id += 1;
-            let _ = writeln!(out, "{id} 3 {d} {} {x:.9e} {y:.9e} {z:.9e}", s.material.density);
+            atom_line(&mut out, id, 3, d, s.material.density, [x, y, z]);
         }
     }
     let [sx, sy] = s.substrate_n;
@@ -111,11 +113,7 @@ pub fn pile_data(s: &Scene) -> String {
         for j in 0..sy {
             id += 1;
             let c = [(i as f64 + 0.5) * h, (j as f64 + 0.5) * h, -0.5 * s.substrate_diameter];
-            let _ = writeln!(
-                out,
-                "{id} 3 {} {} {:.9e} {:.9e} {:.9e}",
-                s.substrate_diameter, s.material.density, c[0], c[1], c[2]
-            );
+            atom_line(&mut out, id, 3, s.substrate_diameter, s.material.density, c);
         }
     }
     out

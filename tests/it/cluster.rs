@@ -451,19 +451,6 @@ fn synthetic(dir: &Path, n: usize) {
     std::fs::write(dir.join("sweep.toml"), SWEEP).unwrap();
 }
 
-/// Compare with `tests/snapshots/NAME`, paths replaced by `DIR` and `SWEEP`; with
-/// `UPDATE_SNAPSHOTS=1` write it instead.
-fn snapshot(name: &str, got: &str) {
-    let path = repo("tests/snapshots").join(name);
-    if std::env::var_os("UPDATE_SNAPSHOTS").is_some() {
-        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-        std::fs::write(&path, got).unwrap();
-        return;
-    }
-    let want = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    assert_eq!(got, want, "{name} changed (UPDATE_SNAPSHOTS=1 rewrites it)");
-}
-
 #[test]
 fn scripts_match_their_snapshots() {
     for (scheduler, extra) in [
@@ -496,7 +483,7 @@ fn scripts_match_their_snapshots() {
                 .replace(dir.to_str().unwrap(), "DIR")
                 .replace(support::SWEEP, "SWEEP")
                 .replace(env!("CARGO_PKG_VERSION"), "VERSION");
-            snapshot(&format!("{scheduler}-{kind}.txt"), &got);
+            support::compare_snapshot(&format!("{scheduler}-{kind}.txt"), &got);
         }
     }
 }

@@ -28,6 +28,7 @@ mod store;
 // What a run measures: one point, the recoater's bounds, the steady state, the timestep's stability edge, the
 // fidelity presets, VTK output, the contact model and the dump parser.
 mod contact;
+mod decks;
 mod dump;
 mod fidelity;
 mod layers;

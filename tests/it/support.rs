@@ -453,3 +453,15 @@ impl Drop for Mount {
         let _ = Command::new("umount").arg("-l").arg(&self.0).status();
     }
 }
+
+/// Compare `got` with `tests/snapshots/NAME`; with `UPDATE_SNAPSHOTS=1` write it instead.
+pub fn compare_snapshot(name: &str, got: &str) {
+    let path = repo("tests/snapshots").join(name);
+    if std::env::var_os("UPDATE_SNAPSHOTS").is_some() {
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(&path, got).unwrap();
+        return;
+    }
+    let want = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert_eq!(got, want, "{name} changed (UPDATE_SNAPSHOTS=1 rewrites it)");
+}

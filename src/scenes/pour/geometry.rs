@@ -5,9 +5,7 @@
 use std::f64::consts::PI;
 use std::fmt::Write;
 
-use rand::Rng;
-
-use crate::scene::pile::Draw;
+use crate::scene::pile::{atom_line, Draw};
 use crate::scene::Scene;
 
 /// Flat faces around the tube: the inscribed polygon's flats lie within 0.2 % of the radius.
@@ -45,7 +43,7 @@ pub fn layer_sites(radius: f64, spacing: f64) -> Vec<[f64; 2]> {
 /// each sphere jittered by at most 0.45 of the clearance to its cell, the diameters assigned by
 /// the size classes' number fractions and shuffled (seeded, reproducible).
 pub fn column_data(s: &Scene) -> String {
-    let Draw { mut rng, diameters, jitter } = Draw::of(s);
+    let mut draw = Draw::of(s);
     let sites = layer_sites(cylinder_radius(s), s.pile_spacing);
     let [cx, cy] = axis(s);
 
@@ -59,17 +57,8 @@ pub fn column_data(s: &Scene) -> String {
     let positions = (0..s.pile_n[2])
         .flat_map(|k| sites.iter().map(move |&[x, y]| [x, y, (k as f64 + 0.5) * s.pile_spacing]));
     for (id, p) in positions.take(s.particles).enumerate() {
-        let c: [f64; 3] = std::array::from_fn(|k| p[k] + rng.gen_range(-jitter..=jitter));
-        let _ = writeln!(
-            out,
-            "{} 1 {} {} {:.9e} {:.9e} {:.9e}",
-            id + 1,
-            diameters[id],
-            s.material.density,
-            cx + c[0],
-            cy + c[1],
-            c[2]
-        );
+        let c = draw.jittered(p);
+        atom_line(&mut out, id + 1, 1, draw.diameters[id], s.material.density, [cx + c[0], cy + c[1], c[2]]);
     }
     out
 }
