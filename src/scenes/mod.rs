@@ -52,6 +52,9 @@ pub fn names() -> Vec<&'static str> {
     LAYOUTS.iter().map(|l| l.name()).collect()
 }
 
+/// Why a one-layer layout (moving blade, conveyor) ignores `layer_thickness` ([`Layout::ignores`]).
+pub const ONE_LAYER: &str = "spreads one layer at `gap`; only the layers layout drops a platform";
+
 /// Why the parameter or `[scene]` key `name` plays no part in a point of `settings`, if it plays
 /// none: the layout does not read it, or the size distribution takes its sizes elsewhere.
 pub fn ignored(settings: &SceneSettings, name: &str) -> Option<String> {

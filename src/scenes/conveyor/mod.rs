@@ -113,7 +113,7 @@ impl Layout for Conveyor {
 
     fn ignores(&self, name: &str) -> Option<&'static str> {
         match name {
-            "layer_thickness" => Some("spreads one layer at `gap`; only the layers layout drops a platform"),
+            "layer_thickness" => Some(super::ONE_LAYER),
             _ => None,
         }
     }

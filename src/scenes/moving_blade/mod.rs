@@ -111,7 +111,7 @@ impl Layout for MovingBlade {
             "heap_height" => {
                 Some("pushes the heap its pile leaves; only the conveyor layout holds one of a set height")
             }
-            "layer_thickness" => Some("spreads one layer at `gap`; only the layers layout drops a platform"),
+            "layer_thickness" => Some(super::ONE_LAYER),
             "scene.substrate" if self.0 == Dose::Free => Some("spreads on the thesis's smooth plate"),
             _ => None,
         }
