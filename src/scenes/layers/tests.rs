@@ -46,6 +46,28 @@ fn the_platform_drops_by_the_layer_thickness_before_every_pass() {
     assert!(last.top - plan.block_depth > sc.z_lo && last.top - plan.block_depth < 0.0);
 }
 
+#[test]
+fn a_round_blade_rides_a_largest_diameter_over_the_feed_platform_and_the_wall() {
+    // No clearance: the flat blade's tip runs on the top surface; the round blade's stands the
+    // largest diameter (mono: the diameter) over it, the plate still k drops under the tip.
+    let flat = SceneSettings { blade_clearance_mm: 0.0, ..settings() };
+    let round = SceneSettings { blade_profile: "round".into(), ..flat.clone() };
+    for (s, gap) in [(&flat, 0.0), (&round, 0.065e-3)] {
+        let sc = scene(s);
+        let plan = plan_of(&sc);
+        assert!((plan.platform_gap - gap).abs() < 1e-12, "{}: {}", s.blade_profile, plan.platform_gap);
+        for (k, p) in plan.passes.iter().enumerate() {
+            assert!((p.tip - (k + 1) as f64 * 1e-4).abs() < 1e-12, "the tip stays k drops over the plate");
+            assert!((p.tip - p.top - gap).abs() < 1e-12);
+        }
+        // The feed platform's faces, lowered with it, stay inside the box.
+        assert!(plan.passes[0].top - plan.block_depth > sc.z_lo);
+    }
+    // A clearance of at least the largest diameter is kept as it is.
+    let wide = SceneSettings { blade_clearance_mm: 0.1, ..round };
+    assert!((plan_of(&scene(&wide)).platform_gap - 1e-4).abs() < 1e-12);
+}
+
 /// The volume of a pass's dose region once shrunk by the largest diameter on every side, as
 /// LIGGGHTS measures it with `all_in yes`.
 fn shrunk_dose_region(sc: &Scene) -> f64 {

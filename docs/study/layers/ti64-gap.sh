@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# The platform gap (docs/study/layers.md "The platform gap"): the shipped machine point of
+# sweeps/ti64-layers.toml, run again once the round blade rode a largest diameter over the feed
+# platform and the wall (before, at no clearance, it ground the powder into the platform). Each
+# case: label, layer thickness (mm), blade speed (m/s). Resumable: a recorded case is skipped.
+# Run from the repository's root with target/release/sweep built (or SWEEP=path).
+#   bash docs/study/layers/ti64-gap.sh [label]
+set -euo pipefail
+cd "$(dirname "$0")/../../.."
+out=docs/study/layers/record
+mkdir -p "$out"
+cases="ti64-50um-0.1-gap 0.05 0.1
+ti64-30um-0.1-gap 0.03 0.1"
+want=${1:-}
+while read -r label thickness speed; do
+  [ -n "$want" ] && [ "$want" != "$label" ] && continue
+  [ -s "$out/$label.json" ] && { echo "$label: recorded"; continue; }
+  start=$(date +%s)
+  "${SWEEP:-target/release/sweep}" run sweeps/ti64-layers.toml --json \
+    --set layer_thickness=$thickness,blade_speed=$speed > "$out/$label.json.part" 2> "$out/$label.err" || true
+  mv "$out/$label.json.part" "$out/$label.json"
+  echo "$label: $(( $(date +%s) - start )) s wall" >&2
+done <<< "$cases"
