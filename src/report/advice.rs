@@ -518,7 +518,7 @@ mod tests {
         assert_eq!(best.index, 0, "the denser steady layer first");
         let detail = best.detail.as_deref().unwrap();
         assert!(
-            detail.contains("107 ± 1 µm of powder under the blade (2.1 × the layer thickness)"),
+            detail.contains("107.0 ± 0.7 µm of powder under the blade (2.1 × the layer thickness)"),
             "{detail}"
         );
         assert!(detail.contains("steady from pass 11"), "{detail}");

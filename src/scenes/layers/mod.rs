@@ -385,7 +385,8 @@ impl Layout for Layers {
     fn answer_detail(&self, r: &RunResult) -> Option<String> {
         let l = r.layers.as_ref()?;
         Some(format!(
-            "{:.0} ± {:.0} µm of powder under the blade ({:.1} × the layer thickness), steady from pass {} of {}",
+            // To 0.1 µm: a steady depth's SE is often under a micrometre, and "± 0" says nothing.
+            "{:.1} ± {:.1} µm of powder under the blade ({:.1} × the layer thickness), steady from pass {} of {}",
             l.effective_thickness_m * 1e6,
             l.effective_thickness_se_m * 1e6,
             l.effective_thickness_m / l.layer_thickness_m,
