@@ -214,6 +214,7 @@ fn setup_section(a: &Analysis) -> Value {
         json!({
             "at": at,
             "particles": c.particles,
+            "runs": c.runs,
             "substrate_particles": c.substrate_particles,
             "length": format!("{:.1}", c.domain_length_mm),
             "depth": format!("{:.1}", c.domain_depth_mm),

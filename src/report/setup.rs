@@ -34,6 +34,8 @@ pub struct Setup {
 pub struct CentreScene {
     pub parameters: BTreeMap<String, f64>,
     pub particles: usize,
+    /// What a run of it simulates, in the layout's words (a layers run: its passes and dose).
+    pub runs: String,
     pub substrate_particles: usize,
     pub domain_length_mm: f64,
     pub domain_depth_mm: f64,
@@ -59,6 +61,7 @@ impl Setup {
             })
             .collect();
         let parameters = crate::point::resolve(sweep, &mid);
+        let layout = crate::scenes::of(&sweep.file.scene).ok();
         let centre = crate::scenes::build(&parameters, &sweep.file.scene).ok().map(|sc| {
             let (t1, t2) = sc.window_steps();
             // A layout dosed pass by pass (layers) starts from no pile and measures no window
@@ -68,6 +71,7 @@ impl Setup {
             CentreScene {
                 parameters: sweep.swept.iter().map(|p| (p.name.clone(), parameters[&p.name])).collect(),
                 particles: sc.particles,
+                runs: layout.map_or_else(String::new, |l| l.what_runs(&sc)),
                 substrate_particles: sc.substrate_particles,
                 domain_length_mm: sc.x_hi * 1e3,
                 domain_depth_mm: sc.depth * 1e3,
@@ -77,7 +81,7 @@ impl Setup {
                 window_travel_mm: if_piled((sc.blade_rear_at(t2) - sc.blade_rear_at(t1)) * 1e3),
                 timestep_s: sc.timestep,
                 rayleigh_time_s: sc.rayleigh_time,
-                held_heap: crate::scenes::of(&sweep.file.scene).ok().and_then(|l| l.held_heap(&sc)),
+                held_heap: layout.and_then(|l| l.held_heap(&sc)),
             }
         });
         let id = |k: &str| manifest.identity.get(k).and_then(|v| v.as_str()).unwrap_or("").to_string();

@@ -141,6 +141,8 @@ fn a_layers_lattice_reports_every_point_done_or_failed_and_answers_in_the_layer_
     for pile in ["initial pile", "measured over", "MFR = 0"] {
         assert!(!page.contains(pile), "the layers report says {pile:?}");
     }
+    // The centre sentence counts a pass's dose, not every dose's particles as one number.
+    assert!(page.contains("5 passes of ") && page.contains(" particles' dose onto a fused bed"), "centre");
     // Its setup lists what a layers point reads: the layer thickness, not the gap above a plate,
     // a held heap's height, a mono-sized powder's Weibull parameters, the plate's substrate or the
     // v_x band in front of the blade.
