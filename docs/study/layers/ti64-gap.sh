@@ -11,7 +11,8 @@ out=docs/study/layers/record
 mkdir -p "$out"
 cases="ti64-50um-0.1-gap 0.05 0.1
 ti64-30um-0.1-gap 0.03 0.1
-ti64-50um-0.2-gap 0.05 0.2"
+ti64-50um-0.2-gap 0.05 0.2
+ti64-50um-0.05-gap 0.05 0.05"
 want=${1:-}
 while read -r label thickness speed; do
   [ -n "$want" ] && [ "$want" != "$label" ] && continue
