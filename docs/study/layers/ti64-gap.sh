@@ -2,7 +2,8 @@
 # The platform gap (docs/study/layers.md "The platform gap"): the shipped machine point of
 # sweeps/ti64-layers.toml, run again once the round blade rode a largest diameter over the feed
 # platform and the wall (before, at no clearance, it ground the powder into the platform). Each
-# case: label, layer thickness (mm), blade speed (m/s). Resumable: a recorded case is skipped.
+# case: label, layer thickness (mm), blade speed (m/s), and optionally a `[scene]` key set in the
+# sweep file (`seed = 2`). Resumable: a recorded case is skipped.
 # Run from the repository's root with target/release/sweep built (or SWEEP=path).
 #   bash docs/study/layers/ti64-gap.sh [label]
 set -euo pipefail
@@ -12,14 +13,23 @@ mkdir -p "$out"
 cases="ti64-50um-0.1-gap 0.05 0.1
 ti64-30um-0.1-gap 0.03 0.1
 ti64-50um-0.2-gap 0.05 0.2
-ti64-50um-0.05-gap 0.05 0.05"
+ti64-50um-0.05-gap 0.05 0.05
+ti64-50um-0.1-gap-seed2 0.05 0.1 seed = 2"
 want=${1:-}
-while read -r label thickness speed; do
+while read -r label thickness speed key eq value; do
   [ -n "$want" ] && [ "$want" != "$label" ] && continue
   [ -s "$out/$label.json" ] && { echo "$label: recorded"; continue; }
+  toml=$(mktemp --suffix=.toml)
+  if [ -n "$key" ]; then
+    sed "s/^layers = \([0-9]*\)$/layers = \1\n$key = $value/" sweeps/ti64-layers.toml > "$toml"
+    grep -q "^$key = $value$" "$toml"
+  else
+    cp sweeps/ti64-layers.toml "$toml"
+  fi
   start=$(date +%s)
-  "${SWEEP:-target/release/sweep}" run sweeps/ti64-layers.toml --json \
+  "${SWEEP:-target/release/sweep}" run "$toml" --json \
     --set layer_thickness=$thickness,blade_speed=$speed > "$out/$label.json.part" 2> "$out/$label.err" || true
   mv "$out/$label.json.part" "$out/$label.json"
+  rm -f "$toml"
   echo "$label: $(( $(date +%s) - start )) s wall" >&2
 done <<< "$cases"
