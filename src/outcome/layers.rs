@@ -52,8 +52,9 @@ pub struct LayerSeries {
     /// The first pass of the steady layers (from 1): from it on, passes agree within their
     /// scatter (MSER truncation of the measure the point answers with, no trend after it).
     pub steady_from: usize,
-    /// Whether the passes from `steady_from` on show no trend (|z| of a least-squares slope
-    /// under [`crate::scenes::layers::MAX_TREND_Z`]) and at least three of them are left.
+    /// Whether the passes from `steady_from` on show no trend (a least-squares slope within
+    /// [`crate::scenes::layers::measure::trend_limit`] of its SE) and at least three of them are
+    /// left.
     pub steady: bool,
     /// The steady layer's means and standard errors over the steady passes.
     #[serde(deserialize_with = "super::nan_if_null")]

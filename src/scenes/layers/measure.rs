@@ -23,19 +23,23 @@
 //! The steady layer: MSER truncation of the point's measure over the passes (relative density
 //! on a loose bed, packing on a fused one — and the effective thickness too on a fused bed,
 //! which converges geometrically), then mean and SE (SD / √n) of what is left. It is steady when
-//! at least [`MIN_STEADY_PASSES`] passes remain and their least-squares trend is within
-//! [`MAX_TREND_Z`] SE of flat (on a fused bed, the effective thickness's too).
+//! at least [`MIN_STEADY_PASSES`] passes remain and their least-squares slope is flat by a
+//! Student t test with n − 2 degrees of freedom at [`TREND_FALSE_ALARM`] for the point (on a
+//! fused bed, the effective thickness's too, each series at half of it). A fixed z limit would
+//! not do: over the four passes a short steady layer may keep, |t| > 2.5 has a 13 % chance on
+//! a series with no trend.
 
 use std::collections::HashSet;
 use std::path::Path;
 
-use super::{plan_of, Plan, MAX_TREND_Z, MIN_STEADY_PASSES};
+use super::{plan_of, Plan, MIN_STEADY_PASSES, TREND_FALSE_ALARM};
 use crate::engine::dump::read_dump;
 use crate::measure::steady::{mser, trend_z};
 use crate::outcome::layers::{LayerSeries, PassRecord};
 use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT, VX_LAYERS};
 use crate::scene::Scene;
 use crate::scenes::{Finished, Rejected};
+use statrs::distribution::{ContinuousCDF, StudentsT};
 
 /// Grid cells per diameter for surfaces and coverage.
 pub const GRID_PER_D: f64 = 4.0;
@@ -215,7 +219,8 @@ pub fn steady_layer(plan: &Plan, passes: Vec<PassRecord>) -> LayerSeries {
     let (effective, effective_se) = pick(&|p| p.effective_thickness_m);
     // A fused bed is steady once its depth has stopped growing too: its packing can settle
     // passes before the depth reaches the drop over it.
-    let flat = |y: &[f64]| trend_z(y).abs() <= MAX_TREND_Z;
+    let limit = trend_limit(kept.len(), if plan.fused { 2 } else { 1 });
+    let flat = |y: &[f64]| trend_z(y).abs() <= limit;
     let steady =
         kept.len() >= MIN_STEADY_PASSES && flat(&answer[cut..]) && (!plan.fused || flat(&depth[cut..]));
     LayerSeries {
@@ -232,6 +237,22 @@ pub fn steady_layer(plan: &Plan, passes: Vec<PassRecord>) -> LayerSeries {
         covered_fraction: pick(&|p| p.covered_fraction).0,
         roughness_d: pick(&|p| p.roughness_d).0,
         passes,
+    }
+}
+
+/// The |t| of a least-squares slope over `passes` passes beyond which one of `series` series
+/// shows a trend: the Student quantile with passes − 2 degrees of freedom at the two-sided level
+/// [`TREND_FALSE_ALARM`] / `series`. Infinite under three passes (no slope can be judged).
+pub fn trend_limit(passes: usize, series: usize) -> f64 {
+    student_quantile(passes as f64 - 2.0, TREND_FALSE_ALARM / series.max(1) as f64)
+}
+
+/// The two-sided Student quantile: |t| with `dof` degrees of freedom exceeds it with chance
+/// `level`. Infinite with no degrees of freedom.
+fn student_quantile(dof: f64, level: f64) -> f64 {
+    match StudentsT::new(0.0, 1.0, dof) {
+        Ok(t) if dof >= 1.0 => t.inverse_cdf(1.0 - level / 2.0),
+        _ => f64::INFINITY,
     }
 }
 
@@ -257,12 +278,14 @@ pub fn layer_dump(k: usize) -> String {
 }
 
 /// Why a series is not steady. A fused bed whose passes after the transient each leave less
-/// than the drop, by more than [`MAX_TREND_Z`] SE, falls behind the platform: that is said first,
-/// with what may make it keep pace.
+/// than the drop, beyond a Student t test of their mean at [`TREND_FALSE_ALARM`], falls behind
+/// the platform: that is said first, with what may make it keep pace.
 pub fn unsteady_why(plan: &Plan, series: &LayerSeries) -> String {
     let (from, to) = (series.steady_from, series.passes.len());
+    let kept = to + 1 - from;
     let behind = 1.0 - series.relative_density;
-    if plan.fused && to + 1 - from >= 2 && behind > MAX_TREND_Z * series.relative_density_se {
+    let limit = student_quantile(kept as f64 - 1.0, TREND_FALSE_ALARM);
+    if plan.fused && kept >= 2 && behind > limit * series.relative_density_se {
         return format!(
             "the bed falls behind: passes {from}–{to} each leave {:.2} ± {:.2} of the drop, where a steady fused bed keeps all of it (a larger dose, scene.supply_factor, or a slower blade may keep pace)",
             series.relative_density, series.relative_density_se
@@ -271,7 +294,8 @@ pub fn unsteady_why(plan: &Plan, series: &LayerSeries) -> String {
     if to + 1 - from < MIN_STEADY_PASSES {
         format!("fewer than {MIN_STEADY_PASSES} passes after the transient (MSER kept passes {from}–{to})")
     } else {
-        format!("a trend over passes {from}–{to} beyond {MAX_TREND_Z} SE")
+        let limit = trend_limit(kept, if plan.fused { 2 } else { 1 });
+        format!("a trend over passes {from}–{to}: a slope beyond {limit:.1} of its SE")
     }
 }
 

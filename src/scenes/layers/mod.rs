@@ -72,9 +72,9 @@ const FEED_OVER_PLATE: f64 = 0.5;
 const PIT_DIAMETERS: f64 = 20.0;
 /// Blade travel over which it accelerates from rest to full speed, in diameters.
 const RAMP_DIAMETERS: f64 = 2.0;
-/// Passes from the steady layer on show a trend when the least-squares slope over its SE is
-/// beyond this.
-pub const MAX_TREND_Z: f64 = 2.5;
+/// Chance that a point whose passes have no trend at all is called unsteady: the slope test's
+/// two-sided level, shared between the series a bed checks (one loose, two fused).
+pub const TREND_FALSE_ALARM: f64 = 0.05;
 /// Fewest passes in the steady layer for a mean and an SE.
 pub const MIN_STEADY_PASSES: usize = 3;
 /// Most passes a point may ask for (each is a whole spread; 30 is hours at 20–40 µm).

@@ -434,3 +434,48 @@ fn a_fused_bed_s_dose_is_twice_a_loose_one_s_and_supply_factor_scales_both() {
     assert!((loose - DOSE_FACTOR * layer / sphere).abs() <= 1.0, "{loose}");
     assert!((dose("fused", 0.5) / fused - 0.5).abs() < 0.02);
 }
+
+#[test]
+fn a_trendless_layer_is_called_unsteady_at_the_rule_s_stated_rate() {
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, StandardNormal};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(44);
+    let mut noise = |n: usize| -> Vec<f64> { (0..n).map(|_| StandardNormal.sample(&mut rng)).collect() };
+    // The slope test alone, at the lengths a steady layer keeps: its level, one series or two.
+    let trials = 20_000;
+    for n in [4, 5, 8, 12] {
+        for series in [1, 2] {
+            let limit = super::measure::trend_limit(n, series);
+            let alarms =
+                (0..trials).filter(|_| crate::measure::steady::trend_z(&noise(n)).abs() > limit).count();
+            let rate = alarms as f64 / trials as f64;
+            let want = TREND_FALSE_ALARM / series as f64;
+            // Binomial SD at 20,000 trials is 0.0015 at 5 %.
+            assert!((rate - want).abs() < 0.006, "{n} passes, {series} series: {rate} against {want}");
+        }
+    }
+    // The whole rule on a fused bed of 14 passes (6 searched) with no trend in either series:
+    // MSER's cut and two tests together: 3 % here, where a fixed |z| of 2.5 called 12 % unsteady.
+    let plan = plan_of(&scene(&SceneSettings {
+        bed: "fused".into(),
+        layers: 14,
+        search_passes: Some(6),
+        ..settings()
+    }));
+    let points = 4_000;
+    let unsteady = (0..points)
+        .filter(|_| {
+            let (p, d) = (noise(14), noise(14));
+            let recs = (0..14)
+                .map(|i| crate::outcome::layers::PassRecord {
+                    search: i < 6,
+                    effective_thickness_m: (130.0 + 0.4 * d[i]) * 1e-6,
+                    ..record(i + 1, 0.37 + 0.004 * p[i])
+                })
+                .collect();
+            !steady_layer(&plan, recs).steady
+        })
+        .count();
+    let rate = unsteady as f64 / points as f64;
+    assert!(rate < 0.06, "{rate} of trendless fused beds called unsteady");
+}
