@@ -202,60 +202,11 @@ pub struct Scene {
     pub vx_length: f64,
     /// Kinetic energy above which the run is unstable, J.
     pub ke_limit: f64,
-    /// Conveyor layout (zero elsewhere): the held heap and the block series.
-    pub conveyor: Conveyor,
     /// The layout's own numbers, as its own type serialised (null for a layout that keeps all
     /// of its numbers in the common fields): the template reads them as `scene.own.*`, and the
     /// layout reads them back with [`Scene::own`].
     #[serde(skip_serializing_if = "serde_json::Value::is_null")]
     pub own: serde_json::Value,
-}
-
-/// The blade's frame (conveyor layout): the blade stands still with its rear face at
-/// `blade_x0`, the rough substrate moves under it at −v (x periodic), a heap of
-/// `heap_particles` is topped up in the box ahead of the blade, and the deposit is deleted
-/// downstream. All lengths in m.
-#[derive(Debug, Clone, Default, Serialize)]
-pub struct Conveyor {
-    /// Height of the held heap (gap + the `heap_height` parameter), and the particles it holds at a
-    /// packing of 0.6 in its 30° repose triangle.
-    pub heap_height: f64,
-    pub heap_particles: usize,
-    /// The box the heap is counted and topped up in: from the blade's front face to a wall at
-    /// `heap_x1`, from the substrate to `heap_z1`.
-    pub heap_x1: f64,
-    pub heap_z1: f64,
-    /// Deposit strip behind the blade: from `delete_x1` to the blade's rear face; everything
-    /// behind `delete_x1` is deleted after each block.
-    pub delete_x1: f64,
-    pub block_steps: u64,
-    pub insert_every: u64,
-    pub warmup_blocks: u64,
-    pub min_window_blocks: u64,
-    pub max_blocks: u64,
-    /// Mass of a full flow through the gap over one block: ρ · w · h · v · Δt_block, kg.
-    pub ideal_block_mass: f64,
-    pub mfr_rel_se: f64,
-    pub mfr_abs_se: f64,
-    /// The substrate is a bed of the powder: its spheres reach above the deposit regions' floor,
-    /// so the deck deletes only powder from the delete region.
-    pub powder_bed: bool,
-    /// Bottom of the deposit strip and the delete region, m.
-    pub regions_z0: f64,
-    /// Particle templates of the feed: diameter, mass fraction, prime seed.
-    pub feed: Vec<FeedClass>,
-    /// The least particle volume the feed's templates accept, m³ (0: the engine's default,
-    /// 1e-12 m³, which refuses every sphere below 124 µm).
-    pub volume_limit: f64,
-    /// Prime seeds of the feed's distribution and insertion.
-    pub distribution_seed: u64,
-    pub insert_seed: u64,
-    /// Write the powder ahead of the blade's rear face at the end (`dump.state`), for warm starts.
-    pub keep_state: bool,
-    /// Start from `warm.data` (a neighbour's state mapped to this point), after a warm-up of
-    /// `warm_warmup_blocks` in place of `warmup_blocks`.
-    pub warm_start: bool,
-    pub warm_warmup_blocks: u64,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
@@ -487,11 +438,6 @@ impl Scene {
     /// The sizes for result.json: `None` for one size.
     pub fn sizes_of_a_distribution(&self) -> Option<SizeSummary> {
         (self.size_classes.len() > 1).then(|| self.sizes.clone())
-    }
-
-    /// Particles of powder in the scene: the dose, or the held heap's target count.
-    pub fn powder_particles(&self) -> usize {
-        self.particles.max(self.conveyor.heap_particles)
     }
 
     /// Timestep at which the blade starts moving: the spread's steps count from it (the deck

@@ -139,9 +139,11 @@ fn did_you_mean(meant: &Option<(f64, &'static str)>) -> String {
 }
 
 /// Refuse a point outside the bounds above, saying which value, in which unit, and what was
-/// probably meant. `values` are the catalogue parameters in catalogue units.
+/// probably meant. `values` are the catalogue parameters in catalogue units; `held_heap` is the
+/// particles and height (m) of a heap the layout holds in front of the blade, if it holds one.
 pub fn check(
     scene: &Scene,
+    held_heap: Option<(usize, f64)>,
     values: &BTreeMap<String, f64>,
     settings: &SceneSettings,
 ) -> Result<(), OutOfBounds> {
@@ -166,10 +168,11 @@ pub fn check(
     if gap < MIN_GAP_DIAMETERS * d {
         return Err(OutOfBounds::Gap { gap, d });
     }
-    // The conveyor holds its heap at a count instead of placing a dose: then the heap sets it.
-    let particles = scene.powder_particles();
-    let heap =
-        (scene.conveyor.heap_particles > scene.particles).then(|| mm(scene.conveyor.heap_height - scene.gap));
+    // A layout that holds its heap at a count instead of placing a dose: then the heap sets it.
+    let (particles, heap) = match held_heap {
+        Some((n, height)) if n > scene.particles => (n, Some(mm(height - scene.gap))),
+        _ => (scene.particles, None),
+    };
     if particles > MAX_PARTICLES {
         return Err(OutOfBounds::Particles { particles, gap, d, heap, name: d_name, value: d_value });
     }

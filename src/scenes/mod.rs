@@ -305,7 +305,8 @@ pub fn build(values: &BTreeMap<String, f64>, settings: &SceneSettings) -> Result
     let layout = of(settings)?;
     let scene = layout.derive(Base::new(values, settings)?, settings);
     if !settings.force_bounds {
-        plausible::check(&scene, values, settings)?;
+        let held = layout.held_heap(&scene).map(|h| (h.heap_particles, h.heap_height_mm * 1e-3));
+        plausible::check(&scene, held, values, settings)?;
     }
     Ok(scene)
 }

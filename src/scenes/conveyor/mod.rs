@@ -7,6 +7,8 @@ pub mod warm;
 
 use std::path::Path;
 
+use serde::{Deserialize, Serialize};
+
 use crate::measure::frame::{Frame, COLUMNS};
 use crate::measure::{layer, steady};
 use crate::outcome::layer::Layer;
@@ -16,8 +18,7 @@ use crate::scene::bed::Bed;
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
 use crate::scene::{
-    prime_seed, Base, Conveyor as Held, Feed, Scene, GRAVITY, LAYER_FRACTION_MAX, MIN_INSERT_VOLUME,
-    REPOSE_DEG,
+    prime_seed, Base, Feed, FeedClass, Scene, GRAVITY, LAYER_FRACTION_MAX, MIN_INSERT_VOLUME, REPOSE_DEG,
 };
 use crate::scenes::moving_blade::{self, Dose};
 use crate::scenes::{
@@ -32,6 +33,64 @@ const BED_THICKNESS: f64 = 2.0;
 
 /// The conveyor's one snapshot of the deposit behind the blade at the end.
 pub const STRIP_DUMP: &str = "dump.strip";
+
+/// The conveyor's own numbers (`scene.own`): a heap of `heap_particles` topped up in the box
+/// ahead of the blade, the deposit deleted downstream, and the block series. All lengths in m.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Held {
+    /// Height of the held heap (gap + the `heap_height` parameter), and the particles it holds at a
+    /// packing of 0.6 in its 30° repose triangle.
+    pub heap_height: f64,
+    pub heap_particles: usize,
+    /// The box the heap is counted and topped up in: from the blade's front face to a wall at
+    /// `heap_x1`, from the substrate to `heap_z1`.
+    pub heap_x1: f64,
+    pub heap_z1: f64,
+    /// Deposit strip behind the blade: from `delete_x1` to the blade's rear face; everything
+    /// behind `delete_x1` is deleted after each block.
+    pub delete_x1: f64,
+    pub block_steps: u64,
+    pub insert_every: u64,
+    pub warmup_blocks: u64,
+    pub min_window_blocks: u64,
+    pub max_blocks: u64,
+    /// Mass of a full flow through the gap over one block: ρ · w · h · v · Δt_block, kg.
+    pub ideal_block_mass: f64,
+    pub mfr_rel_se: f64,
+    pub mfr_abs_se: f64,
+    /// The substrate is a bed of the powder: its spheres reach above the deposit regions' floor,
+    /// so the deck deletes only powder from the delete region.
+    pub powder_bed: bool,
+    /// Bottom of the deposit strip and the delete region, m.
+    pub regions_z0: f64,
+    /// Particle templates of the feed: diameter, mass fraction, prime seed.
+    pub feed: Vec<FeedClass>,
+    /// The least particle volume the feed's templates accept, m³ (0: the engine's default,
+    /// 1e-12 m³, which refuses every sphere below 124 µm).
+    pub volume_limit: f64,
+    /// Prime seeds of the feed's distribution and insertion.
+    pub distribution_seed: u64,
+    pub insert_seed: u64,
+    /// Write the powder ahead of the blade's rear face at the end (`dump.state`), for warm starts.
+    pub keep_state: bool,
+    /// Start from `warm.data` (a neighbour's state mapped to this point), after a warm-up of
+    /// `warm_warmup_blocks` in place of `warmup_blocks`.
+    pub warm_start: bool,
+    pub warm_warmup_blocks: u64,
+}
+
+/// The held heap's numbers of a conveyor scene.
+pub fn held(scene: &Scene) -> Held {
+    scene.own().expect("a conveyor scene carries its held heap")
+}
+
+/// `scene` with its held heap's numbers changed by `change`.
+pub fn with_held(mut scene: Scene, change: impl FnOnce(&mut Held)) -> Scene {
+    let mut h = held(&scene);
+    change(&mut h);
+    scene.own = serde_json::to_value(h).expect("a held heap serialises");
+    scene
+}
 
 impl Layout for Conveyor {
     fn name(&self) -> &'static str {
@@ -104,11 +163,7 @@ impl Layout for Conveyor {
     }
 
     fn what_runs(&self, sc: &Scene) -> String {
-        format!(
-            "a heap held at {} particles, at most {} steps",
-            sc.conveyor.heap_particles,
-            sc.spread_steps()
-        )
+        format!("a heap held at {} particles, at most {} steps", held(sc).heap_particles, sc.spread_steps())
     }
 
     fn ignores(&self, name: &str) -> Option<&'static str> {
@@ -182,14 +237,14 @@ impl Layout for Conveyor {
     }
 
     fn with_precision(&self, scene: &Scene, mfr_abs_se: f64) -> Option<Scene> {
-        let mut s = scene.clone();
-        s.conveyor.mfr_rel_se = 0.0;
-        s.conveyor.mfr_abs_se = mfr_abs_se;
-        Some(s)
+        Some(with_held(scene.clone(), |c| {
+            c.mfr_rel_se = 0.0;
+            c.mfr_abs_se = mfr_abs_se;
+        }))
     }
 
     fn held_heap(&self, sc: &Scene) -> Option<HeldHeap> {
-        let c = &sc.conveyor;
+        let c = held(sc);
         let block_mm = sc.blade_speed * sc.timestep * c.block_steps as f64 * 1e3;
         Some(HeldHeap {
             heap_particles: c.heap_particles,
@@ -243,7 +298,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let mean_volume = psd.mean_volume();
     let mass = heap_particles as f64 * s.material.density * mean_volume;
     let Feed { classes: feed, volume_limit } = Feed::of(&psd, s.seed);
-    s.conveyor = Held {
+    let mut conveyor = Held {
         heap_height,
         heap_particles,
         heap_x1,
@@ -288,8 +343,9 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         s.substrate_bed.as_ref().map_or(s.substrate_n[0] * s.substrate_n[1], |bed| bed.spheres.len());
     // Above the lattice's centres (a delete region takes every atom in it); a bed's deposit sits
     // in pockets down to its floor, and the deck deletes only the powder there.
-    s.conveyor.powder_bed = powder_bed;
-    s.conveyor.regions_z0 = if powder_bed { s.z_lo } else { -0.2 * d };
+    conveyor.powder_bed = powder_bed;
+    conveyor.regions_z0 = if powder_bed { s.z_lo } else { -0.2 * d };
+    s.own = serde_json::to_value(conveyor).expect("a held heap serialises");
     s.gate_x = 0.0;
     s.rest_ke = 0.0;
     s.settle_steps = 0;
@@ -307,7 +363,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
 /// The spread layer: coverage and roughness from the strip behind the blade at the end
 /// (`dump.strip`), uniformity from the mass each block of the steady window deposited.
 fn conveyor_layer(scene: &Scene, frame: &Frame, st: &SteadyState) -> Option<Layer> {
-    let c = &scene.conveyor;
+    let c = held(scene);
     let mut l = layer::measure(scene, frame, c.delete_x1, scene.blade_x0)?;
     let particle_mass = |d: f64| scene.material.density * std::f64::consts::PI / 6.0 * d.powi(3);
     let weighted: f64 = c.feed.iter().map(|f| f.mass_fraction * particle_mass(f.diameter)).sum::<f64>()
@@ -325,14 +381,14 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
     let scene = run.scene;
     let (blocks, stop) = steady::parse_log(&run.run.log)
         .map_err(|e| Rejected::new(FailureClass::Unparsable, e.to_string()))?;
-    let c = &scene.conveyor;
-    let held = steady::HeldBlocks {
+    let c = held(scene);
+    let blocks_of = steady::HeldBlocks {
         ideal_block_mass: c.ideal_block_mass,
         warmup_blocks: c.warmup_blocks,
         block_steps: c.block_steps,
         heap_particles: c.heap_particles,
     };
-    let st = steady::compute(scene, &held, &blocks, &stop, &frames);
+    let st = steady::compute(scene, &blocks_of, &blocks, &stop, &frames);
     // The steady window in quarters (the moving-blade scenes' sub-windows, for the same readers).
     let w = &st.state.block_mfr[st.state.transient_blocks..];
     let quarter = w.len().div_ceil(4).max(1);
@@ -356,7 +412,7 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         steady: st.unsteady.is_none(),
         steady_p: 1.0,
         vx: st.vx,
-        particles: scene.conveyor.heap_particles,
+        particles: c.heap_particles,
         layer,
         layer_thickness: Some(scene.layer_thickness()),
         layer_packing: Some(scene.layer_packing(st.mfr)),
@@ -385,7 +441,7 @@ mod tests {
 
     /// The planned warm-up, s, and one block's time.
     fn warmup(scene: &crate::scene::Scene) -> (f64, f64) {
-        let c = &scene.conveyor;
+        let c = super::held(scene);
         let block_s = c.block_steps as f64 * scene.timestep;
         (c.warmup_blocks as f64 * block_s, block_s)
     }
@@ -400,7 +456,7 @@ mod tests {
         let (warmup_s, block_s) = warmup(&sc);
         let rule = WARMUP_HEAP_FALLS * (0.02125f64 / crate::scene::GRAVITY).sqrt();
         assert!((rule..rule + block_s).contains(&warmup_s), "warm-up {warmup_s} s against {rule} s");
-        let c = &sc.conveyor;
+        let c = super::held(&sc);
         let after = (c.max_blocks - c.warmup_blocks) as f64 * settings.block_diameters;
         assert!((600.0..600.0 + settings.block_diameters).contains(&after), "{after} D after the warm-up");
     }
@@ -437,7 +493,7 @@ mod tests {
             [("diameter", 2.0), ("gap", 1.7)].iter().map(|(k, v)| (k.to_string(), *v)).collect();
         let settings = SceneSettings { layout: "conveyor".into(), ..SceneSettings::default() };
         let scene = crate::scenes::build(&values, &settings).unwrap();
-        let cv = &scene.conveyor;
+        let cv = super::held(&scene);
         let c = HeldBlocks {
             ideal_block_mass: cv.ideal_block_mass,
             warmup_blocks: cv.warmup_blocks,

@@ -71,7 +71,7 @@ pub fn map(from: &Scene, state: &Path, to: &Scene, to_pile: &str, distance: f64)
     let snap = snaps.last().ok_or(ColdStart::EmptyDump)?;
     let col: Vec<_> = STATE_COLUMNS.iter().map(|c| snap.column(c).expect("required column")).collect();
     let (sy, sv) = (to.depth / from.depth, to.blade_speed / from.blade_speed);
-    let c = &to.conveyor;
+    let c = super::held(to);
     let blade = ([to.blade_x0, to.blade_x0 + to.blade_thickness], [to.gap, to.blade_top]);
     let mut mapped: Vec<Sphere> = (0..snap.len())
         .map(|i| {
@@ -125,15 +125,16 @@ pub fn map(from: &Scene, state: &Path, to: &Scene, to_pile: &str, distance: f64)
     }
     let first_id = substrate.len() + 1;
     let data = data_file(&warm, first_id, to.material.density);
-    let mut scene = to.clone();
     let window_blocks = c.max_blocks - c.warmup_blocks;
     let share = (distance / FULL_WARMUP_DISTANCE).clamp(LEAST_WARMUP_SHARE, 1.0);
     let warmup_blocks = ((c.warmup_blocks as f64 * share).ceil() as u64)
         .clamp(c.warm_warmup_blocks.min(c.warmup_blocks), c.warmup_blocks);
-    scene.conveyor.warm_start = true;
-    scene.conveyor.warmup_blocks = warmup_blocks;
-    scene.conveyor.max_blocks = warmup_blocks + window_blocks;
-    scene.window_length_steps = scene.conveyor.max_blocks * c.block_steps;
+    let mut scene = super::with_held(to.clone(), |h| {
+        h.warm_start = true;
+        h.warmup_blocks = warmup_blocks;
+        h.max_blocks = warmup_blocks + window_blocks;
+    });
+    scene.window_length_steps = (warmup_blocks + window_blocks) * c.block_steps;
     Ok(Warm { scene, data, data_file: WARM_DATA, particles: warm.len() })
 }
 
@@ -262,6 +263,7 @@ impl Grid {
 
 #[cfg(test)]
 mod tests {
+    use super::super::held;
     use super::*;
     use std::collections::BTreeMap;
 
@@ -310,19 +312,19 @@ mod tests {
         let w = map(&from, &state, &to, &pile, 0.01).unwrap();
         assert!(w.particles > 50, "{} particles", w.particles);
         // However near, a warm start keeps LEAST_WARMUP_SHARE of the cold warm-up.
-        let least = ((to.conveyor.warmup_blocks as f64 * LEAST_WARMUP_SHARE).ceil() as u64)
-            .max(to.conveyor.warm_warmup_blocks.min(to.conveyor.warmup_blocks));
-        assert!(w.scene.conveyor.warm_start && w.scene.conveyor.warmup_blocks == least);
-        assert!(least < to.conveyor.warmup_blocks);
+        let least = ((held(&to).warmup_blocks as f64 * LEAST_WARMUP_SHARE).ceil() as u64)
+            .max(held(&to).warm_warmup_blocks.min(held(&to).warmup_blocks));
+        assert!(held(&w.scene).warm_start && held(&w.scene).warmup_blocks == least);
+        assert!(least < held(&to).warmup_blocks);
         assert_eq!(
-            w.scene.conveyor.max_blocks - w.scene.conveyor.warmup_blocks,
-            to.conveyor.max_blocks - to.conveyor.warmup_blocks
+            held(&w.scene).max_blocks - held(&w.scene).warmup_blocks,
+            held(&to).max_blocks - held(&to).warmup_blocks
         );
         // The warm-up shrinks with the distance: the whole cold one from FULL_WARMUP_DISTANCE on.
         let far = map(&from, &state, &to, &pile, FULL_WARMUP_DISTANCE).unwrap();
-        assert_eq!(far.scene.conveyor.warmup_blocks, to.conveyor.warmup_blocks);
+        assert_eq!(held(&far.scene).warmup_blocks, held(&to).warmup_blocks);
         let most = map(&from, &state, &to, &pile, 0.8 * FULL_WARMUP_DISTANCE).unwrap();
-        assert_eq!(most.scene.conveyor.warmup_blocks, (to.conveyor.warmup_blocks as f64 * 0.8).ceil() as u64);
+        assert_eq!(held(&most.scene).warmup_blocks, (held(&to).warmup_blocks as f64 * 0.8).ceil() as u64);
         let atoms: Vec<Vec<f64>> = w
             .data
             .lines()
@@ -351,13 +353,13 @@ mod tests {
         let state = state_of(&from, dir.path(), 12);
         let pile = crate::scene::pile::pile_data(&to);
         let w = map(&from, &state, &to, &pile, 0.3).unwrap();
-        assert!(w.particles <= to.conveyor.heap_particles + 200, "{}", w.particles);
+        assert!(w.particles <= held(&to).heap_particles + 200, "{}", w.particles);
         for l in w.data.lines().skip_while(|l| *l != "Atoms").skip(2).take_while(|l| !l.is_empty()) {
             let a: Vec<f64> = l.split_whitespace().map(|t| t.parse().unwrap()).collect();
             let (x, z, r) = (a[4], a[6], 0.5 * a[2]);
             let blade = ([to.blade_x0, to.blade_x0 + to.blade_thickness], [to.gap, to.blade_top]);
             assert!(box_distance(x, z, blade) >= r, "a sphere at x {x} z {z} overlaps the blade");
-            assert!(x + r <= to.conveyor.heap_x1);
+            assert!(x + r <= held(&to).heap_x1);
         }
     }
 

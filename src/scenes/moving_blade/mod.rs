@@ -21,8 +21,8 @@ use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT};
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
 use crate::scene::{
-    Base, Conveyor, Scene, GRAVITY, LAYER_FRACTION_MAX, REPOSE_DEG, SNAPSHOTS_PER_SUB_WINDOW, SUB_WINDOWS,
-    THESIS_BAND, VTK_EVERY_S,
+    Base, Scene, GRAVITY, LAYER_FRACTION_MAX, REPOSE_DEG, SNAPSHOTS_PER_SUB_WINDOW, SUB_WINDOWS, THESIS_BAND,
+    VTK_EVERY_S,
 };
 use crate::scenes::{BadSetting, BuiltinTemplate, Finished, Layout, Rejected, SetupRows};
 
@@ -329,7 +329,6 @@ pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
         vx_band,
         vx_length: 6.0 * profile_diameter,
         ke_limit,
-        conveyor: Conveyor::default(),
         own: serde_json::Value::Null,
     }
 }

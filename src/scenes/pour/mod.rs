@@ -34,7 +34,7 @@ use crate::engine::dump::read_dump;
 use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT, VX_LAYERS};
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
-use crate::scene::{Base, Conveyor, Scene, GRAVITY, LAYER_FRACTION_MAX};
+use crate::scene::{Base, Scene, GRAVITY, LAYER_FRACTION_MAX};
 use crate::scenes::{BadSetting, BuiltinTemplate, Finished, Layout, Rejected, SetupRows, StandInModel};
 
 /// The pour layout (registered in [`crate::scenes::LAYOUTS`]).
@@ -293,7 +293,6 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         vx_band: 0.0,
         vx_length: 0.0,
         ke_limit: 0.5 * mass * (10.0 * v_ref).powi(2),
-        conveyor: Conveyor::default(),
         own: serde_json::Value::Null,
     }
 }
