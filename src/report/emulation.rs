@@ -68,6 +68,29 @@ struct Fitted {
     se: Vec<Option<f64>>,
 }
 
+/// The emulator fits a sweep directory keeps, so that the next report or `sweep predict` on it
+/// recalls them instead of fitting again ([`crate::analysis::emulator::memo`]).
+pub const FITS_FILE: &str = "emulator-fits.json";
+/// Largest fits file read: 32 fits of a few dozen numbers are a few kB.
+const FITS_CAP: u64 = 1 << 20;
+
+/// Recall the fits `dir` keeps. A cache: a file missing, unreadable or not of its form is as
+/// if empty.
+pub fn recall_fits(dir: &std::path::Path) {
+    let fits = crate::sys::read::read_text_capped(&dir.join(FITS_FILE), FITS_CAP)
+        .ok()
+        .and_then(|text| serde_json::from_str(&text).ok());
+    if let Some(fits) = fits {
+        crate::analysis::emulator::memo::import(fits);
+    }
+}
+
+/// Keep the fits of this process in `dir` for the next. A cache: a failed write costs only the
+/// next report's time.
+pub fn keep_fits(dir: &std::path::Path) {
+    let _ = crate::sys::atomic::write_json(&dir.join(FITS_FILE), &crate::analysis::emulator::memo::export());
+}
+
 /// Fit to the members of a space (done runs and screened zeros), thinned to MAX_POINTS.
 fn fit(sweep: &Sweep, rows: &[&PointRow]) -> Option<Fitted> {
     let usable: Vec<&&PointRow> = rows.iter().filter(|p| p.mfr().is_some()).collect();
@@ -223,6 +246,7 @@ pub fn parse_setting(sweep: &Sweep, sets: &[String]) -> Result<Vec<f64>, ReportE
 pub fn predict(dir: &std::path::Path, sets: &[String]) -> crate::error::Result<Prediction> {
     let (_, sweep, points, _) = super::read_points(dir)?;
     let values = parse_setting(&sweep, sets)?;
+    recall_fits(dir);
     let rows: Vec<&PointRow> = points.iter().collect();
     let f = fit(&sweep, &rows).ok_or_else(|| ReportError::NoEmulator {
         dir: dir.to_path_buf(),

@@ -281,6 +281,7 @@ pub fn read_points(dir: &Path) -> Result<(Manifest, Sweep, Vec<PointRow>, Screen
 pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Analysis> {
     let (manifest, sweep, points, screen) = read_points(dir)?;
     let spaces = judge_spaces(dir, &sweep, &manifest, &points, criteria, boot);
+    emulation::recall_fits(dir);
     let emulator = emulation::analyse(&sweep, &points, &spaces, criteria);
     let counts = count(&manifest, &points, spaces.len());
     let verdict = verdict(&spaces, &counts, criteria);
@@ -364,6 +365,7 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
         points,
     };
     a.answer = Some(answer::answer(&a));
+    emulation::keep_fits(dir);
     Ok(a)
 }
 

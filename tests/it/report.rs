@@ -134,6 +134,9 @@ fn lds_on_the_stand_in_stops_by_itself_and_its_statistics_are_the_prefixes() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert_eq!(joblog_lines(&out), before, "resume ran points past a converged space");
     assert!(stderr(&o).contains(&format!("converged at N = {n}")), "{}", stderr(&o));
+    // Its report recalled the emulator fits the first one kept, and read the same from them.
+    assert!(out.join("emulator-fits.json").exists());
+    assert_eq!(summary(&out)["emulator"], s["emulator"]);
 
     // A larger --max extends on purpose and judges again past the old extent.
     let o =

@@ -4,7 +4,7 @@
 
 use crate::analysis::simplex::minimise;
 
-use super::{condition, subset, FIT_POINTS};
+use super::{condition, memo, subset, FIT_POINTS};
 
 /// Negative log marginal likelihood (up to a constant) at log-parameters `p` = (ln θ…, ln σ², ln τ²).
 fn nll(x: &[Vec<f64>], z: &[f64], se2: &[f64], p: &[f64]) -> f64 {
@@ -60,6 +60,10 @@ pub(super) fn likelihood_fit(
     prior: Option<(f64, f64)>,
 ) -> (Vec<f64>, f64, f64) {
     let d = x[0].len();
+    let key = memo::key(x, z, se2, prior);
+    if let Some(fit) = memo::recall(&key).filter(|f| f.0.len() == d) {
+        return fit;
+    }
     // The fit subset: a seeded random one (every k-th point of a Halton sequence would share
     // its leading digits, and sit in one slice of the box).
     let idx = subset(x.len(), FIT_POINTS, 1);
@@ -76,6 +80,7 @@ pub(super) fn likelihood_fit(
     // A restart from the optimum escapes an early collapse of the simplex.
     best = minimise(&f, &best, 0.5, 150 * (d + 2), &|p| clamp_params(p, d));
     let theta: Vec<f64> = best[..d].iter().map(|v| v.exp()).collect();
+    memo::remember(key, &theta, best[d].exp(), best[d + 1].exp());
     (theta, best[d].exp(), best[d + 1].exp())
 }
 

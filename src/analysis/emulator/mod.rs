@@ -34,6 +34,7 @@ use rand_chacha::ChaCha8Rng;
 
 mod cross_validation;
 mod likelihood;
+pub mod memo;
 mod paths;
 pub use cross_validation::CrossValidation;
 pub use likelihood::LENGTH_PRIOR;
