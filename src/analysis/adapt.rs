@@ -118,7 +118,7 @@ pub fn batch_candidates(
     existing: &[Vec<f64>],
 ) -> Vec<Vec<f64>> {
     let mut cands = candidates(dim, batch, seed);
-    let Some(best) = em.and_then(|em| em.rank(existing).first().map(|r| existing[r.0].clone())) else {
+    let Some(best) = em.and_then(|em| em.rank(existing, 1).first().map(|r| existing[r.0].clone())) else {
         return cands;
     };
     let start = (batch * NEAR) as u64;
@@ -299,7 +299,7 @@ pub fn next_batch(
     let vc: Vec<Vec<f64>> = cands.iter().map(|u| em.whitened(u)).collect();
     let mut var_c: Vec<f64> =
         cands.iter().zip(&vc).map(|(u, v)| (em.prior_cov(u, u) - dot(v, v)).max(0.0)).collect();
-    let mean_c: Vec<f64> = cands.iter().map(|u| em.predict(u).0).collect();
+    let mean_c: Vec<f64> = cands.iter().map(|u| em.mean(u)).collect();
     let mut cov_cl: Vec<[f64; TARGETS]> = cands
         .iter()
         .zip(&vc)
@@ -444,7 +444,7 @@ mod tests {
         let c = batch_candidates(2, 0, 14, Some(&e), &x);
         assert_eq!(c.len(), CANDIDATES + NEAR + 1);
         assert_eq!(batch_candidates(2, 0, 14, None, &x).len(), CANDIDATES);
-        let best = &x[e.rank(&x)[0].0];
+        let best = &x[e.rank(&x, 1)[0].0];
         for u in &c[CANDIDATES..CANDIDATES + NEAR] {
             for (a, b) in u.iter().zip(best) {
                 assert!((a - b).abs() <= NEAR_REACH + 1e-12 && (0.0..=1.0).contains(a), "{u:?} {best:?}");

@@ -471,7 +471,7 @@ pub fn next_batch(
     let explore = ((size as f64 * EXPLORE).floor() as usize).min(size);
     let n_out = outputs.len();
     let mean: Vec<Vec<f64>> =
-        outputs.iter().map(|o| cands.iter().map(|u| o.emulator.predict(u).0).collect()).collect();
+        outputs.iter().map(|o| cands.iter().map(|u| o.emulator.mean(u)).collect()).collect();
     let white: Vec<Vec<Vec<f64>>> =
         outputs.iter().map(|o| cands.iter().map(|u| o.emulator.whitened(u)).collect()).collect();
     let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();

@@ -246,7 +246,7 @@ impl Row {
 /// The run of the design the emulator of its runs ranks best, by its true MFR.
 fn recommended(s: &dyn Surface, x: &[Vec<f64>], em: Option<&Emulator>, y: &[f64]) -> f64 {
     let i = match em {
-        Some(em) => em.rank(x).first().map_or(0, |r| r.0),
+        Some(em) => em.rank(x, 1).first().map_or(0, |r| r.0),
         None => y.iter().enumerate().fold((0, f64::MIN), |a, (i, v)| if *v > a.1 { (i, *v) } else { a }).0,
     };
     x.get(i).map_or(f64::NAN, |u| s.truth(u))

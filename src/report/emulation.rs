@@ -145,7 +145,7 @@ pub fn analyse(
             points.iter().filter(|p| p.done().is_some_and(|(_, pq)| pq == q)).collect();
         let units: Vec<Vec<f64>> =
             done.iter().map(|p| crate::sweep::space::unit_point(sweep, &p.values)).collect();
-        let ranked = f.emulator.rank(&units);
+        let ranked = f.emulator.rank(&units, 5);
         let list: Vec<Best> = ranked
             .into_iter()
             .take(5)

@@ -230,13 +230,16 @@ impl Emulator {
     /// their expected value given that bound and every other value: Gauss–Seidel sweeps of the
     /// truncated-normal mean of each one's leave-one-out prediction, with the covariance held.
     fn impute_below(&self, z: &mut [f64], floor: &[usize], c: f64) {
-        // K⁻¹; it is symmetric, so column i is row i.
-        let kinv = self.chol.inverse();
+        // The columns of K⁻¹ at the floored runs only (K⁻¹ is symmetric, so column i is row i):
+        // each is the one nalgebra's whole inverse would hold, at a share of its cost.
+        let n = self.n();
+        let kinv: Vec<DVector<f64>> =
+            floor.iter().map(|&i| self.chol.solve(&DVector::from_fn(n, |r, _| f64::from(r == i)))).collect();
         let mut alpha = self.alpha.clone();
         for _sweep in 0..100 {
             let mut largest = 0.0f64;
-            for &i in floor {
-                let kii = kinv[(i, i)];
+            for (&i, column) in floor.iter().zip(&kinv) {
+                let kii = column[i];
                 // The leave-one-out prediction of run i's value (its own noise included).
                 let m = z[i] - alpha[i] / kii;
                 let s = (1.0 / kii).sqrt();
@@ -246,7 +249,7 @@ impl Emulator {
                 let new = (m - s * ratio).min(c);
                 let step = new - z[i];
                 if step != 0.0 {
-                    for (al, k) in alpha.iter_mut().zip(kinv.column(i).iter()) {
+                    for (al, k) in alpha.iter_mut().zip(column.iter()) {
                         *al += step * k;
                     }
                     z[i] = new;
@@ -311,27 +314,25 @@ impl Emulator {
     pub fn zero_fraction(&self, pts: &[Vec<f64>], level: f64) -> (f64, f64) {
         let (mut likely, mut sure) = (0usize, 0usize);
         for u in pts {
-            let (m, s) = self.predict(u);
-            likely += usize::from(m < level);
-            sure += usize::from(m + 1.96 * s < level);
+            // The SE (O(N²) a point) only where the mean is below the level: above it, the
+            // upper bound is too.
+            let m = self.mean(u);
+            if m < level {
+                likely += 1;
+                sure += usize::from(m + 1.96 * self.predict(u).1 < level);
+            }
         }
         let n = pts.len().max(1) as f64;
         (likely as f64 / n, sure as f64 / n)
     }
 
-    /// Candidates (unit coordinates) ranked by the emulator's MFR, highest first: (index into
-    /// `candidates`, mean, SE).
-    pub fn rank(&self, candidates: &[Vec<f64>]) -> Vec<(usize, f64, f64)> {
-        let mut r: Vec<(usize, f64, f64)> = candidates
-            .iter()
-            .enumerate()
-            .map(|(i, u)| {
-                let (m, s) = self.predict(u);
-                (i, m.max(0.0), s)
-            })
-            .collect();
+    /// The `top` candidates (unit coordinates) by the emulator's MFR, highest first: (index into
+    /// `candidates`, mean, SE). The SE (O(N²) a candidate) only for those returned.
+    pub fn rank(&self, candidates: &[Vec<f64>], top: usize) -> Vec<(usize, f64, f64)> {
+        let mut r: Vec<(usize, f64)> =
+            candidates.iter().enumerate().map(|(i, u)| (i, self.mean(u).max(0.0))).collect();
         r.sort_by(|a, b| b.1.total_cmp(&a.1));
-        r
+        r.into_iter().take(top).map(|(i, m)| (i, m, self.predict(&candidates[i]).1)).collect()
     }
 }
 
@@ -426,8 +427,12 @@ mod tests {
         assert!((likely - zero_share).abs() < 0.05, "{likely} vs {zero_share}");
         assert!(sure > 0.5 * zero_share && sure <= likely, "{sure} vs {zero_share}");
         // The best candidate is the corner (1, 1), where the function is largest.
-        let r = e.rank(&[vec![0.2, 0.2], vec![1.0, 1.0], vec![0.5, 0.5]]);
-        assert_eq!(r[0].0, 1);
+        let cands = [vec![0.2, 0.2], vec![1.0, 1.0], vec![0.5, 0.5]];
+        let r = e.rank(&cands, 2);
+        assert_eq!((r.len(), r[0].0, r[1].0), (2, 1, 2));
+        // Each with the emulator's own mean and SE there.
+        let (m, se) = e.predict(&cands[1]);
+        assert_eq!((r[0].1, r[0].2), (m.max(0.0), se));
     }
 
     #[test]

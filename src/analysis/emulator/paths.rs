@@ -40,7 +40,7 @@ impl Emulator {
     pub fn space_statistics(&self, draws: usize, paths: usize, seed: u64) -> EmulatedStatistics {
         let d = self.x[0].len();
         let pts = crate::design::halton::halton(d, draws, crate::design::halton::Scrambling::Random, seed);
-        let surface: Vec<f64> = pts.iter().map(|u| self.predict(u).0.max(0.0)).collect();
+        let surface: Vec<f64> = pts.iter().map(|u| self.mean(u).max(0.0)).collect();
         let statistics = crate::analysis::stats::moments(&surface);
         let m = pts.len().min(256);
         let sub = &pts[..m];
@@ -65,7 +65,7 @@ impl Emulator {
             jitter *= 10.0;
             chol = factor(cov.clone());
         }
-        let mean_sub: Vec<f64> = sub.iter().map(|u| self.predict(u).0).collect();
+        let mean_sub: Vec<f64> = sub.iter().map(|u| self.mean(u)).collect();
         let base = crate::analysis::stats::moments(&mean_sub.iter().map(|v| v.max(0.0)).collect::<Vec<_>>());
         let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed);
         let mut shifts: [Vec<f64>; 4] = Default::default();
