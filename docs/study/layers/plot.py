@@ -9,6 +9,9 @@ ti64.sh write. Needs matplotlib.
 - ti64-fused.png: the fused bed over passes (the machine answer, its controls, ti64.sh's lattice
   of two layer thicknesses and two blade speeds) — each pass's deposit over the drop (1 once the
   bed is steady) and the powder under the blade over the drop (→ 1 / packing);
+- ti64-search.png and ti64-gap.png: the fused bed whose first passes search for the steady
+  depth, before the platform gap and on the current scene (ti64-gap.sh) — the powder under the
+  blade over the drop and the packing, per pass;
 - a Markdown table of each on stdout.
 """
 import glob, json, os, sys
@@ -102,6 +105,8 @@ VARIANTS = {"flat": "flat blade", "gamma0": "no cohesion", "halfdose": "half the
 def pretty(label):
     """'50um-0.1-gamma0' → '50 µm, 0.1 m/s, no cohesion'."""
     t, v, *rest = label.split("-")
+    if rest and rest[0] == "gap":
+        return ", ".join([t.replace("um", " µm"), v + " m/s"] + [VARIANTS.get(r, r) for r in rest[1:]])
     # The sweep's own blade is round; variants say what they change.
     if rest and rest[0].startswith("search"):
         # The search's records: the round blade unless a variant follows.
@@ -165,20 +170,18 @@ def finish(fig, ylabels, xlabel, title, name):
     fig.savefig(os.path.join(HERE, name), dpi=110)
 
 
-def ti64_searched(runs):
-    """The points whose first passes searched for the steady depth: ti64-search.png and the
-    steady layer of each (mean ± SE over the passes from `steady_from`)."""
+def ti64_searched(runs, drawn, title, name):
+    """The points whose first passes searched for the steady depth: a figure of those `drawn`
+    picks, and the steady layer of each (mean ± SE over the passes from `steady_from`)."""
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.4))
     print()
     print("| case | passes (search) | steady from | packing ± SE | powder under the tip ± SE (µm) | over the drop | deposit over the drop ± SE | covered | CPU s | CPU s a pass |")
     print("|---|---|---|---|---|---|---|---|---|---|")
-    for name, label, series, failed, cpu in runs:
+    for case, label, series, failed, cpu in runs:
         p = series["passes"]
         t = series["layer_thickness_m"]
         search = sum(1 for q in p if q.get("search"))
-        # The figure: the machine's cases (and one at half the dose); the numerical variants and
-        # the other half-dose runs only in the table.
-        if name.endswith("search6") or name == "50um-0.1-search6-halfdose":
+        if drawn(case):
             line = a1.plot([q["k"] for q in p], [q["effective_thickness_m"] / t for q in p], marker=".", label=label)[0]
             a2.plot([q["k"] for q in p], [q["packing"] for q in p], marker=".", color=line.get_color(), label=label)
             for a, key in ((a1, "effective_thickness_m"), (a2, "packing")):
@@ -191,19 +194,28 @@ def ti64_searched(runs):
               f"{series['effective_thickness_m'] / t:.1f} | {series['relative_density']:.3f} ± {series['relative_density_se']:.3f} | "
               f"{series['covered_fraction']:.2f} | {cpu:.0f} | {cpu / len(p):.0f} |")
     finish(fig, {a1: "powder under the blade / layer thickness", a2: "packing of the pass's layer"},
-           "pass (open: searching for the steady depth)",
-           "Ti-6Al-4V 15–45 µm on a fused bed, round blade: searching for the steady layer",
-           "ti64-search.png")
+           "pass (open: searching for the steady depth)", title, name)
 
 
 def ti64():
     runs = ti64_runs()
-    laid = [r for r in runs if "search" not in r[0]]
+    laid = [r for r in runs if "search" not in r[0] and "gap" not in r[0]]
     searched = [r for r in runs if "search" in r[0]]
+    gap = [r for r in runs if "gap" in r[0]]
     if laid:
         ti64_laid(laid)
     if searched:
-        ti64_searched(searched)
+        # The machine's cases (and one at half the dose); the numerical variants and the other
+        # half-dose runs only in the table.
+        ti64_searched(searched, lambda n: n.endswith("search6") or n == "50um-0.1-search6-halfdose",
+                      "Ti-6Al-4V 15–45 µm on a fused bed, round blade: searching for the steady layer "
+                      "(before the platform gap)", "ti64-search.png")
+    if gap:
+        # The machine's cases on the current scene; the second seed and the numerical checks only
+        # in the table.
+        ti64_searched(gap, lambda n: n.endswith("-gap"),
+                      "Ti-6Al-4V 15–45 µm on a fused bed, round blade, the current scene: the steady layer",
+                      "ti64-gap.png")
 
 
 def loose():
