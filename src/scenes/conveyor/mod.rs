@@ -298,30 +298,6 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let mean_volume = psd.mean_volume();
     let mass = heap_particles as f64 * s.material.density * mean_volume;
     let Feed { classes: feed, volume_limit } = Feed::of(&psd, s.seed);
-    let mut conveyor = Held {
-        heap_height,
-        heap_particles,
-        heap_x1,
-        heap_z1: 1.6 * heap_height,
-        delete_x1: blade_x0 - 10.0 * d,
-        block_steps,
-        insert_every: (block_steps / 5).max(1),
-        warmup_blocks,
-        min_window_blocks: settings.min_window_blocks as u64,
-        max_blocks,
-        ideal_block_mass: s.material.density * s.depth * gap * v * dt * block_steps as f64,
-        mfr_rel_se: settings.mfr_rel_se,
-        mfr_abs_se: settings.mfr_abs_se,
-        powder_bed: false,
-        regions_z0: 0.0,
-        feed,
-        volume_limit,
-        distribution_seed: prime_seed(s.seed, 0),
-        insert_seed: prime_seed(s.seed, 1),
-        keep_state: settings.warm_start,
-        warm_start: false,
-        warm_warmup_blocks: blocks((settings.warm_warmup_s * v / d).max(settings.block_diameters)),
-    };
     s.blade_fixed = true;
     s.particles = 0;
     s.pile_n = [0, 0, 0];
@@ -341,10 +317,32 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     s.substrate_diameter = if rough || powder_bed { d } else { 0.0 };
     s.substrate_particles =
         s.substrate_bed.as_ref().map_or(s.substrate_n[0] * s.substrate_n[1], |bed| bed.spheres.len());
-    // Above the lattice's centres (a delete region takes every atom in it); a bed's deposit sits
-    // in pockets down to its floor, and the deck deletes only the powder there.
-    conveyor.powder_bed = powder_bed;
-    conveyor.regions_z0 = if powder_bed { s.z_lo } else { -0.2 * d };
+    let conveyor = Held {
+        heap_height,
+        heap_particles,
+        heap_x1,
+        heap_z1: 1.6 * heap_height,
+        delete_x1: blade_x0 - 10.0 * d,
+        block_steps,
+        insert_every: (block_steps / 5).max(1),
+        warmup_blocks,
+        min_window_blocks: settings.min_window_blocks as u64,
+        max_blocks,
+        ideal_block_mass: s.material.density * s.depth * gap * v * dt * block_steps as f64,
+        mfr_rel_se: settings.mfr_rel_se,
+        mfr_abs_se: settings.mfr_abs_se,
+        powder_bed,
+        // Above the lattice's centres (a delete region takes every atom in it); a bed's deposit
+        // sits in pockets down to its floor, and the deck deletes only the powder there.
+        regions_z0: if powder_bed { s.z_lo } else { -0.2 * d },
+        feed,
+        volume_limit,
+        distribution_seed: prime_seed(s.seed, 0),
+        insert_seed: prime_seed(s.seed, 1),
+        keep_state: settings.warm_start,
+        warm_start: false,
+        warm_warmup_blocks: blocks((settings.warm_warmup_s * v / d).max(settings.block_diameters)),
+    };
     s.own = serde_json::to_value(conveyor).expect("a held heap serialises");
     s.gate_x = 0.0;
     s.rest_ke = 0.0;
