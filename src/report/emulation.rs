@@ -148,7 +148,6 @@ pub fn analyse(
         let ranked = f.emulator.rank(&units, 5);
         let list: Vec<Best> = ranked
             .into_iter()
-            .take(5)
             .map(|(i, m, s)| Best {
                 index: done[i].index,
                 parameters: sweep

@@ -219,7 +219,7 @@ pub fn steady_layer(plan: &Plan, passes: Vec<PassRecord>) -> LayerSeries {
     let (effective, effective_se) = pick(&|p| p.effective_thickness_m);
     // A fused bed is steady once its depth has stopped growing too: its packing can settle
     // passes before the depth reaches the drop over it.
-    let limit = trend_limit(kept.len(), if plan.fused { 2 } else { 1 });
+    let limit = trend_limit(kept.len(), series_tested(plan));
     let flat = |y: &[f64]| trend_z(y).abs() <= limit;
     let steady =
         kept.len() >= MIN_STEADY_PASSES && flat(&answer[cut..]) && (!plan.fused || flat(&depth[cut..]));
@@ -245,6 +245,16 @@ pub fn steady_layer(plan: &Plan, passes: Vec<PassRecord>) -> LayerSeries {
 /// [`TREND_FALSE_ALARM`] / `series`. Infinite under three passes (no slope can be judged).
 pub fn trend_limit(passes: usize, series: usize) -> f64 {
     student_quantile(passes as f64 - 2.0, TREND_FALSE_ALARM / series.max(1) as f64)
+}
+
+/// The series a bed's steadiness tests: a loose bed its relative density, a fused one its
+/// packing and its depth.
+fn series_tested(plan: &Plan) -> usize {
+    if plan.fused {
+        2
+    } else {
+        1
+    }
 }
 
 /// The two-sided Student quantile: |t| with `dof` degrees of freedom exceeds it with chance
@@ -294,7 +304,7 @@ pub fn unsteady_why(plan: &Plan, series: &LayerSeries) -> String {
     if to + 1 - from < MIN_STEADY_PASSES {
         format!("fewer than {MIN_STEADY_PASSES} passes after the transient (MSER kept passes {from}–{to})")
     } else {
-        let limit = trend_limit(kept, if plan.fused { 2 } else { 1 });
+        let limit = trend_limit(kept, series_tested(plan));
         format!("a trend over passes {from}–{to}: a slope beyond {limit:.1} of its SE")
     }
 }
