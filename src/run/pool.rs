@@ -14,7 +14,9 @@
 //!   process even when it is SIGKILLed ([`crate::sys::process`]).
 //! - Each worker writes its attempt's joblog line (under the directory lock) before it gives the
 //!   claim back, so a finished run always has its line or its claim; otherwise workers only send
-//!   [`Event`]s, which the caller's thread consumes (results.csv, progress).
+//!   [`Event`]s, which the caller's thread consumes (results.csv, progress, the rule). A worker
+//!   more than a few events ahead of the consumer waits for it, so the rule stops a sweep a few
+//!   runs past the space it judges converged however short the runs are.
 //!
 //! Not responsible for what a job is (the [`Executor`]) or for what to run (the driver).
 
@@ -33,6 +35,10 @@ use crate::sys::process::CancelToken;
 pub const TICK: Duration = Duration::from_millis(250);
 /// How often a run held by another process is looked at again.
 const BUSY_POLL: Duration = Duration::from_millis(200);
+/// Events a slot may have sent that the consumer has not yet taken: a worker waits on the
+/// consumer past this, so that while the consumer judges a space (which takes seconds) runs a
+/// millisecond long cannot race through the rest of the sweep. A run sends three events.
+const EVENTS_AHEAD_PER_SLOT: usize = 6;
 
 /// Runs one attempt of one job. The real one renders and runs a LIGGGHTS deck
 /// ([`crate::run::PointExecutor`]); `run::fake::FakeExecutor` stands in for it in tests.
@@ -117,7 +123,7 @@ pub fn run<E: Executor>(
     let busy: Mutex<VecDeque<(E::Job, Instant)>> = Mutex::new(VecDeque::new());
     let drain = AtomicBool::new(false);
     let joblog = Mutex::new(joblog);
-    let (tx, rx) = mpsc::channel::<Event>();
+    let (tx, rx) = mpsc::sync_channel::<Event>(opts.slots.max(1) * EVENTS_AHEAD_PER_SLOT);
     std::thread::scope(|scope| {
         for _ in 0..opts.slots.max(1) {
             let tx = tx.clone();
@@ -157,7 +163,7 @@ struct Worker<'a, E: Executor> {
     queue: &'a Mutex<VecDeque<E::Job>>,
     busy: &'a Mutex<VecDeque<(E::Job, Instant)>>,
     drain: &'a AtomicBool,
-    tx: mpsc::Sender<Event>,
+    tx: mpsc::SyncSender<Event>,
 }
 
 impl<E: Executor> Worker<'_, E> {

@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# The numerical choices at a real powder's scale (docs/study/warmup-um.md "The numerical choices
+# at 35 µm"): the point of sweeps/ti64-machine.toml at 0.08 m/s, at its defaults (two seeds, for
+# the noise between seeds) and with the timestep halved (0.165 Rayleigh times; doubled, 0.66, is
+# past the 0.5 stability bound), the periodic depth halved and doubled (3, 12 D) and the block
+# halved and doubled (2.5, 10 D). Each case: label, then a `[scene]` key and its value (none: the
+# defaults). Resumable: a recorded case is skipped.
+#   bash docs/study/warmup-um/numerics.sh [SWEEP_BIN]
+set -euo pipefail
+cd "$(dirname "$0")/../../.."
+bin=${1:-target/release/sweep}
+out=docs/study/warmup-um/numerics
+mkdir -p "$out"
+cases="default
+seed2 seed 2
+dt0.165 rayleigh_fraction 0.165
+depth3 depth_diameters 3.0
+depth12 depth_diameters 12.0
+block2.5 block_diameters 2.5
+block10 block_diameters 10.0"
+while read -r label key value; do
+  [ -s "$out/$label.json" ] && { echo "$label: recorded"; continue; }
+  toml=$(mktemp --suffix=.toml)
+  if [ -n "$key" ]; then
+    sed "s/^\[scene\]$/[scene]\n$key = $value/" sweeps/ti64-machine.toml > "$toml"
+    grep -q "^$key = $value$" "$toml"
+  else
+    cp sweeps/ti64-machine.toml "$toml"
+  fi
+  start=$(date +%s)
+  if "$bin" run "$toml" --json --set blade_speed=0.08 > "$out/$label.json.part" 2> "$out/$label.err"; then
+    mv "$out/$label.json.part" "$out/$label.json"
+  else
+    echo "$label: failed (see $out/$label.err)" >&2
+  fi
+  rm -f "$toml"
+  echo "$label: $(( $(date +%s) - start )) s wall" >&2
+done <<< "$cases"
