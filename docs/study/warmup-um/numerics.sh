@@ -27,6 +27,9 @@ while read -r label key value; do
   else
     cp sweeps/ti64-machine.toml "$toml"
   fi
+  # A wall-clock guard, not a numerical choice: this machine is shared, and a point of about
+  # 230 CPU s can take past the 600 s default on a busy core.
+  printf '\n[run]\ntimeout_s = 7200\n' >> "$toml"
   start=$(date +%s)
   if "$bin" run "$toml" --json --set blade_speed=0.08 > "$out/$label.json.part" 2> "$out/$label.err"; then
     mv "$out/$label.json.part" "$out/$label.json"
