@@ -4,8 +4,8 @@
 # platform and the wall (before, at no clearance, it ground the powder into the platform). Each
 # case: label, layer thickness (mm), blade speed (m/s), and optionally a `[scene]` key set in the
 # sweep file (`seed = 2`). The numerical checks of the machine point halve the timestep (0.165
-# Rayleigh times), double the periodic depth (12 D), and halve and double the build plate (20 D,
-# 80 D). Resumable: a recorded case is skipped.
+# Rayleigh times), double the periodic depth (12 D), and halve, double and double again the build
+# plate (20, 80, 160 D). Resumable: a recorded case is skipped.
 # Run from the repository's root with target/release/sweep built (or SWEEP=path).
 #   bash docs/study/layers/ti64-gap.sh [label]
 set -euo pipefail
@@ -21,7 +21,8 @@ ti64-80um-0.1-gap 0.08 0.1
 ti64-50um-0.1-gap-dt0.165 0.05 0.1 rayleigh_fraction = 0.165
 ti64-50um-0.1-gap-depth12 0.05 0.1 depth_diameters = 12.0
 ti64-50um-0.1-gap-plate20 0.05 0.1 plate_diameters = 20.0
-ti64-50um-0.1-gap-plate80 0.05 0.1 plate_diameters = 80.0"
+ti64-50um-0.1-gap-plate80 0.05 0.1 plate_diameters = 80.0
+ti64-50um-0.1-gap-plate160 0.05 0.1 plate_diameters = 160.0"
 want=${1:-}
 while read -r label thickness speed key eq value; do
   [ -n "$want" ] && [ "$want" != "$label" ] && continue
