@@ -2,8 +2,9 @@
 # The numerical choices at a real powder's scale (docs/study/warmup-um.md "The numerical choices
 # at 35 µm"): the point of sweeps/ti64-machine.toml at 0.08 m/s, at its defaults (two seeds, for
 # the noise between seeds) and with the timestep halved (0.165 Rayleigh times; doubled, 0.66, is
-# past the 0.5 stability bound), the periodic depth halved and doubled (3, 12 D) and the block
-# halved and doubled (2.5, 10 D). Each case: label, then a `[scene]` key and its value (none: the
+# past the 0.5 stability bound), the periodic depth asked at 3, 12 and 20 D (the heap's insertion
+# region keeps it at about 10 D at this point: 3 D and the default 6 D run the same scene) and
+# the block halved and doubled (2.5, 10 D). Each case: label, then a `[scene]` key and its value (none: the
 # defaults). Resumable: a recorded case is skipped.
 #   bash docs/study/warmup-um/numerics.sh [SWEEP_BIN]
 set -euo pipefail
@@ -16,6 +17,7 @@ seed2 seed 2
 dt0.165 rayleigh_fraction 0.165
 depth3 depth_diameters 3.0
 depth12 depth_diameters 12.0
+depth20 depth_diameters 20.0
 block2.5 block_diameters 2.5
 block10 block_diameters 10.0"
 while read -r label key value; do
