@@ -4,7 +4,8 @@
 # the noise between seeds) and with the timestep halved (0.165 Rayleigh times; doubled, 0.66, is
 # past the 0.5 stability bound), the periodic depth asked at 3, 12 and 20 D (the heap's insertion
 # region keeps it at about 10 D at this point: 3 D and the default 6 D run the same scene) and
-# the block halved and doubled (2.5, 10 D). Each case: label, then a `[scene]` key and its value (none: the
+# the block halved and doubled (2.5, 10 D); then seeds 3–10, whether the SE the point reports
+# covers the scatter between seeds. Each case: label, then a `[scene]` key and its value (none: the
 # defaults). Resumable: a recorded case is skipped.
 #   bash docs/study/warmup-um/numerics.sh [SWEEP_BIN]
 set -euo pipefail
@@ -19,7 +20,15 @@ depth3 depth_diameters 3.0
 depth12 depth_diameters 12.0
 depth20 depth_diameters 20.0
 block2.5 block_diameters 2.5
-block10 block_diameters 10.0"
+block10 block_diameters 10.0
+seed3 seed 3
+seed4 seed 4
+seed5 seed 5
+seed6 seed 6
+seed7 seed 7
+seed8 seed 8
+seed9 seed 9
+seed10 seed 10"
 while read -r label key value; do
   [ -s "$out/$label.json" ] && { echo "$label: recorded"; continue; }
   toml=$(mktemp --suffix=.toml)
