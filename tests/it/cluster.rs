@@ -692,6 +692,42 @@ fn tree(pid: u32) -> Vec<i32> {
     out
 }
 
+/// Stop the process tree of `pid` at a moment it does not hold the sweep directory's lock; its
+/// pids. A lost node's locks lapse with its lease on the file server, while a stopped process
+/// here keeps its `flock`: frozen inside a claim's renewal (under the lock, a few ms in every
+/// lease/4 on a loaded machine), it would block every other process, which no lost node does.
+fn freeze_outside_the_lock(pid: u32, dir: &Path) -> Vec<i32> {
+    let lock = std::fs::OpenOptions::new().write(true).open(dir.join(".lock")).unwrap();
+    loop {
+        let frozen = tree(pid);
+        signal(&frozen, libc::SIGSTOP);
+        // A stop is delivered, not done, when kill(2) returns: look once every thread has stopped.
+        wait_until("node-a's threads to stop", Duration::from_secs(10), || {
+            frozen.iter().all(|&p| all_stopped(p))
+        });
+        // SAFETY: flock on a descriptor we own; a lock taken is given back at once.
+        let free =
+            unsafe { libc::flock(std::os::fd::AsRawFd::as_raw_fd(&lock), libc::LOCK_EX | libc::LOCK_NB) }
+                == 0;
+        if free {
+            unsafe { libc::flock(std::os::fd::AsRawFd::as_raw_fd(&lock), libc::LOCK_UN) };
+            return frozen;
+        }
+        signal(&frozen, libc::SIGCONT);
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// Whether every thread of `pid` is stopped (state `T`), or the process is gone.
+fn all_stopped(pid: i32) -> bool {
+    let Ok(tasks) = std::fs::read_dir(format!("/proc/{pid}/task")) else { return true };
+    tasks.flatten().all(|t| {
+        let stat = std::fs::read_to_string(t.path().join("stat")).unwrap_or_default();
+        // The state follows the parenthesised command name, which may itself hold spaces.
+        stat.rsplit_once(") ").is_none_or(|(_, rest)| rest.starts_with('T') || rest.starts_with('t'))
+    })
+}
+
 fn signal(targets: &[i32], sig: i32) {
     for &t in targets {
         // SAFETY: kill(2) on a pid or a process group (negative).
@@ -730,8 +766,7 @@ fn a_frozen_task_is_taken_over_after_its_lease_and_a_live_one_is_not() {
         c.renewed_at.is_some_and(|r| r - b_started > 6.0)
     });
     // Frozen: node-a and its LIGGGHTS stop, as on a lost node.
-    let frozen = tree(a.id());
-    signal(&frozen, libc::SIGSTOP);
+    let frozen = freeze_outside_the_lock(a.id(), &dir);
     let last = claim_of(&dir, &hash).and_then(|c| c.renewed_at).expect("a renewed claim");
     let mut took = 0.0;
     wait_until("node-b's takeover", Duration::from_secs(60), || {
