@@ -165,6 +165,37 @@ pub fn settled_se(settled: &[f64], window: usize) -> (f64, usize, f64) {
     (se * (settled.len() as f64 / window.max(1) as f64).sqrt(), b, r)
 }
 
+/// How many times too short an SE is when computed as if `n` values were independent while
+/// they follow an AR(1) process of lag-1 autocorrelation `rho`: the SE of their mean, or with
+/// `slope` of their least-squares slope against the index (as [`trend_z`] computes it). Exact in
+/// expectation: the estimator's variance over what the naive SE² reads from the residuals, which
+/// a positive correlation shrinks too. 1 at `rho` = 0; (1 + ρ)/(1 − ρ) squared for a long mean.
+pub fn ar1_se_factor(n: usize, rho: f64, slope: bool) -> f64 {
+    let fitted = if slope { 2 } else { 1 };
+    if n <= fitted || rho == 0.0 {
+        return 1.0;
+    }
+    let xm = (n - 1) as f64 / 2.0;
+    let t: Vec<f64> = (0..n).map(|i| i as f64 - xm).collect();
+    let sxx: f64 = t.iter().map(|v| v * v).sum();
+    let w: Vec<f64> = if slope { t.iter().map(|v| v / sxx).collect() } else { vec![1.0 / n as f64; n] };
+    // Quadratic forms in the correlation matrix ρ^|i−j|.
+    let form = |a: &[f64], b: &[f64]| -> f64 {
+        let mut s = 0.0;
+        for i in 0..n {
+            for j in 0..n {
+                s += a[i] * b[j] * rho.powi((i as i32 - j as i32).abs());
+            }
+        }
+        s
+    };
+    let ones = vec![1.0; n];
+    // The trace of the hat matrix times the correlation: what the fit takes out of the residuals.
+    let taken = form(&ones, &ones) / n as f64 + if slope { form(&t, &t) / sxx } else { 0.0 };
+    let naive = (n as f64 - taken) / (n - fitted) as f64 * w.iter().map(|v| v * v).sum::<f64>();
+    (form(&w, &w) / naive).sqrt()
+}
+
 /// OLS slope of y against its index, over its SE (0 when the residuals vanish).
 pub fn trend_z(y: &[f64]) -> f64 {
     let n = y.len() as f64;
@@ -319,6 +350,53 @@ pub fn compute(scene: &Scene, c: &HeldBlocks, blocks: &[Block], stop: &str, fram
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_ar1_factor_of_a_mean_is_the_closed_form_and_of_a_slope_what_noise_shows() {
+        // The mean: Var(ȳ) = σ²g/n with g = 1 + 2 Σ (1 − k/n) ρ^k, E[s²] = σ²(n − g)/(n − 1).
+        for (n, rho) in [(4, 0.3), (8, 0.65), (30, -0.4)] {
+            let g = 1.0
+                + 2.0 * (1..n).map(|k| (1.0 - k as f64 / n as f64) * f64::powi(rho, k as i32)).sum::<f64>();
+            let want = (g * (n - 1) as f64 / (n as f64 - g)).sqrt();
+            assert!((ar1_se_factor(n, rho, false) - want).abs() < 1e-12, "{n} {rho}");
+        }
+        // Long series: the familiar √((1 + ρ)/(1 − ρ)), for the mean and the slope alike.
+        let long = ((1.0 + 0.5) / (1.0 - 0.5) as f64).sqrt();
+        assert!((ar1_se_factor(2000, 0.5, false) / long - 1.0).abs() < 0.01);
+        assert!((ar1_se_factor(2000, 0.5, true) / long - 1.0).abs() < 0.01);
+        assert_eq!(ar1_se_factor(8, 0.0, true), 1.0);
+        // The slope over eight values of AR(1) noise: the RMS of the slope over its naive SE
+        // (what trend_z returns) against E[slope²]/E[naive SE²] (the factor); RMS of t with
+        // 6 dof is √(6/4) on independent noise, scaled by the factor here.
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let (n, rho, trials) = (8, 0.65_f64, 40_000);
+        let (mut slope2, mut se2) = (0.0, 0.0);
+        for _ in 0..trials {
+            let e: f64 = StandardNormal.sample(&mut rng);
+            let mut x = e / (1.0 - rho * rho).sqrt();
+            let y: Vec<f64> = (0..n)
+                .map(|_| {
+                    x = rho * x + {
+                        let e: f64 = StandardNormal.sample(&mut rng);
+                        e
+                    };
+                    x
+                })
+                .collect();
+            let z = trend_z(&y);
+            let xm = (n - 1) as f64 / 2.0;
+            let sxx: f64 = (0..n).map(|i| (i as f64 - xm).powi(2)).sum();
+            let slope = y.iter().enumerate().map(|(i, v)| (i as f64 - xm) * v).sum::<f64>() / sxx;
+            slope2 += slope * slope;
+            se2 += (slope / z).powi(2);
+        }
+        let seen = (slope2 / se2).sqrt();
+        let f = ar1_se_factor(n, rho, true);
+        assert!((seen / f - 1.0).abs() < 0.03, "seen {seen}, factor {f}");
+        assert!(f > 1.8, "{f}: a correlated wander reads as a slope of more SEs than noise");
+    }
 
     #[test]
     fn mser_drops_a_ramp_and_keeps_a_flat_series() {

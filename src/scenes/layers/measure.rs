@@ -28,13 +28,19 @@
 //! fused bed, the effective thickness's too, each series at half of it). A fixed z limit would
 //! not do: over the four passes a short steady layer may keep, |t| > 2.5 has a 13 % chance on
 //! a series with no trend.
+//!
+//! A fused bed's passes are not independent: each pass's depth is the last one's plus the drop
+//! less its deposit, so the depth wanders. Its SEs and its slope test allow for the lag-1
+//! autocorrelation measured over steady records ([`FUSED_DEPTH_LAG1`], [`FUSED_PACKING_LAG1`]);
+//! read as independent, a wander of eight passes at 0.65 passes the slope test's 2.5 % limit
+//! 14 % of the time, and its mean's SE is short by 2.3 times.
 
 use std::collections::HashSet;
 use std::path::Path;
 
-use super::{plan_of, Plan, MIN_STEADY_PASSES, TREND_FALSE_ALARM};
+use super::{plan_of, Plan, FUSED_DEPTH_LAG1, FUSED_PACKING_LAG1, MIN_STEADY_PASSES, TREND_FALSE_ALARM};
 use crate::engine::dump::read_dump;
-use crate::measure::steady::{mser, trend_z};
+use crate::measure::steady::{ar1_se_factor, mser, trend_z};
 use crate::outcome::layers::{LayerSeries, PassRecord};
 use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT, VX_LAYERS};
 use crate::scene::Scene;
@@ -213,16 +219,21 @@ pub fn steady_layer(plan: &Plan, passes: Vec<PassRecord>) -> LayerSeries {
     let (answer_laid, depth_laid) = (&answer[first..], &depth[first..]);
     let cut = first + if plan.fused { mser(answer_laid).max(mser(depth_laid)) } else { mser(answer_laid) };
     let kept = &passes[cut..];
-    let pick = |f: &dyn Fn(&PassRecord) -> f64| mean_se(&kept.iter().map(f).collect::<Vec<f64>>());
-    let (packing, packing_se) = pick(&|p| p.packing);
-    let (relative_density, relative_density_se) = pick(&|p| p.relative_density);
-    let (effective, effective_se) = pick(&|p| p.effective_thickness_m);
+    let (deposit_lag1, depth_lag1) = lag1(plan);
+    let pick = |f: &dyn Fn(&PassRecord) -> f64, lag1: f64| {
+        let (m, se) = mean_se(&kept.iter().map(f).collect::<Vec<f64>>());
+        (m, se * ar1_se_factor(kept.len(), lag1, false))
+    };
+    let (packing, packing_se) = pick(&|p| p.packing, deposit_lag1);
+    let (relative_density, relative_density_se) = pick(&|p| p.relative_density, deposit_lag1);
+    let (effective, effective_se) = pick(&|p| p.effective_thickness_m, depth_lag1);
     // A fused bed is steady once its depth has stopped growing too: its packing can settle
     // passes before the depth reaches the drop over it.
-    let limit = trend_limit(kept.len(), series_tested(plan));
-    let flat = |y: &[f64]| trend_z(y).abs() <= limit;
-    let steady =
-        kept.len() >= MIN_STEADY_PASSES && flat(&answer[cut..]) && (!plan.fused || flat(&depth[cut..]));
+    let series = series_tested(plan);
+    let flat = |y: &[f64], lag1: f64| trend_z(y).abs() <= trend_limit(y.len(), series, lag1);
+    let steady = kept.len() >= MIN_STEADY_PASSES
+        && flat(&answer[cut..], deposit_lag1)
+        && (!plan.fused || flat(&depth[cut..], depth_lag1));
     LayerSeries {
         bed: if plan.fused { "fused" } else { "loose" }.into(),
         layer_thickness_m: plan.layer_thickness,
@@ -234,17 +245,29 @@ pub fn steady_layer(plan: &Plan, passes: Vec<PassRecord>) -> LayerSeries {
         relative_density_se,
         effective_thickness_m: effective,
         effective_thickness_se_m: effective_se,
-        covered_fraction: pick(&|p| p.covered_fraction).0,
-        roughness_d: pick(&|p| p.roughness_d).0,
+        covered_fraction: pick(&|p| p.covered_fraction, 0.0).0,
+        roughness_d: pick(&|p| p.roughness_d, 0.0).0,
         passes,
     }
 }
 
 /// The |t| of a least-squares slope over `passes` passes beyond which one of `series` series
 /// shows a trend: the Student quantile with passes − 2 degrees of freedom at the two-sided level
-/// [`TREND_FALSE_ALARM`] / `series`. Infinite under three passes (no slope can be judged).
-pub fn trend_limit(passes: usize, series: usize) -> f64 {
+/// [`TREND_FALSE_ALARM`] / `series`, widened by what a lag-1 autocorrelation `lag1` of the
+/// passes adds to the slope's scatter. Infinite under three passes (no slope can be judged).
+pub fn trend_limit(passes: usize, series: usize, lag1: f64) -> f64 {
     student_quantile(passes as f64 - 2.0, TREND_FALSE_ALARM / series.max(1) as f64)
+        * ar1_se_factor(passes, lag1, true)
+}
+
+/// The lag-1 autocorrelation allowed for in a bed's passes: (its deposit's — packing and
+/// relative density —, its depth's). A loose bed's passes showed none.
+fn lag1(plan: &Plan) -> (f64, f64) {
+    if plan.fused {
+        (FUSED_PACKING_LAG1, FUSED_DEPTH_LAG1)
+    } else {
+        (0.0, 0.0)
+    }
 }
 
 /// The series a bed's steadiness tests: a loose bed its relative density, a fused one its
@@ -304,8 +327,22 @@ pub fn unsteady_why(plan: &Plan, series: &LayerSeries) -> String {
     if to + 1 - from < MIN_STEADY_PASSES {
         format!("fewer than {MIN_STEADY_PASSES} passes after the transient (MSER kept passes {from}–{to})")
     } else {
-        let limit = trend_limit(kept, series_tested(plan));
-        format!("a trend over passes {from}–{to}: a slope beyond {limit:.1} of its SE")
+        // The series that trends: the point's measure, or on a fused bed its depth.
+        let laid = &series.passes[from - 1..];
+        let answer: Vec<f64> =
+            laid.iter().map(|p| if plan.fused { p.packing } else { p.relative_density }).collect();
+        let depth: Vec<f64> = laid.iter().map(|p| p.effective_thickness_m).collect();
+        let (deposit_lag1, depth_lag1) = lag1(plan);
+        let (name, y, lag1) = if plan.fused && trend_z(&answer).abs() <= trend_limit(kept, 2, deposit_lag1) {
+            ("its depth under the blade", depth, depth_lag1)
+        } else {
+            (if plan.fused { "its packing" } else { "its relative density" }, answer, deposit_lag1)
+        };
+        let limit = trend_limit(kept, series_tested(plan), lag1);
+        format!(
+            "{name} trends over passes {from}–{to}: a slope of {:.1} SE, beyond {limit:.1}",
+            trend_z(&y).abs()
+        )
     }
 }
 

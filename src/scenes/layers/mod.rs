@@ -75,6 +75,12 @@ const RAMP_DIAMETERS: f64 = 2.0;
 /// Chance that a point whose passes have no trend at all is called unsteady: the slope test's
 /// two-sided level, shared between the series a bed checks (one loose, two fused).
 pub const TREND_FALSE_ALARM: f64 = 0.05;
+/// Lag-1 autocorrelation of a fused bed's depth under the blade from pass to pass, which its
+/// steady layer's SE and slope test allow for: the mean over twelve steady Ti-6Al-4V records at
+/// 30–80 µm (docs/study/layers.md "How correlated the passes are"), 0.5–0.9 within its SE.
+pub const FUSED_DEPTH_LAG1: f64 = 0.65;
+/// Lag-1 autocorrelation of a fused bed's packing and relative density, likewise (0–0.3).
+pub const FUSED_PACKING_LAG1: f64 = 0.15;
 /// Fewest passes in the steady layer for a mean and an SE.
 pub const MIN_STEADY_PASSES: usize = 3;
 /// Most passes a point may ask for (each is a whole spread; 30 is hours at 20–40 µm).

@@ -445,7 +445,7 @@ fn a_trendless_layer_is_called_unsteady_at_the_rule_s_stated_rate() {
     let trials = 20_000;
     for n in [4, 5, 8, 12] {
         for series in [1, 2] {
-            let limit = super::measure::trend_limit(n, series);
+            let limit = super::measure::trend_limit(n, series, 0.0);
             let alarms =
                 (0..trials).filter(|_| crate::measure::steady::trend_z(&noise(n)).abs() > limit).count();
             let rate = alarms as f64 / trials as f64;
@@ -454,8 +454,31 @@ fn a_trendless_layer_is_called_unsteady_at_the_rule_s_stated_rate() {
             assert!((rate - want).abs() < 0.006, "{n} passes, {series} series: {rate} against {want}");
         }
     }
-    // The whole rule on a fused bed of 14 passes (6 searched) with no trend in either series:
-    // MSER's cut and two tests together: 3 % here, where a fixed |z| of 2.5 called 12 % unsteady.
+    // The slope test of correlated passes, at the lag-1 autocorrelation a fused bed's depth has:
+    // its level holds where, read as independent, 14 % of eight passes would trend.
+    let mut ar1 = |n: usize, rho: f64| -> Vec<f64> {
+        let e: f64 = StandardNormal.sample(&mut rng);
+        let mut x = e / (1.0 - rho * rho).sqrt();
+        (0..n)
+            .map(|_| {
+                x = rho * x + {
+                    let e: f64 = StandardNormal.sample(&mut rng);
+                    e
+                };
+                x
+            })
+            .collect()
+    };
+    for n in [4, 8, 12] {
+        let limit = super::measure::trend_limit(n, 1, FUSED_DEPTH_LAG1);
+        let alarms = (0..trials)
+            .filter(|_| crate::measure::steady::trend_z(&ar1(n, FUSED_DEPTH_LAG1)).abs() > limit)
+            .count();
+        let rate = alarms as f64 / trials as f64;
+        assert!((rate - TREND_FALSE_ALARM).abs() < 0.01, "{n} correlated passes: {rate}");
+    }
+    // The whole rule on a fused bed of 14 passes (6 searched) with no trend in either series,
+    // each as correlated as the rule allows for: MSER's cut and two tests together (2.6 % here).
     let plan = plan_of(&scene(&SceneSettings {
         bed: "fused".into(),
         layers: 14,
@@ -465,7 +488,7 @@ fn a_trendless_layer_is_called_unsteady_at_the_rule_s_stated_rate() {
     let points = 4_000;
     let unsteady = (0..points)
         .filter(|_| {
-            let (p, d) = (noise(14), noise(14));
+            let (p, d) = (ar1(14, FUSED_PACKING_LAG1), ar1(14, FUSED_DEPTH_LAG1));
             let recs = (0..14)
                 .map(|i| crate::outcome::layers::PassRecord {
                     search: i < 6,
