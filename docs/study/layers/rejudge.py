@@ -71,20 +71,21 @@ for f in sys.argv[1:]:
     lim = lambda rho: stats.t.ppf(1 - 0.05 / series / 2, n - 2) * factor(n, rho, True) if n >= 3 else np.inf
     za, zd = trend_z(ans[cut:]), trend_z(dep[cut:])
     steady = n >= 3 and abs(za) <= lim(a_lag) and (not fused or abs(zd) <= lim(d_lag))
+    independent = n >= 3 and abs(za) <= lim(0) and (not fused or abs(zd) <= lim(0))
     se = lambda y, rho: y.std(ddof=1) / np.sqrt(len(y)) * factor(len(y), rho, False)
     pack = np.array([p["packing"] for p in P])[cut:]
-    rows.append((os.path.basename(f)[:-5], L["bed"], cut + 1, L["steady"], steady,
+    rows.append((os.path.basename(f)[:-5], L["bed"], cut + 1, L["steady"], independent, steady,
                  pack.mean(), se(pack, a_lag), dep[cut:].mean(), se(dep[cut:], d_lag), za, lim(a_lag), zd, lim(d_lag)))
     if fused and L["steady"] and len(P) >= 14:
         pooled["packing"].append(r1(np.array([p["packing"] for p in P][6:14])))
         pooled["depth"].append(r1(dep[6:14]))
 
-print("| record | bed | steady from | steady (as run) | steady (current rule) | packing | depth, µm | packing slope / limit | depth slope / limit |")
-print("|---|---|---|---|---|---|---|---|---|")
+print("| record | bed | steady from | steady: as run | read as independent | the current rule | packing | depth, µm | packing slope / limit | depth slope / limit |")
+print("|---|---|---|---|---|---|---|---|---|---|")
 for r in rows:
-    name, bed, frm, was, now, pm, ps, dm, ds, za, la, zd, ld = r
+    name, bed, frm, was, ind, now, pm, ps, dm, ds, za, la, zd, ld = r
     dz = f"{abs(zd):.1f} / {ld:.1f}" if bed == "fused" else "—"
-    print(f"| {name} | {bed} | {frm} | {'yes' if was else 'no'} | {'yes' if now else 'no'} | {pm:.3f} ± {ps:.3f} | {dm:.1f} ± {ds:.1f} | {abs(za):.1f} / {la:.1f} | {dz} |")
+    print(f"| {name} | {bed} | {frm} | {'yes' if was else 'no'} | {'yes' if ind else 'no'} | {'yes' if now else 'no'} | {pm:.3f} ± {ps:.3f} | {dm:.1f} ± {ds:.1f} | {abs(za):.1f} / {la:.1f} | {dz} |")
 
 # Pooled lag-1 autocorrelation of the steady fused records' passes 7-14, and the AR(1)
 # correlation whose eight-pass estimate has that mean (a short series' estimate is biased low).

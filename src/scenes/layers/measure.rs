@@ -32,8 +32,8 @@
 //! A fused bed's passes are not independent: each pass's depth is the last one's plus the drop
 //! less its deposit, so the depth wanders. Its SEs and its slope test allow for the lag-1
 //! autocorrelation measured over steady records ([`FUSED_DEPTH_LAG1`], [`FUSED_PACKING_LAG1`]);
-//! read as independent, a wander of eight passes at 0.65 passes the slope test's 2.5 % limit
-//! 14 % of the time, and its mean's SE is short by 2.3 times.
+//! read as independent, a wander of eight passes at 0.65 exceeds the slope test's 2.5 % limit
+//! 18 % of the time, and its mean's SE is short by 2.3 times.
 
 use std::collections::HashSet;
 use std::path::Path;
