@@ -181,13 +181,10 @@ pub fn ar1_se_factor(n: usize, rho: f64, slope: bool) -> f64 {
     let w: Vec<f64> = if slope { t.iter().map(|v| v / sxx).collect() } else { vec![1.0 / n as f64; n] };
     // Quadratic forms in the correlation matrix ρ^|i−j|.
     let form = |a: &[f64], b: &[f64]| -> f64 {
-        let mut s = 0.0;
-        for i in 0..n {
-            for j in 0..n {
-                s += a[i] * b[j] * rho.powi((i as i32 - j as i32).abs());
-            }
-        }
-        s
+        let row = |i: usize, ai: f64| -> f64 {
+            b.iter().enumerate().map(|(j, bj)| ai * bj * rho.powi((i as i32 - j as i32).abs())).sum()
+        };
+        a.iter().enumerate().map(|(i, &ai)| row(i, ai)).sum()
     };
     let ones = vec![1.0; n];
     // The trace of the hat matrix times the correlation: what the fit takes out of the residuals.
