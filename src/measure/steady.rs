@@ -358,7 +358,7 @@ mod tests {
             assert!((ar1_se_factor(n, rho, false) - want).abs() < 1e-12, "{n} {rho}");
         }
         // Long series: the familiar √((1 + ρ)/(1 − ρ)), for the mean and the slope alike.
-        let long = ((1.0 + 0.5) / (1.0 - 0.5) as f64).sqrt();
+        let long = f64::sqrt((1.0 + 0.5) / (1.0 - 0.5));
         assert!((ar1_se_factor(2000, 0.5, false) / long - 1.0).abs() < 0.01);
         assert!((ar1_se_factor(2000, 0.5, true) / long - 1.0).abs() < 0.01);
         assert_eq!(ar1_se_factor(8, 0.0, true), 1.0);
