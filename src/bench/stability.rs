@@ -123,6 +123,10 @@ pub struct StabilityPlan {
     pub fractions: Vec<f64>,
     pub moduli: Vec<f64>,
     pub seeds: u64,
+    /// Whether the timestep ladder runs (`--ladder`).
+    pub timestep_ladder: bool,
+    /// Whether the stiffness ladder runs.
+    pub stiffness_ladder: bool,
     pub jobs: usize,
     pub out: PathBuf,
 }
@@ -162,16 +166,23 @@ fn level_sweep(sweep: &Sweep, corner: &[f64], level: Level) -> (Sweep, Vec<f64>)
     (sweep, values)
 }
 
-fn levels(ctx: &PointContext, plan: &StabilityPlan) -> [(&'static str, Vec<Level>); 2] {
+/// The ladders the plan runs, each with its levels in order.
+fn levels(ctx: &PointContext, plan: &StabilityPlan) -> Vec<(&'static str, Vec<Level>)> {
     let default_fraction = ctx.sweep.file.scene.rayleigh_fraction;
     let e0 = plan.moduli[0];
-    [
-        ("timestep", plan.fractions.iter().map(|&f| Level { fraction: f, youngs_mpa: e0 }).collect()),
-        (
-            "stiffness",
-            plan.moduli.iter().map(|&e| Level { fraction: default_fraction, youngs_mpa: e }).collect(),
-        ),
-    ]
+    let mut out = Vec::new();
+    if plan.timestep_ladder {
+        out.push((
+            "timestep",
+            plan.fractions.iter().map(|&f| Level { fraction: f, youngs_mpa: e0 }).collect(),
+        ));
+    }
+    if plan.stiffness_ladder {
+        let levels =
+            plan.moduli.iter().map(|&e| Level { fraction: default_fraction, youngs_mpa: e }).collect();
+        out.push(("stiffness", levels));
+    }
+    out
 }
 
 /// Every level's scene and deck build (bad input is found before anything runs).
@@ -298,7 +309,7 @@ fn judge(ladder: &'static str, level: Level, runs: Vec<Run>, base: Option<(f64, 
     }
 }
 
-/// Run both ladders, each up to its first failing level. `progress` is told of each level.
+/// Run the plan's ladders, each up to its first failing level. `progress` is told of each level.
 pub fn run(
     ctx: &PointContext,
     plan: &StabilityPlan,

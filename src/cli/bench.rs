@@ -212,6 +212,14 @@ pub(super) struct BenchContactArgs {
     out: PathBuf,
 }
 
+/// The ladders `sweep bench stability` runs.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub(super) enum LadderChoice {
+    Both,
+    Timestep,
+    Stiffness,
+}
+
 #[derive(Args)]
 pub(super) struct StabilityArgs {
     sweep: PathBuf,
@@ -225,6 +233,9 @@ pub(super) struct StabilityArgs {
     /// Pile seeds per level (the sweep's scene.seed and the next ones).
     #[arg(long, default_value_t = 3)]
     seeds: u64,
+    /// Which ladder to run: both, or the timestep or the stiffness ladder alone.
+    #[arg(long, value_enum, default_value = "both")]
+    ladder: LadderChoice,
     /// Concurrent LIGGGHTS runs (default: the machine's cores).
     #[arg(long)]
     jobs: Option<usize>,
@@ -346,7 +357,16 @@ pub(super) fn bench_stability(a: StabilityArgs) -> Result<(), Error> {
     demsweep::sys::process::install_interrupt_handler();
     let ctx = PointContext::new(sweep)?;
     // Every level's scene must build (the bound aside) before anything is written.
-    let plan = stability::StabilityPlan { corner, fractions: a.fractions, moduli, seeds: a.seeds, jobs, out };
+    let plan = stability::StabilityPlan {
+        corner,
+        fractions: a.fractions,
+        moduli,
+        seeds: a.seeds,
+        timestep_ladder: a.ladder != LadderChoice::Stiffness,
+        stiffness_ladder: a.ladder != LadderChoice::Timestep,
+        jobs,
+        out,
+    };
     stability::check(&ctx, &plan)?;
     let heading = stability::describe_corner(&ctx.sweep, &plan.corner);
     std::fs::create_dir_all(&plan.out)
@@ -378,6 +398,7 @@ pub(super) fn bench_stability(a: StabilityArgs) -> Result<(), Error> {
     let default = ctx.sweep.file.scene.rayleigh_fraction;
     let (safe, edge) = stability::edge(&results, "timestep");
     match (safe, edge) {
+        _ if !plan.timestep_ladder => {}
         (Some(s), e) => println!(
             "timestep: safe up to {} × T_R ({:.2}× the default {default}); edge {}",
             s.level.fraction,
@@ -394,6 +415,7 @@ pub(super) fn bench_stability(a: StabilityArgs) -> Result<(), Error> {
     }
     let (safe, edge) = stability::edge(&results, "stiffness");
     match (safe, edge) {
+        _ if !plan.stiffness_ladder => {}
         (Some(s), e) => println!(
             "stiffness: safe down to {} MPa at {default} × T_R; edge {}",
             s.level.youngs_mpa,

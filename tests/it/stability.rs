@@ -84,7 +84,8 @@ fn bad_bench_input_is_one_line_and_writes_nothing() {
     assert!(!out.exists());
 }
 
-/// 1.5× the default timestep (the default itself runs in every other LIGGGHTS test) at the
+/// 1.5× the default timestep (the default itself runs in every other LIGGGHTS test, so the
+/// timestep ladder runs alone) at the
 /// harshest corner (D 1 mm, gap 5 mm, v 1.6 m/s, μ 0.3), two pile seeds, on a window of 20 D starting 15 D past the gate (about half the
 /// default run's CPU): every run must end cleanly — no lost atoms, no exploding energy, no
 /// LIGGGHTS error, a pile that comes to rest — with a positive MFR. The MFR drift is not judged
@@ -116,6 +117,8 @@ fn the_default_timestep_has_a_margin_of_1_5_below_the_edge_at_the_harshest_corne
         "21",
         "--seeds",
         "2",
+        "--ladder",
+        "timestep",
         "--jobs",
         "2",
         "--out",
@@ -127,6 +130,9 @@ fn the_default_timestep_has_a_margin_of_1_5_below_the_edge_at_the_harshest_corne
     let csv = std::fs::read_to_string(out.join("stability.csv")).unwrap();
     let timestep: Vec<&str> = csv.lines().filter(|l| l.starts_with("timestep,")).collect();
     assert_eq!(timestep.len(), 1, "{csv}");
+    // The timestep ladder alone: the default's level runs in every other LIGGGHTS test.
+    assert!(!csv.lines().any(|l| l.starts_with("stiffness,")), "{csv}");
+    assert!(!stdout.contains("stiffness:"), "{stdout}");
     for row in timestep {
         let cells: Vec<&str> = row.split(',').collect();
         // ladder,rayleigh_fraction,youngs_modulus_mpa,timestep_s,runs,failed,mfr_mean,...
