@@ -20,49 +20,73 @@ use crate::support::{
     self, attempt_counts, failed_sweep, output, p, repo, results, stderr, sweep, sweep_bin, text, wait_until,
 };
 
-/// Three points of the quick scene (D = 1.5 mm, gap and blade speed swept).
+/// Three points of the quick scene (D = 1.5 mm, gap and blade speed swept). Cluster runs are
+/// compared digit for digit with the local run: every point from rest, since a warm start's
+/// digits depend on which neighbour had finished first (tests/it/warm.rs).
 const SWEEP: &str = r#"name = "cluster-test"
 [parameters]
 gap         = { lo = 2.0, hi = 3.0, unit = "mm" }
 blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
 diameter    = { value = 1.5, unit = "mm" }
-# The lease test watches a claim for twice its lease while the run is still going: the knobs of
-# the previous defaults keep a run ~2× longer than the fast preset's (BENCHMARKS.md "Fidelity").
-# Cluster runs are compared digit for digit with the local run: every point from rest, since a
-# warm start's digits depend on which neighbour had finished first (tests/it/warm.rs).
+[scene]
+warm_start = false
+"#;
+const POINTS: usize = 3;
+
+/// The same scene, one point, for the lease test, which watches a claim for twice its lease
+/// while the run is still going: the knobs of the previous defaults keep a run ~2× longer than
+/// the fast preset's (BENCHMARKS.md "Fidelity").
+const LEASE_SWEEP: &str = r#"name = "cluster-lease"
+[parameters]
+gap         = { lo = 2.0, hi = 3.0, unit = "mm" }
+blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
+diameter    = { value = 1.5, unit = "mm" }
 [scene]
 rayleigh_fraction = 0.2
 mesh_cells_across = 6
 skin_diameters = 0.25
 warm_start = false
 "#;
-const POINTS: usize = 3;
+
+/// The local run of `sweep`'s first `points` points, in a kept temporary directory.
+fn local_run(sweep: &str, points: usize) -> PathBuf {
+    let root = tempfile::Builder::new().prefix("cluster-ref-").tempdir().unwrap().keep();
+    std::fs::write(root.join("s.toml"), sweep).unwrap();
+    let n = points.to_string();
+    let o = output(
+        support::sweep_bin()
+            .args(["lds", "s.toml", "--step", &n, "--max", &n, "--jobs", "2", "-q", "--out", "local"])
+            .current_dir(&root),
+    );
+    assert!(matches!(o.status.code(), Some(0 | 1)), "local run: {}", text(&o.stderr));
+    root.join("local")
+}
 
 /// The local run every cluster run is compared with, made once per test binary.
 fn reference() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
-    DIR.get_or_init(|| {
-        let root = tempfile::Builder::new().prefix("cluster-ref-").tempdir().unwrap().keep();
-        std::fs::write(root.join("s.toml"), SWEEP).unwrap();
-        let dir = root.join("local");
-        let o = output(
-            support::sweep_bin()
-                .args(["lds", "s.toml", "--step", "3", "--max", "3", "--jobs", "2", "-q", "--out", "local"])
-                .current_dir(&root),
-        );
-        assert!(matches!(o.status.code(), Some(0 | 1)), "local run: {}", text(&o.stderr));
-        dir
-    })
+    DIR.get_or_init(|| local_run(SWEEP, POINTS))
+}
+
+/// The lease test's local run (one point of [`LEASE_SWEEP`]).
+fn lease_reference() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| local_run(LEASE_SWEEP, 1))
 }
 
 /// A sweep directory of the reference's sweep with nothing run: what a user takes to a cluster
 /// (its manifest and resolved sweep file).
 fn fresh_copy(name: &str) -> (tempfile::TempDir, PathBuf) {
+    fresh_copy_of(reference(), name)
+}
+
+/// A sweep directory of the sweep of the local run `local`, with nothing run.
+fn fresh_copy_of(local: &Path, name: &str) -> (tempfile::TempDir, PathBuf) {
     let root = tempfile::Builder::new().prefix(name).tempdir().unwrap();
     let dir = root.path().join("sweep");
     std::fs::create_dir_all(dir.join("runs")).unwrap();
     for f in ["manifest.json", "sweep.toml"] {
-        std::fs::copy(reference().join(f), dir.join(f)).unwrap();
+        std::fs::copy(local.join(f), dir.join(f)).unwrap();
     }
     (root, dir)
 }
@@ -740,8 +764,8 @@ fn signal(targets: &[i32], sig: i32) {
 /// lease and completes it with the local run's MFR.
 #[test]
 fn a_frozen_task_is_taken_over_after_its_lease_and_a_live_one_is_not() {
-    let (_root, dir) = fresh_copy("cluster-lease-");
-    let want = results(reference());
+    let (_root, dir) = fresh_copy_of(lease_reference(), "cluster-lease-");
+    let want = results(lease_reference());
     let k = want.iter().position(|r| r.1 == "done").expect("a successful point");
     let hash = want[k].0.clone();
     let task = k.to_string();
