@@ -20,9 +20,8 @@ use crate::support::{
     self, attempt_counts, failed_sweep, output, p, repo, results, stderr, sweep, sweep_bin, text, wait_until,
 };
 
-/// Three points of the quick scene (D = 1.5 mm, gap and blade speed swept). Cluster runs are
-/// compared digit for digit with the local run: every point from rest, since a warm start's
-/// digits depend on which neighbour had finished first (tests/it/warm.rs).
+/// Three points of the quick scene (D = 1.5 mm, gap and blade speed swept), each from rest: the
+/// points of [`support::quick_reference`], whose local run the cluster runs are compared with.
 const SWEEP: &str = r#"name = "cluster-test"
 [parameters]
 gap         = { lo = 2.0, hi = 3.0, unit = "mm" }
@@ -62,10 +61,10 @@ fn local_run(sweep: &str, points: usize) -> PathBuf {
     root.join("local")
 }
 
-/// The local run every cluster run is compared with, made once per test binary.
+/// The local run every cluster run is compared with: [`SWEEP`]'s points, made once per test
+/// binary and shared with the resume tests.
 fn reference() -> &'static Path {
-    static DIR: OnceLock<PathBuf> = OnceLock::new();
-    DIR.get_or_init(|| local_run(SWEEP, POINTS))
+    support::quick_reference()
 }
 
 /// The lease test's local run (one point of [`LEASE_SWEEP`]).

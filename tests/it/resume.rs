@@ -97,23 +97,13 @@ fn interrupt(sweep: &Path, out: &Path, signal: i32) -> (std::process::ExitStatus
 fn killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results() {
     support::require_liggghts!("killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results");
     let tmp = tempfile::tempdir().unwrap();
-    // Compared digit for digit with the uninterrupted run: every point from rest, since a warm
-    // start's digits depend on which neighbour had finished first (tests/it/warm.rs).
+    // Compared digit for digit with the uninterrupted run of the same three points, each from
+    // rest (support::quick_reference, shared with the cluster tests).
     let sweep = support::write_file(
         &tmp.path().join("kr.toml"),
         &support::quick_scene("kr", "[scene]\nwarm_start = false\n"),
     );
-    let lds = |out: &Path| {
-        let mut c = support::sweep_bin();
-        c.args(["lds", sweep.to_str().unwrap(), "--max", "3", "--step", "3", "--jobs", "2", "-q", "--out"])
-            .arg(out);
-        c
-    };
-
-    let reference = tmp.path().join("reference");
-    let o = output(&mut lds(&reference));
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let want = results(&reference);
+    let want = results(support::quick_reference());
     assert_eq!(want.len(), 3);
     assert!(want.iter().all(|r| r.1 == "done"), "{want:?}");
 

@@ -153,6 +153,25 @@ diameter    = {{ value = 1.5, unit = "mm" }}
     )
 }
 
+/// The quick scene's first three LDS points, each from rest, run once per test binary: the
+/// local run that resumed, interrupted and cluster runs of the same points are compared with,
+/// digit for digit (from rest: a warm start's digits depend on which neighbour had finished
+/// first, tests/it/warm.rs). The sweep's name does not enter a point's hash.
+pub fn quick_reference() -> &'static Path {
+    static DIR: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+    DIR.get_or_init(|| {
+        let root = tempfile::Builder::new().prefix("quick-reference-").tempdir().unwrap().keep();
+        write_file(&root.join("s.toml"), &quick_scene("reference", "[scene]\nwarm_start = false\n"));
+        let o = output(
+            sweep_bin()
+                .args(["lds", "s.toml", "--step", "3", "--max", "3", "--jobs", "2", "-q", "--out", "local"])
+                .current_dir(&root),
+        );
+        assert!(matches!(o.status.code(), Some(0 | 1)), "the reference run: {}", text(&o.stderr));
+        root.join("local")
+    })
+}
+
 /// The quick scene in `dir/NAME.toml`, its deck from `template` when given, `extra_run` in `[run]`.
 pub fn quick_sweep(dir: &Path, name: &str, extra_run: &str, template: Option<&Path>) -> PathBuf {
     let template = template.map_or(String::new(), |t| format!("template = {:?}\n", t));
