@@ -5,7 +5,9 @@
 # past the 0.5 stability bound), the periodic depth asked at 3, 12 and 20 D (the heap's insertion
 # region keeps it at about 10 D at this point: 3 D and the default 6 D run the same scene) and
 # the block halved and doubled (2.5, 10 D); then seeds 3–10, whether the SE the point reports
-# covers the scatter between seeds. Each case: label, then a `[scene]` key and its value (none: the
+# covers the scatter between seeds; and the window's cap halved (300 D: the least window, 8
+# blocks, and the cap doubled cannot bind where the default's window took 32 blocks and stopped
+# at its SE target). Each case: label, then a `[scene]` key and its value (none: the
 # defaults). Resumable: a recorded case is skipped.
 #   bash docs/study/warmup-um/numerics.sh [SWEEP_BIN]
 set -euo pipefail
@@ -28,7 +30,8 @@ seed6 seed 6
 seed7 seed 7
 seed8 seed 8
 seed9 seed 9
-seed10 seed 10"
+seed10 seed 10
+cap300 window_cap_diameters 300.0"
 while read -r label key value; do
   [ -s "$out/$label.json" ] && { echo "$label: recorded"; continue; }
   toml=$(mktemp --suffix=.toml)
