@@ -367,12 +367,18 @@ fn a_fused_bed_whose_depth_still_grows_is_not_steady_though_its_packing_is() {
         (0..8)
             .map(|i| crate::outcome::layers::PassRecord {
                 effective_thickness_m: if grow { depth[i] } else { depth[i].min(203.0) } * 1e-6,
+                // Each pass keeps the drop: the bed keeps pace, only its depth trends.
+                relative_density: 1.0,
                 ..record(i + 1, packing[i])
             })
             .collect::<Vec<_>>()
     };
-    assert!(!steady_layer(&plan, passes(true)).steady);
+    let growing = steady_layer(&plan, passes(true));
+    assert!(!growing.steady);
     assert!(steady_layer(&plan, passes(false)).steady);
+    // The reason names the series that trends: the depth, not the settled packing.
+    let why = super::measure::unsteady_why(&plan, &growing);
+    assert!(why.starts_with("its depth under the blade trends over passes"), "{why}");
 }
 
 #[test]
