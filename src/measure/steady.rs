@@ -169,7 +169,7 @@ pub fn settled_se(settled: &[f64], window: usize) -> (f64, usize, f64) {
 /// they follow an AR(1) process of lag-1 autocorrelation `rho`: the SE of their mean, or with
 /// `slope` of their least-squares slope against the index (as [`trend_z`] computes it). Exact in
 /// expectation: the estimator's variance over what the naive SE² reads from the residuals, which
-/// a positive correlation shrinks too. 1 at `rho` = 0; (1 + ρ)/(1 − ρ) squared for a long mean.
+/// a positive correlation shrinks too. 1 at `rho` = 0; √((1 + ρ)/(1 − ρ)) for a long series.
 pub fn ar1_se_factor(n: usize, rho: f64, slope: bool) -> f64 {
     let fitted = if slope { 2 } else { 1 };
     if n <= fitted || rho == 0.0 {

@@ -47,20 +47,6 @@ skin_diameters = 0.25
 warm_start = false
 "#;
 
-/// The local run of `sweep`'s first `points` points, in a kept temporary directory.
-fn local_run(sweep: &str, points: usize) -> PathBuf {
-    let root = tempfile::Builder::new().prefix("cluster-ref-").tempdir().unwrap().keep();
-    std::fs::write(root.join("s.toml"), sweep).unwrap();
-    let n = points.to_string();
-    let o = output(
-        support::sweep_bin()
-            .args(["lds", "s.toml", "--step", &n, "--max", &n, "--jobs", "2", "-q", "--out", "local"])
-            .current_dir(&root),
-    );
-    assert!(matches!(o.status.code(), Some(0 | 1)), "local run: {}", text(&o.stderr));
-    root.join("local")
-}
-
 /// The local run every cluster run is compared with: [`SWEEP`]'s points, made once per test
 /// binary and shared with the resume tests.
 fn reference() -> &'static Path {
@@ -70,7 +56,7 @@ fn reference() -> &'static Path {
 /// The lease test's local run (one point of [`LEASE_SWEEP`]).
 fn lease_reference() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
-    DIR.get_or_init(|| local_run(LEASE_SWEEP, 1))
+    DIR.get_or_init(|| support::local_lds(LEASE_SWEEP, 1))
 }
 
 /// A sweep directory of the reference's sweep with nothing run: what a user takes to a cluster

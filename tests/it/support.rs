@@ -153,23 +153,28 @@ diameter    = {{ value = 1.5, unit = "mm" }}
     )
 }
 
+/// The local run of the first `points` LDS points of the sweep file text `sweep`, in a kept
+/// temporary directory (`<root>/local`): what runs elsewhere are compared with.
+pub fn local_lds(sweep: &str, points: usize) -> PathBuf {
+    let root = tempfile::Builder::new().prefix("local-reference-").tempdir().unwrap().keep();
+    write_file(&root.join("s.toml"), sweep);
+    let n = points.to_string();
+    let o = output(
+        sweep_bin()
+            .args(["lds", "s.toml", "--step", &n, "--max", &n, "--jobs", "2", "-q", "--out", "local"])
+            .current_dir(&root),
+    );
+    assert!(matches!(o.status.code(), Some(0 | 1)), "the local run: {}", text(&o.stderr));
+    root.join("local")
+}
+
 /// The quick scene's first three LDS points, each from rest, run once per test binary: the
 /// local run that resumed, interrupted and cluster runs of the same points are compared with,
 /// digit for digit (from rest: a warm start's digits depend on which neighbour had finished
 /// first, tests/it/warm.rs). The sweep's name does not enter a point's hash.
 pub fn quick_reference() -> &'static Path {
     static DIR: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
-    DIR.get_or_init(|| {
-        let root = tempfile::Builder::new().prefix("quick-reference-").tempdir().unwrap().keep();
-        write_file(&root.join("s.toml"), &quick_scene("reference", "[scene]\nwarm_start = false\n"));
-        let o = output(
-            sweep_bin()
-                .args(["lds", "s.toml", "--step", "3", "--max", "3", "--jobs", "2", "-q", "--out", "local"])
-                .current_dir(&root),
-        );
-        assert!(matches!(o.status.code(), Some(0 | 1)), "the reference run: {}", text(&o.stderr));
-        root.join("local")
-    })
+    DIR.get_or_init(|| local_lds(&quick_scene("reference", "[scene]\nwarm_start = false\n"), 3))
 }
 
 /// The quick scene in `dir/NAME.toml`, its deck from `template` when given, `extra_run` in `[run]`.

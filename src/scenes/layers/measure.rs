@@ -212,9 +212,7 @@ pub fn passes(
 
 /// The steady layer over `passes`: a fused bed's search passes are never part of it.
 pub fn steady_layer(plan: &Plan, passes: Vec<PassRecord>) -> LayerSeries {
-    let answer: Vec<f64> =
-        passes.iter().map(|p| if plan.fused { p.packing } else { p.relative_density }).collect();
-    let depth: Vec<f64> = passes.iter().map(|p| p.effective_thickness_m).collect();
+    let (answer, depth) = tested_series(plan, &passes);
     let first = plan.search_passes.min(passes.len());
     let (answer_laid, depth_laid) = (&answer[first..], &depth[first..]);
     let cut = first + if plan.fused { mser(answer_laid).max(mser(depth_laid)) } else { mser(answer_laid) };
@@ -258,6 +256,13 @@ pub fn steady_layer(plan: &Plan, passes: Vec<PassRecord>) -> LayerSeries {
 pub fn trend_limit(passes: usize, series: usize, lag1: f64) -> f64 {
     student_quantile(passes as f64 - 2.0, TREND_FALSE_ALARM / series.max(1) as f64)
         * ar1_se_factor(passes, lag1, true)
+}
+
+/// The two series of `passes` the steady rule reads: the point's measure (relative density on a
+/// loose bed, packing on a fused one) and the depth under the blade (a fused bed's second test).
+fn tested_series(plan: &Plan, passes: &[PassRecord]) -> (Vec<f64>, Vec<f64>) {
+    let answer = passes.iter().map(|p| if plan.fused { p.packing } else { p.relative_density }).collect();
+    (answer, passes.iter().map(|p| p.effective_thickness_m).collect())
 }
 
 /// The lag-1 autocorrelation allowed for in a bed's passes: (its deposit's — packing and
@@ -328,17 +333,16 @@ pub fn unsteady_why(plan: &Plan, series: &LayerSeries) -> String {
         format!("fewer than {MIN_STEADY_PASSES} passes after the transient (MSER kept passes {from}–{to})")
     } else {
         // The series that trends: the point's measure, or on a fused bed its depth.
-        let laid = &series.passes[from - 1..];
-        let answer: Vec<f64> =
-            laid.iter().map(|p| if plan.fused { p.packing } else { p.relative_density }).collect();
-        let depth: Vec<f64> = laid.iter().map(|p| p.effective_thickness_m).collect();
+        let (answer, depth) = tested_series(plan, &series.passes[from - 1..]);
         let (deposit_lag1, depth_lag1) = lag1(plan);
-        let (name, y, lag1) = if plan.fused && trend_z(&answer).abs() <= trend_limit(kept, 2, deposit_lag1) {
-            ("its depth under the blade", depth, depth_lag1)
-        } else {
-            (if plan.fused { "its packing" } else { "its relative density" }, answer, deposit_lag1)
-        };
-        let limit = trend_limit(kept, series_tested(plan), lag1);
+        let series = series_tested(plan);
+        let (name, y, lag1) =
+            if plan.fused && trend_z(&answer).abs() <= trend_limit(kept, series, deposit_lag1) {
+                ("its depth under the blade", depth, depth_lag1)
+            } else {
+                (if plan.fused { "its packing" } else { "its relative density" }, answer, deposit_lag1)
+            };
+        let limit = trend_limit(kept, series, lag1);
         format!(
             "{name} trends over passes {from}–{to}: a slope of {:.1} SE, beyond {limit:.1}",
             trend_z(&y).abs()
