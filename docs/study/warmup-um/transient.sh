@@ -15,7 +15,8 @@ budget=${BUDGET_S:-3600}
 mkdir -p "$out"
 # In the order run; the budget stops the list where it is spent.
 # name | D (mm, or "ti64": sieved 15–45 µm, D10/D50/D90 20/31/42 µm) | gap mm | heap mm | v m/s |
-# surface energy J/m² | friction | rolling friction | simulated time s
+# surface energy J/m² | friction | rolling friction | simulated time s | substrate (rough unless
+# set: "powder" is a frozen bed of the powder itself)
 # 35 µm: the issue's point (friction 0.3, restitution 0.4, ρ 4430, E 5 MPa); ti64: the powder and
 # the point of sweeps/ti64-machine.toml (50 µm layer, 0.4 mm heap, μ 0.5, μ_r 0.1).
 table="
@@ -29,6 +30,7 @@ D35-v0.2-h1-g0         0.035 0.1  1.0 0.2  0     0.3 0.1  0.10
 ti64-v0.2-h0.4-g1e-4   ti64  0.05 0.4 0.2  1e-4  0.5 0.1  0.10
 ti64-v0.02-h0.4-g1e-4  ti64  0.05 0.4 0.02 1e-4  0.5 0.1  0.16
 D35-v0.08-h1-g1e-4     0.035 0.1  1.0 0.08 1e-4  0.3 0.1  0.12
+ti64-v0.08-h0.4-g1e-4-bed ti64 0.05 0.4 0.08 1e-4 0.5 0.1  0.10 powder
 "
 spent() {
   python3 - "$out" <<'PY'
@@ -41,7 +43,7 @@ for f in glob.glob(sys.argv[1] + "/*/result.json") + glob.glob(sys.argv[1] + "/*
 print(int(t))
 PY
 }
-echo "$table" | while read -r name d gap heap v gamma mu mur time_s; do
+echo "$table" | while read -r name d gap heap v gamma mu mur time_s substrate; do
   [ -n "$name" ] || continue
   if [ -n "${CASES:-}" ] && ! [[ " $CASES " == *" $name "* ]]; then continue; fi
   case_dir=$out/$name
@@ -80,6 +82,7 @@ youngs_modulus = { value = 5, unit = "MPa" }
 friction = { lo = $(python3 -c "print($mu-0.05)"), hi = $(python3 -c "print($mu+0.05)") }   # its middle: a sweep file needs one swept parameter
 [scene]
 layout = "conveyor"
+substrate = "${substrate:-rough}"
 warmup_s = 0.0
 mfr_rel_se = 0.0
 mfr_abs_se = 0.0
