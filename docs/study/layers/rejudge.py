@@ -4,7 +4,9 @@
 # for (a fused bed's depth 0.65, its packing 0.15; a loose bed none), and the slope test at
 # 2.5 % a series (fused) or 5 % (loose) widened likewise. Also: the pooled lag-1
 # autocorrelation of the steady records' passes the allowance comes from.
-#   /usr/bin/python3 docs/study/layers/rejudge.py docs/study/layers/record/*.json
+# With --passes N, each record is judged on its first N passes only (what a shorter run would
+# have answered).
+#   /usr/bin/python3 docs/study/layers/rejudge.py [--passes N] docs/study/layers/record/*.json
 import json, sys, os
 import numpy as np
 from scipy import stats
@@ -54,13 +56,17 @@ def r1(y):
     return (d[1:] * d[:-1]).sum() / (d * d).sum()
 
 
+args = sys.argv[1:]
+keep = None
+if args[:1] == ["--passes"]:
+    keep, args = int(args[1]), args[2:]
 rows, pooled = [], {"packing": [], "depth": []}
-for f in sys.argv[1:]:
+for f in args:
     L = layers_of(f)
     if not L:
         continue
     fused = L["bed"] == "fused"
-    P = L["passes"]
+    P = L["passes"][:keep] if keep else L["passes"]
     first = sum(1 for p in P if p.get("search"))
     ans = np.array([p["packing"] if fused else p["relative_density"] for p in P])
     dep = np.array([p["effective_thickness_m"] * 1e6 for p in P])
