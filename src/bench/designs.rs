@@ -131,6 +131,29 @@ impl Surface for ReplaySurface {
     }
 }
 
+/// A surface whose runs are quieter (or noisier): each run's deviation from the truth and the SE
+/// it records scaled by `scale` — the runs of a sweep whose precision target is `scale` times
+/// the other's, at the cost of a window 1/scale² as long. The targets stay the inner surface's
+/// (`se` is not scaled), so that designs at different precisions are judged alike.
+pub struct Scaled<'a> {
+    pub inner: &'a dyn Surface,
+    pub scale: f64,
+}
+
+impl Surface for Scaled<'_> {
+    fn truth(&self, u: &[f64]) -> f64 {
+        self.inner.truth(u)
+    }
+    fn run(&self, u: &[f64]) -> (f64, Option<f64>) {
+        let t = self.inner.truth(u);
+        let (y, se) = self.inner.run(u);
+        ((t + self.scale * (y - t)).max(0.0), se.map(|s| s * self.scale))
+    }
+    fn se(&self, u: &[f64]) -> f64 {
+        self.inner.se(u)
+    }
+}
+
 /// The known answer.
 #[derive(Debug, Clone)]
 pub struct Truth {
@@ -519,6 +542,30 @@ mod tests {
             lo: Some(v - half),
             hi: Some(v + half),
         }
+    }
+
+    /// A plane with a run 0.01 above it, SE 0.01, at every point.
+    struct Plane;
+    impl Surface for Plane {
+        fn truth(&self, u: &[f64]) -> f64 {
+            0.1 + 0.05 * u[0]
+        }
+        fn run(&self, u: &[f64]) -> (f64, Option<f64>) {
+            (self.truth(u) + 0.01, Some(0.01))
+        }
+        fn se(&self, _: &[f64]) -> f64 {
+            0.01
+        }
+    }
+
+    #[test]
+    fn a_quieter_surface_scales_each_run_s_deviation_and_se_but_not_the_truth_or_the_target() {
+        let q = Scaled { inner: &Plane, scale: 0.25 };
+        let u = [0.4];
+        let (y, se) = q.run(&u);
+        assert!((y - (0.12 + 0.0025)).abs() < 1e-15, "{y}");
+        assert!((se.unwrap() - 0.0025).abs() < 1e-15);
+        assert_eq!((q.truth(&u), q.se(&u)), (Plane.truth(&u), 0.01));
     }
 
     #[test]

@@ -103,10 +103,18 @@ pub(super) struct DesignsArgs {
     /// Lattice levels (values per parameter).
     #[arg(long, value_delimiter = ',', default_value = "3,4,5,6,7")]
     levels: Vec<usize>,
+    /// Every run's noise and SE times this: the runs of a sweep whose precision target is this
+    /// fraction of the surface's (0.5: half the SE, for a measuring window four times as long).
+    /// The targets stay those of the unscaled runs.
+    #[arg(long, default_value_t = 1.0)]
+    noise_scale: f64,
 }
 
 pub(super) fn bench_designs(a: DesignsArgs) -> Result<(), Error> {
     use demsweep::bench::designs::{self, Plan, ReplaySurface, StandInSurface, Surface};
+    if !(a.noise_scale > 0.0 && a.noise_scale.is_finite()) {
+        return Err(flag("--noise-scale", format!("{} is not a positive number", a.noise_scale)));
+    }
     let sweep = Sweep::load(&a.sweep)?;
     let surface: Box<dyn Surface> = match &a.replay {
         Some(csv) => {
@@ -134,9 +142,10 @@ pub(super) fn bench_designs(a: DesignsArgs) -> Result<(), Error> {
         emulate_to: a.emulate_to,
         levels: a.levels,
     };
+    let scaled = designs::Scaled { inner: surface.as_ref(), scale: a.noise_scale };
     let started = std::time::Instant::now();
-    let truth = designs::truth(surface.as_ref(), &names);
-    let rows = designs::compare(surface.as_ref(), &names, &plan);
+    let truth = designs::truth(&scaled, &names);
+    let rows = designs::compare(&scaled, &names, &plan);
     print!("{}", designs::tables(&truth, &rows));
     let (fits, fit) = designs::fit_time();
     eprintln!(
