@@ -21,10 +21,10 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use crate::analysis::adapt as criterion;
-use crate::analysis::convergence::{judge, Criteria, SpaceStats};
+use crate::analysis::convergence::{judge, scale, Criteria, SpaceStats};
 use crate::analysis::emulator::Emulator;
 use crate::analysis::sensitivity;
-use crate::analysis::stats::{moments, Bootstrap, Moments};
+use crate::analysis::stats::{moments, Bootstrap, Moments, STATISTICS};
 use crate::design::halton::{halton, Scrambling};
 use crate::run::standin::{Noise, Point};
 use crate::sweep::Sweep;
@@ -513,7 +513,8 @@ fn rule_table(t: &Truth, rows: &[Row]) -> String {
     }
     let mut out = String::from(
         "\nThe default rule (scaled, τ = 0.05, hold 2) applied checkpoint to checkpoint, and the answer where it held:\n\n\
-         | design | seed | the rule holds at | all six targets there |\n| --- | ---: | ---: | --- |\n",
+         | design | seed | the rule holds at | all six targets there | last checkpoint: 95 % half-widths over τ·scale (mean, std, skewness, kurtosis) | truth inside the intervals |\n\
+         | --- | ---: | ---: | --- | --- | ---: |\n",
     );
     for ((d, seed), mut rs) in by {
         rs.sort_by_key(|r| r.runs);
@@ -525,9 +526,31 @@ fn rule_table(t: &Truth, rows: &[Row]) -> String {
             }
             None => ("never".into(), "–"),
         };
-        out.push_str(&format!("| {d} | {seed} | {n} | {ok} |\n"));
+        let (widths, inside) = rs.last().and_then(|r| r.rule).map_or(("–".into(), "–".into()), |st| {
+            known(&st, t, c.tolerance)
+        });
+        out.push_str(&format!("| {d} | {seed} | {n} | {ok} | {widths} | {inside} |\n"));
     }
     out
+}
+
+/// How well a space knows each statistic as the rule reads it (its 95 % half-width over τ times
+/// the statistic's scale: above 1 the rule cannot hold), and how many of the four intervals
+/// hold the truth.
+fn known(st: &SpaceStats, t: &Truth, tolerance: f64) -> (String, String) {
+    let mut widths = Vec::new();
+    let mut inside = 0;
+    for (k, s) in STATISTICS.iter().enumerate() {
+        let (Some(v), Some(h), Some(sc), Some(truth)) =
+            (s.of(&st.moments), st.noise[k], scale(*s, &st.moments), s.of(&t.moments))
+        else {
+            widths.push("–".to_string());
+            continue;
+        };
+        widths.push(format!("{:.1}", h / (tolerance * sc)));
+        inside += usize::from((v - truth).abs() <= h);
+    }
+    (widths.join(", "), format!("{inside}/4"))
 }
 
 #[cfg(test)]
