@@ -539,7 +539,7 @@ fn rule_table(t: &Truth, rows: &[Row]) -> String {
 /// hold the truth.
 fn known(st: &SpaceStats, t: &Truth, tolerance: f64) -> (String, String) {
     let mut widths = Vec::new();
-    let mut inside = 0;
+    let (mut inside, mut outside) = (0, Vec::new());
     for (k, s) in STATISTICS.iter().enumerate() {
         let (Some(v), Some(h), Some(sc), Some(truth)) =
             (s.of(&st.moments), st.noise[k], scale(*s, &st.moments), s.of(&t.moments))
@@ -548,9 +548,14 @@ fn known(st: &SpaceStats, t: &Truth, tolerance: f64) -> (String, String) {
             continue;
         };
         widths.push(format!("{:.1}", h / (tolerance * sc)));
-        inside += usize::from((v - truth).abs() <= h);
+        if (v - truth).abs() <= h {
+            inside += 1;
+        } else {
+            outside.push(s.name());
+        }
     }
-    (widths.join(", "), format!("{inside}/4"))
+    let missed = if outside.is_empty() { String::new() } else { format!(" (not the {})", outside.join(", ")) };
+    (widths.join(", "), format!("{inside}/4{missed}"))
 }
 
 #[cfg(test)]
