@@ -526,9 +526,10 @@ fn rule_table(t: &Truth, rows: &[Row]) -> String {
             }
             None => ("never".into(), "–"),
         };
-        let (widths, inside) = rs.last().and_then(|r| r.rule).map_or(("–".into(), "–".into()), |st| {
-            known(&st, t, c.tolerance)
-        });
+        let (widths, inside) = rs
+            .last()
+            .and_then(|r| r.rule)
+            .map_or(("–".into(), "–".into()), |st| known(&st, t, c.tolerance));
         out.push_str(&format!("| {d} | {seed} | {n} | {ok} | {widths} | {inside} |\n"));
     }
     out
@@ -554,7 +555,8 @@ fn known(st: &SpaceStats, t: &Truth, tolerance: f64) -> (String, String) {
             outside.push(s.name());
         }
     }
-    let missed = if outside.is_empty() { String::new() } else { format!(" (not the {})", outside.join(", ")) };
+    let missed =
+        if outside.is_empty() { String::new() } else { format!(" (not the {})", outside.join(", ")) };
     (widths.join(", "), format!("{inside}/4{missed}"))
 }
 

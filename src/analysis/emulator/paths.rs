@@ -1,7 +1,7 @@
 //! The space's statistics from the emulator with their posterior intervals: the mean surface on
 //! many points, and posterior sample paths on a sub-design for each statistic's shift.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
@@ -10,6 +10,15 @@ use serde::Serialize;
 use crate::analysis::stats::{percentile_sorted, Interval, Moments, STATISTICS};
 
 use super::{dist, factor, matern52, Emulator};
+
+/// Points of the sub-design the posterior sample paths are drawn on. Each path's statistic on
+/// these points carries a sampling error of its own that widens the intervals: on the replayed
+/// LIGGGHTS sweep at 240 adaptive runs the skewness's 95 % half-width was 2.1–2.5 times the
+/// rule's tolerance on 256 points, 1.6–1.8 on 1,024 and 1.3–1.7 on 2,048 (at a quarter of the
+/// runs' noise: 1.8–2.1, 0.9–1.1, 0.8–1.0), so that on 256 no noise level let the rule hold
+/// (BENCHMARKS.md "The answer's cost"). Its cost is one factor of a square matrix this size,
+/// about a second.
+pub const PATH_POINTS: usize = 2048;
 
 /// The space's statistics from the emulator, with 95 % intervals from its posterior.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -29,7 +38,7 @@ impl Emulator {
     /// The space's MFR statistics from the emulator, each the posterior median of the statistic
     /// with its 95 % posterior interval. The mean surface, clamped at 0 (MFR cannot be
     /// negative), is evaluated on `draws` scrambled-Halton points of the unit cube; `paths`
-    /// posterior sample paths on the first 256 of them give each statistic's shift from the mean
+    /// posterior sample paths on the first [`PATH_POINTS`] of them give each statistic's shift from the mean
     /// surface's on the same points; the estimate is the mean surface's statistic plus the
     /// median shift, the interval plus the 2.5 and 97.5 % shifts.
     ///
@@ -42,14 +51,15 @@ impl Emulator {
         let pts = crate::design::halton::halton(d, draws, crate::design::halton::Scrambling::Random, seed);
         let surface: Vec<f64> = pts.iter().map(|u| self.mean(u).max(0.0)).collect();
         let statistics = crate::analysis::stats::moments(&surface);
-        let m = pts.len().min(256);
+        let m = pts.len().min(PATH_POINTS);
         let sub = &pts[..m];
         let n = self.n();
         // Posterior covariance on the sub-design: K** − VᵀV, V = L⁻¹K*.
         let mut v =
             DMatrix::from_fn(n, m, |i, j| self.sigma2 * matern52(dist(&self.x[i], &sub[j], &self.theta)));
         self.chol.l_dirty().solve_lower_triangular_unchecked_mut(&mut v);
-        let vtv = v.tr_mul(&v);
+        // As a product of the transpose (a blocked matrix product), not `tr_mul`'s dot per entry.
+        let vtv = v.transpose() * &v;
         let mut cov = DMatrix::from_fn(m, m, |i, j| {
             self.sigma2 * matern52(dist(&sub[i], &sub[j], &self.theta)) - vtv[(i, j)]
         });
@@ -70,10 +80,10 @@ impl Emulator {
         let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed);
         let mut shifts: [Vec<f64>; 4] = Default::default();
         if let Some(chol) = chol {
-            let l = chol.unpack();
-            for _ in 0..paths {
-                let e = DVector::from_iterator(m, (&mut rng).sample_iter(StandardNormal).take(m));
-                let c = &l * e;
+            // Every path's deviates at once: one matrix product.
+            let e = DMatrix::from_iterator(m, paths, (&mut rng).sample_iter(StandardNormal).take(m * paths));
+            let deviations = chol.unpack() * e;
+            for c in deviations.column_iter() {
                 let path: Vec<f64> = mean_sub
                     .iter()
                     .zip(c.iter())
