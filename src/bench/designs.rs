@@ -536,8 +536,9 @@ fn rule_table(t: &Truth, rows: &[Row]) -> String {
 }
 
 /// How well a space knows each statistic as the rule reads it (its 95 % half-width over τ times
-/// the statistic's scale: above 1 the rule cannot hold), and how many of the four intervals
-/// hold the truth.
+/// the statistic's scale: above 1 the rule cannot hold), and for how many of the four the truth
+/// lies within that half-width of the estimate (the rule's reading of the interval; the
+/// emulator's own intervals are not symmetric).
 fn known(st: &SpaceStats, t: &Truth, tolerance: f64) -> (String, String) {
     let mut widths = Vec::new();
     let (mut inside, mut outside) = (0, Vec::new());

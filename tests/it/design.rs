@@ -155,3 +155,21 @@ fn bad_designs_are_refused_before_anything_is_written() {
     assert_eq!(err.code(), 2);
     assert!(err.to_string().contains("not a sweep directory"), "{err}");
 }
+
+#[test]
+fn the_designs_bench_refuses_a_noise_scale_that_is_not_positive_in_one_line() {
+    let file = repo("sweeps/thesis-lds.toml");
+    for bad in ["0", "-0.5", "inf", "nan"] {
+        let o = support::sweep_bin()
+            .args(["bench", "designs"])
+            .arg(&file)
+            .args(["--noise-scale", bad, "--seeds", "14", "--max", "40"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{bad}: {err}");
+        assert!(err.contains("--noise-scale") && err.contains(bad), "{err}");
+        assert!(o.stdout.is_empty(), "{bad}: the bench ran");
+    }
+}

@@ -16,8 +16,9 @@ use super::{dist, factor, matern52, Emulator};
 /// LIGGGHTS sweep at 240 adaptive runs the skewness's 95 % half-width was 2.1–2.5 times the
 /// rule's tolerance on 256 points, 1.6–1.8 on 1,024 and 1.3–1.7 on 2,048 (at a quarter of the
 /// runs' noise: 1.8–2.1, 0.9–1.1, 0.8–1.0), so that on 256 no noise level let the rule hold
-/// (BENCHMARKS.md "The answer's cost"). Its cost is one factor of a square matrix this size,
-/// about a second.
+/// (BENCHMARKS.md "The answer's cost"). Its cost: a square matrix this size factored, and the
+/// runs' factor solved against this many points — about a second at 240 runs, 1.4 s more a
+/// space than on 256 points at 2,800.
 pub const PATH_POINTS: usize = 2048;
 
 /// The space's statistics from the emulator, with 95 % intervals from its posterior.
@@ -38,9 +39,9 @@ impl Emulator {
     /// The space's MFR statistics from the emulator, each the posterior median of the statistic
     /// with its 95 % posterior interval. The mean surface, clamped at 0 (MFR cannot be
     /// negative), is evaluated on `draws` scrambled-Halton points of the unit cube; `paths`
-    /// posterior sample paths on the first [`PATH_POINTS`] of them give each statistic's shift from the mean
-    /// surface's on the same points; the estimate is the mean surface's statistic plus the
-    /// median shift, the interval plus the 2.5 and 97.5 % shifts.
+    /// posterior sample paths on the first [`PATH_POINTS`] of them give each statistic's shift
+    /// from the mean surface's on the same points; the estimate is the mean surface's statistic
+    /// plus the median shift, the interval plus the 2.5 and 97.5 % shifts.
     ///
     /// Why the median shift: a statistic of the mean surface is not the mean of that statistic
     /// over the functions the emulator deems possible. The mean surface is smoother than any of
