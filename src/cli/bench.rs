@@ -106,7 +106,7 @@ pub(super) struct DesignsArgs {
     /// Every run's noise and SE times this: the runs of a sweep whose precision target is this
     /// fraction of the surface's (0.5: half the SE, for a measuring window four times as long).
     /// The targets stay those of the unscaled runs.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     noise_scale: f64,
 }
 

@@ -173,4 +173,14 @@ fn the_designs_bench_refuses_a_noise_scale_that_is_not_positive_in_one_line() {
         assert!(err.contains("--noise-scale") && err.to_lowercase().contains(bad), "{err}");
         assert!(o.stdout.is_empty(), "{bad}: the bench ran");
     }
+    // A negative value after a space is the value, not a flag.
+    let o = support::sweep_bin()
+        .args(["bench", "designs"])
+        .arg(&file)
+        .args(["--noise-scale", "-0.5"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--noise-scale: -0.5 is not a positive number"), "{err}");
 }
