@@ -2,7 +2,7 @@
 //! an uninterrupted run's; what a kill leaves — a dead process's claim, a half-written run
 //! directory, a result without its joblog line, a torn claim — is cleaned up or completed, and a
 //! killed attempt shows as interrupted. On the fake executor, the stand-in, and real LIGGGHTS
-//! (SIGKILL and SIGINT part-way through a small sweep).
+//! (a small sweep killed part-way, its resume interrupted part-way, and resumed again).
 
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -65,27 +65,22 @@ fn alive_in(groups: &BTreeSet<i32>) -> Vec<i32> {
         .collect()
 }
 
-fn any_result(dir: &Path) -> bool {
+fn results_in(dir: &Path) -> usize {
     std::fs::read_dir(dir.join("runs"))
-        .map(|d| d.flatten().any(|e| e.path().join("result.json").exists()))
-        .unwrap_or(false)
+        .map(|d| d.flatten().filter(|e| e.path().join("result.json").exists()).count())
+        .unwrap_or(0)
 }
 
-/// Start `sweep lds` on `out`, wait until one run has finished while another is running, and
-/// send `signal`. Returns the child's exit status and its jobs' process groups.
-fn interrupt(sweep: &Path, out: &Path, signal: i32) -> (std::process::ExitStatus, BTreeSet<i32>) {
-    let mut child: Child = support::sweep_bin()
-        .args(["lds", sweep.to_str().unwrap(), "--max", "3", "--step", "3"])
-        .args(["--jobs", "2", "-q", "--out"])
-        .arg(out)
-        .stdin(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
+/// Run `sweep ARGS` on `out`, wait until a run has finished since it started while another is
+/// running, and send `signal`. Returns the child's exit status and its jobs' process groups.
+fn interrupt(args: &[&str], out: &Path, signal: i32) -> (std::process::ExitStatus, BTreeSet<i32>) {
+    let before = results_in(out);
+    let mut child: Child =
+        support::sweep_bin().args(args).stdin(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
     let mut groups = BTreeSet::new();
     wait_until("a finished run with another running", Duration::from_secs(180), || {
         groups = child_groups(child.id());
-        any_result(out) && !groups.is_empty()
+        results_in(out) > before && !groups.is_empty()
     });
     // SAFETY: signalling the child we spawned.
     unsafe { libc::kill(child.id() as i32, signal) };
@@ -106,41 +101,39 @@ fn killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results() {
     let want = results(support::quick_reference());
     assert_eq!(want.len(), 3);
     assert!(want.iter().all(|r| r.1 == "done"), "{want:?}");
+    let dir = tmp.path().join("kr");
+    let d = dir.to_str().unwrap();
 
     // SIGKILL: no chance to clean up; each run's guard takes its LIGGGHTS down with us.
-    let killed = tmp.path().join("killed");
-    let (status, groups) = interrupt(&sweep, &killed, libc::SIGKILL);
+    let lds = ["lds", sweep.to_str().unwrap(), "--max", "3", "--step", "3", "--jobs", "2", "-q", "--out", d];
+    let (status, groups) = interrupt(&lds, &dir, libc::SIGKILL);
     assert_eq!(std::os::unix::process::ExitStatusExt::signal(&status), Some(libc::SIGKILL));
     wait_until("the killed sweep's jobs to die", Duration::from_secs(10), || alive_in(&groups).is_empty());
-    let finished_before: Vec<String> = attempts(&killed).into_keys().collect();
+    let finished_before: Vec<String> = attempts(&dir).into_keys().collect();
     // The run cut off by the kill left its claim: status shows it as interrupted.
-    let st = output(support::sweep_bin().args(["status", "--json"]).arg(&killed));
+    let st = output(support::sweep_bin().args(["status", "--json"]).arg(&dir));
     let st: serde_json::Value = serde_json::from_slice(&st.stdout).unwrap();
     assert!(st["interrupted"].as_u64().unwrap() >= 1, "{st}");
-    let o = output(support::sweep_bin().args(["resume", "--jobs", "2", "-q"]).arg(&killed));
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    assert_done_once(&killed);
-    let a = attempts(&killed);
+
+    // SIGINT to the resume, one run at a time, once one of the killed runs has finished again:
+    // stop, kill the running job, record it as cancelled, exit 130.
+    let (status, groups) = interrupt(&["resume", "--jobs", "1", "-q", d], &dir, libc::SIGINT);
+    assert_eq!(status.code(), Some(130));
+    assert_eq!(alive_in(&groups), Vec::<i32>::new(), "a LIGGGHTS job outlived `sweep`");
+    let a = attempts(&dir);
+    assert!(a.values().flatten().any(|s| s == "cancelled"), "{a:?}");
     for h in &finished_before {
         assert_eq!(a[h], vec!["done"], "run {h} finished before the kill and ran again");
     }
-    assert_eq!(results(&killed), want);
-
-    // SIGINT: stop, kill the running jobs, record them as cancelled, exit 130.
-    let interrupted = tmp.path().join("interrupted");
-    let (status, groups) = interrupt(&sweep, &interrupted, libc::SIGINT);
-    assert_eq!(status.code(), Some(130));
-    assert_eq!(alive_in(&groups), Vec::<i32>::new(), "a LIGGGHTS job outlived `sweep`");
-    let a = attempts(&interrupted);
-    assert!(a.values().flatten().any(|s| s == "cancelled"), "{a:?}");
-    let st = output(support::sweep_bin().args(["status", "--json"]).arg(&interrupted));
+    let st = output(support::sweep_bin().args(["status", "--json"]).arg(&dir));
     let st: serde_json::Value = serde_json::from_slice(&st.stdout).unwrap();
     assert_eq!(st["running"], 0, "no claim is left behind");
     assert!(st["pending"].as_u64().unwrap() >= 1);
-    let o = output(support::sweep_bin().args(["resume", "--jobs", "2", "-q"]).arg(&interrupted));
+
+    let o = output(support::sweep_bin().args(["resume", "--jobs", "2", "-q"]).arg(&dir));
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    assert_done_once(&interrupted);
-    assert_eq!(results(&interrupted), want);
+    assert_done_once(&dir);
+    assert_eq!(results(&dir), want);
 }
 
 // ---- on the fake executor ----
