@@ -320,7 +320,7 @@ fn a_full_disk_under_liggghts_is_a_store_error_not_failed_runs_and_resume_finish
     let tmp = tempfile::tempdir().unwrap();
     // From rest (no end state kept for warm starts): a run of this scene then leaves 1.6 to
     // 2.2 MB (mesh, pile, dumps, log; as many dump snapshots as its precision stop takes): the
-    // first fits, the second does not.
+    // first fits, the second does not. Two points are enough to show both.
     let sweep = support::quick_lds_sweep(tmp.path(), "full", "\n[scene]\nwarm_start = false");
     let fs = tmp.path().join("fs");
     let mount = match Mount::tmpfs(&fs, "size=2600k") {
@@ -332,7 +332,7 @@ fn a_full_disk_under_liggghts_is_a_store_error_not_failed_runs_and_resume_finish
     };
     let out = fs.join("out");
     let o = support::sweep_bin()
-        .args(["lds", sweep.to_str().unwrap(), "--max", "3", "--step", "3", "--jobs", "1", "-q", "--out"])
+        .args(["lds", sweep.to_str().unwrap(), "--max", "2", "--step", "2", "--jobs", "1", "-q", "--out"])
         .arg(&out)
         .stdin(Stdio::null())
         .output()
@@ -349,7 +349,7 @@ fn a_full_disk_under_liggghts_is_a_store_error_not_failed_runs_and_resume_finish
     assert!(lines.iter().all(|l| l.status != "failed"), "a full disk became failed runs: {lines:?}");
     let st = run::status(&out).unwrap();
     let done = lines.iter().filter(|l| l.status == "done").count();
-    assert_eq!((st.done, st.failed, st.pending), (done, 0, 3 - done), "{lines:?}");
+    assert_eq!((st.done, st.failed, st.pending), (done, 0, 2 - done), "{lines:?}");
     assert!(done >= 1, "the first run should have fitted: {lines:?}");
 
     mount.remount("size=16m");
@@ -361,7 +361,7 @@ fn a_full_disk_under_liggghts_is_a_store_error_not_failed_runs_and_resume_finish
         .unwrap();
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let per_hash = done_per_hash(&out);
-    assert!(per_hash.len() == 3 && per_hash.values().all(|&n| n == 1), "{per_hash:?}");
+    assert!(per_hash.len() == 2 && per_hash.values().all(|&n| n == 1), "{per_hash:?}");
     let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
-    assert_eq!(csv.matches(",done,").count(), 3, "{csv}");
+    assert_eq!(csv.matches(",done,").count(), 2, "{csv}");
 }
