@@ -22,41 +22,31 @@ use crate::support::{
 
 /// Three points of the quick scene (D = 1.5 mm, gap and blade speed swept), each from rest: the
 /// points of [`support::quick_reference`], whose local run the cluster runs are compared with.
-const SWEEP: &str = r#"name = "cluster-test"
-[parameters]
-gap         = { lo = 2.0, hi = 3.0, unit = "mm" }
-blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
-diameter    = { value = 1.5, unit = "mm" }
-[scene]
-warm_start = false
-"#;
-const POINTS: usize = 3;
+fn sweep_text() -> String {
+    support::quick_scene("cluster-test", support::FROM_REST)
+}
+const POINTS: usize = support::QUICK_REFERENCE_POINTS;
 
 /// The same scene, one point, for the lease test, which watches a claim for twice its lease
 /// while the run is still going: the knobs of the previous defaults keep a run ~2× longer than
 /// the fast preset's (BENCHMARKS.md "Fidelity").
-const LEASE_SWEEP: &str = r#"name = "cluster-lease"
-[parameters]
-gap         = { lo = 2.0, hi = 3.0, unit = "mm" }
-blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
-diameter    = { value = 1.5, unit = "mm" }
-[scene]
-rayleigh_fraction = 0.2
-mesh_cells_across = 6
-skin_diameters = 0.25
-warm_start = false
-"#;
+fn lease_sweep_text() -> String {
+    support::quick_scene(
+        "cluster-lease",
+        "[scene]\nrayleigh_fraction = 0.2\nmesh_cells_across = 6\nskin_diameters = 0.25\nwarm_start = false\n",
+    )
+}
 
-/// The local run every cluster run is compared with: [`SWEEP`]'s points, made once per test
+/// The local run every cluster run is compared with: [`sweep_text`]'s points, made once per test
 /// binary and shared with the resume tests.
 fn reference() -> &'static Path {
     support::quick_reference()
 }
 
-/// The lease test's local run (one point of [`LEASE_SWEEP`]).
+/// The lease test's local run (one point of [`lease_sweep_text`]).
 fn lease_reference() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
-    DIR.get_or_init(|| support::local_lds(LEASE_SWEEP, 1))
+    DIR.get_or_init(|| support::local_lds(&lease_sweep_text(), 1))
 }
 
 /// A sweep directory of the reference's sweep with nothing run: what a user takes to a cluster
@@ -457,7 +447,7 @@ fn synthetic(dir: &Path, n: usize) {
     });
     std::fs::create_dir_all(dir.join("runs")).unwrap();
     std::fs::write(dir.join("manifest.json"), manifest.to_string()).unwrap();
-    std::fs::write(dir.join("sweep.toml"), SWEEP).unwrap();
+    std::fs::write(dir.join("sweep.toml"), sweep_text()).unwrap();
 }
 
 #[test]
@@ -503,7 +493,7 @@ fn scripts_match_their_snapshots() {
 #[test]
 fn a_planned_directory_is_submitted_and_another_tasks_says_what_it_does() {
     let root = tempfile::tempdir().unwrap();
-    std::fs::write(root.path().join("s.toml"), SWEEP).unwrap();
+    std::fs::write(root.path().join("s.toml"), sweep_text()).unwrap();
     let o = output(
         sweep_bin()
             .args(["lds", "s.toml", "--step", "3", "--max", "3", "--out", "planned", "--plan"])

@@ -174,8 +174,13 @@ pub fn local_lds(sweep: &str, points: usize) -> PathBuf {
 /// first, tests/it/warm.rs). The sweep's name does not enter a point's hash.
 pub fn quick_reference() -> &'static Path {
     static DIR: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
-    DIR.get_or_init(|| local_lds(&quick_scene("reference", "[scene]\nwarm_start = false\n"), 3))
+    DIR.get_or_init(|| local_lds(&quick_scene("reference", FROM_REST), QUICK_REFERENCE_POINTS))
 }
+
+/// Points in [`quick_reference`].
+pub const QUICK_REFERENCE_POINTS: usize = 3;
+/// The `[scene]` table of a sweep whose every point starts from rest.
+pub const FROM_REST: &str = "[scene]\nwarm_start = false\n";
 
 /// The quick scene in `dir/NAME.toml`, its deck from `template` when given, `extra_run` in `[run]`.
 pub fn quick_sweep(dir: &Path, name: &str, extra_run: &str, template: Option<&Path>) -> PathBuf {
