@@ -23,7 +23,7 @@ use crate::support::{
 /// Three points of the quick scene (D = 1.5 mm, gap and blade speed swept), each from rest: the
 /// points of [`support::quick_reference`], whose local run the cluster runs are compared with.
 fn sweep_text() -> String {
-    support::quick_scene("cluster-test", support::FROM_REST)
+    support::quick_scene("cluster-test", support::SHORT_FROM_REST)
 }
 const POINTS: usize = support::QUICK_REFERENCE_POINTS;
 
@@ -148,13 +148,14 @@ fn slurm_array_with_a_cancelled_task_completes_on_resubmission() {
     let script = std::fs::read_to_string(dir.join("cluster/array.slurm")).unwrap();
     assert!(script.contains("#SBATCH --array=0-2\n"), "{script}");
 
-    // Cancel task 1 once its LIGGGHTS run has started (its claim is there).
+    // Cancel task 1 as soon as its LIGGGHTS run has started (its log is there): an event, not a
+    // clock, so a busy machine cannot let the short point finish first.
     let manifest: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("manifest.json")).unwrap()).unwrap();
     let hash1 = manifest["points"][1]["hash"].as_str().unwrap().to_string();
     let claim1 = dir.join("runs").join(&hash1).join("claim");
-    wait_until("task 1 to claim its point", Duration::from_secs(120), || claim1.exists());
-    std::thread::sleep(Duration::from_secs(2));
+    let log1 = dir.join("runs").join(&hash1).join(demsweep::engine::LOG);
+    wait_until("task 1's LIGGGHTS to start", Duration::from_secs(120), || claim1.exists() && log1.exists());
     let o = output(Command::new("scancel").env("SLURM_CONF", &conf).arg(format!("{job}_1")));
     assert!(o.status.success(), "scancel: {}", text(&o.stderr));
     wait_until("the array to end", Duration::from_secs(600), || squeue(&conf, &job).is_empty());

@@ -95,15 +95,18 @@ fn killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results() {
     // Compared digit for digit with the uninterrupted run of the same three points, each from
     // rest (support::quick_reference, shared with the cluster tests).
     let sweep =
-        support::write_file(&tmp.path().join("kr.toml"), &support::quick_scene("kr", support::FROM_REST));
+        support::write_file(&tmp.path().join("kr.toml"), &support::quick_scene("kr", support::SHORT_FROM_REST));
     let want = results(support::quick_reference());
     assert_eq!(want.len(), support::QUICK_REFERENCE_POINTS);
     assert!(want.iter().all(|r| r.1 == "done"), "{want:?}");
     let dir = tmp.path().join("kr");
     let d = dir.to_str().unwrap();
 
-    // SIGKILL: no chance to clean up; each run's guard takes its LIGGGHTS down with us.
-    let lds = ["lds", sweep.to_str().unwrap(), "--max", "3", "--step", "3", "--jobs", "2", "-q", "--out", d];
+    // SIGKILL: no chance to clean up; each run's guard takes its LIGGGHTS down with us. One run
+    // at a time, so the kill comes with one point finished and two left: two at a time, the
+    // first two short points end together and the kill would leave one, which the interrupted
+    // resume below needs two of.
+    let lds = ["lds", sweep.to_str().unwrap(), "--max", "3", "--step", "3", "--jobs", "1", "-q", "--out", d];
     let (status, groups) = interrupt(&lds, &dir, libc::SIGKILL);
     assert_eq!(std::os::unix::process::ExitStatusExt::signal(&status), Some(libc::SIGKILL));
     wait_until("the killed sweep's jobs to die", Duration::from_secs(10), || alive_in(&groups).is_empty());
