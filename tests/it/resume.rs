@@ -94,8 +94,10 @@ fn killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results() {
     let tmp = tempfile::tempdir().unwrap();
     // Compared digit for digit with the uninterrupted run of the same three points, each from
     // rest (support::quick_reference, shared with the cluster tests).
-    let sweep =
-        support::write_file(&tmp.path().join("kr.toml"), &support::quick_scene("kr", support::SHORT_FROM_REST));
+    let sweep = support::write_file(
+        &tmp.path().join("kr.toml"),
+        &support::quick_scene("kr", support::SHORT_FROM_REST),
+    );
     let want = results(support::quick_reference());
     assert_eq!(want.len(), support::QUICK_REFERENCE_POINTS);
     assert!(want.iter().all(|r| r.1 == "done"), "{want:?}");

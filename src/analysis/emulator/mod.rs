@@ -13,7 +13,8 @@
 //! takes one scalar nugget, not a noise variance per point, and brings ndarray and linfa for a
 //! model this size; the closed-form leave-one-out residuals (Rasmussen & Williams 2006, Eq.
 //! 5.12) need the inverse covariance, which is a few lines here. The dense linear algebra
-//! (Cholesky factor, triangular solves, inverse) is `nalgebra`'s.
+//! (triangular solves, inverse) is `nalgebra`'s; the Cholesky factor is nalgebra's in blocks
+//! (`cholesky`).
 //!
 //! MFR is fitted by [`Emulator::fit_censored`]: its zeros (jammed runs) are a floor of a latent
 //! flow rate that goes on below zero (the censored regression of Tobin 1958, Econometrica 26,
@@ -32,10 +33,12 @@ use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
+mod cholesky;
 mod cross_validation;
 mod likelihood;
 pub mod memo;
 mod paths;
+use cholesky::factor;
 pub use cross_validation::CrossValidation;
 pub use likelihood::LENGTH_PRIOR;
 use likelihood::{at_length_bound, likelihood_fit};
@@ -75,12 +78,6 @@ fn matern52(r: f64) -> f64 {
 
 fn dist(a: &[f64], b: &[f64], theta: &[f64]) -> f64 {
     a.iter().zip(b).zip(theta).map(|((p, q), t)| ((p - q) / t).powi(2)).sum::<f64>().sqrt()
-}
-
-/// The Cholesky factor of `k` (its lower triangle read); `None` when `k` is not positive
-/// definite or its factor not finite.
-fn factor(k: DMatrix<f64>) -> Option<Cholesky<f64, Dyn>> {
-    Cholesky::new(k).filter(|c| c.l_dirty().diagonal().iter().all(|d| d.is_finite()))
 }
 
 /// Solve L·v = b (forward substitution) for the lower factor L of `chol`, in place.
