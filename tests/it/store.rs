@@ -318,12 +318,12 @@ fn a_full_disk_stops_the_sweep_says_where_and_resume_finishes_it() {
 #[test]
 fn a_full_disk_under_liggghts_is_a_store_error_not_failed_runs_and_resume_finishes_it() {
     let tmp = tempfile::tempdir().unwrap();
-    // From rest (no end state kept for warm starts): a run of this scene then leaves 1.6 to
-    // 2.2 MB (mesh, pile, dumps, log; as many dump snapshots as its precision stop takes): the
-    // first fits, the second does not. Two points are enough to show both.
-    let sweep = support::quick_lds_sweep(tmp.path(), "full", "\n[scene]\nwarm_start = false");
+    // Short runs from rest (no end state kept for warm starts): a run of this scene then leaves
+    // 340 to 360 kB (mesh, pile, dumps, log): the first fits, the second does not. Two points
+    // are enough to show both.
+    let sweep = support::quick_lds_sweep(tmp.path(), "full", &format!("\n{}", support::SHORT_FROM_REST));
     let fs = tmp.path().join("fs");
-    let mount = match Mount::tmpfs(&fs, "size=2600k") {
+    let mount = match Mount::tmpfs(&fs, "size=520k") {
         Ok(m) => m,
         Err(why) => {
             support::skip("a full disk test", &format!("cannot mount a small tmpfs to fill: {why}"));
