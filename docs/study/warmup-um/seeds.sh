@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Whether the SE a real powder's point reports is honest across its speeds
+# (docs/study/warmup-um.md "The SE between seeds at three speeds"): the point of
+# sweeps/ti64-machine.toml, every `[scene]` numerical key at its default, at 0.2 and 0.02 m/s,
+# ten scene seeds each (the 0.08 m/s seeds are numerics.sh's `default` and `seed2`…`seed10`).
+# The fast speed first: its seeds cost about a fifth of the slow one's. Resumable: a recorded
+# seed is skipped.
+#   bash docs/study/warmup-um/seeds.sh [SWEEP_BIN]
+set -euo pipefail
+cd "$(dirname "$0")/../../.."
+bin=${1:-target/release/sweep}
+for speed in 0.2 0.02; do
+  out=docs/study/warmup-um/seeds/v$speed
+  mkdir -p "$out"
+  for seed in 1 2 3 4 5 6 7 8 9 10; do
+    label=seed$seed
+    [ -s "$out/$label.json" ] && { echo "v$speed $label: recorded"; continue; }
+    toml=$(mktemp --suffix=.toml)
+    sed "s/^\[scene\]$/[scene]\nseed = $seed/" sweeps/ti64-machine.toml > "$toml"
+    grep -q "^seed = $seed$" "$toml"
+    # A wall-clock guard, not a numerical choice: this machine is shared.
+    printf '\n[run]\ntimeout_s = 14400\n' >> "$toml"
+    start=$(date +%s)
+    if "$bin" run "$toml" --json --set blade_speed=$speed > "$out/$label.json.part" 2> "$out/$label.err"; then
+      mv "$out/$label.json.part" "$out/$label.json"
+    else
+      echo "v$speed $label: failed (see $out/$label.err)" >&2
+    fi
+    rm -f "$toml"
+    echo "v$speed $label: $(( $(date +%s) - start )) s wall" >&2
+  done
+done
