@@ -58,7 +58,7 @@ impl Emulator {
         // Posterior covariance on the sub-design: K** − VᵀV, V = L⁻¹K*.
         let mut v =
             DMatrix::from_fn(n, m, |i, j| self.sigma2 * matern52(dist(&self.x[i], &sub[j], &self.theta)));
-        self.chol.l_dirty().solve_lower_triangular_unchecked_mut(&mut v);
+        super::cholesky::solve_lower(self.chol.l_dirty(), &mut v);
         // As a product of the transpose (a blocked matrix product), not `tr_mul`'s dot per entry.
         let vtv = v.transpose() * &v;
         let mut cov = DMatrix::from_fn(m, m, |i, j| {
