@@ -168,9 +168,9 @@ pub fn local_lds(sweep: &str, points: usize) -> PathBuf {
     root.join("local")
 }
 
-/// The quick scene's first three LDS points, each from rest and short ([`SHORT_FROM_REST`]), run once per test binary: the
-/// local run that resumed, interrupted and cluster runs of the same points are compared with,
-/// digit for digit (from rest: a warm start's digits depend on which neighbour had finished
+/// The quick scene's first three LDS points, each from rest and short ([`SHORT_FROM_REST`]),
+/// run once per test binary: the local run that resumed, interrupted and cluster runs of the
+/// same points are compared with, digit for digit (from rest: a warm start's digits depend on which neighbour had finished
 /// first, tests/it/warm.rs). The sweep's name does not enter a point's hash.
 pub fn quick_reference() -> &'static Path {
     static DIR: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();

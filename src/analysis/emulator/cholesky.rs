@@ -1,4 +1,5 @@
-//! The Cholesky factor of a covariance matrix, in blocks.
+//! The Cholesky factor of a covariance matrix, and the triangular solve with many right-hand
+//! sides, in blocks.
 //!
 //! Why not `nalgebra::Cholesky::new` alone: it factors column by column with vector updates, at
 //! about the speed of memory, and a report's emulator factors matrices of a few thousand rows

@@ -12,9 +12,9 @@
 //! Why our own model rather than a kriging crate: `egobox-gp` (the best-kept Rust kriging crate)
 //! takes one scalar nugget, not a noise variance per point, and brings ndarray and linfa for a
 //! model this size; the closed-form leave-one-out residuals (Rasmussen & Williams 2006, Eq.
-//! 5.12) need the inverse covariance, which is a few lines here. The dense linear algebra
-//! (triangular solves, inverse) is `nalgebra`'s; the Cholesky factor is nalgebra's in blocks
-//! (`cholesky`).
+//! 5.12) need the inverse covariance, which is a few lines here. The dense linear algebra is
+//! `nalgebra`'s; the Cholesky factor and the triangular solve with many right-hand sides run it
+//! in blocks (`cholesky`).
 //!
 //! MFR is fitted by [`Emulator::fit_censored`]: its zeros (jammed runs) are a floor of a latent
 //! flow rate that goes on below zero (the censored regression of Tobin 1958, Econometrica 26,
