@@ -19,9 +19,6 @@ const BLOCK: usize = 48;
 /// definite or its factor not finite.
 pub fn factor(k: DMatrix<f64>) -> Option<Cholesky<f64, Dyn>> {
     let n = k.nrows();
-    if n <= BLOCK {
-        return Cholesky::new(k).filter(|c| c.l_dirty().diagonal().iter().all(|d| d.is_finite()));
-    }
     let mut a = k;
     let mut j = 0;
     while j < n {
