@@ -218,6 +218,7 @@ fn identify_version(path: &Path, cancel: &CancelToken) -> Result<String, Identif
             .map_err(|e| failed(format!("cannot write in the scratch directory: {e}")))
     };
     let mut cmd = Command::new(path);
+    serial_mpi(&mut cmd);
     cmd.args(["-log", "none", "-h"])
         .current_dir(scratch.path())
         .stdin(Stdio::null())
@@ -305,6 +306,9 @@ pub fn command_ranks(engine: &Path, dir: &Path, deck: &str, ranks: u32) -> std::
     }
     argv.push(engine.into());
     let mut cmd = Command::new(&argv[0]);
+    if ranks <= 1 {
+        serial_mpi(&mut cmd);
+    }
     cmd.args(&argv[1..]);
     cmd.args(["-in", deck, "-log", LOG, "-echo", "none", "-nocite"])
         .current_dir(dir)
@@ -312,6 +316,18 @@ pub fn command_ranks(engine: &Path, dir: &Path, deck: &str, ranks: u32) -> std::
         .stdout(screen)
         .stderr(screen_err);
     Ok(cmd)
+}
+
+/// Open MPI's transports for a run on one rank, which talks to nobody: its point-to-point layer
+/// `ob1` over `self`. Left to choose, Debian's Open MPI 4.1 probes UCX and libfabric first, which
+/// costs 0.2 s of idle wall time at every start (0.33 s against 0.13 s for an empty deck) — a
+/// tenth of a short point's. A user's own `OMPI_MCA_pml` or `OMPI_MCA_btl` is kept.
+fn serial_mpi(cmd: &mut Command) {
+    for (key, value) in [("OMPI_MCA_pml", "ob1"), ("OMPI_MCA_btl", "self")] {
+        if std::env::var_os(key).is_none() {
+            cmd.env(key, value);
+        }
+    }
 }
 
 /// The step at which the deck's settle ended, from the line it prints
@@ -537,6 +553,21 @@ mod tests {
     use super::*;
 
     const LIMITS: LogLimits = LogLimits { ke_limit: 1.0, atoms: Some(700) };
+
+    #[test]
+    fn a_run_on_one_rank_skips_open_mpi_s_network_probes_and_one_under_mpirun_does_not() {
+        let dir = tempfile::tempdir().unwrap();
+        let env = |ranks| {
+            let cmd = command_ranks(Path::new("/usr/bin/liggghts"), dir.path(), "in.deck", ranks).unwrap();
+            cmd.get_envs()
+                .map(|(k, v)| (k.to_string_lossy().into_owned(), v.map(|v| v.to_string_lossy().into_owned())))
+                .collect::<Vec<_>>()
+        };
+        if std::env::var_os("OMPI_MCA_pml").is_none() {
+            assert!(env(1).contains(&("OMPI_MCA_pml".into(), Some("ob1".into()))), "{:?}", env(1));
+        }
+        assert!(env(2).iter().all(|(k, _)| !k.starts_with("OMPI_MCA")), "{:?}", env(2));
+    }
 
     #[test]
     fn a_multi_line_warning_is_kept_whole() {

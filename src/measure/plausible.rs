@@ -20,6 +20,14 @@ pub const PACKING_MAX: f64 = 0.74;
 /// whose energy explodes is stopped by the engine's log watch long before 10×.
 pub const VX_MAX_BLADE_SPEEDS: f64 = 10.0;
 
+/// What gravity adds to a single particle's bound, in multiples of the speed of a fall from the
+/// top of the box: a sphere topped up onto the heap, or rolling off its crest, falls to the plate
+/// whatever the blade's speed, and a bounce turns that speed sideways. Twice the fall, because a
+/// sphere freed from a jam also takes the elastic energy of its overlaps. At a slow blade this is
+/// most of the bound (a 35 µm powder at 0.02 m/s: a sphere at v_x 0.22 m/s, 11 blade speeds, in
+/// a run with nothing else wrong).
+pub const VX_MAX_FALL_SPEEDS: f64 = 2.0;
+
 /// Why a number the engine wrote, or a result holds, is not possible: the number, named.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum Implausible {
@@ -29,9 +37,10 @@ pub enum Implausible {
     /// A window that counted more particles than the pile holds.
     #[error("mfr_particles = {counted}: more than the {particles} particles of the pile")]
     Counted { counted: usize, particles: usize },
-    /// A particle of a dump frame: `step 100, particle 7: mass = 0: expected a finite mass > 0`.
-    #[error("step {step}, particle {id}: {what} = {value}: expected {expected}")]
-    Particle { step: u64, id: u64, what: &'static str, value: f64, expected: String },
+    /// A particle of a dump frame, where it was: `step 100, particle 7 at x = 10 mm, z = 2 mm:
+    /// mass = 0: expected a finite mass > 0`.
+    #[error("step {step}, particle {id} at x = {} mm, z = {} mm: {what} = {value}: expected {expected}", mm(*.x), mm(*.z))]
+    Particle { step: u64, id: u64, x: f64, z: f64, what: &'static str, value: f64, expected: String },
     /// A deposit under a gap no resting sphere passes ([`check_squeezed`]); the gap and the
     /// sphere's top in diameters.
     #[error(
@@ -48,6 +57,11 @@ fn shown(v: f64) -> String {
     } else {
         format!("{v}")
     }
+}
+
+/// A position in millimetres, to four digits.
+fn mm(metres: f64) -> String {
+    crate::scene::plausible::round_to(metres * 1e3, 4)
 }
 
 /// Why a number is not possible, naming it.
@@ -141,14 +155,23 @@ pub fn check_result(r: &RunResult) -> Result<(), Implausible> {
     Ok(())
 }
 
+/// The highest |v_x| a single particle can reach: [`VX_MAX_BLADE_SPEEDS`] blade speeds and
+/// [`VX_MAX_FALL_SPEEDS`] times the speed of a fall of `fall_height` (the box's height).
+pub fn particle_vx_limit(blade_speed: f64, fall_height: f64) -> f64 {
+    vx_limit(blade_speed) + VX_MAX_FALL_SPEEDS * (2.0 * crate::scene::GRAVITY * fall_height.max(0.0)).sqrt()
+}
+
 /// Every particle of a dump frame possible: positions and velocities finite, masses finite and
-/// > 0, |v_x| within [`VX_MAX_BLADE_SPEEDS`] blade speeds. The error names the particle.
-pub fn check_frame(f: &Frame, blade_speed: f64) -> Result<(), Implausible> {
-    let limit = vx_limit(blade_speed);
+/// positive, |v_x| within [`particle_vx_limit`] of the blade speed and a fall of `fall_height`.
+/// The error names the particle and where it was.
+pub fn check_frame(f: &Frame, blade_speed: f64, fall_height: f64) -> Result<(), Implausible> {
+    let limit = particle_vx_limit(blade_speed, fall_height);
     for i in 0..f.len() {
         let at = |what, value, expected: String| Implausible::Particle {
             step: f.step,
             id: f.id[i],
+            x: f.x[i],
+            z: f.z[i],
             what,
             value,
             expected,
@@ -164,7 +187,12 @@ pub fn check_frame(f: &Frame, blade_speed: f64) -> Result<(), Implausible> {
         }
         let v = f.vx[i];
         if !(v.is_finite() && v.abs() <= limit) {
-            return Err(at("vx", v, format!("|v_x| ≤ {VX_MAX_BLADE_SPEEDS} blade speeds ({limit} m/s)")));
+            let limit = crate::scene::plausible::round_to(limit, 3);
+            let expected = format!(
+                "|v_x| ≤ {limit} m/s ({VX_MAX_BLADE_SPEEDS} blade speeds and {VX_MAX_FALL_SPEEDS} times a fall of {} mm)",
+                mm(fall_height)
+            );
+            return Err(at("vx", v, expected));
         }
     }
     Ok(())
@@ -207,18 +235,30 @@ mod tests {
     #[test]
     fn a_frame_with_a_negative_or_zero_mass_is_refused_naming_the_particle() {
         for m in [-4.4e-6, 0.0, f64::NAN] {
-            let e = check_frame(&frame(m, 0.5), 1.4).unwrap_err().to_string();
-            assert!(e.contains("particle 7") && e.contains("mass"), "{e}");
+            let e = check_frame(&frame(m, 0.5), 1.4, 0.0).unwrap_err().to_string();
+            assert!(e.contains("particle 7 at x = 10 mm, z = 2 mm") && e.contains("mass"), "{e}");
         }
-        assert!(check_frame(&frame(4.4e-6, 0.5), 1.4).is_ok());
+        assert!(check_frame(&frame(4.4e-6, 0.5), 1.4, 0.0).is_ok());
     }
 
     #[test]
     fn a_frame_with_vx_beyond_the_stated_multiple_of_the_blade_speed_is_refused() {
-        assert!(check_frame(&frame(4.4e-6, 13.9), 1.4).is_ok());
+        assert!(check_frame(&frame(4.4e-6, 13.9), 1.4, 0.0).is_ok());
         for v in [14.1, -14.1, 1e300, f64::INFINITY] {
-            assert!(check_frame(&frame(4.4e-6, v), 1.4).unwrap_err().to_string().contains("vx"), "{v}");
+            assert!(check_frame(&frame(4.4e-6, v), 1.4, 0.0).unwrap_err().to_string().contains("vx"), "{v}");
         }
+    }
+
+    #[test]
+    fn at_a_slow_blade_a_particle_may_move_at_twice_the_speed_of_a_fall_from_the_box_top() {
+        // A 3 mm box: a fall from its top reaches √(2 g 3 mm) = 0.2426 m/s; at 0.02 m/s the
+        // bound is 0.2 + 2 × 0.2426 = 0.685 m/s, where ten blade speeds alone were 0.2.
+        let fall = (2.0 * 9.81 * 0.003f64).sqrt();
+        assert!((particle_vx_limit(0.02, 0.003) - (0.2 + 2.0 * fall)).abs() < 1e-12);
+        assert!(check_frame(&frame(4.4e-6, 0.22), 0.02, 0.003).is_ok());
+        assert!(check_frame(&frame(4.4e-6, -0.68), 0.02, 0.003).is_ok());
+        let e = check_frame(&frame(4.4e-6, 0.69), 0.02, 0.003).unwrap_err().to_string();
+        assert!(e.contains("|v_x| ≤ 0.685 m/s") && e.contains("a fall of 3 mm"), "{e}");
     }
 
     #[test]
