@@ -11,7 +11,6 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
-use statrs::statistics::{Data, OrderStatistics, Statistics};
 
 /// The standard deviation below which a set counts as constant (S = 0), relative to the largest
 /// magnitude in it: the shape statistics divide by S, and rounding alone leaves S ≈ 1e-17·|x|.
@@ -84,10 +83,15 @@ impl Statistic {
 
 /// The statistics of `x` (finite values; callers drop NaN and failed runs first).
 ///
-/// Mean, standard deviation (population, divisor N) and median come from statrs; the central
-/// moments m3 and m4 (which statrs has only for distributions, not for data) are two-pass sums
-/// about the mean.
+/// The mean is Σx/N; the central moments m2, m3 and m4 one pass of sums about it; the median
+/// the middle order statistic (the mean of the two middle ones for even N, as statrs has it).
 pub fn moments(x: &[f64]) -> Moments {
+    moments_reordering(&mut x.to_vec())
+}
+
+/// [`moments`] of `x`, which the median's selection reorders: the bootstrap's resample, drawn
+/// afresh each time, needs no copy.
+fn moments_reordering(x: &mut [f64]) -> Moments {
     let n = x.len();
     if n == 0 {
         return Moments {
@@ -100,20 +104,41 @@ pub fn moments(x: &[f64]) -> Moments {
             median: None,
         };
     }
-    let mean = x.iter().mean();
-    let std = if n == 1 { 0.0 } else { x.iter().population_std_dev() };
-    let median = Data::new(x.to_vec()).median();
-    let scale = x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let nf = n as f64;
+    let mean = x.iter().sum::<f64>() / nf;
+    let (mut s2, mut s3, mut s4, mut scale) = (0.0, 0.0, 0.0, 0.0f64);
+    for &v in x.iter() {
+        let d = v - mean;
+        let d2 = d * d;
+        s2 += d2;
+        s3 += d2 * d;
+        s4 += d2 * d2;
+        scale = scale.max(v.abs());
+    }
+    let std = if n == 1 { 0.0 } else { (s2 / nf).sqrt() };
+    let median = median_reordering(x);
     let constant = std <= CONSTANT_REL * scale || std == 0.0;
     let (skewness, kurtosis, moment_skewness) = if constant {
         (None, None, None)
     } else {
-        let nf = n as f64;
-        let m3 = x.iter().map(|v| (v - mean).powi(3)).sum::<f64>() / nf;
-        let m4 = x.iter().map(|v| (v - mean).powi(4)).sum::<f64>() / nf;
+        let (m3, m4) = (s3 / nf, s4 / nf);
         (Some(3.0 * (mean - median) / std), Some(m4 / std.powi(4)), Some(m3 / std.powi(3)))
     };
     Moments { n, mean: Some(mean), std: Some(std), skewness, kurtosis, moment_skewness, median: Some(median) }
+}
+
+/// The median of non-empty `x`, selected in place: for even N the mean of the two middle order
+/// statistics, the lower being the largest value left below the upper by the selection.
+fn median_reordering(x: &mut [f64]) -> f64 {
+    let (n, k) = (x.len(), x.len() / 2);
+    let (below, upper, _) = x.select_nth_unstable_by(k, f64::total_cmp);
+    let upper = *upper;
+    if n % 2 != 0 {
+        upper
+    } else {
+        let lower = below.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        (lower + upper) / 2.0
+    }
 }
 
 /// A confidence interval; `None` bounds when too few resamples defined the statistic.
@@ -162,7 +187,7 @@ pub fn bootstrap(x: &[f64], b: &Bootstrap) -> [Interval; 4] {
         for s in sample.iter_mut() {
             *s = x[rng.gen_range(0..n)];
         }
-        let m = moments(&sample);
+        let m = moments_reordering(&mut sample);
         for (d, stat) in draws.iter_mut().zip(STATISTICS) {
             if let Some(v) = stat.of(&m) {
                 d.push(v);
@@ -226,6 +251,7 @@ pub fn parse_cells<'a>(cells: impl IntoIterator<Item = &'a str>) -> Column {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use statrs::statistics::{Data, OrderStatistics, Statistics};
 
     fn close(a: f64, b: f64, tol: f64) -> bool {
         (a - b).abs() <= tol * (1.0 + b.abs())
@@ -274,6 +300,15 @@ mod tests {
         assert_eq!(m.median, Some(s[50]));
         // statrs' sample variance has divisor N − 1.
         assert!(close(m.std.unwrap().powi(2) * n / (n - 1.0), x.iter().variance(), 1e-12));
+        assert_eq!(m.median, Some(Data::new(x.clone()).median()));
+    }
+
+    #[test]
+    fn the_median_selected_in_place_is_statrs_s_for_odd_and_even_sets_with_ties() {
+        for n in [1, 2, 3, 4, 7, 10, 101, 1000] {
+            let x: Vec<f64> = (0..n).map(|i| ((i * 7919) % 13) as f64 * 0.25 - (i % 3) as f64).collect();
+            assert_eq!(moments(&x).median, Some(Data::new(x.clone()).median()), "n = {n}");
+        }
     }
 
     #[test]
