@@ -26,7 +26,7 @@
 //! ([`crate::analysis::stats`], [`crate::analysis::weights`]) or for running the sweep
 //! ([`crate::run`]).
 
-use crate::analysis::stats::{Bootstrap, Moments, Statistic, STATISTICS};
+use crate::analysis::stats::{Bootstrap, Interval, Moments, Statistic, STATISTICS};
 use crate::analysis::weights::LatticeWeights;
 use serde::{Deserialize, Serialize};
 
@@ -169,9 +169,21 @@ pub struct SpaceStats {
 impl SpaceStats {
     /// The (weighted) statistics of `x` and their bootstrap noise; `n` points in the space.
     pub fn of(n: usize, x: &[f64], w: Option<&[f64]>, boot: &Bootstrap) -> SpaceStats {
+        Self::with_intervals(n, x, w, boot).0
+    }
+
+    /// [`SpaceStats::of`] and the bootstrap intervals its noise is read from, for a caller that
+    /// reports them too (one bootstrap, not two).
+    pub fn with_intervals(
+        n: usize,
+        x: &[f64],
+        w: Option<&[f64]>,
+        boot: &Bootstrap,
+    ) -> (SpaceStats, [Interval; 4]) {
         let moments = crate::analysis::weights::moments(x, w);
         let iv = crate::analysis::weights::bootstrap(x, w, boot);
-        SpaceStats { n, moments, noise: iv.map(|i| i.lo.zip(i.hi).map(|(lo, hi)| (hi - lo) / 2.0)) }
+        let noise = iv.map(|i| i.lo.zip(i.hi).map(|(lo, hi)| (hi - lo) / 2.0));
+        (SpaceStats { n, moments, noise }, iv)
     }
 }
 

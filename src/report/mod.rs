@@ -409,8 +409,7 @@ fn judge_spaces(
         let (st, iv) = if adaptive {
             adaptive::emulated_space(dir, sweep, &space.label, &members)
         } else {
-            let iv = crate::analysis::weights::bootstrap(&mfr, w.as_deref(), boot);
-            (SpaceStats::of(members.len(), &mfr, w.as_deref(), boot), iv)
+            SpaceStats::with_intervals(members.len(), &mfr, w.as_deref(), boot)
         };
         let m = st.moments;
         judged.push(st);
