@@ -342,9 +342,8 @@ pub fn read_frames(run: &Finished, dump: &str) -> Result<(u64, Vec<Frame>), Reje
         .and_then(|snaps| snaps.iter().map(Frame::from_snapshot).collect())
         .map_err(|e| Rejected::new(FailureClass::Unparsable, e.to_string()))?;
     // What the engine wrote must be possible before the metrics read it.
-    let blade_speed = run.parameters.get("blade_speed").copied().unwrap_or(f64::NAN);
-    let fall_height = run.scene.z_hi - run.scene.z_lo;
-    if let Some(e) = frames.iter().find_map(|f| plausible::check_frame(f, blade_speed, fall_height).err()) {
+    let speeds = plausible::SphereSpeeds::of(run.scene);
+    if let Some(e) = frames.iter().find_map(|f| plausible::check_frame(f, &speeds).err()) {
         return Err(Rejected::new(FailureClass::Implausible, format!("{dump}: {e}")));
     }
     Ok((settle_steps, frames))
