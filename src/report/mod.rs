@@ -393,24 +393,41 @@ fn judge_spaces(
     boot: &Bootstrap,
 ) -> Vec<SpaceRow> {
     let adaptive = manifest.design.is_adaptive();
+    let lattice = matches!(manifest.design, DesignRecord::Lattice { .. });
+    // The spaces up to the first with a pending point, each with its MFR values and weights.
+    type Complete<'a> = (&'a crate::store::SpaceRecord, Vec<&'a PointRow>, Vec<f64>, Option<Vec<f64>>);
+    let complete: Vec<Complete> = manifest
+        .spaces
+        .iter()
+        .map(|space| (space, space.points.iter().map(|&i| &points[i]).collect::<Vec<&PointRow>>()))
+        .take_while(|(_, members)| !members.iter().any(|p| matches!(p.state, PointState::Pending)))
+        .map(|(space, members)| {
+            let values: Vec<&[f64]> = members.iter().map(|p| p.values.as_slice()).collect();
+            let all_mfr: Vec<Option<f64>> = members.iter().map(|p| p.mfr()).collect();
+            let (mfr, w) =
+                convergence::space_values(&values, &all_mfr, c.for_design(lattice).lattice_weights);
+            (space, members, mfr, w)
+        })
+        .collect();
+    // A sample's spaces are bootstrapped on every core: each bootstrap is seeded alone, so the
+    // intervals are those of one space after another. An adaptive design's are its emulator's.
+    let statistics: Vec<(SpaceStats, [Interval; 4])> = if adaptive {
+        complete
+            .iter()
+            .map(|(space, members, _, _)| adaptive::emulated_space(dir, sweep, &space.label, members))
+            .collect()
+    } else {
+        use rayon::prelude::*;
+        complete
+            .par_iter()
+            .map(|(_, members, mfr, w)| SpaceStats::with_intervals(members.len(), mfr, w.as_deref(), boot))
+            .collect()
+    };
     let mut rows = Vec::new();
     let mut judged: Vec<SpaceStats> = Vec::new();
-    for space in &manifest.spaces {
-        let members: Vec<&PointRow> = space.points.iter().map(|&i| &points[i]).collect();
-        if members.iter().any(|p| matches!(p.state, PointState::Pending)) {
-            break;
-        }
-        let values: Vec<&[f64]> = members.iter().map(|p| p.values.as_slice()).collect();
-        let all_mfr: Vec<Option<f64>> = members.iter().map(|p| p.mfr()).collect();
-        let lattice = matches!(manifest.design, DesignRecord::Lattice { .. });
-        let (mfr, w) = convergence::space_values(&values, &all_mfr, c.for_design(lattice).lattice_weights);
+    for ((space, members, mfr, w), (st, iv)) in complete.into_iter().zip(statistics) {
         let se: Vec<Option<f64>> = members.iter().filter(|p| p.mfr().is_some()).map(|p| p.mfr_se).collect();
         let noise = crate::analysis::noise::split(&mfr, &se, w.as_deref());
-        let (st, iv) = if adaptive {
-            adaptive::emulated_space(dir, sweep, &space.label, &members)
-        } else {
-            SpaceStats::with_intervals(members.len(), &mfr, w.as_deref(), boot)
-        };
         let m = st.moments;
         judged.push(st);
         rows.push(SpaceRow {
