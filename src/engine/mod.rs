@@ -322,7 +322,7 @@ pub fn command_ranks(engine: &Path, dir: &Path, deck: &str, ranks: u32) -> std::
 /// `ob1` over `self`. Left to choose, Debian's Open MPI 4.1 probes UCX and libfabric first, which
 /// costs 0.2 s of idle wall time at every start (0.33 s against 0.13 s for an empty deck) — a
 /// tenth of a short point's. A user's own `OMPI_MCA_pml` or `OMPI_MCA_btl` is kept.
-fn serial_mpi(cmd: &mut Command) {
+pub fn serial_mpi(cmd: &mut Command) {
     for (key, value) in [("OMPI_MCA_pml", "ob1"), ("OMPI_MCA_btl", "self")] {
         if std::env::var_os(key).is_none() {
             cmd.env(key, value);

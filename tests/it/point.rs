@@ -197,7 +197,9 @@ fn every_thesis_geometry_passes_liggghts_setup() {
         let deck = std::fs::read_to_string(out.join("in.liggghts")).unwrap();
         let first_run = deck.find("\nrun ").expect("a run command");
         std::fs::write(out.join("in.liggghts"), format!("{}\nrun 1\n", &deck[..first_run])).unwrap();
-        let run = Command::new("liggghts")
+        let mut liggghts = Command::new("liggghts");
+        demsweep::engine::serial_mpi(&mut liggghts);
+        let run = liggghts
             .args(["-in", "in.liggghts", "-log", "log.liggghts", "-echo", "none"])
             .current_dir(&out)
             .output()
