@@ -37,7 +37,7 @@ pub fn released_jam_speed(youngs_modulus: f64, poisson: f64, density: f64) -> f6
     let v2 =
         4.0 / (5.0 * std::f64::consts::PI) / std::f64::consts::SQRT_2 * RELEASED_OVERLAP.powf(2.5) * e_star
             / density;
-    v2.max(0.0).sqrt()
+    v2.sqrt()
 }
 
 /// What moves one sphere besides the blade: a fall from the top of the box and a jam released.
