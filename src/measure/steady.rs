@@ -17,7 +17,10 @@
 //!   runs of a point with other seeds differed by 1.18 of their combined SE, RMS, over 89
 //!   points; 0.96 with this SE). Blocks are batched in twos until the lag-1 autocorrelation of
 //!   the batch means is at most [`MAX_BATCH_ACF`] (measured: 5 D blocks give −0.17 to −0.08 at
-//!   0.1–1.4 m/s, so batches of one block); the ACF is reported with the SE.
+//!   0.1–1.4 m/s, so batches of one block); the ACF is reported with the SE. The SE is widened
+//!   by Student's t for the batches' degrees of freedom ([`t_allowance`]), and the deck stops on
+//!   that widened SE: an SE from 8–12 blocks is often read low, and the run stops when it first
+//!   dips under its target.
 //! - Steady: no trend over the window (|slope / SE| ≤ [`TREND_Z`], an ordinary least-squares
 //!   fit over the blocks), the heap at the window's end within [`HEAP_TOLERANCE`] of its start,
 //!   and the MSER truncation short of the series' half.
@@ -156,13 +159,26 @@ pub fn batch_means_se(y: &[f64]) -> (f64, usize, f64) {
     }
 }
 
+/// Coefficients of Student's t₀.₉₇₅(ν) over 1.96 in powers of 1/ν (the Cornish–Fisher expansion
+/// of the t quantile about the normal one, three terms): within 0.3 % of the exact ratio from 4
+/// degrees of freedom on. The conveyor deck's stop rule writes the same three numbers.
+pub const T_ALLOWANCE: [f64; 3] = [1.210_37, 1.440_10, 1.304_1];
+
+/// How much wider Student's 95 % interval is than the normal one for an SE estimated with `dof`
+/// degrees of freedom: t₀.₉₇₅(dof) / 1.96 by [`T_ALLOWANCE`] (1 for an SE known exactly).
+pub fn t_allowance(dof: f64) -> f64 {
+    let u = 1.0 / dof.max(1.0);
+    1.0 + u * (T_ALLOWANCE[0] + u * (T_ALLOWANCE[1] + u * T_ALLOWANCE[2]))
+}
+
 /// The SE of the mean of the last `window` blocks of `settled` (every block after the warm-up):
 /// batch means over all of `settled`, as if its spread were the window's. A transient that MSER
 /// cut widens the spread, so this errs on the safe side; on a steady series it does not carry
 /// MSER's choice of the least spread. Returns (SE, blocks per batch, lag-1 ACF of the batches).
 pub fn settled_se(settled: &[f64], window: usize) -> (f64, usize, f64) {
     let (se, b, r) = batch_means_se(settled);
-    (se * (settled.len() as f64 / window.max(1) as f64).sqrt(), b, r)
+    let batches = (settled.len() / b) as f64;
+    (se * (settled.len() as f64 / window.max(1) as f64).sqrt() * t_allowance(batches - 1.0), b, r)
 }
 
 /// How many times too short an SE is when computed as if `n` values were independent while
@@ -434,8 +450,29 @@ mod tests {
         assert_eq!(b, 1);
         let m = mean(&y);
         let sd = (y.iter().map(|v| (v - m).powi(2)).sum::<f64>() / 15.0).sqrt();
-        assert!((se - sd / 14f64.sqrt()).abs() < 1e-12, "{se}");
+        // Widened for the 15 degrees of freedom of its 16 batches.
+        assert!((se - sd / 14f64.sqrt() * t_allowance(15.0)).abs() < 1e-12, "{se}");
         assert!(se > 2.0 * batch_means_se(w).0, "{se} {:?}", batch_means_se(w));
+    }
+
+    #[test]
+    fn the_t_allowance_is_students_quantile_over_the_normal_one() {
+        use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
+        let z = Normal::new(0.0, 1.0).unwrap().inverse_cdf(0.975);
+        for dof in [4.0, 5.0, 7.0, 10.0, 20.0, 50.0, 200.0, 1e4] {
+            let exact = StudentsT::new(0.0, 1.0, dof).unwrap().inverse_cdf(0.975) / z;
+            let a = t_allowance(dof);
+            assert!((a / exact - 1.0).abs() < 0.003, "{dof}: {a} against {exact}");
+        }
+    }
+
+    #[test]
+    fn the_conveyor_deck_stops_on_the_se_its_result_reports() {
+        let deck = include_str!("../../templates/conveyor.liggghts.tera");
+        let [a, b, c] = T_ALLOWANCE;
+        let widened = format!("variable se_t equal v_se*(1+v_tu*({a}+v_tu*({b}+v_tu*{c})))");
+        assert!(deck.contains(&widened), "the deck's allowance is not {widened}");
+        assert!(deck.contains("variable tu equal 1/(${k}-1)"));
     }
 
     #[test]

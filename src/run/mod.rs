@@ -28,7 +28,7 @@ pub mod calibrate;
 pub mod cluster;
 mod error;
 mod executor;
-#[cfg(any(test, feature = "test-support"))]
+#[doc(hidden)]
 pub mod fake;
 mod finished;
 mod plan;
