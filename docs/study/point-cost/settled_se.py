@@ -3,6 +3,7 @@
 
     python3 docs/study/point-cost/settled_se.py pairs RUN_A RUN_B   # two runs of the same points
     python3 docs/study/point-cost/settled_se.py mc                  # synthetic steady blocks
+    python3 docs/study/point-cost/settled_se.py mc-t                # the same, SE widened by t
 
 pairs: RUN_A and RUN_B are sweep directories of the same design with other particle seeds, or one
 from rest and one warm-started (with the 0.6 floor of its warm-up) (each
@@ -17,6 +18,11 @@ honest, z has an RMS of about 1 (a little above: each SE is estimated from ~9 bl
 mc: stationary blocks (mean 1, coefficient of variation 0.12-0.17, lag-1 correlation 0 or -0.12
 as measured), the deck's stop rule (least window 8 blocks, SE <= 5 % of the mean) with each
 estimator; z = (mean - 1) / SE over 4,000 runs.
+
+mc-t: the same blocks and the "settled" SE, the deck stopping on the plain SE (z rule, the deck
+before; "z, least 16" with a least window of 16 blocks) or on the SE widened by Student's t for
+its k - 1 degrees of freedom (t rule, the deck now); z from the plain SE and from the widened one
+(what a result reports now); 1,500 runs each, CV 0.12-0.25.
 """
 import csv, importlib.util, json, math, os, random, statistics, sys
 
@@ -110,10 +116,46 @@ def mc():
                 print(f"| {cv} | {rho:+.2f} | {kind} | {mean(ks):.1f} | {rms:.2f} | {100 * mean([abs(z) > 3 for z in zs]):.1f} % |")
 
 
+def t_allowance(dof):
+    """t_0.975(dof) / 1.96 by three terms of its Cornish-Fisher series (src/measure/steady.rs)."""
+    u = 1.0 / dof
+    return 1 + u * (1.21037 + u * (1.4401 + u * 1.3041))
+
+
+def mc_t():
+    rng = random.Random(3)
+    print("| block CV | lag-1 ACF | stop rule | blocks | RMS z, plain SE | RMS z, widened SE | beyond 3 widened SE |")
+    print("|---|---|---|---|---|---|---|")
+    for rho in (0.0, -0.12):
+        theta = 0.0 if rho == 0 else (1 - math.sqrt(1 - 4 * rho * rho)) / (2 * rho)
+        for cv in (0.12, 0.17, 0.25):
+            for rule in ("z", "t", "z, least 16"):
+                least = 16 if rule == "z, least 16" else 8
+                plain, widened, ks = [], [], []
+                for _ in range(1500):
+                    e = [rng.gauss(0, 1) for _ in range(401)]
+                    y = [1 + cv * (e[k + 1] + theta * e[k]) / math.sqrt(1 + theta * theta) for k in range(400)]
+                    for k in range(least, 401):
+                        if mser(y[:k]) >= k // 2:
+                            continue
+                        m, se = estimate(y[:k], "settled")
+                        a = t_allowance(k - 1)
+                        if se * (a if rule == "t" else 1.0) <= 0.05 * m:
+                            plain.append((m - 1) / se)
+                            widened.append((m - 1) / (se * a))
+                            ks.append(k)
+                            break
+                rms = lambda zs: math.sqrt(mean([z * z for z in zs]))
+                print(f"| {cv} | {rho:+.2f} | {rule} | {mean(ks):.1f} | {rms(plain):.2f} | {rms(widened):.2f} | "
+                      f"{100 * mean([abs(z) > 3 for z in widened]):.1f} % |", flush=True)
+
+
 if __name__ == "__main__":
     if sys.argv[1:2] == ["pairs"] and len(sys.argv) == 4:
         pairs(sys.argv[2], sys.argv[3])
     elif sys.argv[1:] == ["mc"]:
         mc()
+    elif sys.argv[1:] == ["mc-t"]:
+        mc_t()
     else:
         sys.exit(__doc__)

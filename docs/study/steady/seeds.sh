@@ -9,6 +9,8 @@
 #   seeds.sh 10 sweeps/thesis-lds.toml friction=0.1,diameter=1.0,gap=3.0,blade_speed=1.5 f0.1-D1.0-g3.0-v1.5
 #   seeds.sh 10 sweeps/thesis-lds.toml friction=0.3,diameter=3.0,gap=4.5,blade_speed=1.2 f0.3-D3.0-g4.5-v1.2
 #   seeds.sh 10 sweeps/ti64-machine.toml blade_speed=0.2 ti64-v0.2   (and v0.063, v0.02)
+# and, once the SE was widened by Student's t and the deck stopped on it (docs/statistics.md):
+#   seeds.sh 10 sweeps/ti64-machine.toml blade_speed=0.2 ti64-v0.2-t   (and v0.063, v0.08)
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 n=$1 file=$2 point=$3 label=$4

@@ -17,6 +17,10 @@ GROUPS = [
     ("0.08", [os.path.join(here, "numerics", n + ".json") for n in ["default"] + [f"seed{k}" for k in range(2, 11)]]),
     ("0.2", [os.path.join(steady, "ti64-v0.2", f"seed-{k}.json") for k in range(1, 11)]),
 ]
+# The same points again once the SE was widened by Student's t and the deck stopped on it
+# (docs/study/steady/seeds.sh … ti64-v0.063-t, ti64-v0.2-t, ti64-v0.08-t): rows "0.063 t" etc.
+GROUPS += [(f"{v} t", [os.path.join(steady, f"ti64-v{v}-t", f"seed-{k}.json") for k in range(1, 11)])
+           for v in ("0.063", "0.08", "0.2")]
 
 def se(y):
     """SE of the mean of y, widened for lag-1 autocorrelation (as transient.py)."""
@@ -26,8 +30,8 @@ def se(y):
     return statistics.stdev(y) / math.sqrt(n) * math.sqrt((1 + r) / (1 - r))
 
 
-def long_run(speed):
-    f = os.path.join(here, "runs", f"ti64-v{speed}-h0.4-g1e-4", "result.json")
+def long_run(label):
+    f = os.path.join(here, "runs", f"ti64-v{label.split()[0]}-h0.4-g1e-4", "result.json")
     if not os.path.exists(f):
         return None
     y = json.load(open(f))["steady_state"]["block_mfr"]
@@ -39,7 +43,7 @@ def rms(zs):
     return math.sqrt(sum(z * z for z in zs) / len(zs)) if zs else float("nan")
 
 
-rows, all_z, by_window = [], [], {"short": [], "long": []}
+rows, all_z, all_zt, by_window = [], [], [], {"short": [], "long": []}
 for speed, files in GROUPS:
     runs = [(os.path.basename(f)[:-5], json.load(open(f))) for f in files if os.path.exists(f)]
     if len(runs) < 3:
@@ -60,7 +64,8 @@ for speed, files in GROUPS:
         zs.append(z)
         st = r["steady_state"]
         # A window of at most 12 blocks: at or near the least window (8), from an SE of few blocks.
-        by_window["short" if st["window_blocks"] <= 12 else "long"].append(z)
+        if not speed.endswith(" t"):
+            by_window["short" if st["window_blocks"] <= 12 else "long"].append(z)
         against = ""
         if long:
             zl = (m[i] - long[0]) / math.hypot(s[i], long[1])
@@ -68,7 +73,10 @@ for speed, files in GROUPS:
             against = f"against the long run {zl:+.2f}  "
         print(f"  {name:8s} {m[i]:.4f} ± {s[i]:.4f}  z {z:+.2f}  {against}"
               f"window {st['window_blocks']:3d} blocks  CPU {r['cpu_time']:.0f} s  {st['stop']}")
-    all_z += zs
+    if not speed.endswith(" t"):
+        all_z += zs
+    else:
+        all_zt.extend(zs)
     line = f"  RMS z {rms(zs):.2f}"
     long_cells = ["–", "–", "–"]
     if long:
@@ -90,3 +98,5 @@ if all_z:
     print(f"\nall speeds: RMS z {rms(all_z):.2f} over {len(all_z)} seeds; windows of at most 12 blocks "
           f"{rms(by_window['short']):.2f} ({len(by_window['short'])} seeds), longer {rms(by_window['long']):.2f} "
           f"({len(by_window['long'])} seeds)")
+if all_zt:
+    print(f"the seeds run with the SE widened by t: RMS z {rms(all_zt):.2f} over {len(all_zt)} seeds")
