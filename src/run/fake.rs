@@ -4,10 +4,8 @@
 //! so timeouts, cancellation and process groups are exercised for real. Its MFR is a made-up
 //! function of the parameters ([`fake_mfr`]).
 //!
-//! For this crate's unit and integration tests and its benchmarks, hidden from the docs. Always
-//! compiled: behind a feature, the integration tests needed the crate as its own
-//! dev-dependency, and that made the unit tests' build wait for the library's (BENCHMARKS.md
-//! "The test suite").
+//! Built for this crate's tests and, with the `test-support` feature, for its integration
+//! tests and benchmarks; not part of the library otherwise.
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;

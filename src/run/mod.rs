@@ -28,7 +28,7 @@ pub mod calibrate;
 pub mod cluster;
 mod error;
 mod executor;
-#[doc(hidden)]
+#[cfg(any(test, feature = "test-support"))]
 pub mod fake;
 mod finished;
 mod plan;
