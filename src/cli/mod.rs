@@ -151,7 +151,8 @@ enum Command {
     /// parameters it used, its MFR with the standard error, and v_x by height.
     #[command(
         after_help = "Examples:\n  sweep run sweeps/quick.toml --set gap=3          # MFR ± SE and v_x; others mid-range
-  sweep run runs/quick/sweep.toml --set gap=3,blade_speed=1.4 --vtk --out view"
+  sweep run runs/quick/sweep.toml --set gap=3,blade_speed=1.4 --vtk --out view
+  sweep run sweeps/ti64-machine.toml --set blade_speed=0.063 --seeds 5   # the scatter between seeds"
     )]
     Run(point::RunArgs),
     /// The statistics of a CSV column (mean, std, skewness, kurtosis) with bootstrap intervals.

@@ -82,6 +82,12 @@ pub(super) struct RunArgs {
     vtk: bool,
     #[arg(long, help = FORCE_HELP)]
     force: bool,
+    /// Run the point with N scene seeds (the file's `[scene] seed` and the N − 1 after it), one
+    /// after another, and print each seed's MFR ± SE and their mean with the SE between seeds:
+    /// the uncertainty to quote where a run's own SE falls short (slow blades with a cohesive
+    /// powder, docs/statistics.md). With --out, each seed's run is kept in <OUT>/seed-<SEED>.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..=100), conflicts_with = "vtk")]
+    seeds: Option<u32>,
 }
 
 pub(super) fn points(a: PointsArgs) -> Result<(), Error> {
@@ -195,6 +201,10 @@ pub(super) fn run_one(a: RunArgs) -> Result<(), Error> {
     // The point's bounds before the engine is looked for: a unit slip is bad input (exit 2)
     // whether or not LIGGGHTS is installed.
     let scene = check_bounds(&sweep, &values, &a.set)?;
+    if let Some(n) = a.seeds {
+        notes.iter().for_each(|n| eprintln!("note: {n}"));
+        return run_seeds(&a, &file_sweep, &sweep, &values, n);
+    }
     let standin = demsweep::run::standin::selected(&sweep);
     let ctx = if standin { None } else { Some(PointContext::new(sweep.clone())?) };
     let prepared = ctx.as_ref().map(|c| prepare_set(c, &values, &a.set)).transpose()?;
@@ -261,6 +271,84 @@ pub(super) fn run_one(a: RunArgs) -> Result<(), Error> {
         }
         RunOutcome::Cancelled => Err(Error::Interrupted),
     }
+}
+
+/// `sweep run --seeds N`: the point with N scene seeds, one after another; each seed's MFR, and
+/// their mean with the SE between seeds. A failed seed is named and left out of the mean.
+fn run_seeds(a: &RunArgs, file_sweep: &Sweep, sweep: &Sweep, values: &[f64], n: u32) -> Result<(), Error> {
+    use demsweep::run::pool::Executor;
+    let exec = demsweep::run::SweepExecutor::for_sweep(sweep)?;
+    let base = sweep.file.scene.seed;
+    let seeds: Vec<u64> = (0..n as u64).map(|k| base + k).collect();
+    let jobs = seeds.iter().map(|&s| exec.prepare_seeded(values, Some(s))).collect::<Result<Vec<_>, _>>()?;
+    let temp;
+    let root = match &a.out {
+        Some(d) => d.clone(),
+        None => {
+            temp = tempfile::Builder::new().prefix("sweep-run-").tempdir()?;
+            temp.path().to_path_buf()
+        }
+    };
+    let cancel = demsweep::sys::process::CancelToken::new();
+    let mut done = Vec::new();
+    for (seed, job) in seeds.iter().zip(&jobs) {
+        let dir = root.join(format!("seed-{seed}"));
+        std::fs::create_dir_all(&dir).map_err(|source| CliError::Create { path: dir.clone(), source })?;
+        if !a.json {
+            eprintln!("seed {seed}: running in {}", dir.display());
+        }
+        match exec.execute(job, &dir, &cancel) {
+            RunOutcome::Done(r) => {
+                if !a.json {
+                    let se = r.mfr_se.map_or(String::new(), |se| format!(" ± {se:.4} (SE)"));
+                    println!("seed {seed}: MFR {:.4}{se}", r.mfr);
+                }
+                done.push((*seed, r));
+            }
+            RunOutcome::Failed(f) => {
+                eprintln!("seed {seed}: run failed ({}): {}", f.class.as_str(), f.reason)
+            }
+            RunOutcome::Cancelled => return Err(Error::Interrupted),
+        }
+    }
+    let failed = seeds.len() - done.len();
+    let mfr: Vec<f64> = done.iter().map(|(_, r)| r.mfr).collect();
+    let k = mfr.len() as f64;
+    let mean = mfr.iter().sum::<f64>() / k;
+    let sd = (mfr.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (k - 1.0)).sqrt();
+    let own: Vec<f64> = done.iter().filter_map(|(_, r)| r.mfr_se).collect();
+    let own_mean = own.iter().sum::<f64>() / own.len().max(1) as f64;
+    if a.json {
+        let runs: Vec<&demsweep::outcome::RunResult> = done.iter().map(|(_, r)| r).collect();
+        let summary = serde_json::json!({
+            "seeds": done.iter().map(|(s, _)| s).collect::<Vec<_>>(),
+            "mfr_mean": if done.len() >= 2 { Some(mean) } else { None },
+            "mfr_sd_between_seeds": if done.len() >= 2 { Some(sd) } else { None },
+            "mfr_se_between_seeds": if done.len() >= 2 { Some(sd / k.sqrt()) } else { None },
+            "failed": failed,
+            "runs": runs,
+        });
+        println!("{}", serde_json::to_string_pretty(&summary).map_err(CliError::Json)?);
+    } else if done.len() >= 2 {
+        println!("{}", used_line(file_sweep, &a.set, &done[0].1));
+        let ratio = if own_mean > 0.0 {
+            format!("; SD between seeds / their mean SE {:.2}", sd / own_mean)
+        } else {
+            String::new()
+        };
+        println!(
+            "mean of {} seeds: MFR {mean:.4} ± {:.4} (SE between seeds; SD {sd:.4}){ratio}",
+            done.len(),
+            sd / k.sqrt()
+        );
+    }
+    if done.len() < 2 {
+        eprintln!("error: {} of {} seeds done: a scatter between seeds needs two", done.len(), seeds.len());
+    }
+    if failed > 0 {
+        return Err(Error::RunsFailed { failed, total: seeds.len() });
+    }
+    Ok(())
 }
 
 /// The scene of the point, or the refusal of a value outside its bounds, naming the `--set`.

@@ -7,7 +7,7 @@ use std::process::Command;
 
 use serde_json::Value;
 
-use crate::support::{self, run_point};
+use crate::support::{self, p, run_point};
 
 /// A sweep file over the thesis's D and gap ranges at μ = 0.3, v = 1.6 m/s, written to `dir`.
 fn thesis_space(dir: &Path) -> PathBuf {
@@ -275,4 +275,51 @@ fn the_thesis_layout_runs_on_a_smooth_plate() {
         }
         _ => panic!("{err}\n{r}"),
     }
+}
+
+/// `sweep run --seeds 2`: the point run with the file's seed and the next, each kept in its own
+/// directory, and their mean with the SE between seeds worked here from the two runs.
+#[test]
+fn a_point_with_two_seeds_reports_each_and_the_scatter_between_them() {
+    support::require_liggghts!("a_point_with_two_seeds_reports_each_and_the_scatter_between_them");
+    let tmp = tempfile::tempdir().unwrap();
+    let file = support::write_file(
+        &tmp.path().join("seeds.toml"),
+        &support::quick_scene("seeds", support::SHORT_FROM_REST),
+    );
+    let out = tmp.path().join("kept");
+    let o = support::sweep(&[
+        "run",
+        p(&file),
+        "--set",
+        "gap=2.5,blade_speed=1.4",
+        "--seeds",
+        "2",
+        "--json",
+        "--out",
+        p(&out),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", support::stderr(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["seeds"], serde_json::json!([12345, 12346]));
+    let runs = v["runs"].as_array().unwrap();
+    let m: Vec<f64> = runs.iter().map(|r| r["mfr"].as_f64().unwrap()).collect();
+    assert!(m.iter().all(|&x| x > 0.02), "{m:?}");
+    // Another seed is another pile and another run.
+    assert_ne!(runs[0]["hash"], runs[1]["hash"]);
+    assert_ne!(m[0], m[1]);
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1e-3);
+    assert!(close(v["mfr_mean"].as_f64().unwrap(), (m[0] + m[1]) / 2.0));
+    // Two values: SD = |Δ|/√2, the SE of their mean |Δ|/2.
+    assert!(close(v["mfr_sd_between_seeds"].as_f64().unwrap(), (m[0] - m[1]).abs() / 2f64.sqrt()));
+    assert!(close(v["mfr_se_between_seeds"].as_f64().unwrap(), (m[0] - m[1]).abs() / 2.0));
+    for seed in ["seed-12345", "seed-12346"] {
+        assert!(out.join(seed).join("in.liggghts").exists(), "{seed} not kept");
+    }
+    // One seed is no scatter: refused before anything is written.
+    let none = tmp.path().join("none");
+    let o = support::sweep(&["run", p(&file), "--seeds", "1", "--out", p(&none)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(support::stderr(&o).trim_end().lines().count(), 1, "{}", support::stderr(&o));
+    assert!(!none.exists());
 }
