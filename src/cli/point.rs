@@ -273,14 +273,37 @@ pub(super) fn run_one(a: RunArgs) -> Result<(), Error> {
     }
 }
 
+/// One seed of `sweep run --seeds`, ready to run.
+enum SeedRun {
+    StandIn(demsweep::run::standin::StandInJob),
+    Engine(Box<PointContext>, Box<point::Prepared>),
+}
+
 /// `sweep run --seeds N`: the point with N scene seeds, one after another; each seed's MFR, and
 /// their mean with the SE between seeds. A failed seed is named and left out of the mean.
 fn run_seeds(a: &RunArgs, file_sweep: &Sweep, sweep: &Sweep, values: &[f64], n: u32) -> Result<(), Error> {
     use demsweep::run::pool::Executor;
-    let exec = demsweep::run::SweepExecutor::for_sweep(sweep)?;
     let base = sweep.file.scene.seed;
     let seeds: Vec<u64> = (0..n as u64).map(|k| base + k).collect();
-    let jobs = seeds.iter().map(|&s| exec.prepare_seeded(values, Some(s))).collect::<Result<Vec<_>, _>>()?;
+    // Each seed from rest at the file's own precision, as `sweep run` runs one point: not the
+    // sweep executor, which would warm-start a seed from another's state or settle a sweep's
+    // precision from the seeds' directories.
+    let standin = demsweep::run::standin::selected(sweep);
+    let standin_exec =
+        if standin { Some(demsweep::run::standin::StandIn::new(sweep.clone())?) } else { None };
+    let mut runs = Vec::new();
+    for &seed in &seeds {
+        match &standin_exec {
+            Some(exec) => runs.push(SeedRun::StandIn(exec.prepare_seeded(values, Some(seed))?)),
+            None => {
+                let mut own = sweep.clone();
+                own.file.scene.seed = seed;
+                let ctx = PointContext::new(own)?;
+                let prepared = prepare_set(&ctx, values, &a.set)?;
+                runs.push(SeedRun::Engine(Box::new(ctx), Box::new(prepared)));
+            }
+        }
+    }
     let temp;
     let root = match &a.out {
         Some(d) => d.clone(),
@@ -291,13 +314,18 @@ fn run_seeds(a: &RunArgs, file_sweep: &Sweep, sweep: &Sweep, values: &[f64], n: 
     };
     let cancel = demsweep::sys::process::CancelToken::new();
     let mut done = Vec::new();
-    for (seed, job) in seeds.iter().zip(&jobs) {
+    for (seed, run) in seeds.iter().zip(&runs) {
         let dir = root.join(format!("seed-{seed}"));
         std::fs::create_dir_all(&dir).map_err(|source| CliError::Create { path: dir.clone(), source })?;
         if !a.json {
             eprintln!("seed {seed}: running in {}", dir.display());
         }
-        match exec.execute(job, &dir, &cancel) {
+        let outcome = match (run, &standin_exec) {
+            (SeedRun::StandIn(job), Some(exec)) => exec.execute(job, &dir, &cancel),
+            (SeedRun::Engine(ctx, prepared), _) => point::execute(ctx, prepared, &dir, &cancel),
+            (SeedRun::StandIn(_), None) => unreachable!("a stand-in job is prepared by the stand-in"),
+        };
+        match outcome {
             RunOutcome::Done(r) => {
                 if !a.json {
                     let se = r.mfr_se.map_or(String::new(), |se| format!(" ± {se:.4} (SE)"));

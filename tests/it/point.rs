@@ -283,9 +283,10 @@ fn the_thesis_layout_runs_on_a_smooth_plate() {
 fn a_point_with_two_seeds_reports_each_and_the_scatter_between_them() {
     support::require_liggghts!("a_point_with_two_seeds_reports_each_and_the_scatter_between_them");
     let tmp = tempfile::tempdir().unwrap();
+    // Warm starts on in the file: each seed still starts from rest, not from another seed's heap.
     let file = support::write_file(
         &tmp.path().join("seeds.toml"),
-        &support::quick_scene("seeds", support::SHORT_FROM_REST),
+        &support::quick_scene("seeds", "[scene]\nwarm_start = true\nwarmup_s = 0.05\nmfr_rel_se = 0.25\n"),
     );
     let out = tmp.path().join("kept");
     let o = support::sweep(&[
@@ -305,8 +306,9 @@ fn a_point_with_two_seeds_reports_each_and_the_scatter_between_them() {
     let runs = v["runs"].as_array().unwrap();
     let m: Vec<f64> = runs.iter().map(|r| r["mfr"].as_f64().unwrap()).collect();
     assert!(m.iter().all(|&x| x > 0.02), "{m:?}");
-    // Another seed is another pile and another run.
+    // Another seed is another pile and another run, each from rest.
     assert_ne!(runs[0]["hash"], runs[1]["hash"]);
+    assert!(runs.iter().all(|r| r.get("warm_start").is_none_or(|w| w.is_null())), "{runs:?}");
     assert_ne!(m[0], m[1]);
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1e-3);
     assert!(close(v["mfr_mean"].as_f64().unwrap(), (m[0] + m[1]) / 2.0));
