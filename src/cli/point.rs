@@ -274,9 +274,19 @@ pub(super) fn run_one(a: RunArgs) -> Result<(), Error> {
 }
 
 /// One seed of `sweep run --seeds`, ready to run.
-enum SeedRun {
-    StandIn(demsweep::run::standin::StandInJob),
+enum SeedRun<'a> {
+    StandIn(&'a demsweep::run::standin::StandIn, demsweep::run::standin::StandInJob),
     Engine(Box<PointContext>, Box<point::Prepared>),
+}
+
+impl SeedRun<'_> {
+    fn execute(&self, dir: &std::path::Path, cancel: &demsweep::sys::process::CancelToken) -> RunOutcome {
+        use demsweep::run::pool::Executor;
+        match self {
+            SeedRun::StandIn(exec, job) => exec.execute(job, dir, cancel),
+            SeedRun::Engine(ctx, prepared) => point::execute(ctx, prepared, dir, cancel),
+        }
+    }
 }
 
 /// `sweep run --seeds N`: the point with N scene seeds, one after another; each seed's MFR, and
@@ -294,7 +304,7 @@ fn run_seeds(a: &RunArgs, file_sweep: &Sweep, sweep: &Sweep, values: &[f64], n: 
     let mut runs = Vec::new();
     for &seed in &seeds {
         match &standin_exec {
-            Some(exec) => runs.push(SeedRun::StandIn(exec.prepare_seeded(values, Some(seed))?)),
+            Some(exec) => runs.push(SeedRun::StandIn(exec, exec.prepare_seeded(values, Some(seed))?)),
             None => {
                 let mut own = sweep.clone();
                 own.file.scene.seed = seed;
@@ -320,12 +330,7 @@ fn run_seeds(a: &RunArgs, file_sweep: &Sweep, sweep: &Sweep, values: &[f64], n: 
         if !a.json {
             eprintln!("seed {seed}: running in {}", dir.display());
         }
-        let outcome = match (run, &standin_exec) {
-            (SeedRun::StandIn(job), Some(exec)) => exec.execute(job, &dir, &cancel),
-            (SeedRun::Engine(ctx, prepared), _) => point::execute(ctx, prepared, &dir, &cancel),
-            (SeedRun::StandIn(_), None) => unreachable!("a stand-in job is prepared by the stand-in"),
-        };
-        match outcome {
+        match run.execute(&dir, &cancel) {
             RunOutcome::Done(r) => {
                 if !a.json {
                     let se = r.mfr_se.map_or(String::new(), |se| format!(" ± {se:.4} (SE)"));
@@ -340,37 +345,40 @@ fn run_seeds(a: &RunArgs, file_sweep: &Sweep, sweep: &Sweep, values: &[f64], n: 
         }
     }
     let failed = seeds.len() - done.len();
+    // Mean, SD (divisor k − 1) and the SE of the mean, over the seeds that finished: two at least.
     let mfr: Vec<f64> = done.iter().map(|(_, r)| r.mfr).collect();
     let k = mfr.len() as f64;
-    let mean = mfr.iter().sum::<f64>() / k;
-    let sd = (mfr.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (k - 1.0)).sqrt();
-    let own: Vec<f64> = done.iter().filter_map(|(_, r)| r.mfr_se).collect();
-    let own_mean = own.iter().sum::<f64>() / own.len().max(1) as f64;
+    let between = (mfr.len() >= 2).then(|| {
+        let mean = mfr.iter().sum::<f64>() / k;
+        let sd = (mfr.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (k - 1.0)).sqrt();
+        (mean, sd, sd / k.sqrt())
+    });
     if a.json {
         let runs: Vec<&demsweep::outcome::RunResult> = done.iter().map(|(_, r)| r).collect();
         let summary = serde_json::json!({
             "seeds": done.iter().map(|(s, _)| s).collect::<Vec<_>>(),
-            "mfr_mean": if done.len() >= 2 { Some(mean) } else { None },
-            "mfr_sd_between_seeds": if done.len() >= 2 { Some(sd) } else { None },
-            "mfr_se_between_seeds": if done.len() >= 2 { Some(sd / k.sqrt()) } else { None },
+            "mfr_mean": between.map(|b| b.0),
+            "mfr_sd_between_seeds": between.map(|b| b.1),
+            "mfr_se_between_seeds": between.map(|b| b.2),
             "failed": failed,
             "runs": runs,
         });
         println!("{}", serde_json::to_string_pretty(&summary).map_err(CliError::Json)?);
-    } else if done.len() >= 2 {
+    } else if let Some((mean, sd, se)) = between {
         println!("{}", used_line(file_sweep, &a.set, &done[0].1));
+        let own: Vec<f64> = done.iter().filter_map(|(_, r)| r.mfr_se).collect();
+        let own_mean = own.iter().sum::<f64>() / own.len().max(1) as f64;
         let ratio = if own_mean > 0.0 {
             format!("; SD between seeds / their mean SE {:.2}", sd / own_mean)
         } else {
             String::new()
         };
         println!(
-            "mean of {} seeds: MFR {mean:.4} ± {:.4} (SE between seeds; SD {sd:.4}){ratio}",
-            done.len(),
-            sd / k.sqrt()
+            "mean of {} seeds: MFR {mean:.4} ± {se:.4} (SE between seeds; SD {sd:.4}){ratio}",
+            done.len()
         );
     }
-    if done.len() < 2 {
+    if between.is_none() {
         eprintln!("error: {} of {} seeds done: a scatter between seeds needs two", done.len(), seeds.len());
     }
     if failed > 0 {
