@@ -163,6 +163,9 @@ pub struct Choice {
     pub se: f64,
     /// The share of the criterion J (before the batch) this run is expected to remove.
     pub gain: f64,
+    /// Its SE target as a multiple of the sweep's (one of [`SE_SCALES`]; 1 for runs placed for
+    /// coverage or towards the best setting).
+    pub se_scale: f64,
 }
 
 /// The emulator's statistics of a space and their intervals as the rule reads them; `None`
@@ -181,9 +184,61 @@ pub fn space_stats(n: usize, em: Option<&Emulator>, seed: u64) -> (SpaceStats, O
 /// The noise variance of a new run: the mean se² of the runs that record one, plus the
 /// emulator's nugget.
 pub fn new_run_noise(em: &Emulator, se: &[Option<f64>]) -> f64 {
-    let s: Vec<f64> = se.iter().flatten().map(|s| s * s).collect();
-    let mean = if s.is_empty() { 0.0 } else { s.iter().sum::<f64>() / s.len() as f64 };
-    mean + em.nugget_variance()
+    RunNoise::of(em, se, &[], 1.0).at(1.0)
+}
+
+/// The SE targets a run may be given when the criterion chooses each run's precision, as
+/// multiples of the sweep's: its own, half and a quarter of it. Measured on the benchmark only
+/// (`sweep bench designs --precision-per-run`): on the replayed thesis sweep it bought less than
+/// every run at half the SE (BENCHMARKS.md "The answer's cost"), so `sweep adapt` runs every
+/// point at the sweep's target.
+pub const SE_SCALES: [f64; 3] = [1.0, 0.5, 0.25];
+
+/// A new run's noise and cost at an SE target `scale` times the sweep's, and the scales it may
+/// be given.
+///
+/// Its noise variance is `scale²` times the runs' own (the mean se² of the runs that record
+/// one, each divided by the square of the scale it ran at) plus the emulator's nugget, which is
+/// not the runs' and no longer window lowers. Its cost, in runs at the sweep's target, is
+/// `w + (1 − w) / scale²`: the warm-up, a share `w` of a run at the sweep's target, is paid
+/// whatever the target, and the window grows as 1/SE².
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunNoise {
+    pub measured: f64,
+    pub nugget: f64,
+    pub warmup_share: f64,
+    /// The SE targets, as multiples of the sweep's, the criterion chooses each run's from
+    /// (`[1.0]`: every run at the sweep's; [`SE_SCALES`]).
+    pub scales: &'static [f64],
+}
+
+impl RunNoise {
+    /// From the emulator, the runs' SEs and the scale of the SE target each ran at (absent:
+    /// the sweep's own, 1); every new run at the sweep's target.
+    pub fn of(em: &Emulator, se: &[Option<f64>], scales: &[f64], warmup_share: f64) -> RunNoise {
+        let s: Vec<f64> = se
+            .iter()
+            .enumerate()
+            .filter_map(|(i, s)| Some((s.as_ref()? / scales.get(i).copied().unwrap_or(1.0)).powi(2)))
+            .collect();
+        let measured = if s.is_empty() { 0.0 } else { s.iter().sum::<f64>() / s.len() as f64 };
+        RunNoise {
+            measured,
+            nugget: em.nugget_variance(),
+            warmup_share: warmup_share.clamp(0.0, 1.0),
+            scales: &[1.0],
+        }
+    }
+
+    /// The noise variance of a new run at `scale` times the sweep's SE target.
+    pub fn at(&self, scale: f64) -> f64 {
+        scale * scale * self.measured + self.nugget
+    }
+
+    /// Its cost in runs at the sweep's target.
+    pub fn cost(&self, scale: f64) -> f64 {
+        self.warmup_share + (1.0 - self.warmup_share) / (scale * scale)
+    }
 }
 
 /// The candidates of batch `batch` (0 is the first adaptive batch): their own block of the
@@ -225,17 +280,22 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
-/// The next `size` runs among `cands` by the criterion (module docs), with `noise` the noise
-/// variance of a new run; and J before the batch. `None` when the statistics are undefined
-/// (the emulator's surface has no spread).
+/// The next `size` runs among `cands` by the criterion (module docs), with `noise` a new run's
+/// noise and cost; and J before the batch. `None` when the statistics are undefined (the
+/// emulator's surface has no spread).
 ///
 /// The first `split.explore` runs of the batch are placed for coverage instead, each the
 /// candidate farthest from the points so far (`existing` and the batch's: greedy maximin); the
 /// next `split.exploit` where the emulator's mean plus its SD (conditioned on the runs chosen
-/// before, whose values it believes) is highest; the rest by the criterion, conditioned on them.
+/// before, whose values it believes) is highest; both at the sweep's SE target. The rest go by
+/// the criterion, conditioned on them: each the candidate and SE target among `noise.scales`
+/// (scales of the sweep's target) that remove the most of J per unit of cost. A quieter run costs more
+/// and removes more, most where the emulator already knows the surface well and a run's own
+/// noise is what is left; where it knows little, a run at the sweep's target removes nearly as
+/// much for less (`noise.scales = [1.0]`: every run at the sweep's target).
 pub fn next_batch(
     em: &Emulator,
-    noise: f64,
+    noise: &RunNoise,
     cands: &[Vec<f64>],
     refs: &[Vec<f64>],
     existing: &[Vec<f64>],
@@ -324,14 +384,30 @@ pub fn next_batch(
     let mut nearest: Vec<f64> =
         cands.iter().map(|c| existing.iter().map(|e| d2(c, e)).fold(f64::INFINITY, f64::min)).collect();
     for step in 0..size.min(cands.len()) {
-        let gain = |c: usize| cov_cl[c].iter().map(|x| x * x).sum::<f64>() / (var_c[c] + noise).max(1e-300);
+        let by_criterion = step >= split.explore + split.exploit;
+        let gain = |c: usize, scale: f64| {
+            cov_cl[c].iter().map(|x| x * x).sum::<f64>() / (var_c[c] + noise.at(scale)).max(1e-300)
+        };
+        // The best scale for a candidate, and its score: the gain per cost by the criterion,
+        // else the coverage or upper-bound score at the sweep's target.
+        // The SE target that removes the most of J per unit of cost at candidate c, and that.
+        let best_scale = |c: usize| -> (f64, f64) {
+            noise.scales.iter().fold((1.0, f64::MIN), |b, &sc| {
+                let v = gain(c, sc) / noise.cost(sc);
+                if v > b.1 {
+                    (sc, v)
+                } else {
+                    b
+                }
+            })
+        };
         let score = |c: usize| {
             if step < split.explore {
                 nearest[c]
-            } else if step < split.explore + split.exploit {
+            } else if !by_criterion {
                 mean_c[c] + var_c[c].sqrt()
             } else {
-                gain(c)
+                best_scale(c).1
             }
         };
         let Some(best) = (0..cands.len())
@@ -344,21 +420,23 @@ pub fn next_batch(
         else {
             break;
         };
+        let scale = if by_criterion { best_scale(best).0 } else { 1.0 };
         for (c, n) in nearest.iter_mut().enumerate() {
             *n = n.min(d2(&cands[c], &cands[best]));
         }
-        let g = gain(best);
+        let g = gain(best, scale);
         let (m, sd) = em.predict(&cands[best]);
         chosen.push(Choice {
             point: cands[best].clone(),
             mfr: m,
             se: sd,
             gain: if before > 0.0 { g / before } else { 0.0 },
+            se_scale: scale,
         });
         taken[best] = true;
         // Condition on the chosen run: a rank-one update of every candidate's variance and
         // covariances.
-        let denom = (var_c[best] + noise).max(1e-300).sqrt();
+        let denom = (var_c[best] + noise.at(scale)).max(1e-300).sqrt();
         let u: Vec<f64> = (0..cands.len())
             .map(|c| {
                 let prior = em.prior_cov(&cands[c], &cands[best]) - dot(&vc[c], &vc[best]);
@@ -381,6 +459,9 @@ pub fn next_batch(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Runs whose noise variance is 1e-4 and whose warm-up is free.
+    const NOISE: RunNoise = RunNoise { measured: 1e-4, nugget: 0.0, warmup_share: 0.0, scales: &[1.0] };
 
     /// A kinked surface like MFR's: zero over part of the square, rising beyond.
     fn kinked(u: &[f64]) -> f64 {
@@ -417,8 +498,8 @@ mod tests {
         let (_, e) = fitted(20);
         let c = candidates(2, 0, 14);
         let r = reference(2, 14);
-        let (a, before) = next_batch(&e, 1e-4, &c, &r, &[], 6, Split::CRITERION).unwrap();
-        let (b, _) = next_batch(&e, 1e-4, &c, &r, &[], 6, Split::CRITERION).unwrap();
+        let (a, before) = next_batch(&e, &NOISE, &c, &r, &[], 6, Split::CRITERION).unwrap();
+        let (b, _) = next_batch(&e, &NOISE, &c, &r, &[], 6, Split::CRITERION).unwrap();
         assert_eq!(a, b);
         assert!(before > 0.0);
         assert_eq!(a.len(), 6);
@@ -451,7 +532,7 @@ mod tests {
             }
         }
         let r = reference(2, 14);
-        let (batch, _) = next_batch(&e, 1e-4, &c, &r, &x, 3, Split { explore: 0, exploit: 1 }).unwrap();
+        let (batch, _) = next_batch(&e, &NOISE, &c, &r, &x, 3, Split { explore: 0, exploit: 1 }).unwrap();
         let ucb = |u: &[f64]| {
             let (m, sd) = e.predict(u);
             m + sd
@@ -472,19 +553,50 @@ mod tests {
     }
 
     #[test]
+    fn a_run_s_noise_and_cost_follow_its_se_target() {
+        let (_, e) = fitted(20);
+        // Two runs, one at the sweep's target and one at half of it: each brought back to the
+        // sweep's target, both 0.02.
+        let n = RunNoise::of(&e, &[Some(0.02), Some(0.01), None], &[1.0, 0.5, 1.0], 0.73);
+        assert!((n.measured - 4e-4).abs() < 1e-15, "{n:?}");
+        assert!((n.at(0.5) - (1e-4 + e.nugget_variance())).abs() < 1e-15);
+        // The warm-up is paid at any target, the window grows as 1/SE².
+        assert!((n.cost(1.0) - 1.0).abs() < 1e-15);
+        assert!((n.cost(0.25) - (0.73 + 0.27 * 16.0)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_quieter_run_is_chosen_only_where_a_run_s_own_noise_is_most_of_what_is_not_known() {
+        let (x, e) = fitted(16);
+        let scales_of = |measured: f64, scales: &'static [f64]| {
+            let noise = RunNoise { measured, nugget: 0.0, warmup_share: 0.73, scales };
+            let (c, r) = (candidates(2, 0, 14), reference(2, 14));
+            let (b, _) = next_batch(&e, &noise, &c, &r, &x, 4, Split::CRITERION).unwrap();
+            b.iter().map(|c| c.se_scale).collect::<Vec<f64>>()
+        };
+        // Runs far quieter than the emulator is unsure: a quieter run removes hardly more, for
+        // five times the cost.
+        assert_eq!(scales_of(1e-8, &SE_SCALES), vec![1.0; 4]);
+        // Runs far noisier: their noise is what is left, and only a quieter run lowers it.
+        assert_eq!(scales_of(1.0, &SE_SCALES), vec![0.25; 4]);
+        // With one scale to choose from, every run is at it.
+        assert_eq!(scales_of(1.0, &[1.0]), vec![1.0; 4]);
+    }
+
+    #[test]
     fn the_criterion_shrinks_when_the_chosen_runs_are_added() {
         // Run the chosen batch for real and refit: J falls by more than it would for as many
         // candidates taken in stream order (a space-filling batch of the same size).
         let (x, e) = fitted(16);
         let c = candidates(2, 0, 14);
         let r = reference(2, 14);
-        let (batch, before) = next_batch(&e, 1e-4, &c, &r, &x, 8, Split::CRITERION).unwrap();
+        let (batch, before) = next_batch(&e, &NOISE, &c, &r, &x, 8, Split::CRITERION).unwrap();
         let after = |extra: Vec<Vec<f64>>| {
             let mut xs = x.clone();
             xs.extend(extra);
             let y: Vec<f64> = xs.iter().map(|u| kinked(u)).collect();
             let e2 = Emulator::fit(&xs, &y, &vec![Some(0.01); xs.len()]).unwrap();
-            next_batch(&e2, 1e-4, &c, &r, &xs, 1, Split::CRITERION).unwrap().1
+            next_batch(&e2, &NOISE, &c, &r, &xs, 1, Split::CRITERION).unwrap().1
         };
         let chosen = after(batch.iter().map(|c| c.point.clone()).collect());
         let plain = after(c[..8].to_vec());

@@ -47,6 +47,13 @@ pub trait Surface: Sync {
     fn run(&self, u: &[f64]) -> (f64, Option<f64>);
     /// The per-run noise SE at `u` (for "within one SE of the best").
     fn se(&self, u: &[f64]) -> f64;
+    /// A run at `u` whose SE target is `scale` times the surface's: its deviation from the
+    /// truth and the SE it records scaled by `scale`.
+    fn run_scaled(&self, u: &[f64], scale: f64) -> (f64, Option<f64>) {
+        let t = self.truth(u);
+        let (y, se) = self.run(u);
+        ((t + scale * (y - t)).max(0.0), se.map(|s| s * scale))
+    }
 }
 
 /// The stand-in's model over a sweep's space.
@@ -145,14 +152,21 @@ impl Surface for Scaled<'_> {
         self.inner.truth(u)
     }
     fn run(&self, u: &[f64]) -> (f64, Option<f64>) {
-        let t = self.inner.truth(u);
-        let (y, se) = self.inner.run(u);
-        ((t + self.scale * (y - t)).max(0.0), se.map(|s| s * self.scale))
+        self.inner.run_scaled(u, self.scale)
     }
     fn se(&self, u: &[f64]) -> f64 {
         self.inner.se(u)
     }
+    fn run_scaled(&self, u: &[f64], scale: f64) -> (f64, Option<f64>) {
+        self.inner.run_scaled(u, self.scale * scale)
+    }
 }
+
+/// The share of a run at the default SE target spent before its window (the warm-up): 0.73 in
+/// the adaptive LIGGGHTS record of the thesis space (`docs/study/thesis/adapt-240`, 232 runs:
+/// 10.8 blocks of warm-up and 29.4 of window a run on average). A run at `f` times the target
+/// costs 0.73 + 0.27/f² of one at it.
+pub const WARMUP_SHARE: f64 = 0.73;
 
 /// The known answer.
 #[derive(Debug, Clone)]
@@ -231,6 +245,8 @@ pub struct Row {
     pub ranking: Vec<String>,
     /// True MFR at the recommended run.
     pub recommended: f64,
+    /// The CPU of the runs so far, in runs at the surface's own SE target.
+    pub cost: f64,
     /// The space as the convergence rule reads it (statistics and their noise); `None` for the
     /// lattice.
     pub rule: Option<SpaceStats>,
@@ -296,6 +312,7 @@ pub fn lds(
     seed: u64,
     checkpoints: &[usize],
     emulate_to: usize,
+    run_cost: f64,
 ) -> Vec<Row> {
     let max = checkpoints.iter().copied().max().unwrap_or(0);
     let x = halton(names.len(), max, Scrambling::Random, seed);
@@ -312,6 +329,7 @@ pub fn lds(
             ranking: ranking(names, &x[..n], &y[..n]),
             recommended: rec,
             rule: Some(SpaceStats::of(n, &y[..n], None, &Bootstrap::default())),
+            cost: n as f64 * run_cost,
         });
         if n <= emulate_to {
             let (st, r) = emulated(names, n, em.as_ref());
@@ -323,6 +341,7 @@ pub fn lds(
                 ranking: r,
                 recommended: rec,
                 rule: Some(st),
+                cost: n as f64 * run_cost,
             });
         }
     }
@@ -330,7 +349,7 @@ pub fn lds(
 }
 
 /// The trapezoid lattice of each of `levels`.
-pub fn lattice(s: &dyn Surface, names: &[String], levels: &[usize]) -> Vec<Row> {
+pub fn lattice(s: &dyn Surface, names: &[String], levels: &[usize], run_cost: f64) -> Vec<Row> {
     levels
         .iter()
         .map(|&l| {
@@ -346,17 +365,23 @@ pub fn lattice(s: &dyn Surface, names: &[String], levels: &[usize]) -> Vec<Row> 
                 ranking: ranking(names, &x, &y),
                 recommended: recommended(s, &x, em.as_ref(), &y),
                 rule: None,
+                cost: x.len() as f64 * run_cost,
             }
         })
         .collect()
 }
 
-/// The adaptive design, batch by batch to `max` runs, as `sweep adapt` plans and judges it.
+/// The adaptive design, batch by batch to `max` runs, as `sweep adapt` plans and judges it:
+/// every run at the surface's SE target, or with `p.per_run` each run the criterion places at
+/// the one of [`criterion::SE_SCALES`] it chooses.
 pub fn adapt(s: &dyn Surface, names: &[String], seed: u64, p: &Plan) -> Vec<Row> {
     let (first, batch, max, explore) = (p.first, p.batch, p.max, p.explore);
     let d = names.len();
     let mut x = halton(d, first, Scrambling::Random, seed);
     let (mut y, mut se) = run_all(s, &x);
+    let mut scales = vec![1.0; x.len()];
+    let mut cost = x.len() as f64 * p.run_cost(1.0);
+    let levels: &'static [f64] = if p.per_run { &criterion::SE_SCALES } else { &[1.0] };
     let refs = criterion::reference(d, seed);
     let mut rows = Vec::new();
     let mut k = 0;
@@ -364,30 +389,42 @@ pub fn adapt(s: &dyn Surface, names: &[String], seed: u64, p: &Plan) -> Vec<Row>
         let em = fit(&x, &y, &se);
         let (st, r) = emulated(names, x.len(), em.as_ref());
         rows.push(Row {
-            design: "adapt".into(),
+            design: if p.per_run { "adapt per-run".into() } else { "adapt".into() },
             seed,
             runs: x.len(),
             moments: st.moments,
             ranking: r,
             recommended: recommended(s, &x, em.as_ref(), &y),
             rule: Some(st),
+            cost,
         });
         let size = batch.min(max.saturating_sub(x.len()));
         if size == 0 {
             return rows;
         }
         let cands = criterion::batch_candidates(d, k, seed, em.as_ref(), &x);
-        let chosen: Vec<Vec<f64>> = em
+        let chosen: Vec<(Vec<f64>, f64)> = em
             .as_ref()
             .and_then(|em| {
-                let noise = criterion::new_run_noise(em, &se);
-                criterion::next_batch(em, noise, &cands, &refs, &x, size, criterion::Split::of(size, explore))
+                let noise = criterion::RunNoise {
+                    scales: levels,
+                    ..criterion::RunNoise::of(em, &se, &scales, WARMUP_SHARE)
+                };
+                let split = criterion::Split::of(size, explore);
+                criterion::next_batch(em, &noise, &cands, &refs, &x, size, split)
             })
-            .map_or_else(|| cands[..size].to_vec(), |(c, _)| c.into_iter().map(|c| c.point).collect());
-        let (ny, nse) = run_all(s, &chosen);
-        x.extend(chosen);
-        y.extend(ny);
-        se.extend(nse);
+            .map_or_else(
+                || cands[..size].iter().map(|u| (u.clone(), 1.0)).collect(),
+                |(c, _)| c.into_iter().map(|c| (c.point, c.se_scale)).collect(),
+            );
+        for (u, scale) in chosen {
+            let (v, e) = s.run_scaled(&u, scale);
+            x.push(u);
+            y.push(v);
+            se.push(e);
+            scales.push(scale);
+            cost += p.run_cost(scale);
+        }
         k += 1;
     }
 }
@@ -432,13 +469,25 @@ pub struct Plan {
     pub lds: Vec<usize>,
     pub emulate_to: usize,
     pub levels: Vec<usize>,
+    /// The runs' SE target as a multiple of the surface's (`--noise-scale`), for their cost.
+    pub noise_scale: f64,
+    /// The adaptive design chooses each run's SE target ([`criterion::SE_SCALES`]).
+    pub per_run: bool,
+}
+
+impl Plan {
+    /// The cost of a run at `scale` times the design's SE target, in runs at the surface's.
+    pub fn run_cost(&self, scale: f64) -> f64 {
+        let f = self.noise_scale * scale;
+        WARMUP_SHARE + (1.0 - WARMUP_SHARE) / (f * f)
+    }
 }
 
 /// Every design's rows on `s`.
 pub fn compare(s: &dyn Surface, names: &[String], p: &Plan) -> Vec<Row> {
-    let mut rows = lattice(s, names, &p.levels);
+    let mut rows = lattice(s, names, &p.levels, p.run_cost(1.0));
     for &seed in &p.seeds {
-        rows.extend(lds(s, names, seed, &p.lds, p.emulate_to));
+        rows.extend(lds(s, names, seed, &p.lds, p.emulate_to, p.run_cost(1.0)));
         rows.extend(adapt(s, names, seed, p));
     }
     rows
@@ -513,24 +562,27 @@ fn rule_table(t: &Truth, rows: &[Row]) -> String {
     }
     let mut out = String::from(
         "\nThe default rule (scaled, τ = 0.05, hold 2) applied checkpoint to checkpoint, and the answer where it held:\n\n\
-         | design | seed | the rule holds at | all six targets there | last checkpoint: 95 % half-widths over τ·scale (mean, std, skewness, kurtosis) | truth inside the intervals |\n\
-         | --- | ---: | ---: | --- | --- | ---: |\n",
+         | design | seed | the rule holds at (runs) | CPU there (runs at the surface's SE) | all six targets there | CPU at the last checkpoint | last checkpoint: 95 % half-widths over τ·scale (mean, std, skewness, kurtosis) | truth inside the intervals |\n\
+         | --- | ---: | ---: | ---: | --- | ---: | --- | ---: |\n",
     );
     for ((d, seed), mut rs) in by {
         rs.sort_by_key(|r| r.runs);
         let spaces: Vec<SpaceStats> = rs.iter().filter_map(|r| r.rule).collect();
         let at = judge(&spaces, &c).iter().position(|j| j.converged);
-        let (n, ok) = match at {
-            Some(i) => {
-                (rs[i].runs.to_string(), if rs[i].within(t).iter().all(|b| *b) { "yes" } else { "no" })
-            }
-            None => ("never".into(), "–"),
+        let (n, cpu, ok) = match at {
+            Some(i) => (
+                rs[i].runs.to_string(),
+                format!("{:.0}", rs[i].cost),
+                if rs[i].within(t).iter().all(|b| *b) { "yes" } else { "no" },
+            ),
+            None => ("never".into(), "–".into(), "–"),
         };
+        let end = rs.last().map_or("–".into(), |r| format!("{:.0}", r.cost));
         let (widths, inside) = rs
             .last()
             .and_then(|r| r.rule)
             .map_or(("–".into(), "–".into()), |st| known(&st, t, c.tolerance));
-        out.push_str(&format!("| {d} | {seed} | {n} | {ok} | {widths} | {inside} |\n"));
+        out.push_str(&format!("| {d} | {seed} | {n} | {cpu} | {ok} | {end} | {widths} | {inside} |\n"));
     }
     out
 }

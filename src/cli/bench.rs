@@ -108,6 +108,11 @@ pub(super) struct DesignsArgs {
     /// The targets stay those of the unscaled runs.
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     noise_scale: f64,
+    /// The adaptive design chooses each run's SE target (1, 1/2 or 1/4 of the sweep's) by the
+    /// criterion's gain per CPU (a run at f times the target costs 0.73 + 0.27/f² of one at
+    /// it); the tables then give each design's CPU in runs at the target.
+    #[arg(long)]
+    precision_per_run: bool,
 }
 
 pub(super) fn bench_designs(a: DesignsArgs) -> Result<(), Error> {
@@ -141,6 +146,8 @@ pub(super) fn bench_designs(a: DesignsArgs) -> Result<(), Error> {
         lds: a.lds,
         emulate_to: a.emulate_to,
         levels: a.levels,
+        noise_scale: a.noise_scale,
+        per_run: a.precision_per_run,
     };
     let scaled = designs::Scaled { inner: surface.as_ref(), scale: a.noise_scale };
     let started = std::time::Instant::now();

@@ -77,7 +77,7 @@ enum Command {
     /// On a cluster: `--plan`, then `sweep submit DIR` runs each batch as an array job and
     /// plans the next in a job after it.
     #[command(
-        after_help = "Examples:\n  sweep adapt sweeps/thesis-lds.toml --max 240 --out runs/ad   # here, batches of --jobs
+        after_help = "Examples:\n  sweep adapt sweeps/thesis-lds.toml --out runs/ad   # here, batches of --jobs, to 480 points
   sweep adapt my.toml --out /scratch/me/ad --plan  # the first batch, for `sweep submit`"
     )]
     Adapt(sweep::AdaptArgs),

@@ -144,9 +144,13 @@ fn started_line(st: &crate::report::Setup, done: usize) -> Option<String> {
         ));
     }
     if let Some(p) = &st.precision {
+        let why = if p.adaptive {
+            "½·σ·√(τ/3): at that noise the emulator knows the skewness to the rule's tolerance within a few hundred runs"
+        } else {
+            "σ·√(τ/3): each point's noise biases the statistics by at most half the tolerance"
+        };
         parts.push(format!(
-            "after its first {} points (MFR's spread σ = {}), the sweep ran its points to an SE of MFR of at most {} \
-             (σ·√(τ/3): each point's noise biases the statistics by at most half the tolerance)",
+            "after its first {} points (MFR's spread σ = {}), the sweep ran its points to an SE of MFR of at most {} ({why})",
             p.points,
             fmt_short_sig(p.spread),
             fmt_short_sig(p.mfr_abs_se)

@@ -350,11 +350,11 @@ fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &AdaptWatch, ran: usize) 
     let k = manifest.spaces.len() - 1;
     let cands = criterion::batch_candidates(sweep.dim(), k, seed, em, x);
     let (chosen, j_before) = match em.and_then(|em| {
-        let noise = criterion::new_run_noise(em, se);
+        let noise = criterion::RunNoise::of(em, se, &[], 1.0);
         let refs = criterion::reference(sweep.dim(), seed);
         criterion::next_batch(
             em,
-            noise,
+            &noise,
             &cands,
             &refs,
             x,
@@ -368,7 +368,7 @@ fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &AdaptWatch, ran: usize) 
         None => (
             cands[..size.min(cands.len())]
                 .iter()
-                .map(|u| Choice { point: u.clone(), mfr: f64::NAN, se: f64::NAN, gain: 0.0 })
+                .map(|u| Choice { point: u.clone(), mfr: f64::NAN, se: f64::NAN, gain: 0.0, se_scale: 1.0 })
                 .collect(),
             f64::NAN,
         ),

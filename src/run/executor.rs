@@ -103,12 +103,15 @@ impl PointExecutor {
         let sweep = &self.ctx.sweep;
         let mfr_se_target = (settings.precision == "sweep")
             .then(|| {
-                precision::settle(
-                    sweep_dir,
-                    sweep.dim(),
-                    sweep.file.convergence.tolerance,
-                    &self.finished.mfrs(sweep, runs),
-                )
+                precision::read(sweep_dir).or_else(|| {
+                    precision::settle(
+                        sweep_dir,
+                        sweep.dim(),
+                        sweep.file.convergence.tolerance,
+                        precision::is_adaptive_sweep(sweep_dir),
+                        &self.finished.mfrs(sweep, runs),
+                    )
+                })
             })
             .flatten()
             .map(|p| p.mfr_abs_se);

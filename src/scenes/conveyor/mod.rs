@@ -191,7 +191,7 @@ impl Layout for Conveyor {
                     "precision target: SE of MFR at most",
                     match sc.precision.as_str() {
                         "sweep" => format!(
-                            "{} × MFR or {} over the first batch, then σ·√(τ/3) (the sweep's precision)",
+                            "{} × MFR or {} over the first batch, then σ·√(τ/3) (the sweep's precision; half of it in sweep adapt)",
                             short(sc.mfr_rel_se),
                             short(sc.mfr_abs_se)
                         ),
