@@ -184,7 +184,7 @@ pub fn space_stats(n: usize, em: Option<&Emulator>, seed: u64) -> (SpaceStats, O
 /// The noise variance of a new run: the mean se² of the runs that record one, plus the
 /// emulator's nugget.
 pub fn new_run_noise(em: &Emulator, se: &[Option<f64>]) -> f64 {
-    RunNoise::of(em, se, &[], 1.0).at(1.0)
+    RunNoise::of(em, se, &[]).at(1.0)
 }
 
 /// The SE targets a run may be given when the criterion chooses each run's precision, as
@@ -214,20 +214,15 @@ pub struct RunNoise {
 
 impl RunNoise {
     /// From the emulator, the runs' SEs and the scale of the SE target each ran at (absent:
-    /// the sweep's own, 1); every new run at the sweep's target.
-    pub fn of(em: &Emulator, se: &[Option<f64>], scales: &[f64], warmup_share: f64) -> RunNoise {
+    /// the sweep's own, 1); every new run at the sweep's target, so no cost to weigh.
+    pub fn of(em: &Emulator, se: &[Option<f64>], scales: &[f64]) -> RunNoise {
         let s: Vec<f64> = se
             .iter()
             .enumerate()
             .filter_map(|(i, s)| Some((s.as_ref()? / scales.get(i).copied().unwrap_or(1.0)).powi(2)))
             .collect();
         let measured = if s.is_empty() { 0.0 } else { s.iter().sum::<f64>() / s.len() as f64 };
-        RunNoise {
-            measured,
-            nugget: em.nugget_variance(),
-            warmup_share: warmup_share.clamp(0.0, 1.0),
-            scales: &[1.0],
-        }
+        RunNoise { measured, nugget: em.nugget_variance(), warmup_share: 1.0, scales: &[1.0] }
     }
 
     /// The noise variance of a new run at `scale` times the sweep's SE target.
@@ -557,7 +552,10 @@ mod tests {
         let (_, e) = fitted(20);
         // Two runs, one at the sweep's target and one at half of it: each brought back to the
         // sweep's target, both 0.02.
-        let n = RunNoise::of(&e, &[Some(0.02), Some(0.01), None], &[1.0, 0.5, 1.0], 0.73);
+        let n = RunNoise {
+            warmup_share: 0.73,
+            ..RunNoise::of(&e, &[Some(0.02), Some(0.01), None], &[1.0, 0.5, 1.0])
+        };
         assert!((n.measured - 4e-4).abs() < 1e-15, "{n:?}");
         assert!((n.at(0.5) - (1e-4 + e.nugget_variance())).abs() < 1e-15);
         // The warm-up is paid at any target, the window grows as 1/SE².

@@ -407,8 +407,9 @@ pub fn adapt(s: &dyn Surface, names: &[String], seed: u64, p: &Plan) -> Vec<Row>
             .as_ref()
             .and_then(|em| {
                 let noise = criterion::RunNoise {
+                    warmup_share: WARMUP_SHARE,
                     scales: levels,
-                    ..criterion::RunNoise::of(em, &se, &scales, WARMUP_SHARE)
+                    ..criterion::RunNoise::of(em, &se, &scales)
                 };
                 let split = criterion::Split::of(size, explore);
                 criterion::next_batch(em, &noise, &cands, &refs, &x, size, split)

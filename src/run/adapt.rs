@@ -350,7 +350,7 @@ fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &AdaptWatch, ran: usize) 
     let k = manifest.spaces.len() - 1;
     let cands = criterion::batch_candidates(sweep.dim(), k, seed, em, x);
     let (chosen, j_before) = match em.and_then(|em| {
-        let noise = criterion::RunNoise::of(em, se, &[], 1.0);
+        let noise = criterion::RunNoise::of(em, se, &[]);
         let refs = criterion::reference(sweep.dim(), seed);
         criterion::next_batch(
             em,
