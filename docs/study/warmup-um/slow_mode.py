@@ -45,14 +45,21 @@ print(f"ten default seeds (0.063 t): mean {statistics.fmean(shorts):.4f}, SD {st
       f"range {min(shorts):.4f}-{max(shorts):.4f}")
 for seed in (4, 1):
     f = os.path.join(long_dir, f"seed-{seed}.json")
-    if not os.path.exists(f):
+    failed = os.path.join(long_dir, f"seed-{seed}-failure.json")
+    if os.path.exists(failed):
+        # Refused by the steadiness check over its window: what it measured is kept.
+        fail = json.load(open(failed))
+        print(f"\nseed {seed}: failed ({fail['class']}: {fail['reason']})")
+        r = fail["measured"]
+    elif os.path.exists(f):
+        r = json.load(open(f))
+    else:
         print(f"seed {seed}: not run yet")
         continue
-    r = json.load(open(f))
     ss = r["steady_state"]
     y = ss["block_mfr"][ss["transient_blocks"]:]
     y = y[: ss["window_blocks"]] if ss["window_blocks"] else y
-    print(f"\nseed {seed}: MFR {r['mfr']:.4f} ± {r['mfr_se']:.4f} over {len(y)} blocks "
+    print(f"seed {seed}: MFR {r.get('mfr', float('nan')):.4f} ± {r.get('mfr_se') or float('nan'):.4f} over {len(y)} blocks "
           f"({len(y) * ss['block_diameters']:.0f} D), stop {ss['stop']}, CPU {r.get('cpu_time', 0):.0f} s")
     q = len(y) // 4
     print("  quarters:", ", ".join(f"{statistics.fmean(y[i * q:(i + 1) * q]):.4f}" for i in range(4)))
