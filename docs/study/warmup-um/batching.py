@@ -3,16 +3,17 @@
 # (src/measure/steady.rs MAX_BATCH_ACF, 0.2 today). The deck's stop rule does not read it, so
 # each run would stop where it did and only its reported SE changes: recomputed here exactly as
 # settled_se does (batch means over every block after the warm-up, scaled to the window, widened
-# by Student's t for the batches less one). The bound 0.2 must give back every recorded SE of
-# the runs recorded since the SE was widened by t (labels "-t"); the older seeds' rows give
-# their SE as a result reports it now.
+# by Student's t for the batches less one). The bound a run was recorded with must give back its
+# recorded SE: 0.2 for the runs recorded since the SE was widened by t (labels "-t"), 0 for the
+# fresh seeds recorded under the bound 0 (labels "-b0"); the older seeds' rows give their SE as
+# a result reported it after the t widening.
 # For each ten- or thirty-seed point: the SD between seeds, the mean SE and the RMS z.
 #   python3 docs/study/warmup-um/batching.py
 import glob, json, math, os, statistics
 
 here = os.path.dirname(os.path.abspath(__file__))
 steady = os.path.join(here, "..", "steady", "seeds")
-POINTS = ["ti64-v0.2-t", "ti64-v0.08-t", "ti64-v0.063-t",
+POINTS = ["ti64-v0.2-t", "ti64-v0.08-t", "ti64-v0.063-t", "ti64-v0.063-b0",
           "f0.1-D1.0-g3.0-v1.5", "f0.2-D2.0-g4.2-v1.3", "f0.3-D3.0-g4.5-v1.2"]
 BOUNDS = [0.2, 0.1, 0.0]
 
@@ -54,6 +55,9 @@ def rms(z):
 for label in POINTS:
     runs = [json.load(open(f)) for f in sorted(glob.glob(os.path.join(steady, label, "seed-*.json")))]
     runs = [r for r in runs if r.get("steady_state")]
+    if len(runs) < 3:
+        print(f"{label}: {len(runs)} seeds recorded, too few")
+        continue
     m = [r["mfr"] for r in runs]
     n = len(m)
     # The warm-up: the least transient among the seeds (MSER only ever extends it).
@@ -65,9 +69,10 @@ for label in POINTS:
             st = r["steady_state"]
             y = st["block_mfr"]
             s = settled_se(y, d0, st["window_blocks"], bound)
-            if bound == 0.2 and label.endswith("-t") and abs(s - r["mfr_se"]) > 1e-9 * max(s, 1e-12) + 1e-12:
+            recorded_with = {"-t": 0.2, "b0": 0.0}.get(label[-2:])
+            if bound == recorded_with and abs(s - r["mfr_se"]) > 1e-9 * max(s, 1e-12) + 1e-12:
                 s_note = f"{r['mfr_se']:.6f} recorded, {s:.6f} recomputed"
-                raise SystemExit(f"{label}: the bound 0.2 does not give back the recorded SE ({s_note})")
+                raise SystemExit(f"{label}: the bound {bound} does not give back the recorded SE ({s_note})")
             se.append(s)
         z = [(m[i] - statistics.fmean(m[:i] + m[i + 1:])) /
              math.sqrt(se[i] ** 2 + statistics.variance(m[:i] + m[i + 1:]) / (n - 1)) for i in range(n)]
