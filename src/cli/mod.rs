@@ -105,6 +105,22 @@ enum Command {
   sweep resume runs/quick --retry-failed           # run the failed points again"
     )]
     Resume(sweep::ResumeArgs),
+    /// Raise a finished sweep's precision without running its points again: every done point
+    /// whose SE of MFR is above the target continues its run from where it ended.
+    ///
+    /// The target is --se, else the sweep's recorded precision (DIR/precision.json; after
+    /// `sweep adapt`, the first batch's points, run to the scene's own target, are brought to the
+    /// sweep's). Each point continues from the restart its run wrote at its end, with no warm-up
+    /// again, in DIR/runs/<hash>/extension-N/, until its SE meets the target or its window the
+    /// cap; its result is measured again over every part and keeps every part's CPU time. A
+    /// --se is recorded as the sweep's precision when it chooses its own, so points run later
+    /// run to it too. An interrupted or failed extension leaves the point's earlier result.
+    /// Then `sweep report DIR`.
+    #[command(
+        after_help = "Examples:\n  sweep extend runs/ad                             # the first batch to the sweep's precision
+  sweep extend runs/quick --se 0.002               # every point to an SE of 0.002"
+    )]
+    Extend(sweep::ExtendArgs),
     /// Counts of a sweep directory: done, failed, running, screened, pending; the screen's verdict.
     #[command(after_help = "Examples:\n  sweep status runs/quick
   sweep status runs/quick --json")]
@@ -249,6 +265,7 @@ pub fn run(cli: Cli) -> Result<(), Error> {
         Command::Adapt(a) => sweep::adapt(a),
         Command::Calibrate(a) => calibrate::calibrate(a),
         Command::Resume(a) => sweep::resume(a),
+        Command::Extend(a) => sweep::extend(a),
         Command::Status(a) => sweep::status(a),
         Command::Unclaim(a) => sweep::unclaim(a),
         Command::Report(a) => sweep::report(a),

@@ -124,6 +124,17 @@ pub(super) struct ResumeArgs {
 }
 
 #[derive(Args)]
+pub(super) struct ExtendArgs {
+    /// The sweep directory (holding manifest.json).
+    dir: PathBuf,
+    /// The SE of MFR to extend every point to (default: the sweep's recorded precision).
+    #[arg(long)]
+    se: Option<f64>,
+    #[command(flatten)]
+    pool: PoolArgs,
+}
+
+#[derive(Args)]
 pub(super) struct UnclaimArgs {
     /// A sweep directory (holding manifest.json).
     dir: PathBuf,
@@ -352,6 +363,50 @@ pub(super) fn resume(a: ResumeArgs) -> Result<(), Error> {
         driver::resume(&a.dir, &exec, &opts, &mut watch, &cancel)?
     };
     finish(&summary, &sweep, opts.progress)
+}
+
+pub(super) fn extend(a: ExtendArgs) -> Result<(), Error> {
+    if let Some(se) = a.se {
+        if !(se.is_finite() && se > 0.0) {
+            return Err(flag(format!("--se {se}"), "expected a positive SE of MFR, e.g. 0.002"));
+        }
+    }
+    let jobs = super::jobs(a.pool.jobs)?;
+    demsweep::sys::process::install_interrupt_handler();
+    let cancel = CancelToken::new();
+    let quiet = a.pool.quiet;
+    let say = |line: &str| {
+        if !quiet {
+            eprintln!("{line}");
+        }
+    };
+    let s = demsweep::run::extend::extend_sweep(&a.dir, a.se, jobs, &cancel, &say)?;
+    let dir = demsweep::sys::shell::quote(&a.dir.display().to_string()).into_owned();
+    let mut parts = vec![format!("{} extended ({:.0} CPU s)", s.extended.len(), s.cpu_s)];
+    parts.push(format!("{} within it already", s.met));
+    if !s.not_extendable.is_empty() {
+        parts.push(format!("{} not extendable", s.not_extendable.len()));
+    }
+    if !s.failed.is_empty() {
+        parts.push(format!("{} failed (they keep their earlier result)", s.failed.len()));
+    }
+    if s.busy > 0 {
+        parts.push(format!("{} held by another process", s.busy));
+    }
+    let still = s.extended.iter().filter(|(_, _, after)| *after > s.target).count();
+    println!("extend to SE {}: {} done points; {}", s.target, s.points, parts.join(", "));
+    if still > 0 {
+        println!("{still} of those extended stopped at the window cap above the target");
+    }
+    if s.interrupted {
+        eprintln!("interrupted: the points not extended keep their results; `sweep extend {dir}` goes on");
+        return Err(Error::Interrupted);
+    }
+    println!("next: sweep report {dir}");
+    if !s.failed.is_empty() {
+        return Err(Error::RunsFailed { failed: s.failed.len(), total: s.points });
+    }
+    Ok(())
 }
 
 /// Write the report, say what happened and what to do next; failed runs or an interruption are

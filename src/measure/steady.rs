@@ -89,6 +89,17 @@ pub enum SteadyError {
 
 /// The block lines of a conveyor log, and how the run stopped.
 pub fn parse_log(log: &str) -> Result<(Vec<Block>, String), SteadyError> {
+    let (blocks, stop) = parse_blocks(log)?;
+    let stop = stop.ok_or(SteadyError::NoStop)?;
+    if blocks.len() < 4 {
+        return Err(SteadyError::TooFewBlocks(blocks.len()));
+    }
+    Ok((blocks, stop))
+}
+
+/// The block lines of a conveyor log, however few (a part of an extended run may add one), and
+/// how the run stopped, if the log says.
+pub fn parse_blocks(log: &str) -> Result<(Vec<Block>, Option<String>), SteadyError> {
     let mut blocks = Vec::new();
     let mut stop = None;
     for line in log.lines().map(str::trim) {
@@ -109,11 +120,27 @@ pub fn parse_log(log: &str) -> Result<(Vec<Block>, String), SteadyError> {
             stop = Some("cap");
         }
     }
-    let stop = stop.ok_or(SteadyError::NoStop)?;
-    if blocks.len() < 4 {
-        return Err(SteadyError::TooFewBlocks(blocks.len()));
-    }
-    Ok((blocks, stop.into()))
+    Ok((blocks, stop.map(String::from)))
+}
+
+/// Each block's MFR: the mass it deposited (what reached the delete region, plus the strip's
+/// change) over a full flow's mass through the gap in one block, `ideal`.
+pub fn block_mfr(blocks: &[Block], ideal: f64) -> Vec<f64> {
+    let mut before = 0.0;
+    blocks
+        .iter()
+        .map(|b| {
+            let m = (b.gone + b.strip - before) / ideal;
+            before = b.strip;
+            // A block that deposited nothing is exactly zero, not rounding residue of the
+            // subtraction, so MSER's ties break as the deck's do.
+            if m.abs() < 1e-9 {
+                0.0
+            } else {
+                m
+            }
+        })
+        .collect()
 }
 
 /// MSER truncation: the d ≤ n/2 that minimises var(y[d..]) / (n − d).
@@ -250,21 +277,7 @@ pub struct HeldBlocks {
 /// snapshots.
 pub fn compute(scene: &Scene, c: &HeldBlocks, blocks: &[Block], stop: &str, frames: &[Frame]) -> Steady {
     let ideal = c.ideal_block_mass;
-    let mut before = 0.0;
-    let y: Vec<f64> = blocks
-        .iter()
-        .map(|b| {
-            let m = (b.gone + b.strip - before) / ideal;
-            before = b.strip;
-            // A block that deposited nothing is exactly zero, not rounding residue of the
-            // subtraction, so MSER's ties break as the deck's do.
-            if m.abs() < 1e-9 {
-                0.0
-            } else {
-                m
-            }
-        })
-        .collect();
+    let y = block_mfr(blocks, ideal);
     // The warm-up is the least transient (the deck's stop rule starts after it); MSER may
     // extend it.
     let d0 = (c.warmup_blocks as usize).min(y.len().saturating_sub(4));

@@ -99,6 +99,14 @@ pub struct RunResult {
     /// The SE target of MFR the sweep chose for this run (absent: the scene's own).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mfr_se_target: Option<f64>,
+    /// The parts that continued the run's window after its first (`sweep extend`), each in
+    /// `extension-N/` of its run directory; its times are every part's (absent: none).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub extensions: u32,
+}
+
+fn is_zero(n: &u32) -> bool {
+    *n == 0
 }
 
 /// Where a warm-started run began: the point whose steady state it was mapped from.
@@ -147,6 +155,7 @@ impl Default for RunResult {
             warnings: Vec::new(),
             warm_start: None,
             mfr_se_target: None,
+            extensions: 0,
         }
     }
 }

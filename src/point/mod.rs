@@ -5,6 +5,7 @@
 
 pub mod deck;
 mod error;
+pub mod extend;
 
 pub use error::PointError;
 
@@ -370,6 +371,7 @@ pub fn execute_from(
         run_dir,
         run: &run,
         engine_version: &ctx.engine.version,
+        earlier: &[],
     };
     let mut result = match ctx.layout.measure(&finished) {
         Ok(result) => result,

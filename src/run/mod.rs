@@ -28,6 +28,7 @@ pub mod calibrate;
 pub mod cluster;
 mod error;
 mod executor;
+pub mod extend;
 #[cfg(any(test, feature = "test-support"))]
 pub mod fake;
 mod finished;

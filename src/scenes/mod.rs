@@ -12,7 +12,7 @@ pub mod moving_blade;
 pub mod pour;
 
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::engine::EngineRun;
 use crate::outcome::{FailureClass, RunResult};
@@ -88,6 +88,9 @@ pub struct Finished<'a> {
     pub run_dir: &'a Path,
     pub run: &'a EngineRun,
     pub engine_version: &'a str,
+    /// The run directories of the run's earlier parts, oldest first, when this one continued
+    /// them (`sweep extend`); empty for a run from rest.
+    pub earlier: &'a [PathBuf],
 }
 
 impl Finished<'_> {
@@ -223,6 +226,19 @@ pub trait Layout: Sync {
         _distance: f64,
     ) -> Result<Warm, ColdStart> {
         Err(ColdStart::NoWarmStart { layout: self.name() })
+    }
+
+    /// `scene` continued from the finished run whose parts' directories are `parts` (the point's
+    /// run directory, then its earlier extensions), by a part run in a new subdirectory of the
+    /// point's run directory; `warm_distance`: the run's first part was warm-started from a
+    /// neighbour that far off. `Err` says why it cannot be.
+    fn continuation(
+        &self,
+        _scene: &Scene,
+        _warm_distance: Option<f64>,
+        _parts: &[PathBuf],
+    ) -> Result<Scene, String> {
+        Err(format!("the {} layout does not run to a precision, so its runs are not extended", self.name()))
     }
 
     /// `scene` run until the SE of its MFR is at most `mfr_abs_se` (the sweep's choice), if

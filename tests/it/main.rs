@@ -19,6 +19,7 @@ mod calibrate;
 mod cluster;
 mod concurrency;
 mod engine;
+mod extend;
 mod failures;
 mod pool;
 mod resume;

@@ -3,9 +3,10 @@
 //! it (topped up to its count every fifth of a block), and the deposit is deleted downstream.
 //! MFR is measured in a steady state with its standard error ([`crate::measure::steady`]).
 
+pub mod extend;
 pub mod warm;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
@@ -77,6 +78,10 @@ pub struct Held {
     /// `warm_warmup_blocks` in place of `warmup_blocks`.
     pub warm_start: bool,
     pub warm_warmup_blocks: u64,
+    /// Continue a finished run from the restart its last part wrote, instead of from rest
+    /// (`sweep extend`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub extend: Option<extend::Continuation>,
 }
 
 /// The held heap's numbers of a conveyor scene.
@@ -229,11 +234,27 @@ impl Layout for Conveyor {
     }
 
     fn run_files(&self, _settings: &SceneSettings) -> Vec<String> {
-        [moving_blade::DUMP, STRIP_DUMP, warm::STATE_DUMP, warm::WARM_DATA].map(String::from).to_vec()
+        [moving_blade::DUMP, STRIP_DUMP, warm::STATE_DUMP, warm::WARM_DATA, extend::RESTART]
+            .map(String::from)
+            .to_vec()
     }
 
     fn warm_start_files(&self) -> Option<WarmFiles> {
         Some(WarmFiles { state: warm::STATE_DUMP, data: warm::WARM_DATA })
+    }
+
+    fn continuation(
+        &self,
+        scene: &Scene,
+        warm_distance: Option<f64>,
+        parts: &[PathBuf],
+    ) -> Result<Scene, String> {
+        // The warm-up and the cap of the run's first part: a warm start's were its own.
+        let scene = match warm_distance {
+            Some(d) => warm::warm_started(scene, d),
+            None => scene.clone(),
+        };
+        extend::continuation(&scene, parts).map_err(|e| e.to_string())
     }
 
     fn with_precision(&self, scene: &Scene, mfr_abs_se: f64) -> Option<Scene> {
@@ -342,6 +363,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         keep_state: settings.warm_start,
         warm_start: false,
         warm_warmup_blocks: blocks((settings.warm_warmup_s * v / d).max(settings.block_diameters)),
+        extend: None,
     };
     s.own = serde_json::to_value(conveyor).expect("a held heap serialises");
     s.gate_x = 0.0;
@@ -374,11 +396,30 @@ fn conveyor_layer(scene: &Scene, frame: &Frame, st: &SteadyState) -> Option<Laye
 
 /// The block series from the log, the steady window, MFR with its SE; a run that did not
 /// become steady fails as `unsteady` with its numbers kept.
+/// An extended run (`run.earlier` not empty) is measured over every part's blocks and snapshots.
 fn measure(run: &Finished) -> Result<RunResult, Rejected> {
-    let (_, frames) = moving_blade::read_frames(run, moving_blade::DUMP)?;
+    let unparsable = |e: String| Rejected::new(FailureClass::Unparsable, e);
+    let (_, these) = moving_blade::read_frames(run, moving_blade::DUMP)?;
     let scene = run.scene;
-    let (blocks, stop) = steady::parse_log(&run.run.log)
-        .map_err(|e| Rejected::new(FailureClass::Unparsable, e.to_string()))?;
+    let (mut blocks, _) = extend::earlier_blocks(run.earlier).map_err(|e| unparsable(e.to_string()))?;
+    let mut frames = Vec::new();
+    for dir in run.earlier {
+        let path = dir.join(moving_blade::DUMP);
+        let snaps = crate::engine::dump::read_dump(&path, &COLUMNS)
+            .map_err(|e| unparsable(format!("{}: {e}", path.display())))?;
+        for s in &snaps {
+            frames.push(Frame::from_snapshot(s).map_err(|e| unparsable(format!("{}: {e}", path.display())))?);
+        }
+    }
+    // A continuation's first snapshot is the earlier part's last, taken again.
+    let joined = frames.last().map(|f| f.step);
+    frames.extend(these.into_iter().filter(|f| joined.is_none_or(|j| f.step > j)));
+    let (more, stop) = steady::parse_blocks(&run.run.log).map_err(|e| unparsable(e.to_string()))?;
+    let stop = stop.ok_or_else(|| unparsable(steady::SteadyError::NoStop.to_string()))?;
+    blocks.extend(more);
+    if blocks.len() < 4 {
+        return Err(unparsable(steady::SteadyError::TooFewBlocks(blocks.len()).to_string()));
+    }
     let c = held(scene);
     let blocks_of = steady::HeldBlocks {
         ideal_block_mass: c.ideal_block_mass,

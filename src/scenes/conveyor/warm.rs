@@ -125,6 +125,14 @@ pub fn map(from: &Scene, state: &Path, to: &Scene, to_pile: &str, distance: f64)
     }
     let first_id = substrate.len() + 1;
     let data = data_file(&warm, first_id, to.material.density);
+    Ok(Warm { scene: warm_started(to, distance), data, data_file: WARM_DATA, particles: warm.len() })
+}
+
+/// `to` started from a neighbour `distance` away: its warm-up shortened in proportion to the
+/// distance (at least [`LEAST_WARMUP_SHARE`] of the cold one and the least warm warm-up), its
+/// window as long.
+pub fn warm_started(to: &Scene, distance: f64) -> Scene {
+    let c = super::held(to);
     let window_blocks = c.max_blocks - c.warmup_blocks;
     let share = (distance / FULL_WARMUP_DISTANCE).clamp(LEAST_WARMUP_SHARE, 1.0);
     let warmup_blocks = ((c.warmup_blocks as f64 * share).ceil() as u64)
@@ -135,7 +143,7 @@ pub fn map(from: &Scene, state: &Path, to: &Scene, to_pile: &str, distance: f64)
         h.max_blocks = warmup_blocks + window_blocks;
     });
     scene.window_length_steps = (warmup_blocks + window_blocks) * c.block_steps;
-    Ok(Warm { scene, data, data_file: WARM_DATA, particles: warm.len() })
+    scene
 }
 
 /// The ratio of `to`'s sizes to `from`'s, the same for every class; an error for two powders of

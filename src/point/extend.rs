@@ -1,0 +1,149 @@
+//! A finished point's run extended to a tighter SE target: its window continued in a new part
+//! (`extension-N/` in its run directory) from where the last part ended, and its result
+//! measured again over every part ([`crate::scenes::Layout::continuation`]).
+//!
+//! The point's `result.json` is replaced only once the new part is measured: a part that is
+//! interrupted or fails leaves the point's earlier result standing (a failure is written in the
+//! part's directory), and a later extension starts that part again.
+
+use std::path::{Path, PathBuf};
+
+use super::{PointContext, Prepared, FAILURE, RESULT};
+use crate::engine::{LogLimits, RunStatus};
+use crate::outcome::{FailureClass, RunFailure, RunResult, RESULT_FORMAT};
+use crate::point::deck::Deck;
+use crate::scenes::Finished;
+use crate::sys::atomic::write_json;
+use crate::sys::process::CancelToken;
+
+/// The directory of a run's n-th extension (n from 1), in the point's run directory.
+pub fn part_dir(run_dir: &Path, n: u32) -> PathBuf {
+    run_dir.join(format!("extension-{n}"))
+}
+
+/// What extending one point came to.
+#[derive(Debug)]
+pub enum Extended {
+    /// Its SE was within the target already: nothing ran.
+    Met(Box<RunResult>),
+    /// A new part ran; the point's result is the one over every part.
+    Done {
+        before: Box<RunResult>,
+        after: Box<RunResult>,
+    },
+    /// It cannot be continued, and why (nothing ran).
+    NotExtendable(String),
+    /// The new part failed; the point keeps its earlier result.
+    Failed(Box<RunFailure>),
+    Cancelled,
+}
+
+/// Extend the finished run of `p` in `run_dir` until the SE of its MFR is at most `target`.
+pub fn extend(
+    ctx: &PointContext,
+    p: &Prepared,
+    run_dir: &Path,
+    target: f64,
+    cancel: &CancelToken,
+) -> Extended {
+    let before: RunResult = match std::fs::read_to_string(run_dir.join(RESULT))
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok())
+    {
+        Some(r) => r,
+        None => return Extended::NotExtendable(format!("no readable {RESULT}: the point has not finished")),
+    };
+    let Some(se) = before.mfr_se else {
+        return Extended::NotExtendable("its result has no SE of MFR".into());
+    };
+    if se <= target {
+        return Extended::Met(Box::new(before));
+    }
+    let parts: Vec<PathBuf> = std::iter::once(run_dir.to_path_buf())
+        .chain((1..=before.extensions).map(|n| part_dir(run_dir, n)))
+        .collect();
+    let Some(scene) = ctx.layout.with_precision(&p.scene, target) else {
+        return Extended::NotExtendable(format!(
+            "the {} layout does not run to a precision",
+            ctx.layout.name()
+        ));
+    };
+    let warm_distance = before.warm_start.as_ref().map(|w| w.distance);
+    let scene = match ctx.layout.continuation(&scene, warm_distance, &parts) {
+        Ok(s) => s,
+        Err(why) => return Extended::NotExtendable(why),
+    };
+    let input = match ctx.template.render(&scene) {
+        Ok(input) if input.contains("read_restart") => input,
+        Ok(_) => {
+            return Extended::NotExtendable(
+                "the sweep's template (scene.template) has no read_restart: it cannot continue a run".into(),
+            )
+        }
+        Err(e) => return Extended::NotExtendable(format!("cannot render the continuation: {e}")),
+    };
+    let n = before.extensions + 1;
+    let dir = part_dir(run_dir, n);
+    let fail = |class: FailureClass, reason: String, log_tail: String, wall: f64| {
+        let f = RunFailure {
+            format: RESULT_FORMAT,
+            hash: p.hash.clone(),
+            class,
+            reason,
+            log_tail,
+            wall_time: wall,
+            measured: None,
+        };
+        let _ = write_json(&dir.join(FAILURE), &f);
+        Extended::Failed(Box::new(f))
+    };
+    // What an interrupted or failed attempt at this part left.
+    let _ = std::fs::remove_dir_all(&dir);
+    let deck = Deck { input, ..p.deck.clone() };
+    if let Err(e) = std::fs::create_dir_all(&dir).and_then(|_| deck.write(&dir)) {
+        return fail(
+            FailureClass::CouldNotStart,
+            format!("cannot write the deck in {}: {e}", dir.display()),
+            String::new(),
+            0.0,
+        );
+    }
+    let limits = LogLimits { ke_limit: scene.ke_limit, atoms: ctx.layout.atoms_kept(&scene) };
+    let run = ctx.engine.run(&dir, Deck::INPUT, &limits, ctx.timeout, cancel);
+    match run.status {
+        RunStatus::Cancelled => return Extended::Cancelled,
+        RunStatus::Failed { class, reason, log_tail } => return fail(class, reason, log_tail, run.wall_time),
+        RunStatus::Ok => {}
+    }
+    let finished = Finished {
+        scene: &scene,
+        parameters: &p.parameters,
+        hash: &p.hash,
+        run_dir: &dir,
+        run: &run,
+        engine_version: &ctx.engine.version,
+        earlier: &parts,
+    };
+    let mut after = match ctx.layout.measure(&finished) {
+        Ok(r) => r,
+        Err(r) => return fail(r.class, r.reason, String::new(), run.wall_time),
+    };
+    // The point's cost is every part's.
+    after.wall_time += before.wall_time;
+    after.cpu_time = match (after.cpu_time, before.cpu_time) {
+        (Some(a), Some(b)) => Some(a + b),
+        _ => None,
+    };
+    after.warm_start = before.warm_start.clone();
+    after.mfr_se_target = Some(target);
+    after.extensions = n;
+    if let Err(e) = write_json(&run_dir.join(RESULT), &after) {
+        return fail(
+            FailureClass::Unparsable,
+            format!("cannot write {RESULT}: {e}"),
+            String::new(),
+            run.wall_time,
+        );
+    }
+    Extended::Done { before: Box::new(before), after: Box::new(after) }
+}

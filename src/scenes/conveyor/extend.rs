@@ -1,0 +1,126 @@
+//! Extending a finished run: its window continued from where the run ended, with no warm-up
+//! again, until a tighter SE target is met or the window cap (`sweep extend`).
+//!
+//! Every conveyor deck writes a LIGGGHTS restart at its end ([`RESTART`]): every particle with
+//! its contacts' history, the walls' and the mesh's state, the step. A continuation deck reads
+//! it in place of the substrate and the heap, numbers its blocks on from the last, and starts
+//! its stop rule from the earlier parts' prefix sums, so it judges the whole series as one run
+//! would. The result is measured over every part's blocks and v_x snapshots.
+//!
+//! How close to one unbroken run (tests/it/extend.rs): the blocks after the join are those of
+//! the same point run at the tighter target from the start for the first two blocks, to the
+//! digits the log prints; the restart does not carry the insertion's random state, so from the
+//! third block on the two part as two seeds of a chaotic flow would.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::engine::LOG;
+use crate::measure::steady::{self, Block};
+use crate::scene::Scene;
+
+/// The restart a conveyor deck writes at its end.
+pub const RESTART: &str = "restart.end";
+
+/// Where a continuation deck starts: the deck's `scene.own.extend`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Continuation {
+    /// The restart it reads, relative to its run directory.
+    pub restart: String,
+    /// The first block it runs; the earlier parts ran the ones before.
+    pub first_block: u64,
+    /// The strip's mass when the earlier parts ended, kg (a block's deposit is the mass that
+    /// reached the delete region plus the strip's change).
+    pub strip_before: f64,
+    /// Prefix sums over the earlier blocks after the warm-up, the deck's `p1_k`, `p2_k`, `p3_k`.
+    pub sums: Vec<PrefixSums>,
+}
+
+/// Σ y, Σ y², Σ k·y over the first k blocks after the warm-up.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PrefixSums {
+    pub y: f64,
+    pub yy: f64,
+    pub ky: f64,
+}
+
+/// Why a finished run cannot be continued.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum NotExtendable {
+    #[error("its run left no {RESTART} (runs from before runs could be extended): run it again")]
+    NoRestart,
+    #[error(
+        "it stopped at the window cap ({blocks} blocks); a longer window needs a larger \
+         scene.window_cap_diameters"
+    )]
+    AtCap { blocks: u64 },
+    #[error("{}: {why}", path.display())]
+    Log { path: PathBuf, why: String },
+}
+
+/// The blocks of a run's parts (`parts`: its directories, oldest first), in order, and how the
+/// last part stopped.
+pub fn earlier_blocks(parts: &[PathBuf]) -> Result<(Vec<Block>, Option<String>), NotExtendable> {
+    let mut blocks = Vec::new();
+    let mut stop = None;
+    for dir in parts {
+        let path = dir.join(LOG);
+        let log = std::fs::read_to_string(&path)
+            .map_err(|e| NotExtendable::Log { path: path.clone(), why: e.to_string() })?;
+        let (these, s) = steady::parse_blocks(&log)
+            .map_err(|e| NotExtendable::Log { path: path.clone(), why: e.to_string() })?;
+        blocks.extend(these);
+        stop = s;
+    }
+    Ok((blocks, stop))
+}
+
+/// `scene` (the point's held heap, at the SE target to run to) continued from the run whose
+/// parts are `parts` (the point's run directory, then its earlier extensions, each a
+/// subdirectory of it), by a new part run in a subdirectory of the point's run directory.
+pub fn continuation(scene: &Scene, parts: &[PathBuf]) -> Result<Scene, NotExtendable> {
+    let last = parts.last().ok_or(NotExtendable::NoRestart)?;
+    if !last.join(RESTART).is_file() {
+        return Err(NotExtendable::NoRestart);
+    }
+    let c = super::held(scene);
+    let (blocks, stop) = earlier_blocks(parts)?;
+    let ran = blocks.len() as u64;
+    if stop.as_deref() == Some("cap") || ran >= c.max_blocks {
+        return Err(NotExtendable::AtCap { blocks: ran });
+    }
+    let y = steady::block_mfr(&blocks, c.ideal_block_mass);
+    let mut sums = Vec::new();
+    let mut s = PrefixSums { y: 0.0, yy: 0.0, ky: 0.0 };
+    for (k, y) in y.iter().skip(c.warmup_blocks as usize).enumerate() {
+        s = PrefixSums { y: s.y + y, yy: s.yy + y * y, ky: s.ky + (k + 1) as f64 * y };
+        sums.push(s);
+    }
+    if sums.is_empty() {
+        // A run that ended in its warm-up did not stop on its target or its cap.
+        return Err(NotExtendable::Log {
+            path: last.join(LOG),
+            why: format!("{ran} blocks, none after the {}-block warm-up", c.warmup_blocks),
+        });
+    }
+    // The new part runs in a subdirectory of the point's run directory, where the first part ran.
+    let restart = if Some(last.as_path()) == parts.first().map(PathBuf::as_path) {
+        format!("../{RESTART}")
+    } else {
+        let name = last.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        format!("../{name}/{RESTART}")
+    };
+    let more = Continuation {
+        restart,
+        first_block: ran + 1,
+        strip_before: blocks.last().map_or(0.0, |b| b.strip),
+        sums,
+    };
+    Ok(super::with_held(scene.clone(), |h| h.extend = Some(more)))
+}
+
+/// Whether `dir` (a run directory) can be continued at all: its run left a restart.
+pub fn has_restart(dir: &Path) -> bool {
+    dir.join(RESTART).is_file()
+}
