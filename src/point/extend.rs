@@ -68,22 +68,32 @@ pub fn extend(
             ctx.layout.name()
         ));
     };
+    let n = before.extensions + 1;
+    let dir = part_dir(run_dir, n);
+    // What an interrupted or failed attempt at this part left goes; so does the part of one
+    // that turns out not to be extendable.
+    let _ = std::fs::remove_dir_all(&dir);
+    let not = |why: String| {
+        let _ = std::fs::remove_dir_all(&dir);
+        Extended::NotExtendable(why)
+    };
+    if let Err(e) = std::fs::create_dir_all(&dir) {
+        return not(format!("cannot create {}: {e}", dir.display()));
+    }
     let warm_distance = before.warm_start.as_ref().map(|w| w.distance);
-    let scene = match ctx.layout.continuation(&scene, warm_distance, &parts) {
+    let scene = match ctx.layout.continuation(&scene, warm_distance, &parts, &dir) {
         Ok(s) => s,
-        Err(why) => return Extended::NotExtendable(why),
+        Err(why) => return not(why),
     };
     let input = match ctx.template.render(&scene) {
         Ok(input) if input.contains("read_restart") => input,
         Ok(_) => {
-            return Extended::NotExtendable(
-                "the sweep's template (scene.template) has no read_restart: it cannot continue a run".into(),
+            return not(
+                "the sweep's template (scene.template) has no read_restart: it cannot continue a run".into()
             )
         }
-        Err(e) => return Extended::NotExtendable(format!("cannot render the continuation: {e}")),
+        Err(e) => return not(format!("cannot render the continuation: {e}")),
     };
-    let n = before.extensions + 1;
-    let dir = part_dir(run_dir, n);
     let fail = |class: FailureClass, reason: String, log_tail: String, wall: f64| {
         let f = RunFailure {
             format: RESULT_FORMAT,
@@ -94,13 +104,12 @@ pub fn extend(
             wall_time: wall,
             measured: None,
         };
+        ctx.layout.keep(&dir, false);
         let _ = write_json(&dir.join(FAILURE), &f);
         Extended::Failed(Box::new(f))
     };
-    // What an interrupted or failed attempt at this part left.
-    let _ = std::fs::remove_dir_all(&dir);
     let deck = Deck { input, ..p.deck.clone() };
-    if let Err(e) = std::fs::create_dir_all(&dir).and_then(|_| deck.write(&dir)) {
+    if let Err(e) = deck.write(&dir) {
         return fail(
             FailureClass::CouldNotStart,
             format!("cannot write the deck in {}: {e}", dir.display()),
@@ -114,6 +123,9 @@ pub fn extend(
         RunStatus::Cancelled => return Extended::Cancelled,
         RunStatus::Failed { class, reason, log_tail } => return fail(class, reason, log_tail, run.wall_time),
         RunStatus::Ok => {}
+    }
+    if let Some(why) = super::cut_off(&dir) {
+        return fail(FailureClass::Unparsable, why, String::new(), run.wall_time);
     }
     let finished = Finished {
         scene: &scene,
@@ -137,6 +149,7 @@ pub fn extend(
     after.warm_start = before.warm_start.clone();
     after.mfr_se_target = Some(target);
     after.extensions = n;
+    ctx.layout.keep(&dir, true);
     if let Err(e) = write_json(&run_dir.join(RESULT), &after) {
         return fail(
             FailureClass::Unparsable,

@@ -226,6 +226,15 @@ pub fn prepare(ctx: &PointContext, swept_values: &[f64]) -> Result<Prepared, Poi
     Ok(Prepared { hash: deck.hash.clone(), parameters, scene, deck })
 }
 
+/// Why the files a run left in `run_dir` cannot be trusted, if they cannot: LIGGGHTS does not
+/// check its writes, so on a full disk its last files (the restart, a dump) are cut off and it
+/// ends as if nothing happened. (A sweep's pool takes such a failure for the store's, and the
+/// point stays pending.)
+pub fn cut_off(run_dir: &Path) -> Option<String> {
+    crate::sys::disk::low_on_space(run_dir)
+        .then(|| format!("the disk holding {} is full: the run's files may be cut off", run_dir.display()))
+}
+
 /// The deck's first lines: every parameter of the point with its unit, and the run's hash.
 fn header(parameters: &BTreeMap<String, f64>, hash: &str) -> String {
     let values: Vec<String> = params::CATALOGUE
@@ -333,6 +342,7 @@ pub fn execute_from(
             measured,
         };
         crate::engine::remove_forced_restarts(run_dir);
+        ctx.layout.keep(run_dir, false);
         let _ = write_json(&run_dir.join(FAILURE), &f);
         RunOutcome::Failed(f)
     };
@@ -364,6 +374,18 @@ pub fn execute_from(
         RunStatus::Failed { class, reason, log_tail } => return fail(class, reason, log_tail, wall),
         RunStatus::Ok => {}
     }
+    if let Some(reason) = cut_off(run_dir) {
+        // Its files are left as they are, the disk full: the pool takes the failure for the store's.
+        return RunOutcome::Failed(RunFailure {
+            format: RESULT_FORMAT,
+            hash: p.hash.clone(),
+            class: FailureClass::Unparsable,
+            reason,
+            log_tail: String::new(),
+            wall_time: wall,
+            measured: None,
+        });
+    }
     let finished = Finished {
         scene,
         parameters: &p.parameters,
@@ -379,6 +401,7 @@ pub fn execute_from(
     };
     result.warm_start = warm.map(|(_, record)| record);
     result.mfr_se_target = mfr_se_target;
+    ctx.layout.keep(run_dir, true);
     if let Err(e) = write_json(&run_dir.join(RESULT), &result) {
         return fail(FailureClass::Unparsable, format!("cannot write {RESULT}: {e}"), String::new(), wall);
     }

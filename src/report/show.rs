@@ -169,6 +169,14 @@ impl PointPage {
             );
             let _ = writeln!(t, "  particles        {}", r.particles);
             let _ = writeln!(t, "  wall time        {:.1} s", r.wall_time);
+            if r.extensions > 0 {
+                let _ = writeln!(
+                    t,
+                    "  extended         {} time(s) by `sweep extend`, to an SE of {} (the parts in the run directory's extension-N/; the times are every part's)",
+                    r.extensions,
+                    r.mfr_se_target.map_or("?".into(), |x| format!("{x:.4}")),
+                );
+            }
             if let (Some(q), Some(p)) = (self.quality, self.profile) {
                 let _ = writeln!(
                     t,

@@ -228,18 +228,23 @@ pub trait Layout: Sync {
         Err(ColdStart::NoWarmStart { layout: self.name() })
     }
 
-    /// `scene` continued from the finished run whose parts' directories are `parts` (the point's
-    /// run directory, then its earlier extensions), by a part run in a new subdirectory of the
-    /// point's run directory; `warm_distance`: the run's first part was warm-started from a
-    /// neighbour that far off. `Err` says why it cannot be.
+    /// `scene` continued from the finished run whose parts' directories are `parts` (oldest
+    /// first) by a new part in `part_dir`, where what it reads besides its deck is written;
+    /// `warm_distance`: the run's first part was warm-started from a neighbour that far off.
+    /// `Err` says why it cannot be.
     fn continuation(
         &self,
         _scene: &Scene,
         _warm_distance: Option<f64>,
         _parts: &[PathBuf],
+        _part_dir: &Path,
     ) -> Result<Scene, String> {
         Err(format!("the {} layout does not run to a precision, so its runs are not extended", self.name()))
     }
+
+    /// Shrink what a finished run leaves in `run_dir` to what is kept (`done`: it has a
+    /// result).
+    fn keep(&self, _run_dir: &Path, _done: bool) {}
 
     /// `scene` run until the SE of its MFR is at most `mfr_abs_se` (the sweep's choice), if
     /// this layout runs to a precision.

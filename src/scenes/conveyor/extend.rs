@@ -22,11 +22,15 @@ use crate::scene::Scene;
 
 /// The restart a conveyor deck writes at its end.
 pub const RESTART: &str = "restart.end";
+/// What a done run's directory keeps of it: gzipped, about a sixth of its size.
+pub const KEPT_RESTART: &str = "restart.end.gz";
+/// The earlier part's restart, unpacked into a continuation's run directory for its deck.
+pub const PRIOR_RESTART: &str = "prior.restart";
 
 /// Where a continuation deck starts: the deck's `scene.own.extend`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Continuation {
-    /// The restart it reads, relative to its run directory.
+    /// The restart it reads, in its run directory.
     pub restart: String,
     /// The first block it runs; the earlier parts ran the ones before.
     pub first_block: u64,
@@ -48,8 +52,10 @@ pub struct PrefixSums {
 /// Why a finished run cannot be continued.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum NotExtendable {
-    #[error("its run left no {RESTART} (runs from before runs could be extended): run it again")]
+    #[error("its run left no {KEPT_RESTART} (runs from before runs could be extended): run it again")]
     NoRestart,
+    #[error("cannot unpack its restart into {}: {why}", path.display())]
+    Unpack { path: PathBuf, why: String },
     #[error(
         "it stopped at the window cap ({blocks} blocks); a longer window needs a larger \
          scene.window_cap_diameters"
@@ -77,11 +83,11 @@ pub fn earlier_blocks(parts: &[PathBuf]) -> Result<(Vec<Block>, Option<String>),
 }
 
 /// `scene` (the point's held heap, at the SE target to run to) continued from the run whose
-/// parts are `parts` (the point's run directory, then its earlier extensions, each a
-/// subdirectory of it), by a new part run in a subdirectory of the point's run directory.
-pub fn continuation(scene: &Scene, parts: &[PathBuf]) -> Result<Scene, NotExtendable> {
+/// parts are `parts` (their run directories, oldest first) by a new part in `part_dir`, with the
+/// last part's restart unpacked there for its deck.
+pub fn continuation(scene: &Scene, parts: &[PathBuf], part_dir: &Path) -> Result<Scene, NotExtendable> {
     let last = parts.last().ok_or(NotExtendable::NoRestart)?;
-    if !last.join(RESTART).is_file() {
+    if !last.join(KEPT_RESTART).is_file() && !last.join(RESTART).is_file() {
         return Err(NotExtendable::NoRestart);
     }
     let c = super::held(scene);
@@ -104,15 +110,10 @@ pub fn continuation(scene: &Scene, parts: &[PathBuf]) -> Result<Scene, NotExtend
             why: format!("{ran} blocks, none after the {}-block warm-up", c.warmup_blocks),
         });
     }
-    // The new part runs in a subdirectory of the point's run directory, where the first part ran.
-    let restart = if Some(last.as_path()) == parts.first().map(PathBuf::as_path) {
-        format!("../{RESTART}")
-    } else {
-        let name = last.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-        format!("../{name}/{RESTART}")
-    };
+    let into = part_dir.join(PRIOR_RESTART);
+    unpack(last, &into).map_err(|e| NotExtendable::Unpack { path: into.clone(), why: e.to_string() })?;
     let more = Continuation {
-        restart,
+        restart: PRIOR_RESTART.into(),
         first_block: ran + 1,
         strip_before: blocks.last().map_or(0.0, |b| b.strip),
         sums,
@@ -120,7 +121,41 @@ pub fn continuation(scene: &Scene, parts: &[PathBuf]) -> Result<Scene, NotExtend
     Ok(super::with_held(scene.clone(), |h| h.extend = Some(more)))
 }
 
-/// Whether `dir` (a run directory) can be continued at all: its run left a restart.
-pub fn has_restart(dir: &Path) -> bool {
-    dir.join(RESTART).is_file()
+/// What a finished run's directory keeps of its restarts: a done run's own gzipped (for a
+/// later extension), nothing of a failed run's, nor the earlier part's copy a continuation read.
+pub fn keep_restart(run_dir: &Path, done: bool) -> std::io::Result<()> {
+    let _ = std::fs::remove_file(run_dir.join(PRIOR_RESTART));
+    let raw = run_dir.join(RESTART);
+    if !raw.is_file() {
+        return Ok(());
+    }
+    let kept = if done { pack(&raw, &run_dir.join(KEPT_RESTART)) } else { Ok(()) };
+    std::fs::remove_file(&raw)?;
+    kept
+}
+
+/// gzip `from` into `to`, whole or not at all.
+fn pack(from: &Path, to: &Path) -> std::io::Result<()> {
+    let tmp = to.with_extension("gz.tmp");
+    let written = (|| {
+        let mut gz = flate2::write::GzEncoder::new(std::fs::File::create(&tmp)?, flate2::Compression::fast());
+        std::io::copy(&mut std::fs::File::open(from)?, &mut gz)?;
+        gz.finish()?.sync_all()?;
+        std::fs::rename(&tmp, to)
+    })();
+    if written.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    written
+}
+
+/// The restart the run in `run_dir` kept, into `to`: gzipped, or as LIGGGHTS wrote it (a run
+/// whose directory was not tidied, e.g. one made before restarts were packed).
+fn unpack(run_dir: &Path, to: &Path) -> std::io::Result<()> {
+    let kept = run_dir.join(KEPT_RESTART);
+    if !kept.is_file() {
+        return std::fs::copy(run_dir.join(RESTART), to).map(|_| ());
+    }
+    let mut gz = flate2::read::GzDecoder::new(std::fs::File::open(kept)?);
+    std::io::copy(&mut gz, &mut std::fs::File::create(to)?).map(|_| ())
 }

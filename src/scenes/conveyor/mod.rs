@@ -234,9 +234,17 @@ impl Layout for Conveyor {
     }
 
     fn run_files(&self, _settings: &SceneSettings) -> Vec<String> {
-        [moving_blade::DUMP, STRIP_DUMP, warm::STATE_DUMP, warm::WARM_DATA, extend::RESTART]
-            .map(String::from)
-            .to_vec()
+        [
+            moving_blade::DUMP,
+            STRIP_DUMP,
+            warm::STATE_DUMP,
+            warm::WARM_DATA,
+            extend::RESTART,
+            extend::KEPT_RESTART,
+            extend::PRIOR_RESTART,
+        ]
+        .map(String::from)
+        .to_vec()
     }
 
     fn warm_start_files(&self) -> Option<WarmFiles> {
@@ -248,13 +256,19 @@ impl Layout for Conveyor {
         scene: &Scene,
         warm_distance: Option<f64>,
         parts: &[PathBuf],
+        part_dir: &Path,
     ) -> Result<Scene, String> {
         // The warm-up and the cap of the run's first part: a warm start's were its own.
         let scene = match warm_distance {
             Some(d) => warm::warm_started(scene, d),
             None => scene.clone(),
         };
-        extend::continuation(&scene, parts).map_err(|e| e.to_string())
+        extend::continuation(&scene, parts, part_dir).map_err(|e| e.to_string())
+    }
+
+    fn keep(&self, run_dir: &Path, done: bool) {
+        // A restart that cannot be kept leaves a point that cannot be extended, nothing worse.
+        let _ = extend::keep_restart(run_dir, done);
     }
 
     fn with_precision(&self, scene: &Scene, mfr_abs_se: f64) -> Option<Scene> {
