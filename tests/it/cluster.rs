@@ -251,6 +251,41 @@ fn an_lds_chain_on_slurm_stops_at_the_verdict() {
     );
 }
 
+/// `sweep extend` in two Slurm jobs on one finished directory: each point extended once (the
+/// jobs share the points through the directory's claims), as one local extend would.
+#[test]
+fn two_slurm_jobs_of_sweep_extend_extend_each_point_once() {
+    support::require_liggghts!("two_slurm_jobs_of_sweep_extend_extend_each_point_once");
+    let Some(conf) = local_slurm() else { return };
+    let root = tempfile::Builder::new().prefix("cluster-extend-").tempdir().unwrap();
+    let (dir, before, target) = crate::extend::finished_copy(root.path());
+    let jobs: Vec<String> = (0..2)
+        .map(|k| {
+            let wrap = format!("{} extend {} --se {target} --jobs 1", support::SWEEP, p(&dir));
+            let out = root.path().join(format!("extend-{k}.out"));
+            let o = output(Command::new("sbatch").env("SLURM_CONF", &conf).args([
+                "--parsable",
+                "--time",
+                "00:10:00",
+                "--output",
+                p(&out),
+                "--wrap",
+                &wrap,
+            ]));
+            assert!(o.status.success(), "sbatch: {}", text(&o.stderr));
+            text(&o.stdout).trim().to_string()
+        })
+        .collect();
+    wait_until("both extend jobs to leave the queue", Duration::from_secs(600), || {
+        jobs.iter().all(|j| squeue(&conf, j).is_empty())
+    });
+    for k in 0..2 {
+        let said = std::fs::read_to_string(root.path().join(format!("extend-{k}.out"))).unwrap_or_default();
+        assert!(said.contains("extend to SE") && said.contains("next: sweep report"), "job {k}: {said}");
+    }
+    crate::extend::assert_extended_once(&dir, &before, target);
+}
+
 /// An adaptive stand-in sweep whose rule holds at its second batch (`adapt 12`): its first
 /// batch of 8 points, then batches of 4.
 const ADAPT: &str = "name = \"achain\"\n[parameters]\ngap = { lo = 2.0, hi = 4.0 }\nblade_speed = { lo = 1.2, hi = 1.6 }\n\
