@@ -96,13 +96,9 @@ pub fn extend_sweep(
             return Err(refuse(why));
         }
     }
-    // Later points of a sweep that chooses its precision run to the new target too.
-    if let (Some(t), Some(p)) = (target_set(target, &recorded), &recorded) {
-        if ctx.sweep.file.scene.precision == "sweep" {
-            let p = SweepPrecision { mfr_abs_se: t, ..p.clone() };
-            crate::sys::atomic::write_json(&dir.join(PRECISION), &p)
-                .map_err(|e| refuse(format!("cannot write {PRECISION}: {e}")))?;
-        }
+    if let Some(p) = recorded_after(target, recorded.as_ref(), ctx.sweep.file.scene.precision == "sweep") {
+        crate::sys::atomic::write_json(&dir.join(PRECISION), &p)
+            .map_err(|e| refuse(format!("cannot write {PRECISION}: {e}")))?;
     }
     let summary = Mutex::new(ExtendSummary { target, points: todo.len(), ..ExtendSummary::default() });
     let queue = Mutex::new(todo);
@@ -130,9 +126,27 @@ pub fn extend_sweep(
     Ok(summary)
 }
 
-/// `target` when it differs from the recorded precision's.
-fn target_set(target: f64, recorded: &Option<SweepPrecision>) -> Option<f64> {
-    recorded.as_ref().is_some_and(|p| p.mfr_abs_se != target).then_some(target)
+/// The precision to record once the sweep's points are extended to `target`, if it changes:
+/// in a sweep that chooses its own (`chooses`) and has (`recorded`), the later points run to
+/// the new target too; a sweep whose precision is fixed, or not chosen yet, keeps its rule.
+fn recorded_after(target: f64, recorded: Option<&SweepPrecision>, chooses: bool) -> Option<SweepPrecision> {
+    let p = recorded.filter(|p| chooses && p.mfr_abs_se != target)?;
+    Some(SweepPrecision { mfr_abs_se: target, ..p.clone() })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_new_target_is_recorded_only_where_the_sweep_chooses_its_precision() {
+        let p = SweepPrecision { mfr_abs_se: 0.004, spread: 0.03, points: 16, adaptive: true };
+        let after = recorded_after(0.002, Some(&p), true).unwrap();
+        assert_eq!(after, SweepPrecision { mfr_abs_se: 0.002, ..p.clone() });
+        assert_eq!(recorded_after(0.004, Some(&p), true), None, "the same target");
+        assert_eq!(recorded_after(0.002, Some(&p), false), None, "a fixed precision");
+        assert_eq!(recorded_after(0.002, None, true), None, "none chosen yet");
+    }
 }
 
 /// Extend one point under its claim; the progress line to print, if any.

@@ -133,10 +133,13 @@ fn an_extended_run_is_the_run_a_tighter_target_makes_from_the_start() {
     for (row, r) in rows.iter().zip(&after) {
         assert_eq!(row["mfr_se"].parse::<f64>().unwrap(), se(r));
     }
-    // Again at the same target: nothing to do, nothing changes.
-    let o = ok(cwd, &["extend", "loose", "--se", &se_flag]);
+    // Again at the same target, now the sweep's recorded precision and so the default: nothing
+    // to do (a run whose deck stopped on it is not extended again), nothing changes.
+    let record = serde_json::json!({ "mfr_abs_se": target, "spread": 0.01, "points": 16 });
+    std::fs::write(cwd.join("loose/precision.json"), record.to_string()).unwrap();
+    let o = ok(cwd, &["extend", "loose"]);
     let said = support::text(&o.stdout);
-    assert!(said.contains("0 extended") || said.contains("not extendable"), "{said}");
+    assert!(said.contains(&format!("extend to SE {target}: 2 done points; 0 extended")), "{said}");
     assert_eq!(results(&cwd.join("loose")), after);
 }
 
