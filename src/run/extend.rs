@@ -134,21 +134,6 @@ fn recorded_after(target: f64, recorded: Option<&SweepPrecision>, chooses: bool)
     Some(SweepPrecision { mfr_abs_se: target, ..p.clone() })
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_new_target_is_recorded_only_where_the_sweep_chooses_its_precision() {
-        let p = SweepPrecision { mfr_abs_se: 0.004, spread: 0.03, points: 16, adaptive: true };
-        let after = recorded_after(0.002, Some(&p), true).unwrap();
-        assert_eq!(after, SweepPrecision { mfr_abs_se: 0.002, ..p.clone() });
-        assert_eq!(recorded_after(0.004, Some(&p), true), None, "the same target");
-        assert_eq!(recorded_after(0.002, Some(&p), false), None, "a fixed precision");
-        assert_eq!(recorded_after(0.002, None, true), None, "none chosen yet");
-    }
-}
-
 /// Extend one point under its claim; the progress line to print, if any.
 fn one(
     ctx: &PointContext,
@@ -227,5 +212,20 @@ fn one(
             Some(line)
         }
         Extended::Cancelled => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_new_target_is_recorded_only_where_the_sweep_chooses_its_precision() {
+        let p = SweepPrecision { mfr_abs_se: 0.004, spread: 0.03, points: 16, adaptive: true };
+        let after = recorded_after(0.002, Some(&p), true).unwrap();
+        assert_eq!(after, SweepPrecision { mfr_abs_se: 0.002, ..p.clone() });
+        assert_eq!(recorded_after(0.004, Some(&p), true), None, "the same target");
+        assert_eq!(recorded_after(0.002, Some(&p), false), None, "a fixed precision");
+        assert_eq!(recorded_after(0.002, None, true), None, "none chosen yet");
     }
 }
