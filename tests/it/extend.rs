@@ -166,6 +166,44 @@ fn two_extends_at_once_on_one_directory_extend_each_point_once() {
 }
 
 #[test]
+fn an_interrupted_extend_leaves_every_result_whole_and_goes_on_when_run_again() {
+    support::require_liggghts!("an_interrupted_extend_leaves_every_result_whole_and_goes_on_when_run_again");
+    let tmp = tempfile::tempdir().unwrap();
+    let (dir, before, target) = finished_copy(tmp.path());
+    let se_flag = target.to_string();
+    let child = sweep_bin()
+        .args(["extend", support::p(&dir), "--se", &se_flag, "--jobs", "1", "-q"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // SIGINT once a part has started running.
+    let started = || {
+        std::fs::read_dir(dir.join("runs"))
+            .unwrap()
+            .flatten()
+            .any(|e| e.path().join("extension-1/in.liggghts").is_file())
+    };
+    support::wait_until("a part to start", std::time::Duration::from_secs(60), started);
+    // SAFETY: kill(2) on our own child.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    assert!(stderr(&o).contains("`sweep extend"), "{}", stderr(&o));
+    // Every result is whole: the earlier one, or one extended before the signal.
+    for (i, r) in results(&dir).iter().enumerate() {
+        if r["extensions"].is_null() {
+            assert_eq!(r, &before[i], "#{i}");
+        } else {
+            assert_ran_on(r, &before[i], i);
+        }
+    }
+    // Run again, it finishes the rest: each point extended once.
+    ok(tmp.path(), &["extend", support::p(&dir), "--se", &se_flag, "-q"]);
+    assert_extended_once(&dir, &before, target);
+}
+
+#[test]
 fn extend_refuses_what_it_cannot_do_and_changes_nothing() {
     let tmp = tempfile::tempdir().unwrap();
     let cwd = tmp.path();
