@@ -25,8 +25,9 @@ use crate::sys::process::CancelToken;
 pub struct ExtendSummary {
     /// The SE target it extended to.
     pub target: f64,
-    /// Done points it looked at.
+    /// Done points to look at, and those looked at so far.
     pub points: usize,
+    pub looked_at: usize,
     /// Points a new part brought nearer the target: (point index, SE before, SE after).
     pub extended: Vec<(usize, f64, f64)>,
     /// Their new parts' CPU time, s.
@@ -171,6 +172,8 @@ fn one(
     };
     let _ = store.release(claim);
     let mut s = summary.lock().unwrap();
+    s.looked_at += 1;
+    let of = format!("[{}/{}] #{}", s.looked_at, s.points, job.index);
     match outcome {
         Extended::Met(_) => {
             s.met += 1;
@@ -184,8 +187,7 @@ fn one(
             let blocks =
                 |r: &crate::outcome::RunResult| r.steady_state.as_ref().map_or(0, |st| st.block_mfr.len());
             Some(format!(
-                "#{}: MFR {:.4} ± {a:.4} → {:.4} ± {b:.4} ({} more blocks, {cpu:.1} CPU s{})",
-                job.index,
+                "{of}: MFR {:.4} ± {a:.4} → {:.4} ± {b:.4} ({} more blocks, {cpu:.1} CPU s{})",
                 before.mfr,
                 after.mfr,
                 blocks(&after) - blocks(&before),
@@ -197,14 +199,13 @@ fn one(
             ))
         }
         Extended::NotExtendable(why) => {
-            let line = format!("#{}: not extended: {why}", job.index);
+            let line = format!("{of}: not extended: {why}");
             s.not_extendable.push((job.index, why));
             Some(line)
         }
         Extended::Failed(f) => {
             let line = format!(
-                "#{}: the extension failed ({}): {}; the point keeps its result",
-                job.index,
+                "{of}: the extension failed ({}): {}; the point keeps its result",
                 f.class.as_str(),
                 f.reason
             );
