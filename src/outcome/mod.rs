@@ -261,6 +261,27 @@ pub struct RunFailure {
     pub measured: Option<Box<RunResult>>,
 }
 
+impl RunFailure {
+    /// The failure of the run `hash`, of the current format, that measured nothing.
+    pub fn of(
+        hash: &str,
+        class: FailureClass,
+        reason: String,
+        log_tail: String,
+        wall_time: f64,
+    ) -> RunFailure {
+        RunFailure {
+            format: RESULT_FORMAT,
+            hash: hash.to_string(),
+            class,
+            reason,
+            log_tail,
+            wall_time,
+            measured: None,
+        }
+    }
+}
+
 /// How one attempt at a run ended.
 #[derive(Debug, Clone, PartialEq)]
 // One per run, moved once: boxing the result would buy nothing.

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use super::{PointContext, Prepared, FAILURE, RESULT};
 use crate::engine::{LogLimits, RunStatus};
-use crate::outcome::{FailureClass, RunFailure, RunResult, RESULT_FORMAT};
+use crate::outcome::{FailureClass, RunFailure, RunResult};
 use crate::point::deck::Deck;
 use crate::scenes::Finished;
 use crate::sys::atomic::write_json;
@@ -98,15 +98,7 @@ pub fn extend(
         Err(e) => return not(format!("cannot render the continuation: {e}")),
     };
     let fail = |class: FailureClass, reason: String, log_tail: String, wall: f64| {
-        let f = RunFailure {
-            format: RESULT_FORMAT,
-            hash: p.hash.clone(),
-            class,
-            reason,
-            log_tail,
-            wall_time: wall,
-            measured: None,
-        };
+        let f = RunFailure::of(&p.hash, class, reason, log_tail, wall);
         ctx.layout.keep(&dir, false);
         let _ = write_json(&dir.join(FAILURE), &f);
         Extended::Failed(Box::new(f))

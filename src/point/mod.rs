@@ -15,7 +15,7 @@ use std::time::Duration;
 
 use crate::engine::{Engine, LogLimits, RunStatus};
 use crate::error::{hint, Result};
-use crate::outcome::{FailureClass, RunFailure, RunOutcome, WarmStart, RESULT_FORMAT};
+use crate::outcome::{FailureClass, RunFailure, RunOutcome, WarmStart};
 use crate::point::deck::{Deck, Template};
 use crate::scene::{mesh, params, Scene};
 use crate::scenes::{Finished, Layout, Warm};
@@ -332,15 +332,7 @@ pub fn execute_from(
     start: &Start,
 ) -> RunOutcome {
     let fail_measured = |class: FailureClass, reason: String, log_tail: String, wall: f64, measured| {
-        let f = RunFailure {
-            format: RESULT_FORMAT,
-            hash: p.hash.clone(),
-            class,
-            reason,
-            log_tail,
-            wall_time: wall,
-            measured,
-        };
+        let f = RunFailure { measured, ..RunFailure::of(&p.hash, class, reason, log_tail, wall) };
         crate::engine::remove_forced_restarts(run_dir);
         ctx.layout.keep(run_dir, false);
         let _ = write_json(&run_dir.join(FAILURE), &f);
@@ -376,15 +368,13 @@ pub fn execute_from(
     }
     if let Some(reason) = cut_off(run_dir) {
         // Its files are left as they are, the disk full: the pool takes the failure for the store's.
-        return RunOutcome::Failed(RunFailure {
-            format: RESULT_FORMAT,
-            hash: p.hash.clone(),
-            class: FailureClass::Unparsable,
+        return RunOutcome::Failed(RunFailure::of(
+            &p.hash,
+            FailureClass::Unparsable,
             reason,
-            log_tail: String::new(),
-            wall_time: wall,
-            measured: None,
-        });
+            String::new(),
+            wall,
+        ));
     }
     let finished = Finished {
         scene,

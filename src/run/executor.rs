@@ -122,15 +122,8 @@ impl PointExecutor {
 }
 
 fn point_failure(job: &PointJob, run_dir: &Path, reason: String) -> RunOutcome {
-    let f = crate::outcome::RunFailure {
-        format: crate::outcome::RESULT_FORMAT,
-        hash: job.hash.clone(),
-        class: crate::outcome::FailureClass::CouldNotStart,
-        reason,
-        log_tail: String::new(),
-        wall_time: 0.0,
-        measured: None,
-    };
+    use crate::outcome::{FailureClass, RunFailure};
+    let f = RunFailure::of(&job.hash, FailureClass::CouldNotStart, reason, String::new(), 0.0);
     let _ = crate::sys::atomic::write_json(&run_dir.join(point::FAILURE), &f);
     RunOutcome::Failed(f)
 }
