@@ -393,10 +393,12 @@ pub(super) fn extend(a: ExtendArgs) -> Result<(), Error> {
     if s.busy > 0 {
         parts.push(format!("{} held by another process", s.busy));
     }
-    let still = s.extended.iter().filter(|(_, _, after)| *after > s.target).count();
     println!("extend to SE {}: {} done points; {}", s.target, s.points, parts.join(", "));
-    if still > 0 {
-        println!("{still} of those extended stopped at the window cap above the target");
+    let capped = s.extended.iter().filter(|e| e.at_cap).count();
+    if capped > 0 {
+        println!(
+            "{capped} of those extended reached the window cap first (a longer window: a larger scene.window_cap_diameters)"
+        );
     }
     if s.interrupted {
         eprintln!("interrupted: the points not extended keep their results; `sweep extend {dir}` goes on");

@@ -28,8 +28,8 @@ pub struct ExtendSummary {
     /// Done points to look at, and those looked at so far.
     pub points: usize,
     pub looked_at: usize,
-    /// Points a new part brought nearer the target: (point index, SE before, SE after).
-    pub extended: Vec<(usize, f64, f64)>,
+    /// Points a new part brought nearer the target.
+    pub extended: Vec<ExtendedPoint>,
     /// Their new parts' CPU time, s.
     pub cpu_s: f64,
     /// Points within the target already.
@@ -41,6 +41,16 @@ pub struct ExtendSummary {
     /// Points another live process holds.
     pub busy: usize,
     pub interrupted: bool,
+}
+
+/// A point a new part brought nearer the target.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExtendedPoint {
+    pub index: usize,
+    pub se_before: f64,
+    pub se_after: f64,
+    /// Its window reached the cap before the deck's rule met the target.
+    pub at_cap: bool,
 }
 
 /// One done point to extend.
@@ -120,7 +130,7 @@ pub fn extend_sweep(
     });
     let mut summary = summary.into_inner().unwrap();
     summary.interrupted = cancel.is_cancelled();
-    summary.extended.sort_by_key(|e| e.0);
+    summary.extended.sort_by_key(|e| e.index);
     if !summary.extended.is_empty() {
         crate::run::rewrite_results(dir)?;
     }
@@ -183,7 +193,8 @@ fn one(
             let (a, b) = (before.mfr_se.unwrap_or(f64::NAN), after.mfr_se.unwrap_or(f64::NAN));
             let cpu = after.cpu_time.unwrap_or(0.0) - before.cpu_time.unwrap_or(0.0);
             s.cpu_s += cpu;
-            s.extended.push((job.index, a, b));
+            let at_cap = after.steady_state.as_ref().is_some_and(|st| st.stop == "cap");
+            s.extended.push(ExtendedPoint { index: job.index, se_before: a, se_after: b, at_cap });
             let blocks =
                 |r: &crate::outcome::RunResult| r.steady_state.as_ref().map_or(0, |st| st.block_mfr.len());
             Some(format!(
@@ -191,11 +202,7 @@ fn one(
                 before.mfr,
                 after.mfr,
                 blocks(&after) - blocks(&before),
-                after
-                    .steady_state
-                    .as_ref()
-                    .filter(|st| st.stop == "cap")
-                    .map_or("", |_| "; at the window cap"),
+                if at_cap { "; at the window cap" } else { "" },
             ))
         }
         Extended::NotExtendable(why) => {
