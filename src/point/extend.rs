@@ -97,11 +97,14 @@ pub fn extend(
         }
         Err(e) => return not(format!("cannot render the continuation: {e}")),
     };
-    let fail = |class: FailureClass, reason: String, log_tail: String, wall: f64| {
-        let f = RunFailure::of(&p.hash, class, reason, log_tail, wall);
+    let fail_measured = |class, reason, log_tail, wall, measured| {
+        let f = RunFailure { measured, ..RunFailure::of(&p.hash, class, reason, log_tail, wall) };
         ctx.layout.keep(&dir, false);
         let _ = write_json(&dir.join(FAILURE), &f);
         Extended::Failed(Box::new(f))
+    };
+    let fail = |class: FailureClass, reason: String, log_tail: String, wall: f64| {
+        fail_measured(class, reason, log_tail, wall, None)
     };
     let deck = Deck { input, ..p.deck.clone() };
     if let Err(e) = deck.write(&dir) {
@@ -133,7 +136,8 @@ pub fn extend(
     };
     let mut after = match ctx.layout.measure(&finished) {
         Ok(r) => r,
-        Err(r) => return fail(r.class, r.reason, String::new(), run.wall_time),
+        // An unsteady part keeps what it measured, for the record (never the point's result).
+        Err(r) => return fail_measured(r.class, r.reason, String::new(), run.wall_time, r.measured),
     };
     // The point's cost is every part's.
     after.wall_time += before.wall_time;
