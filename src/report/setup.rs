@@ -27,6 +27,10 @@ pub struct Setup {
     /// how many of the done runs started from a finished neighbour's steady state.
     pub precision: Option<crate::run::precision::SweepPrecision>,
     pub warm_started: usize,
+    /// Done runs that ran to the scene's own target before the sweep chose its precision, and
+    /// are coarser than it; and runs `sweep extend` continued.
+    pub coarser: usize,
+    pub extended: usize,
 }
 
 /// The scene at the centre of the space, in mm, s and counts: what one run looks like.
@@ -85,14 +89,22 @@ impl Setup {
             }
         });
         let id = |k: &str| manifest.identity.get(k).and_then(|v| v.as_str()).unwrap_or("").to_string();
+        let precision = crate::run::precision::read(dir);
+        let coarser = precision.as_ref().map_or(0, |p| {
+            let above =
+                |r: &&&RunResult| r.mfr_se_target.is_none() && r.mfr_se.is_some_and(|se| se > p.mfr_abs_se);
+            done.iter().filter(above).count()
+        });
         Setup {
             fixed: crate::point::fixed_values(sweep),
             scene: sweep.file.scene.clone(),
             centre,
             engine_version: id("engine_version"),
             engine_path: id("engine_path"),
-            precision: crate::run::precision::read(dir),
+            precision,
             warm_started: done.iter().filter(|r| r.warm_start.is_some()).count(),
+            coarser,
+            extended: done.iter().filter(|r| r.extensions > 0).count(),
         }
     }
 }
