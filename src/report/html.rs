@@ -157,13 +157,13 @@ fn started_line(st: &crate::report::Setup, done: usize) -> Option<String> {
         ));
         if st.coarser > 0 {
             parts.push(format!(
-                "{} done runs ran before that, to the scene's own target, and are coarser: `sweep extend` brings them to it without running them again",
+                "{} done runs ran before that, to the scene's own target, and are coarser (sweep extend brings them to it without running them again)",
                 st.coarser
             ));
         }
     }
     if st.extended > 0 {
-        parts.push(format!("{} runs were continued to a tighter SE by `sweep extend`", st.extended));
+        parts.push(format!("{} runs were continued to a tighter SE by sweep extend", st.extended));
     }
     (!parts.is_empty()).then(|| parts.join("; "))
 }

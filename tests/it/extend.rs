@@ -144,7 +144,7 @@ fn an_extended_run_is_the_run_a_tighter_target_makes_from_the_start() {
     // The report says so; no run is left coarser than the recorded precision.
     ok(cwd, &["report", "loose"]);
     let page = std::fs::read_to_string(cwd.join("loose/report/report.html")).unwrap();
-    assert!(page.contains("2 runs were continued to a tighter SE by `sweep extend`"), "{page}");
+    assert!(page.contains("2 runs were continued to a tighter SE by sweep extend"), "{page}");
     assert!(!page.contains("ran before that"), "{page}");
 }
 
