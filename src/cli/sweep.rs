@@ -382,22 +382,22 @@ pub(super) fn extend(a: ExtendArgs) -> Result<(), Error> {
     };
     let s = demsweep::run::extend::extend_sweep(&a.dir, a.se, jobs, &cancel, &say)?;
     let dir = demsweep::sys::shell::quote(&a.dir.display().to_string()).into_owned();
-    let mut parts = vec![format!("{} extended ({:.0} CPU s)", s.extended.len(), s.cpu_s)];
+    let mut parts = vec![format!("{} extended ({:.0} CPU s)", s.extended, s.cpu_s)];
     parts.push(format!("{} within it already", s.met));
-    if !s.not_extendable.is_empty() {
-        parts.push(format!("{} not extendable", s.not_extendable.len()));
+    if s.not_extendable > 0 {
+        parts.push(format!("{} not extendable", s.not_extendable));
     }
-    if !s.failed.is_empty() {
-        parts.push(format!("{} failed (they keep their earlier result)", s.failed.len()));
+    if s.failed > 0 {
+        parts.push(format!("{} failed (they keep their earlier result)", s.failed));
     }
     if s.busy > 0 {
         parts.push(format!("{} held by another process", s.busy));
     }
     println!("extend to SE {}: {} done points; {}", s.target, s.points, parts.join(", "));
-    let capped = s.extended.iter().filter(|e| e.at_cap).count();
-    if capped > 0 {
+    if s.at_cap > 0 {
         println!(
-            "{capped} of those extended reached the window cap first (a longer window: a larger scene.window_cap_diameters)"
+            "{} of those extended reached the window cap first (a longer window: a larger scene.window_cap_diameters)",
+            s.at_cap
         );
     }
     if s.interrupted {
@@ -405,8 +405,8 @@ pub(super) fn extend(a: ExtendArgs) -> Result<(), Error> {
         return Err(Error::Interrupted);
     }
     println!("next: sweep report {dir}");
-    if !s.failed.is_empty() {
-        return Err(Error::RunsFailed { failed: s.failed.len(), total: s.points });
+    if s.failed > 0 {
+        return Err(Error::RunsFailed { failed: s.failed, total: s.points });
     }
     Ok(())
 }

@@ -87,9 +87,9 @@ pub enum SteadyError {
     NoStop,
 }
 
-/// The block lines of a conveyor log, and how the run stopped.
-pub fn parse_log(log: &str) -> Result<(Vec<Block>, String), SteadyError> {
-    let (blocks, stop) = parse_blocks(log)?;
+/// A run's whole block series (every part's, for an extended run) and how it stopped: at least
+/// 4 blocks, and a stop the log said.
+pub fn series(blocks: Vec<Block>, stop: Option<String>) -> Result<(Vec<Block>, String), SteadyError> {
     let stop = stop.ok_or(SteadyError::NoStop)?;
     if blocks.len() < 4 {
         return Err(SteadyError::TooFewBlocks(blocks.len()));
@@ -523,6 +523,12 @@ mod tests {
         assert!(trend_z(&noise).abs() < 1.0);
         let slope: Vec<f64> = noise.iter().enumerate().map(|(i, v)| v + 0.02 * i as f64).collect();
         assert!(trend_z(&slope) > 5.0);
+    }
+
+    /// One run's log as the conveyor's measure reads it.
+    fn parse_log(log: &str) -> Result<(Vec<Block>, String), SteadyError> {
+        let (blocks, stop) = parse_blocks(log)?;
+        series(blocks, stop)
     }
 
     #[test]

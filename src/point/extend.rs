@@ -25,7 +25,7 @@ pub fn part_dir(run_dir: &Path, n: u32) -> PathBuf {
 #[derive(Debug)]
 pub enum Extended {
     /// Its SE was within the target already: nothing ran.
-    Met(Box<RunResult>),
+    Met,
     /// A new part ran; the point's result is the one over every part.
     Done {
         before: Box<RunResult>,
@@ -60,7 +60,7 @@ pub fn extend(
     // rule, though the result's SE, widened where its blocks are correlated, may read above it.
     let stopped_on = before.steady_state.as_ref().filter(|st| st.stop == "target").and(before.mfr_se_target);
     if se <= target || stopped_on.is_some_and(|t| t <= target) {
-        return Extended::Met(Box::new(before));
+        return Extended::Met;
     }
     let parts: Vec<PathBuf> = std::iter::once(run_dir.to_path_buf())
         .chain((1..=before.extensions).map(|n| part_dir(run_dir, n)))

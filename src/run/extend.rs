@@ -28,29 +28,21 @@ pub struct ExtendSummary {
     /// Done points to look at, and those looked at so far.
     pub points: usize,
     pub looked_at: usize,
-    /// Points a new part brought nearer the target.
-    pub extended: Vec<ExtendedPoint>,
+    /// Points a new part brought nearer the target, and those of them whose window reached the
+    /// cap before the deck's rule met the target.
+    pub extended: usize,
+    pub at_cap: usize,
     /// Their new parts' CPU time, s.
     pub cpu_s: f64,
     /// Points within the target already.
     pub met: usize,
-    /// Points that cannot be continued: (point index, why).
-    pub not_extendable: Vec<(usize, String)>,
-    /// Points whose new part failed (they keep their earlier result): (index, why).
-    pub failed: Vec<(usize, String)>,
+    /// Points that cannot be continued, and points whose new part failed (they keep their
+    /// earlier result); each said in its progress line.
+    pub not_extendable: usize,
+    pub failed: usize,
     /// Points another live process holds.
     pub busy: usize,
     pub interrupted: bool,
-}
-
-/// A point a new part brought nearer the target.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ExtendedPoint {
-    pub index: usize,
-    pub se_before: f64,
-    pub se_after: f64,
-    /// Its window reached the cap before the deck's rule met the target.
-    pub at_cap: bool,
 }
 
 /// One done point to extend.
@@ -130,8 +122,7 @@ pub fn extend_sweep(
     });
     let mut summary = summary.into_inner().unwrap();
     summary.interrupted = cancel.is_cancelled();
-    summary.extended.sort_by_key(|e| e.index);
-    if !summary.extended.is_empty() {
+    if summary.extended > 0 {
         crate::run::rewrite_results(dir)?;
     }
     Ok(summary)
@@ -161,7 +152,7 @@ fn one(
             return Some(format!("#{}: another process holds it; left as it is", job.index));
         }
         Err(e) => {
-            summary.lock().unwrap().failed.push((job.index, e.to_string()));
+            summary.lock().unwrap().failed += 1;
             return Some(format!("#{}: {e}", job.index));
         }
     };
@@ -185,7 +176,7 @@ fn one(
     s.looked_at += 1;
     let of = format!("[{}/{}] #{}", s.looked_at, s.points, job.index);
     match outcome {
-        Extended::Met(_) => {
+        Extended::Met => {
             s.met += 1;
             None
         }
@@ -194,7 +185,8 @@ fn one(
             let cpu = after.cpu_time.unwrap_or(0.0) - before.cpu_time.unwrap_or(0.0);
             s.cpu_s += cpu;
             let at_cap = after.steady_state.as_ref().is_some_and(|st| st.stop == "cap");
-            s.extended.push(ExtendedPoint { index: job.index, se_before: a, se_after: b, at_cap });
+            s.extended += 1;
+            s.at_cap += usize::from(at_cap);
             let blocks =
                 |r: &crate::outcome::RunResult| r.steady_state.as_ref().map_or(0, |st| st.block_mfr.len());
             Some(format!(
@@ -207,7 +199,7 @@ fn one(
         }
         Extended::NotExtendable(why) => {
             let line = format!("{of}: not extended: {why}");
-            s.not_extendable.push((job.index, why));
+            s.not_extendable += 1;
             Some(line)
         }
         Extended::Failed(f) => {
@@ -216,7 +208,7 @@ fn one(
                 f.class.as_str(),
                 f.reason
             );
-            s.failed.push((job.index, format!("{}: {}", f.class.as_str(), f.reason)));
+            s.failed += 1;
             Some(line)
         }
         Extended::Cancelled => None,

@@ -429,11 +429,8 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
     let joined = frames.last().map(|f| f.step);
     frames.extend(these.into_iter().filter(|f| joined.is_none_or(|j| f.step > j)));
     let (more, stop) = steady::parse_blocks(&run.run.log).map_err(|e| unparsable(e.to_string()))?;
-    let stop = stop.ok_or_else(|| unparsable(steady::SteadyError::NoStop.to_string()))?;
     blocks.extend(more);
-    if blocks.len() < 4 {
-        return Err(unparsable(steady::SteadyError::TooFewBlocks(blocks.len()).to_string()));
-    }
+    let (blocks, stop) = steady::series(blocks, stop).map_err(|e| unparsable(e.to_string()))?;
     let c = held(scene);
     let blocks_of = steady::HeldBlocks {
         ideal_block_mass: c.ideal_block_mass,
