@@ -130,8 +130,12 @@ pub(super) struct ExtendArgs {
     /// The SE of MFR to extend every point to (default: the sweep's recorded precision).
     #[arg(long)]
     se: Option<f64>,
-    #[command(flatten)]
-    pool: PoolArgs,
+    /// Concurrent LIGGGHTS runs (default: the machine's cores).
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// No line on stderr as each point ends (the summary on stdout stays).
+    #[arg(long, short)]
+    quiet: bool,
 }
 
 #[derive(Args)]
@@ -371,10 +375,10 @@ pub(super) fn extend(a: ExtendArgs) -> Result<(), Error> {
             return Err(flag(format!("--se {se}"), "expected a positive SE of MFR, e.g. 0.002"));
         }
     }
-    let jobs = super::jobs(a.pool.jobs)?;
+    let jobs = super::jobs(a.jobs)?;
     demsweep::sys::process::install_interrupt_handler();
     let cancel = CancelToken::new();
-    let quiet = a.pool.quiet;
+    let quiet = a.quiet;
     let say = |line: &str| {
         if !quiet {
             eprintln!("{line}");
