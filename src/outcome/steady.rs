@@ -19,8 +19,12 @@ pub struct SteadyState {
     pub batch_acf1: f64,
     /// Lag-1 autocorrelation of the window's blocks.
     pub block_acf1: f64,
-    /// OLS slope of the block MFR over the window, over its SE.
+    /// OLS slope of the window's batch means (batched as the SE is) over its SE, and the limit
+    /// |trend_z| must stay within for the window to count as steady (absent in older results,
+    /// whose trend was over single blocks within 3).
     pub trend_z: f64,
+    #[serde(default = "old_trend_limit")]
+    pub trend_limit: f64,
     /// (last quarter − first quarter) / MFR over the window.
     pub drift: f64,
     /// The heap's count at the window's start and end, and its target.
@@ -33,4 +37,9 @@ pub struct SteadyState {
     pub heap_mass_per_width: f64,
     /// `"target"`: the precision target ended the run; `"cap"`: the window cap did.
     pub stop: String,
+}
+
+/// The trend limit of results written before it was recorded.
+fn old_trend_limit() -> f64 {
+    3.0
 }

@@ -40,12 +40,11 @@ use std::path::Path;
 
 use super::{plan_of, Plan, FUSED_DEPTH_LAG1, FUSED_PACKING_LAG1, MIN_STEADY_PASSES, TREND_FALSE_ALARM};
 use crate::engine::dump::read_dump;
-use crate::measure::steady::{ar1_se_factor, mser, trend_z};
+use crate::measure::steady::{ar1_se_factor, mser, student_quantile, trend_z};
 use crate::outcome::layers::{LayerSeries, PassRecord};
 use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT, VX_LAYERS};
 use crate::scene::Scene;
 use crate::scenes::{Finished, Rejected};
-use statrs::distribution::{ContinuousCDF, StudentsT};
 
 /// Grid cells per diameter for surfaces and coverage.
 pub const GRID_PER_D: f64 = 4.0;
@@ -282,15 +281,6 @@ fn series_tested(plan: &Plan) -> usize {
         2
     } else {
         1
-    }
-}
-
-/// The two-sided Student quantile: |t| with `dof` degrees of freedom exceeds it with chance
-/// `level`. Infinite with no degrees of freedom.
-fn student_quantile(dof: f64, level: f64) -> f64 {
-    match StudentsT::new(0.0, 1.0, dof) {
-        Ok(t) if dof >= 1.0 => t.inverse_cdf(1.0 - level / 2.0),
-        _ => f64::INFINITY,
     }
 }
 
