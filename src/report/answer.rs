@@ -262,7 +262,7 @@ fn next(a: &Analysis) -> Option<String> {
             DesignRecord::Lds { max, .. } => format!(
                 "raise design.lds.max: `sweep lds {file} --max {} --out {dir}` keeps the {} points run and adds {}",
                 2 * max,
-                max,
+                a.counts.points,
                 max
             ),
             DesignRecord::Lattice { levels } => {
@@ -276,7 +276,7 @@ fn next(a: &Analysis) -> Option<String> {
             DesignRecord::Adapt { max, .. } => format!(
                 "raise design.adapt.max: `sweep adapt {file} --max {} --out {dir}` keeps the {} points run and adds batches",
                 2 * max,
-                max
+                a.counts.points
             ),
         }),
         _ => {}

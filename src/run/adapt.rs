@@ -348,7 +348,7 @@ fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &AdaptWatch, ran: usize) 
         return Ok(false);
     }
     let k = manifest.spaces.len() - 1;
-    let cands = criterion::batch_candidates(sweep.dim(), k, seed, em, x);
+    let cands = untaken(criterion::batch_candidates(sweep.dim(), k, seed, em, x), &sweep, &manifest.points);
     let (chosen, j_before) = match em.and_then(|em| {
         let noise = criterion::RunNoise::of(em, se, &[]);
         let refs = criterion::reference(sweep.dim(), seed);
@@ -387,6 +387,25 @@ fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &AdaptWatch, ran: usize) 
         |job| screen && exec.closed(job),
         |rows| write_batches(dir, &sweep, label, k + 1, j_before, rows),
     )
+}
+
+/// `cands` without the points the design holds already (run, failed or screened) and without
+/// repeats: a setting run again is the same deck, so a batch that chose only such points would
+/// add nothing and end the design short of its max. Near a best run on a face the candidates
+/// clipped to the cube, and the upper bound's peak, are that run itself (in one dimension the
+/// criterion chose the slowest blade twice and the sweep stopped at 11 of 480 points).
+fn untaken(cands: Vec<Vec<f64>>, sweep: &Sweep, points: &[PointRecord]) -> Vec<Vec<f64>> {
+    let same = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(a, b)| (a - b).abs() <= 1e-9);
+    let mut taken: Vec<Vec<f64>> =
+        points.iter().map(|p| crate::sweep::space::unit_point(sweep, &p.values)).collect();
+    let mut kept = Vec::with_capacity(cands.len());
+    for c in cands {
+        if !taken.iter().any(|t| same(t, &c)) {
+            taken.push(c.clone());
+            kept.push(c);
+        }
+    }
+    kept
 }
 
 /// Append the rows of one batch to `DIR/batches.csv` (written whole, atomically, under the

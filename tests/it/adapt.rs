@@ -263,6 +263,38 @@ fn the_command_runs_reports_and_resumes_on_the_stand_in() {
     assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
 }
 
+/// One swept parameter on the stand-in, whose MFR is highest at the slowest blade: the
+/// criterion keeps wanting the face the first batch already ran, and the design must still grow
+/// by new points to its max (it once chose that run again, added nothing and stopped at 12).
+#[test]
+fn a_one_dimensional_adapt_runs_new_points_to_its_max() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("speed.toml");
+    std::fs::write(
+        &file,
+        "name = \"speed\"\n[parameters]\nblade_speed = { lo = 1.2, hi = 1.6, unit = \"m/s\" }\n\
+         [convergence]\ntolerance = 0.0001\n[run]\nengine = \"stand-in\"\n",
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    let o = common::sweep_bin()
+        .args(["adapt", file.to_str().unwrap(), "-q", "--jobs", "1", "--max", "24", "--out"])
+        .arg(&out)
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    let m = manifest(&out);
+    assert_eq!(m.points.len(), 24, "{err}");
+    let mut speeds: Vec<f64> = m.points.iter().map(|p| p.values[0]).collect();
+    speeds.sort_by(f64::total_cmp);
+    speeds.dedup();
+    assert_eq!(speeds.len(), 24, "a setting planned twice");
+    let said = format!("{}{err}", String::from_utf8_lossy(&o.stdout));
+    assert!(said.contains("keeps the 24 points run"), "{said}");
+}
+
 #[test]
 fn bad_adapt_sizes_are_refused_before_anything_is_written() {
     let tmp = tempfile::tempdir().unwrap();
