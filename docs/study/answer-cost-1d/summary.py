@@ -1,0 +1,110 @@
+#!/usr/bin/env python3
+"""The answer's cost on LIGGGHTS: each way's answer against the truth, and the CPU it took.
+
+    python3 docs/study/answer-cost-1d/summary.py OUT      # OUT as given to run.sh
+
+The truth is the 33-point lattice (OUT/truth) read as `sweep lattice` reports it (trapezoid
+weights over the speed). Targets, as in BENCHMARKS.md "Designs against a known answer": mean
+within 2 %, std within 3 %, skewness and kurtosis within 5 % of their scale (the rule's scales:
+max(|skewness|, 1) and the kurtosis), and the recommended setting's true MFR (the truth lattice
+interpolated) within one SE of the truth's recommended run. CPU is LIGGGHTS's own (each run's
+`cpu_time`), summed over the runs of the design up to a space, in design order.
+"""
+import csv
+import json
+import re
+import sys
+from pathlib import Path
+
+TARGETS = {"mean": 0.02, "std": 0.03, "skewness": 0.05, "kurtosis": 0.05}
+
+
+def scale(stat, m):
+    if stat == "mean":
+        return abs(m["mean"])
+    if stat == "std":
+        return m["std"]
+    if stat == "skewness":
+        return max(abs(m["skewness"]), 1.0)
+    return m["kurtosis"]
+
+
+def rows(d):
+    with open(d / "results.csv") as f:
+        return sorted(csv.DictReader(f), key=lambda r: int(r["index"]))
+
+
+def cpu(d, r):
+    p = d / "runs" / r["hash"] / "result.json"
+    if not r["hash"] or not p.is_file():
+        return 0.0
+    return json.load(open(p)).get("cpu_time", 0.0)
+
+
+def recommended(d, summary):
+    """The recommended run's blade speed, from the answer's "(point #k)"."""
+    m = re.search(r"point #(\d+)", summary["answer"]["recommendation"] or "")
+    if not m:
+        return None
+    for r in rows(d):
+        if r["index"] == m.group(1):
+            return float(r["blade_speed"]), float(r["mfr"]), float(r["mfr_se"] or "nan")
+    return None
+
+
+def interpolate(truth, v):
+    pts = sorted((float(r["blade_speed"]), float(r["mfr"])) for r in truth if r["status"] == "done")
+    for (v0, y0), (v1, y1) in zip(pts, pts[1:]):
+        if v0 <= v <= v1:
+            return y0 + (y1 - y0) * (v - v0) / (v1 - v0)
+    return pts[0][1] if v < pts[0][0] else pts[-1][1]
+
+
+def main(out):
+    out = Path(out)
+    truth_dir = out / "truth"
+    ts = json.load(open(truth_dir / "summary.json"))
+    truth = ts["statistics"]
+    truth_rows = rows(truth_dir)
+    best = recommended(truth_dir, ts)
+    truth_cpu = sum(cpu(truth_dir, r) for r in truth_rows)
+    print(f"Truth: {len(truth_rows)}-point lattice, {truth_cpu:.0f} CPU s; mean {truth['mean']:.4f}, "
+          f"std {truth['std']:.4f}, skewness {truth['skewness']:.3f}, kurtosis {truth['kurtosis']:.3f}; "
+          f"verdict {ts['verdict']['status']}")
+    if best:
+        print(f"Truth's recommendation: blade_speed {best[0]:.3f} m/s, MFR {best[1]:.4f} ± {best[2]:.4f}")
+    print()
+    print("| way | runs | verdict (at runs) | CPU s to the end | CPU s a run | mean | std | skewness | kurtosis | recommended m/s (true MFR) | targets met |")
+    print("|---|---:|---|---:|---:|---|---|---|---|---|---|")
+    for way in ["thesis", "lds", "adapt"]:
+        d = out / way
+        if not (d / "summary.json").is_file():
+            print(f"| {way} | (running) |")
+            continue
+        s = json.load(open(d / "summary.json"))
+        rs = rows(d)
+        done = [r for r in rs if r["status"] in ("done", "failed", "screened")]
+        total = sum(cpu(d, r) for r in done)
+        m = s["statistics"]
+        cells, met = [], 0
+        for stat, tol in TARGETS.items():
+            err = (m[stat] - truth[stat]) / scale(stat, truth)
+            ok = abs(err) <= tol
+            met += ok
+            cells.append(f"{m[stat]:.4g} ({err:+.1%}{' ✓' if ok else ''})")
+        rec = recommended(d, s)
+        if rec and best:
+            true_mfr = interpolate(truth_rows, rec[0])
+            ok = abs(true_mfr - best[1]) <= best[2]
+            met += ok
+            cells.append(f"{rec[0]:.3f} ({true_mfr:.4f}{' ✓' if ok else ''})")
+        else:
+            cells.append("–")
+        v = s["verdict"]
+        verdict = f"{v['status']}" + (f" ({v['n']})" if v.get("n") else "")
+        print(f"| {way} | {len(done)} | {verdict} | {total:.0f} | {total / max(len(done), 1):.1f} | "
+              + " | ".join(cells) + f" | {met}/5 |")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1] if len(sys.argv) > 1 else "/tmp/answer-cost-1d")
