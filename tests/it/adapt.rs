@@ -36,6 +36,19 @@ fn done_attempts(dir: &Path) -> HashMap<String, usize> {
     m
 }
 
+/// `sweep adapt FILE ARGS --out OUT`, its output.
+fn sweep_adapt(file: &Path, out: &Path, args: &[&str]) -> std::process::Output {
+    common::sweep_bin()
+        .arg("adapt")
+        .arg(file)
+        .args(args)
+        .arg("--out")
+        .arg(out)
+        .stdin(Stdio::null())
+        .output()
+        .unwrap()
+}
+
 fn manifest(dir: &Path) -> store::Manifest {
     Store::read_manifest(dir).unwrap().0
 }
@@ -233,12 +246,7 @@ fn the_command_runs_reports_and_resumes_on_the_stand_in() {
     let tmp = tempfile::tempdir().unwrap();
     let file = standin_sweep(tmp.path());
     let out = tmp.path().join("out");
-    let o = common::sweep_bin()
-        .args(["adapt", file.to_str().unwrap(), "-q", "--jobs", "2", "--out"])
-        .arg(&out)
-        .stdin(Stdio::null())
-        .output()
-        .unwrap();
+    let o = sweep_adapt(&file, &out, &["-q", "--jobs", "2"]);
     assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
     let m = manifest(&out);
     assert!(matches!(m.design, DesignRecord::Adapt { first: 20, batch: 10, max: 50, .. }));
@@ -277,12 +285,7 @@ fn a_one_dimensional_adapt_runs_new_points_to_its_max() {
     )
     .unwrap();
     let out = tmp.path().join("out");
-    let o = common::sweep_bin()
-        .args(["adapt", file.to_str().unwrap(), "-q", "--jobs", "1", "--max", "24", "--out"])
-        .arg(&out)
-        .stdin(Stdio::null())
-        .output()
-        .unwrap();
+    let o = sweep_adapt(&file, &out, &["-q", "--jobs", "1", "--max", "24"]);
     let err = common::stderr(&o);
     assert_eq!(o.status.code(), Some(0), "{err}");
     let m = manifest(&out);
@@ -380,12 +383,7 @@ fn each_batch_is_said_on_the_terminal_and_tabled_in_the_report() {
          [run]\nengine = \"stand-in\"\n",
     );
     let out = tmp.path().join("out");
-    let o = common::sweep_bin()
-        .args(["adapt", file.to_str().unwrap(), "--jobs", "2", "--out"])
-        .arg(&out)
-        .stdin(Stdio::null())
-        .output()
-        .unwrap();
+    let o = sweep_adapt(&file, &out, &["--jobs", "2"]);
     let err = common::stderr(&o);
     assert_eq!(o.status.code(), Some(0), "{err}");
     let summary: serde_json::Value =
