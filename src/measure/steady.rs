@@ -23,8 +23,8 @@
 //!   that widened SE: an SE from 8–12 blocks is often read low, and the run stops when it first
 //!   dips under its target.
 //! - Steady: no trend over the window ([`window_trend`]: the least-squares slope of the
-//!   window's batch means, batched as the SE is, within Student's quantile at
-//!   [`TREND_FALSE_ALARM`]), the heap at the window's end within [`HEAP_TOLERANCE`] of its start,
+//!   window's batch means, batched by the SE's rule on what the fitted line leaves, within
+//!   Student's quantile at [`TREND_FALSE_ALARM`]), the heap at the window's end within [`HEAP_TOLERANCE`] of its start,
 //!   and the MSER truncation short of the series' half.
 //! - v_x: the profile of each block's snapshot of the 6 D in front of the blade (thesis
 //!   Appendix A), in the lab frame (+v), averaged over the steady window, with the SE of each
