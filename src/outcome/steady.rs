@@ -19,7 +19,7 @@ pub struct SteadyState {
     pub batch_acf1: f64,
     /// Lag-1 autocorrelation of the window's blocks.
     pub block_acf1: f64,
-    /// OLS slope of the window's batch means (batched as the SE is) over its SE, and the limit
+    /// OLS slope of the window's batch means (`measure::steady::window_trend`) over its SE, and the limit
     /// |trend_z| must stay within for the window to count as steady (absent in older results,
     /// whose trend was over single blocks within 3).
     pub trend_z: f64,
