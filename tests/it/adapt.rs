@@ -274,6 +274,7 @@ fn the_command_runs_reports_and_resumes_on_the_stand_in() {
 /// One swept parameter on the stand-in, whose MFR is highest at the slowest blade: the
 /// criterion keeps wanting the face the first batch already ran, and the design must still grow
 /// by new points to its max (it once chose that run again, added nothing and stopped at 12).
+/// Its 31 batches of one (one job slot) fold in the report's table: the first 4 and last 12.
 #[test]
 fn a_one_dimensional_adapt_runs_new_points_to_its_max() {
     let tmp = tempfile::tempdir().unwrap();
@@ -285,17 +286,24 @@ fn a_one_dimensional_adapt_runs_new_points_to_its_max() {
     )
     .unwrap();
     let out = tmp.path().join("out");
-    let o = sweep_adapt(&file, &out, &["-q", "--jobs", "1", "--max", "24"]);
+    let o = sweep_adapt(&file, &out, &["-q", "--jobs", "1", "--max", "40"]);
     let err = common::stderr(&o);
     assert_eq!(o.status.code(), Some(0), "{err}");
     let m = manifest(&out);
-    assert_eq!(m.points.len(), 24, "{err}");
+    assert_eq!(m.points.len(), 40, "{err}");
     let mut speeds: Vec<f64> = m.points.iter().map(|p| p.values[0]).collect();
     speeds.sort_by(f64::total_cmp);
     speeds.dedup();
-    assert_eq!(speeds.len(), 24, "a setting planned twice");
+    assert_eq!(speeds.len(), 40, "a setting planned twice");
     let said = format!("{}{err}", String::from_utf8_lossy(&o.stdout));
-    assert!(said.contains("keeps the 24 points run"), "{said}");
+    assert!(said.contains("keeps the 40 points run"), "{said}");
+    let html = std::fs::read_to_string(out.join("report/report.html")).unwrap();
+    for row in ["1 (adapt 10)", "4 (adapt 13)", "20 (adapt 29)", "31 (adapt 40)"] {
+        assert!(html.contains(&format!("<td class=\"l\">{row}</td>")), "no row {row}");
+    }
+    assert!(!html.contains("<td class=\"l\">5 (adapt 14)</td>"), "the table did not fold");
+    assert!(html.contains("… 15 more batches (convergence.csv has every one)"));
+    assert_eq!(common::csv_rows(&out.join("convergence.csv")).len(), 31);
 }
 
 #[test]
