@@ -99,6 +99,9 @@ pub fn with_intervals(
 
 /// Whether a ranking of `d` parameters from `n` points is reliable, and why not in words.
 pub fn reliability(n: usize, ranked: &[Index]) -> (bool, String) {
+    if let [only] = ranked {
+        return (true, format!("{} is the only swept parameter: there is nothing to rank", only.parameter));
+    }
     let d = ranked.len().max(1);
     if n < RELIABLE_PER_PARAMETER * d {
         return (
@@ -223,8 +226,12 @@ mod tests {
         assert!(large[1].lo.unwrap() < 0.4424 && 0.4424 < large[1].hi.unwrap(), "{:?}", large[1]);
         let (ok, why) = reliability(100, &ranked(small));
         assert!(!ok && why.contains("fewer than 50 per parameter"), "{why}");
+        let only = large[..1].to_vec();
         let (ok, _) = reliability(1600, &ranked(large));
         assert!(ok);
+        // One parameter explains whatever the sweep sees: no order to doubt, at any size.
+        let (ok, why) = reliability(11, &only);
+        assert!(ok && why.contains("the only swept parameter"), "{why}");
     }
 
     #[test]

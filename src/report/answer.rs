@@ -155,6 +155,9 @@ fn matters(a: &Analysis) -> Option<String> {
     if ranked.is_empty() {
         return None;
     }
+    if let [only] = a.sensitivity.as_slice() {
+        return Some(format!("{} alone is swept: there is nothing to rank", only.parameter));
+    }
     // Every interval reaching zero: no parameter is shown to matter, so no order is.
     let unranked =
         a.sensitivity.iter().filter(|s| s.first_order.is_some()).all(|s| s.lo.is_some_and(|lo| lo < 0.005));

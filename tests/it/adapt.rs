@@ -297,6 +297,7 @@ fn a_one_dimensional_adapt_runs_new_points_to_its_max() {
     assert_eq!(speeds.len(), 40, "a setting planned twice");
     let said = format!("{}{err}", String::from_utf8_lossy(&o.stdout));
     assert!(said.contains("keeps the 40 points run"), "{said}");
+    assert!(said.contains("what matters: blade_speed alone is swept: there is nothing to rank"), "{said}");
     let html = std::fs::read_to_string(out.join("report/report.html")).unwrap();
     for row in ["1 (adapt 10)", "4 (adapt 13)", "20 (adapt 29)", "31 (adapt 40)"] {
         assert!(html.contains(&format!("<td class=\"l\">{row}</td>")), "no row {row}");
