@@ -389,15 +389,14 @@ fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &AdaptWatch, ran: usize) 
     )
 }
 
-/// `cands` without the points the design holds already (run, failed or screened) and without
-/// repeats: a setting run again is the same deck, so a batch that chose only such points would
-/// add nothing and end the design short of its max. Near a best run on a face the candidates
-/// clipped to the cube, and the upper bound's peak, are that run itself (in one dimension the
-/// criterion chose the slowest blade twice and the sweep stopped at 11 of 480 points).
+/// `cands` without the points the design holds already ([`batches::taken`]) and without
+/// repeats: a batch that chose only such points would add nothing and end the design short of
+/// its max. Near a best run on a face the candidates clipped to the cube, and the upper bound's
+/// peak, are that run itself (in one dimension the criterion chose the slowest blade twice and
+/// the sweep stopped at 11 of 480 points).
 fn untaken(cands: Vec<Vec<f64>>, sweep: &Sweep, points: &[PointRecord]) -> Vec<Vec<f64>> {
     let same = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(a, b)| (a - b).abs() <= 1e-9);
-    let mut taken: Vec<Vec<f64>> =
-        points.iter().map(|p| crate::sweep::space::unit_point(sweep, &p.values)).collect();
+    let mut taken = batches::taken(sweep, points);
     let mut kept = Vec::with_capacity(cands.len());
     for c in cands {
         if !taken.iter().any(|t| same(t, &c)) {

@@ -17,6 +17,12 @@ use crate::run::SpaceHook;
 use crate::store::{Manifest, PointRecord, SpaceRecord, Store};
 use crate::sys::process::CancelToken;
 
+/// The unit-cube coordinates of a design's points (run, failed or screened alike): what its next
+/// batch must not plan again, since a setting run again is the same deck.
+pub fn taken(sweep: &crate::sweep::Sweep, points: &[PointRecord]) -> Vec<Vec<f64>> {
+    points.iter().map(|p| crate::sweep::space::unit_point(sweep, &p.values)).collect()
+}
+
 /// What a sequential design adds to a space hook: what it says of its batches, whether its rule
 /// has held, and its next batch.
 pub trait Sequential: SpaceHook {

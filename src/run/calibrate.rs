@@ -505,8 +505,7 @@ fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &CalibrationWatch, ran: u
     let k = manifest.spaces.len() - 1;
     let post = watch.batches.last().and_then(|b| b.posterior.as_ref());
     let cands = cal::candidates(sweep.dim(), k, seed, post);
-    let existing: Vec<Vec<f64>> =
-        manifest.points.iter().map(|p| crate::sweep::space::unit_point(&sweep, &p.values)).collect();
+    let existing = batches::taken(&sweep, &manifest.points);
     let picks: Vec<Pick> = match ems {
         Some(ems) => {
             let outs = Emulated::pair(&watch.settings.targets, ems);
