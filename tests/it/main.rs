@@ -39,6 +39,7 @@ mod powders;
 mod recoater;
 mod stability;
 mod steady;
+mod study_layers;
 mod vtk;
 mod warm;
 

@@ -4,8 +4,9 @@ ti64.sh write. Needs matplotlib.
 
     python3 docs/study/layers/plot.py      # from the repository's root
 
-- gaboriault.png: the layer relative density per layer, ours per property set (each pass, the
-  steady layer's mean ± SE as a band) beside the experiment's three repeats (mean, min–max);
+- gaboriault.png: Gaboriault et al.'s three repeats (min–max band, mean) and our PS1–PS3, in step
+  (their layer n against our pass n + 1, compare.py), per layer and per layer group, and
+  compare.py's aligned tables;
 - ti64-fused.png: the fused bed over passes (the machine answer, its controls, ti64.sh's lattice
   of two layer thicknesses and two blade speeds) — each pass's deposit over the drop (1 once the
   bed is steady) and the powder under the blade over the drop (→ 1 / packing);
@@ -21,6 +22,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import compare  # noqa: E402  the alignment with the experiment, and its tables
 
 
 def load(path):
@@ -32,69 +35,73 @@ def load(path):
     return (m.get("layers") if isinstance(m, dict) else None), j.get("reason") or j.get("failed") or "failed"
 
 
-def experiment():
-    rows = []
-    for line in open(os.path.join(HERE, "experimental.data")):
-        if line.startswith("#") or line.startswith("Layer"):
-            continue
-        k, *r = line.split()
-        rows.append((int(k) + 1, [float(x) for x in r]))
-    return rows
-
-
 def gaboriault():
-    exp = experiment()
-    fig, ax = plt.subplots(figsize=(8, 4.8))
-    ks = [k for k, _ in exp]
-    mean = [sum(r) / 3 for _, r in exp]
-    lo = [m - min(r) for m, (_, r) in zip(mean, exp)]
-    hi = [max(r) - m for m, (_, r) in zip(mean, exp)]
-    ax.errorbar(ks, mean, yerr=[lo, hi], color="black", marker="s", capsize=3,
-                label="experiment, 3 repeats (mean, min–max)")
-    print("| set | first layer (over 100 µm) | first layer (over its 200 µm gap) | steady from | steady layer ± SE | passes 2–N ± SE | passes | covered | CPU s | experiment layers 2–10 |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
-    plateau = [v for k, r in exp if 2 <= k <= 10 for v in r]
+    """Their layers against our passes, in step (compare.py: their layer n is our pass n + 1):
+    per layer, and per layer group as compare.py's table has it."""
+    rows = compare.experiment()
+    layers = list(range(1, 21))  # their layers; row_of_layer finds each in their file
+    reps = [[rows[compare.row_of_layer(n)][i] for n in layers] for i in range(3)]
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12.5, 5.0), gridspec_kw={"width_ratios": [2.3, 1]})
+    # The three repeats: their min–max as a band, their mean as a line.
+    a1.fill_between(layers, [min(v) for v in zip(*reps)], [max(v) for v in zip(*reps)], color="0.6",
+                    label="experiment: 3 repeats, min–max")
+    a1.plot(layers, [sum(v) / 3 for v in zip(*reps)], color="black", marker="s", markersize=3,
+            linewidth=0.8, label="experiment: mean of the repeats")
     colours = {"PS1": "#e6550d", "PS2": "#3182bd", "PS3": "#31a354"}
-    for path in sorted(glob.glob(os.path.join(HERE, "record", "PS*.json"))):
-        label = os.path.basename(path)[:-5]
-        series, failed = load(path)
-        if not series:
-            print(f"| {label} | failed: {failed} | | | | | | |")
+    offsets = {"PS1": -0.18, "PS2": 0.0, "PS3": 0.18}
+    exp = compare.experiment_groups(rows)
+    a2.errorbar([i - 0.27 for i in range(3)], [e["mean"] for e in exp], yerr=[e["sd"] for e in exp], color="black", marker="s",
+                linestyle="none", capsize=4, label="experiment: mean ± SD of the repeats")
+    for label, _ in compare.SETS:
+        p = compare.load_passes(label)
+        if not p:
             continue
-        p = series["passes"]
-        t = series["layer_thickness_m"]
-        # Their post-processing divides every layer's deposit by the drop δn (100 µm), the first
-        # too; ours divides the first by its whole gap (drop + clearance).
-        rd = [q["deposit_m"] / t for q in p]
-        c = colours.get(label, None)
-        # The figure shows the three sets; variants (another seed, another plate) only in the table.
-        on_figure = c is not None
-        if on_figure:
-            ax.plot([q["k"] for q in p], rd, marker="o", color=c, label=f"{label} (ours, per pass)")
-            ax.plot([1], [p[0]["relative_density"]], marker="o", markerfacecolor="none", color=c, linestyle="none",
-                    label=f"{label} first layer over its 200 µm gap")
-        s = series["steady_from"]
-        m, se = series["relative_density"], series["relative_density_se"]
-        if on_figure:
-            ax.fill_between([s, len(p)], [m - se] * 2, [m + se] * 2, color=c, alpha=0.25)
-        cov = sum(q["covered_fraction"] for q in p[s - 1:]) / len(p[s - 1:])
-        # Every pass after the first, as the experiment's plateau is read (its layers 2–10).
-        later = rd[1:]
-        lm = sum(later) / len(later)
-        lse = (sum((x - lm) ** 2 for x in later) / (len(later) - 1) / len(later)) ** 0.5
-        cpu = json.load(open(path)).get("cpu_time") or float("nan")
-        print(f"| {label} | {rd[0]:.3f} | {p[0]['relative_density']:.3f} | {s} | "
-              f"{m:.3f} ± {se:.3f}{'' if series['steady'] else ' (not steady)'} | {lm:.3f} ± {lse:.3f} | {len(p)} | "
-              f"{cov:.2f} | {cpu:.0f} | {min(plateau):.3f}–{max(plateau):.3f} |")
-    ax.set_xlabel("layer")
-    ax.set_ylabel("layer relative density (deposit / 100 µm)")
-    ax.set_xticks(range(1, 21))
-    ax.set_ylim(0, 1.0)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="lower right")
-    ax.set_title("Ti-6Al-4V 45–106 µm, 100 µm layers, 0.1 m/s: ours beside Gaboriault et al. 2025")
+        c, dx = colours[label], offsets[label]
+        values = compare.layer_values(p)
+        groups = compare.record_groups(p)
+        # A single pass's error: the SD of the record's passes over layers 2–10.
+        single = groups[0]["err"]
+        ns = sorted(values)
+        a1.errorbar([n + dx for n in ns], [values[n] for n in ns], yerr=single, color=c, marker="o",
+                    markersize=4.5, linewidth=1.0, capsize=2, elinewidth=0.8,
+                    label=f"{label}: pass n + 1 at layer n (± one pass's SD)")
+        # Our first pass, into the 200 µm gap: the baseline their script skips, not a layer.
+        a1.plot([dx], [p[0]["relative_density"]], marker="o", markerfacecolor="white", color=c, linestyle="none")
+        for i, g in enumerate(groups):
+            if g["layers"] is None:
+                continue
+            a2.errorbar([i + 0.06 + 0.8 * dx], [g["mean"]], yerr=[g["err"]], color=c, marker="o", linestyle="none",
+                        capsize=4, label=f"{label} ± SE (layer 1: ± one pass's SD)")
+    a1.plot([], [], marker="o", markerfacecolor="white", color="0.3", linestyle="none",
+            label="our pass 1 over its 200 µm gap: the baseline (no layer)")
+    a1.axvline(0.5, color="0.5", linewidth=0.6, linestyle=":")
+    a1.set_xticks(range(0, 21))
+    a1.set_xticklabels(["base"] + [str(n) for n in range(1, 21)])
+    a1.set_xlim(-0.6, 20.6)
+    a1.set_xlabel("their layer n  (our pass n + 1)")
+    top = a1.secondary_xaxis("top", functions=(lambda x: x + 1, lambda x: x - 1))
+    top.set_xticks(range(1, 22, 2))
+    top.set_xlabel("our pass")
+    a1.set_ylabel("layer relative density (deposit / 100 µm drop)")
+    a1.set_ylim(0.25, 0.85)
+    a1.grid(alpha=0.3)
+    a1.legend(fontsize=7.5, loc="upper left", ncol=2)
+    a1.text(13.5, 0.30, "ours: 8 passes (layers 1–7);\nlayers 8–20 not run", fontsize=8, color="0.3")
+    a2.set_xticks(range(3))
+    a2.set_xticklabels([f"layer {e['group']}" if e["group"] == "1" else f"layers {e['group']}" for e in exp])
+    a2.set_xlim(-0.5, 2.5)
+    a2.set_ylim(0.25, 0.85)
+    a2.text(1.0, 0.44, "ours over\nlayers 2–7", fontsize=8, color="0.3", ha="center")
+    a2.text(2.0, 0.55, "ours: not run\n(passes 12–21)", fontsize=8, color="0.3", ha="center")
+    a2.set_ylabel("mean over the group")
+    a2.grid(alpha=0.3)
+    handles, labels = a2.get_legend_handles_labels()
+    keep = {l: h for h, l in zip(handles, labels)}
+    a2.legend(keep.values(), keep.keys(), fontsize=7.5, loc="upper left")
+    fig.suptitle("Ti-6Al-4V 45–106 µm, 100 µm layers, 0.1 m/s: Gaboriault et al. 2025's layers and ours, in step")
     fig.tight_layout()
     fig.savefig(os.path.join(HERE, "gaboriault.png"), dpi=110)
+    compare.main_tables()
 
 
 VARIANTS = {"flat": "flat blade", "gamma0": "no cohesion", "halfdose": "half the dose", "depth12": "depth 12 D",

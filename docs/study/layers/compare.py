@@ -1,0 +1,211 @@
+#!/usr/bin/env python3
+"""Gaboriault et al. 2025's measured layers against our passes, in step (docs/study/layers.md).
+
+    python3 docs/study/layers/compare.py              # the aligned tables, Markdown, on stdout
+    python3 docs/study/layers/compare.py --self-test  # the alignment checked (tests/it/layers_compare.rs)
+
+**The alignment.** Their `post_processing/post_rel_density.py` measures the plate after every
+blade pass and skips the first (`if index ==0: continue`): the pass into the first gap (the
+plate's 100 µm drop and the blade's 100 µm clearance) is a baseline. Their layer 1 is the second
+pass's added volume over δn × the plate's area, and `graph_rel_density.py` plots it at layer 1
+beside `experimental.data`'s row 0 (`layer_number + 1`). So their layer n — the file's row n − 1
+— stands against our pass n + 1: `pass_of_layer` and `row_of_layer` below, and nowhere else.
+
+**What is compared.** Per layer group (1; 2–10; 11–20): the experiment's three repeats, each
+averaged over the group, as mean ± SD of the three; ours, per record, the mean of our passes
+that are the group's layers ± its SE (SD/√n over those passes; a loose bed's passes are not
+correlated, docs/study/layers.md). A group of one layer has one pass: its error is a single
+pass's scatter, the SD of the same record's passes over layers 2–10. A group our passes cover
+only in part is averaged over the layers covered and says which; one they do not reach is n/a.
+
+**The self-test** feeds the experiment's own rows to the records' code as if they were our
+passes — row n − 1 as pass n + 1 (`--feed-shift`, 1 by default, says by how much a row is moved
+on: row n − 1 → pass n + shift), pass 1 a baseline of 0 — and checks that every group's mean comes
+back exactly as the experiment's. It prints JSON and exits 1 when a mean differs.
+
+Needs only the standard library (plot.py draws the figure from the same functions).
+"""
+import argparse, json, math, os, sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+# Their layer groups: the first layer; the plateau; the densification (the paper's subject).
+GROUPS = [("1", 1, 1), ("2–10", 2, 10), ("11–20", 11, 20)]
+PLATEAU = (2, 10)
+
+# The records of their case (sweeps/layers-gaboriault.toml): the three property sets, then the
+# variants of the same case that measure its numerical and seed error.
+SETS = [("PS1", "PS1"), ("PS2", "PS2"), ("PS3", "PS3")]
+VARIANTS = [("PS1-plate12", "PS1, plate halved (12 D)"), ("PS2-seed2", "PS2, seed 2")]
+
+
+def pass_of_layer(n):
+    """Our pass that stands against their layer n: their first pass is a baseline they skip."""
+    return n + 1
+
+
+def row_of_layer(n):
+    """experimental.data's row (its `Layer_number`) that holds their layer n."""
+    return n - 1
+
+
+def mean(xs):
+    s = 0.0
+    for x in xs:
+        s += x
+    return s / len(xs)
+
+
+def sd(xs):
+    """Sample standard deviation (n − 1)."""
+    m = mean(xs)
+    return math.sqrt(sum((x - m) ** 2 for x in xs) / (len(xs) - 1))
+
+
+def experiment(path=os.path.join(HERE, "experimental.data")):
+    """{row: [R1, R2, R3]} from their file."""
+    rows = {}
+    for line in open(path):
+        if line.startswith("#") or line.startswith("Layer"):
+            continue
+        k, *r = line.split()
+        rows[int(k)] = [float(x) for x in r]
+    return rows
+
+
+def experiment_repeat_means(rows, first, last):
+    """Each repeat's mean over their layers first..last, read from the rows that hold them."""
+    return [mean([rows[row_of_layer(n)][i] for n in range(first, last + 1)]) for i in range(3)]
+
+
+def experiment_groups(rows):
+    """Per group: the three repeats' means, their mean and SD."""
+    out = []
+    for name, a, b in GROUPS:
+        reps = experiment_repeat_means(rows, a, b)
+        out.append({"group": name, "layers": [a, b], "repeats": reps, "mean": mean(reps), "sd": sd(reps)})
+    return out
+
+
+def layer_values(passes):
+    """{their layer n: our value} from a record's passes ({k, relative_density}); our pass 1,
+    the baseline, stands against no layer. A pass's relative density after the first is its
+    deposit over the drop, as theirs is."""
+    by_pass = {q["k"]: q["relative_density"] for q in passes}
+    out = {}
+    n = 1
+    while pass_of_layer(n) in by_pass:
+        out[n] = by_pass[pass_of_layer(n)]
+        n += 1
+    return out
+
+
+def record_groups(passes):
+    """Per group: our mean over the layers our passes reach, its error, and which layers."""
+    values = layer_values(passes)
+    a, b = PLATEAU
+    plateau = [values[n] for n in range(a, b + 1) if n in values]
+    single = sd(plateau) if len(plateau) > 1 else float("nan")
+    out = []
+    for name, a, b in GROUPS:
+        covered = [n for n in range(a, b + 1) if n in values]
+        if not covered:
+            out.append({"group": name, "layers": None})
+            continue
+        xs = [values[n] for n in covered]
+        err = sd(xs) / math.sqrt(len(xs)) if len(xs) > 1 else single
+        out.append({"group": name, "layers": [covered[0], covered[-1]], "n": len(xs), "mean": mean(xs),
+                    "err": err, "err_kind": "SE" if len(xs) > 1 else "one pass's SD"})
+    return out
+
+
+def load_passes(label):
+    path = os.path.join(HERE, "record", label + ".json")
+    if not os.path.exists(path):
+        return None
+    j = json.load(open(path))
+    layers = j.get("layers") or (j.get("measured") or {}).get("layers")
+    return layers["passes"] if layers else None
+
+
+def cell(g, e, rows):
+    """One record's cell of the table: mean ± error, the layers when only some of the group's,
+    and how many combined SE it lies from the experiment over the same layers."""
+    if g["layers"] is None:
+        return "n/a (not run)"
+    a, b = g["layers"]
+    reps = experiment_repeat_means(rows, a, b)
+    exp_se = sd(reps) / math.sqrt(3)
+    z = (g["mean"] - mean(reps)) / math.sqrt(g["err"] ** 2 + exp_se ** 2)
+    part = "" if [a, b] == e["layers"] else f", layers {a}–{b}" if a != b else f", layer {a}"
+    return f"{g['mean']:.3f} ± {g['err']:.3f}{part} ({z:+.1f})"
+
+
+def table(labels, rows):
+    exp = experiment_groups(rows)
+    recs = [(name, load_passes(label)) for label, name in labels]
+    recs = [(n, record_groups(p)) for n, p in recs if p]
+    print("| their layers | our passes | experiment, mean ± SD of 3 repeats | "
+          + " | ".join(n for n, _ in recs) + " |")
+    print("|---|---|---|" + "---|" * len(recs))
+    for i, e in enumerate(exp):
+        a, b = e["layers"]
+        ps = f"{pass_of_layer(a)}" if a == b else f"{pass_of_layer(a)}–{pass_of_layer(b)}"
+        print(f"| {e['group']} | {ps} | {e['mean']:.3f} ± {e['sd']:.3f} | "
+              + " | ".join(cell(g[i], e, rows) for _, g in recs) + " |")
+    covered = {tuple(g[i]["layers"]) for _, g in recs for i in range(len(GROUPS))
+               if g[i]["layers"] and g[i]["layers"] != exp[i]["layers"]}
+    for a, b in sorted(covered):
+        reps = experiment_repeat_means(rows, a, b)
+        print(f"\nThe experiment over layers {a}–{b} only: {mean(reps):.3f} ± {sd(reps):.3f} (SD of 3 repeats).")
+
+
+def self_test(shift):
+    """The experiment's rows fed as our passes (row n − 1 → pass n + shift; pass 1 a baseline of
+    0 when shift is 1); every group's mean must come back as the experiment's, exactly."""
+    rows = experiment()
+    exp = experiment_groups(rows)
+    out = {"shift": shift, "repeats": [], "ok": True}
+    for i in range(3):
+        passes = [{"k": 1, "relative_density": 0.0}] if shift == 1 else []
+        for row in sorted(rows):
+            k = (row + 1) + shift  # row n − 1 holds layer n = row + 1
+            if k >= 1 and not any(q["k"] == k for q in passes):
+                passes.append({"k": k, "relative_density": rows[row][i]})
+        fed = record_groups(passes)
+        groups = []
+        for f, e in zip(fed, exp):
+            same = f["layers"] == e["layers"] and f["mean"] == e["repeats"][i]
+            out["ok"] &= same
+            groups.append({"group": e["group"], "layers": e["layers"], "fed": f.get("mean"),
+                           "fed_layers": f["layers"], "experiment": e["repeats"][i], "same": same})
+        out["repeats"].append({"repeat": f"R{i + 1}", "groups": groups})
+    out["experiment"] = [{"group": e["group"], "mean": e["mean"], "sd": e["sd"]} for e in exp]
+    print(json.dumps(out, indent=1, ensure_ascii=False))
+    return out["ok"]
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--self-test", action="store_true", help="check the alignment on the experiment's own rows")
+    ap.add_argument("--feed-shift", type=int, default=1,
+                    help="self-test: feed row n − 1 as pass n + SHIFT (1 is the alignment; 0 must fail)")
+    args = ap.parse_args()
+    if args.self_test:
+        sys.exit(0 if self_test(args.feed_shift) else 1)
+    main_tables()
+
+
+def main_tables():
+    """The aligned tables of docs/study/layers.md."""
+    rows = experiment()
+    print("Their layer n against our pass n + 1; ours: mean ± SE over the passes (a single pass: ± the "
+          "SD of that record's passes over layers 2–10); in brackets, combined SE from the experiment "
+          "over the same layers.\n")
+    table(SETS, rows)
+    print()
+    table([("PS1", "PS1 (24 D, seed 1)"), VARIANTS[0], ("PS2", "PS2 (seed 1)"), VARIANTS[1]], rows)
+
+
+if __name__ == "__main__":
+    main()
