@@ -359,10 +359,15 @@ fn execute<E: Executor>(
     let mut recovered: Vec<(String, Option<f64>)> = Vec::new();
     let mut queued: BTreeMap<usize, E::Job> = BTreeMap::new();
     let mut held: BTreeMap<usize, E::Job> = BTreeMap::new();
+    let mut not_theirs = std::collections::HashMap::new();
     for (p, job) in manifest.points.iter().zip(jobs) {
         let state = store.point_state(manifest, p);
         if let RunState::Damaged { file, reason } = &state {
             eprintln!("warning: {}: {reason}; point {} runs again", file.display(), p.index);
+            // A readable result of another point: the pool must not take it for this one's.
+            if let (Some(RunState::Done(_)), Some(t)) = (store.finished(&p.hash), store.outcome_time(&p.hash)) {
+                not_theirs.insert(p.hash.clone(), t);
+            }
         }
         if matches!(state, RunState::Done(_) | RunState::Failed(_)) {
             // A process killed between its outcome and its joblog line left its claim, or
@@ -418,6 +423,7 @@ fn execute<E: Executor>(
         slots: opts.jobs.max(1),
         retries: sweep.file.run.retries,
         retry_failed_before: if opts.retry_failed { Some(store.retry_round()?) } else { None },
+        not_theirs,
     };
     let joblog = || -> Result<store::Joblog> {
         Ok(store.joblog()?.with_indices(manifest.points.iter().map(|p| (p.hash.clone(), p.index)).collect()))

@@ -20,7 +20,7 @@
 //!
 //! Not responsible for what a job is (the [`Executor`]) or for what to run (the driver).
 
-use std::collections::VecDeque;
+use std::collections::{HashMap, VecDeque};
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc;
@@ -77,6 +77,11 @@ pub struct PoolOptions {
     /// Re-run failed runs whose `failure.json` is older than this (`--retry-failed`); a failure
     /// written since (by another process of this resume) stands.
     pub retry_failed_before: Option<SystemTime>,
+    /// Runs whose `result.json`, when the sweep looked, was not their point's (it holds other
+    /// parameters: [`Store::point_state`]), with that file's modification time: found again
+    /// under the claim, the same file is run again, not reused; a result written since (by
+    /// another process) is its own.
+    pub not_theirs: HashMap<String, SystemTime>,
 }
 
 /// What the pool reports, in the order it happens for each job.
@@ -250,6 +255,11 @@ impl<E: Executor> Worker<'_, E> {
         let hash = hash.to_string();
         // Finished while we were not looking (another process), or earlier and not to retry.
         let found = match self.store.finished(&hash) {
+            Some(RunState::Done(_))
+                if self.opts.not_theirs.get(&hash).is_some_and(|&t| self.store.outcome_time(&hash) == Some(t)) =>
+            {
+                None
+            }
             Some(RunState::Done(r)) => Some(RunOutcome::Done(*r)),
             Some(RunState::Failed(f)) => {
                 let retry = match (self.opts.retry_failed_before, self.store.failure_time(&hash)) {

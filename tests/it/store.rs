@@ -16,7 +16,7 @@ use demsweep::sys::process::CancelToken;
 
 use crate::support::{
     self, assert_all_finite, assert_unique_seq, done_per_hash, engine_sweep, lds, p, result_rows, snapshot,
-    stderr, sweep, Mount, MS,
+    stderr, sweep, text, Mount, MS,
 };
 
 // ---- the manifest ----
@@ -175,6 +175,32 @@ fn a_result_with_parameters_of_another_point_is_not_accepted() {
     assert_eq!(o.status.code(), Some(0), "{err}");
     assert!(err.contains(&format!("runs/{h0}/result.json")) && err.contains("parameters"), "{err}");
     assert_eq!(result_rows(&d)[0]["mfr"], before[0]["mfr"]);
+}
+
+/// Issue 70, defect 2: the pool's claim found the edited result and reused it, so the point
+/// that "runs again" never ran, and every resume said so again.
+#[test]
+fn a_result_with_another_fixed_parameter_runs_again_and_is_then_done() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = finished_standin(tmp.path());
+    let h4 = result_rows(&d)[4]["hash"].clone();
+    let path = result_path(&d, &h4);
+    let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    v["parameters"]["diameter"] = 2.0.into();
+    std::fs::write(&path, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+    let o = sweep(&["resume", p(&d)]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(err.contains("point 4 runs again") && err.contains("7 reused"), "{err}");
+    let again: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    assert_eq!(again["parameters"]["diameter"], 1.5, "run again with the sweep's diameter");
+    assert_eq!(result_rows(&d)[4]["status"], "done");
+    let o = sweep(&["status", p(&d)]);
+    assert!(text(&o.stdout).contains("pending  0"), "{}", text(&o.stdout));
+    // A second resume finds nothing to run and nothing to warn about.
+    let o = sweep(&["resume", p(&d)]);
+    let err = stderr(&o);
+    assert!(!err.contains("runs again") && err.contains("8 reused"), "{err}");
 }
 
 #[test]
