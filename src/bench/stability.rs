@@ -120,6 +120,8 @@ pub fn drift_bound(base: (f64, f64), this: (f64, f64)) -> f64 {
 /// What the bench was asked to do.
 pub struct StabilityPlan {
     pub corner: Vec<f64>,
+    /// The corner's Young's modulus, MPa: the timestep ladder's.
+    pub corner_youngs_mpa: f64,
     pub fractions: Vec<f64>,
     pub moduli: Vec<f64>,
     pub seeds: u64,
@@ -169,7 +171,7 @@ fn level_sweep(sweep: &Sweep, corner: &[f64], level: Level) -> (Sweep, Vec<f64>)
 /// The ladders the plan runs, each with its levels in order.
 fn levels(ctx: &PointContext, plan: &StabilityPlan) -> Vec<(&'static str, Vec<Level>)> {
     let default_fraction = ctx.sweep.file.scene.rayleigh_fraction;
-    let e0 = plan.moduli[0];
+    let e0 = plan.corner_youngs_mpa;
     let mut out = Vec::new();
     if plan.timestep_ladder {
         out.push((

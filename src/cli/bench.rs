@@ -198,7 +198,7 @@ pub(super) struct FidelityArgs {
     /// Points of the draw.
     #[arg(long, default_value_t = 8)]
     points: usize,
-    /// Pile seeds per point and variant (the sweep's scene.seed and the next ones).
+    /// Pile seeds per point and variant (the sweep's scene.seed and the next ones), 1 to 1000.
     #[arg(long, default_value_t = 2)]
     seeds: u64,
     /// Presets to run; errors need `reference`, speed-ups over the thesis need `thesis`.
@@ -239,14 +239,15 @@ pub(super) enum LadderChoice {
 #[derive(Args)]
 pub(super) struct StabilityArgs {
     sweep: PathBuf,
-    /// Timestep ladder, fractions of the Rayleigh time, increasing, each in (0, 1].
-    #[arg(long, value_delimiter = ',', default_value = "0.2,0.3,0.4,0.5,0.6,0.8,1.0")]
-    fractions: Vec<f64>,
+    /// Timestep ladder, fractions of the Rayleigh time, increasing, each in (0, 1] (default
+    /// 0.2,0.3,0.4,0.5,0.6,0.8,1.0).
+    #[arg(long, value_delimiter = ',')]
+    fractions: Option<Vec<f64>>,
     /// Stiffness ladder, Young's modulus in MPa, decreasing, each in [5, 1000] (default: the
     /// corner's modulus halved down to 5).
     #[arg(long, value_delimiter = ',')]
     moduli: Option<Vec<f64>>,
-    /// Pile seeds per level (the sweep's scene.seed and the next ones).
+    /// Pile seeds per level (the sweep's scene.seed and the next ones), 1 to 1000.
     #[arg(long, default_value_t = 3)]
     seeds: u64,
     /// Which ladder to run: both, or the timestep or the stiffness ladder alone.
@@ -266,8 +267,9 @@ pub(super) fn bench_fidelity(a: FidelityArgs) -> Result<(), Error> {
     if a.points == 0 {
         return Err(flag("--points 0", "expected at least 1"));
     }
-    if a.seeds == 0 {
-        return Err(flag("--seeds 0", "expected at least 1"));
+    check_seeds(a.seeds)?;
+    if a.points > MAX_POINTS {
+        return Err(flag(format!("--points {}", a.points), format!("expected 1 to {MAX_POINTS}")));
     }
     let jobs = jobs(a.jobs)?;
     let variants = fidelity::variants(&sweep, &a.presets, &a.variant)?;
@@ -332,9 +334,51 @@ pub(super) fn bench_fidelity(a: FidelityArgs) -> Result<(), Error> {
     Ok(())
 }
 
+/// Most pile seeds a bench runs per level or variant: each is a LIGGGHTS run, and more than this
+/// is a slip (99999999999 asked for an 800 GB list before anything ran).
+const MAX_SEEDS: u64 = 1000;
+/// Most points of a fidelity bench's draw.
+const MAX_POINTS: usize = 10_000;
+
+fn check_seeds(seeds: u64) -> Result<(), Error> {
+    if !(1..=MAX_SEEDS).contains(&seeds) {
+        return Err(flag(format!("--seeds {seeds}"), format!("expected 1 to {MAX_SEEDS}")));
+    }
+    Ok(())
+}
+
+/// The default timestep ladder, fractions of the Rayleigh time.
+const FRACTIONS: [f64; 7] = [0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0];
+
 pub(super) fn bench_stability(a: StabilityArgs) -> Result<(), Error> {
     use demsweep::bench::stability;
+    check_seeds(a.seeds)?;
+    // A flag of the ladder that does not run would be ignored without a word.
+    match (a.ladder, &a.fractions, &a.moduli) {
+        (LadderChoice::Stiffness, Some(f), _) => {
+            return Err(flag(
+                format!("--fractions {}", list(f)),
+                "only the timestep ladder reads it, and --ladder stiffness runs the stiffness ladder alone",
+            ))
+        }
+        (LadderChoice::Timestep, _, Some(m)) => {
+            return Err(flag(
+                format!("--moduli {}", list(m)),
+                "only the stiffness ladder reads it, and --ladder timestep runs the timestep ladder alone \
+                 (at the corner's modulus)",
+            ))
+        }
+        _ => {}
+    }
+    let fractions = a.fractions.unwrap_or_else(|| FRACTIONS.to_vec());
     let sweep = Sweep::load(&a.sweep)?;
+    if let Some(why) = demsweep::scenes::lookup(&sweep.file.scene.layout).and_then(|l| l.refuses_sweeps()) {
+        let why = format!(
+            "scene.layout = \"{}\": the stability bench compares MFR between levels, and {why}",
+            sweep.file.scene.layout
+        );
+        return Err(flag(a.sweep.display().to_string(), why));
+    }
     if sweep.file.scene.timestep_s > 0.0 {
         let why = format!(
             "scene.timestep_s = {} fixes the timestep (fidelity \"{}\"); the stability bench drives \
@@ -343,14 +387,14 @@ pub(super) fn bench_stability(a: StabilityArgs) -> Result<(), Error> {
         );
         return Err(flag(a.sweep.display().to_string(), why));
     }
-    if a.fractions.is_empty() || a.fractions.iter().any(|f| !(f.is_finite() && *f > 0.0 && *f <= 1.0)) {
+    if fractions.is_empty() || fractions.iter().any(|f| !(f.is_finite() && *f > 0.0 && *f <= 1.0)) {
         return Err(flag(
-            format!("--fractions {:?}", a.fractions),
+            format!("--fractions {}", list(&fractions)),
             "expected fractions of the Rayleigh time in (0, 1]",
         ));
     }
-    if a.fractions.windows(2).any(|w| w[1] <= w[0]) {
-        return Err(flag(format!("--fractions {:?}", a.fractions), "expected increasing fractions"));
+    if fractions.windows(2).any(|w| w[1] <= w[0]) {
+        return Err(flag(format!("--fractions {}", list(&fractions)), "expected increasing fractions"));
     }
     let corner = stability::harshest_corner(&sweep);
     let e0 = point::resolve(&sweep, &corner)["youngs_modulus"];
@@ -360,9 +404,6 @@ pub(super) fn bench_stability(a: StabilityArgs) -> Result<(), Error> {
     }
     if moduli.windows(2).any(|w| w[1] >= w[0]) {
         return Err(flag(format!("--moduli {moduli:?}"), "expected decreasing moduli"));
-    }
-    if a.seeds == 0 {
-        return Err(flag("--seeds 0", "expected at least 1"));
     }
     let jobs = jobs(a.jobs)?;
     let out = a.out.unwrap_or_else(|| PathBuf::from("runs").join(format!("{}-stability", sweep.file.name)));
@@ -375,7 +416,8 @@ pub(super) fn bench_stability(a: StabilityArgs) -> Result<(), Error> {
     // Every level's scene must build (the bound aside) before anything is written.
     let plan = stability::StabilityPlan {
         corner,
-        fractions: a.fractions,
+        corner_youngs_mpa: e0,
+        fractions,
         moduli,
         seeds: a.seeds,
         timestep_ladder: a.ladder != LadderChoice::Stiffness,
@@ -444,6 +486,11 @@ pub(super) fn bench_stability(a: StabilityArgs) -> Result<(), Error> {
         eprintln!("wrote {}", f.display());
     }
     Ok(())
+}
+
+/// `10,5`: a list of a flag as written.
+fn list(v: &[f64]) -> String {
+    v.iter().map(|x| x.to_string()).collect::<Vec<_>>().join(",")
 }
 
 pub(super) fn bench_contact(a: BenchContactArgs) -> Result<(), Error> {

@@ -70,11 +70,33 @@ fn bad_bench_input_is_one_line_and_writes_nothing() {
     let f = file.to_str().unwrap();
     let out = tmp.path().join("out");
     let o = out.to_str().unwrap();
-    for extra in [["--fractions", "0.3,0.2"], ["--fractions", "1.5"], ["--moduli", "3"], ["--seeds", "0"]] {
-        let r = sweep(&["bench", "stability", f, "--out", o, extra[0], extra[1]]);
+    let pour = support::write_file(
+        &tmp.path().join("pour.toml"),
+        "name = \"p\"\n[parameters]\nfriction = { lo = 0.1, hi = 0.6 }\n[scene]\nlayout = \"pour\"\n",
+    );
+    let pour = pour.to_str().unwrap();
+    // Issue 70, defects 5 and 6: a seed count that asked for 800 GB, a pour (no MFR), and
+    // flags of the ladder that does not run, once ignored without a word.
+    let cases: [(&str, &[&str], &str); 8] = [
+        (f, &["--fractions", "0.3,0.2"], "increasing"),
+        (f, &["--fractions", "1.5"], "(0, 1]"),
+        (f, &["--moduli", "3"], "[5, 1000] MPa"),
+        (f, &["--seeds", "0"], "--seeds 0: expected 1 to 1000"),
+        (f, &["--seeds", "99999999999"], "--seeds 99999999999: expected 1 to 1000"),
+        (
+            f,
+            &["--ladder", "stiffness", "--fractions", "0.2,0.3"],
+            "--fractions 0.2,0.3: only the timestep ladder",
+        ),
+        (f, &["--ladder", "timestep", "--moduli", "10,5"], "--moduli 10,5: only the stiffness ladder"),
+        (pour, &[], "scene.layout = \"pour\": the stability bench compares MFR"),
+    ];
+    for (file, extra, says) in cases {
+        let r = sweep(&[&["bench", "stability", file, "--out", o][..], extra].concat());
         let err = String::from_utf8_lossy(&r.stderr);
         assert_eq!(r.status.code(), Some(2), "{extra:?}: {err}");
         assert_eq!(err.trim_end().lines().count(), 1, "{extra:?}: {err}");
+        assert!(err.contains(says), "{extra:?}: {err}");
         assert!(!out.exists());
     }
     let thesis = thesis_space(tmp.path(), "fidelity = \"thesis\"");
