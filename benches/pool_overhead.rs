@@ -65,7 +65,8 @@ fn ours(tmp: &Path, round: usize, jobs: usize, count: usize) -> Duration {
     let store = Store::open(&dir);
     let exec = TrueExecutor;
     let work: Vec<String> = (0..count).map(|i| exec.prepare(&[i as f64]).unwrap()).collect();
-    let opts = PoolOptions { slots: jobs, retries: 0, retry_failed_before: None, not_theirs: Default::default() };
+    let opts =
+        PoolOptions { slots: jobs, retries: 0, retry_failed_before: None, not_theirs: Default::default() };
     let t = Instant::now();
     let mut done = 0;
     pool::run(&exec, &store, store.joblog().unwrap(), work, &opts, &CancelToken::new(), |e| {

@@ -127,7 +127,7 @@ pub(super) fn resume(
 
 /// Write the calibration's report, print its answer, and say what to do about the runs.
 fn finish(s: &Summary) -> Result<(), Error> {
-    let dir = demsweep::sys::shell::quote(&s.dir.display().to_string()).into_owned();
+    let dir = demsweep::sys::shell::quote_path(&s.dir).into_owned();
     // Told to stop: stop now, and leave the report of what is done to `sweep report`.
     if !s.interrupted {
         demsweep::sys::process::on_interrupt_say(format!(

@@ -129,7 +129,7 @@ pub(super) struct WorkArgs {
 pub(super) fn submit(a: SubmitArgs) -> Result<(), Error> {
     use demsweep::run::cluster::{self, Only, Scheduler, SubmitOptions};
     if demsweep::run::calibrate::settings(&a.dir).is_some() {
-        let dir = demsweep::sys::shell::quote(&a.dir.display().to_string()).into_owned();
+        let dir = demsweep::sys::shell::quote_path(&a.dir).into_owned();
         return Err(flag(
             format!("sweep submit {dir}"),
             format!("a calibration plans each batch from the last on one machine; run it with `sweep resume {dir}`"),
@@ -285,7 +285,7 @@ fn chain_stops(dir: &std::path::Path, after_batch: Option<usize>) -> Result<bool
             eprintln!(
                 "the batch ended with {left} of its {upto} points unfinished (tasks cut off?): no next batch; \
                  `sweep submit {}` re-submits them and carries the chain on",
-                demsweep::sys::shell::quote(&dir.display().to_string())
+                demsweep::sys::shell::quote_path(dir)
             );
             return Ok(true);
         }
@@ -331,8 +331,8 @@ fn next_adaptive_batch(dir: &std::path::Path) -> Result<bool, Error> {
                 eprintln!(
                     "nothing to submit: the rule has not held by design.adapt.max ({n} points); \
                      `sweep adapt {} --max M --out {}` raises it",
-                    demsweep::sys::shell::quote(&dir.join("sweep.toml").display().to_string()),
-                    demsweep::sys::shell::quote(&dir.display().to_string())
+                    demsweep::sys::shell::quote_path(&dir.join("sweep.toml")),
+                    demsweep::sys::shell::quote_path(dir)
                 );
                 Ok(false)
             }

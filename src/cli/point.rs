@@ -252,7 +252,9 @@ pub(super) fn run_one(a: RunArgs) -> Result<(), Error> {
                 println!("{}", serde_json::to_string_pretty(&r).map_err(CliError::Json)?);
             } else {
                 println!("{}", used_line(&file_sweep, &a.set, &r));
-                print_result(&r, &scene, ctx.as_ref().and_then(|c| c.layout.result_lines(&r)));
+                // The layout's own lines (a pour's angle of repose), on the stand-in as on LIGGGHTS.
+                let own = demsweep::scenes::lookup(&sweep.file.scene.layout).and_then(|l| l.result_lines(&r));
+                print_result(&r, &scene, own);
             }
             if a.vtk {
                 eprintln!("ParaView: open {}/particles_*.vtk and blade_*.vtk", dir.display());

@@ -336,7 +336,7 @@ fn plan(
     let cancel = CancelToken::new();
     let exec = driver::SweepExecutor::for_sweep(sweep)?;
     let (points, unfinished) = driver::plan_dir(sweep, design, out, &exec, opts.progress, &cancel)?;
-    let dir = demsweep::sys::shell::quote(&out.display().to_string()).into_owned();
+    let dir = demsweep::sys::shell::quote_path(out).into_owned();
     eprintln!("planned {points} points in {dir}, {unfinished} to run; nothing run");
     eprintln!(
         "run them here: `sweep resume {dir}`; on a cluster: `sweep submit {dir} --scheduler slurm --tasks N`"
@@ -385,7 +385,7 @@ pub(super) fn extend(a: ExtendArgs) -> Result<(), Error> {
         }
     };
     let s = demsweep::run::extend::extend_sweep(&a.dir, a.se, jobs, &cancel, &say)?;
-    let dir = demsweep::sys::shell::quote(&a.dir.display().to_string()).into_owned();
+    let dir = demsweep::sys::shell::quote_path(&a.dir).into_owned();
     let mut parts = vec![format!("{} extended ({:.0} CPU s)", s.extended, s.cpu_s)];
     parts.push(format!("{} within it already", s.met));
     if s.not_extendable > 0 {
@@ -422,7 +422,7 @@ pub(super) fn finish(s: &Summary, sweep: &Sweep, progress: ProgressMode) -> Resu
     if s.interrupted {
         return finish_runs(s);
     }
-    let dir = demsweep::sys::shell::quote(&s.dir.display().to_string()).into_owned();
+    let dir = demsweep::sys::shell::quote_path(&s.dir).into_owned();
     demsweep::sys::process::on_interrupt_say(format!(
         "the runs are kept; the report was not finished: `sweep report {dir}` writes it"
     ));
@@ -458,7 +458,7 @@ fn print_answer(analysis: &demsweep::report::Analysis) {
 
 /// Say what to do next about the runs; failed runs or an interruption are the error returned.
 pub(super) fn finish_runs(s: &Summary) -> Result<(), Error> {
-    let dir = demsweep::sys::shell::quote(&s.dir.display().to_string()).into_owned();
+    let dir = demsweep::sys::shell::quote_path(&s.dir).into_owned();
     if let Some(line) = s.screen.sentence() {
         let warning =
             if s.screen.verdict == demsweep::run::screen::Verdict::Refuted { "warning: " } else { "" };
@@ -501,7 +501,7 @@ pub(super) fn unclaim(a: UnclaimArgs) -> Result<(), Error> {
     eprintln!(
         "released {} claims; kept {kept} held by live processes here; `sweep resume {}` runs the released points",
         released.len(),
-        demsweep::sys::shell::quote(&a.dir.display().to_string())
+        demsweep::sys::shell::quote_path(&a.dir)
     );
     Ok(())
 }

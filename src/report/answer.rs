@@ -253,21 +253,54 @@ fn failing_tests(a: &Analysis) -> Vec<String> {
     out
 }
 
+/// Rule "scaled": the points at which every statistic's 95% bootstrap interval would be within
+/// the tolerance of its scale, if the half-widths of the last space narrow as 1/√N (a multiple
+/// of `step`), and the statistic whose interval is the widest; `None` under another rule or
+/// without intervals.
+fn points_to_know(a: &Analysis, step: usize) -> Option<(usize, &'static str)> {
+    if a.criteria.rule != Rule::Scaled {
+        return None;
+    }
+    let changes = a.spaces.last()?.changes.as_ref()?;
+    let (ratio, widest) = STATISTICS
+        .iter()
+        .filter_map(|st| {
+            let c = changes.get(st.name())?;
+            let r = c.noise? / (a.criteria.tolerance * c.scale?);
+            r.is_finite().then_some((r, st.name()))
+        })
+        .max_by(|x, y| x.0.total_cmp(&y.0))?;
+    let n = a.counts.points as f64 * ratio * ratio;
+    let step = step.max(1) as f64;
+    (n.is_finite() && n < 1e9).then(|| (((n / step).ceil() * step) as usize, widest))
+}
+
 /// What to do next: resume, extend the design, look at the failures.
 fn next(a: &Analysis) -> Option<String> {
     // Words a user pastes into a shell: a name with a space or a `*` stays one word.
-    let quote = |p: &std::path::Path| crate::sys::shell::quote(&p.display().to_string()).into_owned();
+    let quote = |p: &std::path::Path| crate::sys::shell::quote_path(p).into_owned();
     let (dir, file) = (quote(&a.dir), quote(&a.dir.join("sweep.toml")));
     let mut steps = Vec::new();
     match a.verdict.status {
         "unfinished" => steps.push(format!("`sweep resume {dir}` runs the pending points")),
         "not-converged" => steps.push(match &a.design {
-            DesignRecord::Lds { max, .. } => format!(
-                "raise design.lds.max: `sweep lds {file} --max {} --out {dir}` keeps the {} points run and adds {}",
-                2 * max,
-                a.counts.points,
-                max
-            ),
+            DesignRecord::Lds { max, step, .. } => {
+                let more = format!(
+                    "raise design.lds.max: `sweep lds {file} --max {} --out {dir}` keeps the {} points run and adds {}",
+                    2 * max,
+                    a.counts.points,
+                    max
+                );
+                match points_to_know(a, *step) {
+                    Some((n, widest)) if n > 2 * max => format!(
+                        "{more}; the 95% intervals narrow as 1/√N, and the widest, the {widest}'s, is {:.0}× the \
+                         tolerance at N = {}: every one is within it at about {n} points",
+                        ((n as f64) / a.counts.points.max(1) as f64).sqrt(),
+                        a.counts.points
+                    ),
+                    _ => more,
+                }
+            }
             DesignRecord::Lattice { levels } => {
                 let more: Vec<String> =
                     levels.iter().chain(levels.last().map(|l| l + 1).as_ref()).map(|l| l.to_string()).collect();

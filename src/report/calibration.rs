@@ -51,6 +51,22 @@ pub struct Residual {
     pub in_sd: f64,
 }
 
+impl Residual {
+    /// How far the simulated value is from the target, in SDs of the two combined (the
+    /// target's, and the run's SE or the emulator's SD).
+    pub fn combined_sd(&self) -> f64 {
+        let sd = (self.target.sd.powi(2) + self.se.unwrap_or(0.0).powi(2)).sqrt();
+        (self.simulated - self.target.value).abs() / sd
+    }
+}
+
+/// A target missed by more than this many combined SDs ([`Residual::combined_sd`]) at the best
+/// run and at the posterior's mode is out of reach: no setting in the sweep file's ranges
+/// reproduces it, and a posterior that has stopped moving says where the miss is smallest, not
+/// what the powder is. Four: a reproduced target lies within 3 SD at 99.7 %, and the mode's
+/// emulator SD is already in its SD.
+pub const OUT_OF_REACH_SD: f64 = 4.0;
+
 /// A setting with its residuals.
 #[derive(Debug, Clone, Serialize)]
 pub struct Setting {
@@ -85,7 +101,8 @@ pub struct Calibration {
     pub best_run: Option<Setting>,
     pub mode: Option<Setting>,
     pub batches: Vec<BatchRow>,
-    /// "converged", "not converged" (at max, or unfinished) or "no posterior".
+    /// "converged", "not converged" (at max, or unfinished), "out of reach" (a target no
+    /// setting in the ranges reproduces: [`OUT_OF_REACH_SD`]) or "no posterior".
     pub status: String,
     pub reason: String,
     pub runs_done: usize,
@@ -293,6 +310,24 @@ fn answer(
             })
             .collect(),
     });
+    // Targets that neither the nearest run nor the posterior's mode comes near.
+    let missed: Vec<&Residual> = best_run.as_ref().map_or(Vec::new(), |b| {
+        b.residuals
+            .iter()
+            .enumerate()
+            .filter(|(k, r)| {
+                r.combined_sd() > OUT_OF_REACH_SD
+                    && mode.as_ref().is_none_or(|m| m.residuals[*k].combined_sd() > OUT_OF_REACH_SD)
+            })
+            .map(|(_, r)| r)
+            .collect()
+    });
+    let mut parameters = parameters;
+    if !missed.is_empty() {
+        for p in &mut parameters {
+            p.identification = "not identified: the targets are out of reach".into();
+        }
+    }
     let batches = watch
         .batches
         .iter()
@@ -318,6 +353,29 @@ fn answer(
     let settings = watch.settings();
     let pending = status.iter().filter(|s| !s.is_finished()).count();
     let (st, reason) = match (watch.converged_at, post) {
+        _ if !missed.is_empty() => {
+            let which: Vec<String> = missed
+                .iter()
+                .map(|r| {
+                    format!(
+                        "{} = {} ± {} (the nearest run gives {}, {:+.1} SD)",
+                        r.target.name,
+                        fmt(r.target.value),
+                        fmt(r.target.sd),
+                        fmt(r.simulated),
+                        r.in_sd
+                    )
+                })
+                .collect();
+            (
+                "out of reach".to_string(),
+                format!(
+                    "no setting in the sweep file's ranges reproduces {}, nor does the posterior's best setting \
+                     (more than {OUT_OF_REACH_SD} SD off); check the targets' values and units, or widen the ranges",
+                    which.join(" and ")
+                ),
+            )
+        }
         (_, None) => ("no posterior".to_string(), "too few runs measured every target for an emulator".to_string()),
         (Some(k), _) => (
             "converged".to_string(),
@@ -330,7 +388,7 @@ fn answer(
             ),
         ),
         (None, Some(_)) if pending > 0 => {
-            ("not converged".to_string(), format!("{pending} planned points are not finished; `sweep resume {}`", crate::sys::shell::quote(&dir.display().to_string())))
+            ("not converged".to_string(), format!("{pending} planned points are not finished; `sweep resume {}`", crate::sys::shell::quote_path(dir)))
         }
         (None, Some(_)) => (
             "not converged".to_string(),

@@ -219,6 +219,14 @@ pub fn parse_setting(sweep: &Sweep, sets: &[String]) -> Result<Vec<f64>, ReportE
             item: format!("{name}={value}"),
             why: "expected a finite number".into(),
         })?;
+        // A value no point can have is refused as `sweep run --set` refuses it, not
+        // extrapolated to.
+        if let Some(info) = crate::scene::params::lookup(name).filter(|info| !info.accepts(v)) {
+            return Err(ReportError::Set {
+                item: format!("{name}={value}"),
+                why: format!("outside {}", info.domain()),
+            });
+        }
         if let Some(first) = &given[i] {
             return Err(ReportError::Set {
                 item: name.into(),

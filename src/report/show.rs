@@ -39,6 +39,9 @@ pub struct PointPage {
     pub files: Vec<String>,
     /// The command that reruns this point with particle and blade dumps for ParaView.
     pub view_command: String,
+    /// What the layout prints of its result instead of MFR and v_x (a pour's angle of repose).
+    #[serde(skip)]
+    pub own_lines: Option<Vec<String>>,
 }
 
 /// Read point `index` of the sweep directory `dir`.
@@ -86,7 +89,10 @@ pub fn show(dir: &Path, index: usize) -> Result<PointPage> {
         }
         None => (None, None),
     };
+    let own_lines =
+        crate::scenes::of(&sweep.file.scene).ok().zip(measured).and_then(|(l, r)| l.result_lines(r));
     Ok(PointPage {
+        own_lines,
         index,
         status,
         swept,
@@ -150,7 +156,14 @@ impl PointPage {
                 "\nscreened: nothing can pass under the blade here; counted as MFR = 0 without a run"
             );
         }
-        if let Some(r) = measured {
+        if let (Some(r), Some(own)) = (measured, &self.own_lines) {
+            let _ = writeln!(t, "\nresult:");
+            for line in own {
+                let _ = writeln!(t, "  {line}");
+            }
+            let _ = writeln!(t, "  particles        {}", r.particles);
+            let _ = writeln!(t, "  wall time        {:.1} s", r.wall_time);
+        } else if let Some(r) = measured {
             let _ = writeln!(t, "\nresult:");
             let se = r.mfr_se.map_or(String::new(), |se| format!(" ± {se:.4} (SE)"));
             let _ = writeln!(

@@ -60,6 +60,9 @@ pub struct Quantity {
     pub repeats: usize,
     /// The values it can take: a target outside is a slip, and its SD is at most this width.
     possible: (f64, f64),
+    /// Whether the lower end itself is a value it can take: MFR can be 0 (nothing passes), a
+    /// heap's angle and packing cannot.
+    lo_possible: bool,
 }
 
 /// A measured value and the run's SE of it, where it gives one.
@@ -74,6 +77,7 @@ pub const QUANTITIES: &[Quantity] = &[
         read: |r| r.heap.as_ref().map(|h| (h.angle_deg, Some(h.angle_se_deg).filter(|s| *s > 0.0))),
         repeats: 2,
         possible: (0.0, 90.0),
+        lo_possible: false,
     },
     Quantity {
         name: "bulk_packing",
@@ -82,6 +86,7 @@ pub const QUANTITIES: &[Quantity] = &[
         repeats: 2,
         // Spheres pack no denser than π/√18 (face-centred cubic).
         possible: (0.0, 0.7405),
+        lo_possible: false,
     },
     // ASTM B212's apparent density (a Hall funnel's free-poured fill of a cup) as the heap's
     // packing times the material's density: both a free-poured, unconsolidated packing.
@@ -95,6 +100,7 @@ pub const QUANTITIES: &[Quantity] = &[
         repeats: 2,
         // The heap's packing (at most 0.7405) times the densest material (25,000 kg/m³).
         possible: (0.0, 20.0),
+        lo_possible: false,
     },
     Quantity {
         name: "mfr",
@@ -102,6 +108,7 @@ pub const QUANTITIES: &[Quantity] = &[
         read: |r| r.mfr.is_finite().then_some((r.mfr, r.mfr_se)),
         repeats: 1,
         possible: (0.0, 1.0),
+        lo_possible: true,
     },
 ];
 
@@ -144,8 +151,12 @@ pub enum TargetsRefused {
     #[error("--target {name}: given twice")]
     Twice { name: String },
     /// A value outside what its quantity can be, `lo`–`hi`.
-    #[error("--target {name}={}: outside {lo}–{hi}{unit}, the values it can take", shown(*.value, 1e6))]
-    Outside { name: String, value: f64, lo: f64, hi: f64, unit: &'static str },
+    #[error(
+        "--target {name}={}: outside {}{lo}, {hi}]{unit}, the values it can take",
+        shown(*.value, 1e6),
+        if *.lo_possible { "[" } else { "(" }
+    )]
+    Outside { name: String, value: f64, lo: f64, hi: f64, lo_possible: bool, unit: &'static str },
     /// An SD outside `min`–`max`, the least measurement and the whole range.
     #[error(
         "--target {name}: SD {}{unit}: expected {} to {}{unit} (the measurement's SD, at most the whole range)",
@@ -219,8 +230,17 @@ const MIN_SD_OF_RANGE: f64 = 1e-6;
 fn check_possible(q: &Quantity, t: &Target) -> std::result::Result<(), TargetsRefused> {
     let (lo, hi) = q.possible;
     let unit = if q.unit == "-" { "" } else { q.unit };
-    if !(t.value >= lo && t.value <= hi) {
-        return Err(TargetsRefused::Outside { name: t.name.clone(), value: t.value, lo, hi, unit });
+    let above_lo = if q.lo_possible { t.value >= lo } else { t.value > lo };
+    if !(above_lo && t.value <= hi) {
+        let lo_possible = q.lo_possible;
+        return Err(TargetsRefused::Outside {
+            name: t.name.clone(),
+            value: t.value,
+            lo,
+            hi,
+            lo_possible,
+            unit,
+        });
     }
     let (min_sd, max_sd) = ((hi - lo) * MIN_SD_OF_RANGE, hi - lo);
     if !(t.sd >= min_sd && t.sd <= max_sd) {

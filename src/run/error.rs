@@ -25,7 +25,7 @@ pub enum RunError {
     #[error(
         "{first}{}; started no run after it; once that is fixed, `sweep resume {}` finishes the sweep",
         in_all(*count),
-        crate::sys::shell::quote(&dir.display().to_string())
+        crate::sys::shell::quote_path(dir)
     )]
     Writes { first: String, count: usize, dir: PathBuf },
 }

@@ -203,10 +203,7 @@ fn create<E: Executor>(
 
 /// What to do after an interrupt that cut a sweep in `dir` short.
 fn continue_with(dir: &Path) -> String {
-    format!(
-        "every finished run is kept; continue with `sweep resume {}`",
-        crate::sys::shell::quote(&dir.display().to_string())
-    )
+    format!("every finished run is kept; continue with `sweep resume {}`", crate::sys::shell::quote_path(dir))
 }
 
 /// `sweep resume DIR`: re-prepare the manifest's points, refuse if the identity or the decks
@@ -240,6 +237,8 @@ pub fn resume_share<E: Executor>(
     let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
     check_parameters(dir, &manifest, &sweep)?;
     Store::open(dir).check_joblog()?;
+    // A directory that cannot be written is said so before anything is looked at.
+    Store::open(dir).check_writable()?;
     let jobs: Vec<E::Job> = manifest
         .points
         .par_iter()
@@ -365,7 +364,8 @@ fn execute<E: Executor>(
         if let RunState::Damaged { file, reason } = &state {
             eprintln!("warning: {}: {reason}; point {} runs again", file.display(), p.index);
             // A readable result of another point: the pool must not take it for this one's.
-            if let (Some(RunState::Done(_)), Some(t)) = (store.finished(&p.hash), store.outcome_time(&p.hash)) {
+            if let (Some(RunState::Done(_)), Some(t)) = (store.finished(&p.hash), store.outcome_time(&p.hash))
+            {
                 not_theirs.insert(p.hash.clone(), t);
             }
         }

@@ -339,7 +339,7 @@ pub(super) fn check_extension(
     new: &Manifest,
     new_toml: &str,
 ) -> Result<()> {
-    let d = crate::sys::shell::quote(&dir.display().to_string()).into_owned();
+    let d = crate::sys::shell::quote_path(dir).into_owned();
     // The design may grow; the convergence rule may change (it decides when to stop, not what
     // a run gives).
     // Compared with defaults filled in, so that a key added since (such as `run.screen`) does

@@ -256,7 +256,11 @@ impl<E: Executor> Worker<'_, E> {
         // Finished while we were not looking (another process), or earlier and not to retry.
         let found = match self.store.finished(&hash) {
             Some(RunState::Done(_))
-                if self.opts.not_theirs.get(&hash).is_some_and(|&t| self.store.outcome_time(&hash) == Some(t)) =>
+                if self
+                    .opts
+                    .not_theirs
+                    .get(&hash)
+                    .is_some_and(|&t| self.store.outcome_time(&hash) == Some(t)) =>
             {
                 None
             }

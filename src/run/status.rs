@@ -183,7 +183,7 @@ impl StatusReport {
         if self.running > 0 {
             s.push_str(&format!(
                 "    a claim whose holder is gone for good (a lost node, a clock far ahead): `sweep unclaim {}` releases it\n",
-                crate::sys::shell::quote(&self.dir.display().to_string())
+                crate::sys::shell::quote_path(&self.dir)
             ));
         }
         for d in &self.damaged {

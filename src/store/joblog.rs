@@ -163,12 +163,17 @@ impl Joblog {
     /// killed attempt owes, written by the process that found its claim.
     pub fn append_as(&mut self, a: &AttemptRecord, host: &str, pid: u32) -> Result<u64, StoreError> {
         let _lock = DirLock::take(&self.lock)?;
-        let (last, ends_with_newline) = last_seq(&self.file).map_err(io(&self.path))?;
+        let (last, cut) = last_seq(&self.file).map_err(io(&self.path))?;
+        // A line cut short (a full disk, a kill mid-write) is no record, and its number would
+        // be ours: it is dropped, so that ours starts a line and numbers stay unique.
+        if let Some(at) = cut {
+            self.file.set_len(at).map_err(io(&self.path))?;
+        }
         let seq = last + 1;
         let start = a.start.duration_since(UNIX_EPOCH).map(|d| d.as_secs_f64()).unwrap_or(0.0);
-        // A line cut short (a full disk) is closed first, so that ours starts a line.
         let runtime = if a.runtime_s.is_finite() { format!("{:.3}", a.runtime_s) } else { "-".into() };
-        let open = if ends_with_newline { "" } else { "\n" };
+        let open =
+            if cut.is_none() && !ends_with_newline(&self.file).map_err(io(&self.path))? { "\n" } else { "" };
         // Tabs and newlines would break the line's columns.
         let host = host.replace(['\t', '\n', '\r'], " ");
         let (status, class, hash) = (a.status, a.class.unwrap_or("-"), &a.hash);
@@ -186,9 +191,20 @@ impl Joblog {
     }
 }
 
-/// The sequence number of the last whole line of a joblog (0 when it has none), and whether
-/// the file ends with a newline. Reads only the file's tail.
-fn last_seq(file: &File) -> std::io::Result<(u64, bool)> {
+/// Whether the file is empty or ends with a newline.
+fn ends_with_newline(file: &File) -> std::io::Result<bool> {
+    use std::os::unix::fs::FileExt;
+    let len = file.metadata()?.len();
+    let mut last = [b'\n'];
+    if len > 0 {
+        file.read_exact_at(&mut last, len - 1)?;
+    }
+    Ok(last[0] == b'\n')
+}
+
+/// The sequence number of the last whole line of a joblog (0 when it has none), and where a
+/// last line cut short (no newline) starts, if the file ends with one. Reads only the file's tail.
+fn last_seq(file: &File) -> std::io::Result<(u64, Option<u64>)> {
     use std::os::unix::fs::FileExt;
     let len = file.metadata()?.len();
     let mut from = len.saturating_sub(8192);
@@ -196,7 +212,20 @@ fn last_seq(file: &File) -> std::io::Result<(u64, bool)> {
         let mut buf = vec![0u8; (len - from) as usize];
         file.read_exact_at(&mut buf, from)?;
         let ends = buf.last().is_none_or(|&b| b == b'\n');
-        let text = String::from_utf8_lossy(&buf);
+        let cut = match buf.iter().rposition(|&b| b == b'\n') {
+            _ if ends => None,
+            Some(i) => Some(from + i as u64 + 1),
+            // No line end in the tail: read the whole file.
+            None if from > 0 => {
+                from = 0;
+                continue;
+            }
+            // A file of one line without its end (the header): it is closed, not dropped.
+            None => None,
+        };
+        // The cut line is not counted.
+        let buf = &buf[..cut.map_or(buf.len(), |c| (c - from) as usize)];
+        let text = String::from_utf8_lossy(buf);
         // The first line of a tail may be cut; only whole lines count.
         let whole = if from == 0 { &text[..] } else { text.split_once('\n').map_or("", |(_, r)| r) };
         let seq = whole
@@ -205,8 +234,8 @@ fn last_seq(file: &File) -> std::io::Result<(u64, bool)> {
             .filter(|l| !is_header(l) && matches!(l.split('\t').count(), FIELDS | OLD_FIELDS))
             .find_map(|l| l.split('\t').next()?.parse::<u64>().ok());
         match seq {
-            Some(s) => return Ok((s, ends)),
-            None if from == 0 => return Ok((0, ends)),
+            Some(s) => return Ok((s, cut)),
+            None if from == 0 => return Ok((0, cut)),
             None => from = 0,
         }
     }

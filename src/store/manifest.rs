@@ -98,7 +98,24 @@ impl Store {
         &self,
         decide: impl FnOnce(Option<(Manifest, String)>) -> Result<Option<(Manifest, String)>, E>,
     ) -> Result<Option<(Manifest, String)>, E> {
+        // A directory this call creates is removed again if it cannot be made whole (a full
+        // disk): a half-made one would read as "not a sweep directory" ever after.
+        let created = self.dir.ancestors().take_while(|d| !d.as_os_str().is_empty() && !d.exists()).last();
+        let created = created.map(Path::to_path_buf);
         fs::create_dir_all(&self.dir).map_err(io(&self.dir))?;
+        let made = self.write_manifest_locked(decide);
+        if let (Err(_), Some(top)) = (&made, &created) {
+            if !Self::manifest_path(&self.dir).exists() {
+                let _ = fs::remove_dir_all(top);
+            }
+        }
+        made
+    }
+
+    fn write_manifest_locked<E: From<StoreError>>(
+        &self,
+        decide: impl FnOnce(Option<(Manifest, String)>) -> Result<Option<(Manifest, String)>, E>,
+    ) -> Result<Option<(Manifest, String)>, E> {
         let _lock = DirLock::take(&self.dir.join(LOCK))?;
         let path = Self::manifest_path(&self.dir);
         let old = if path.exists() { Some(Self::read_manifest(&self.dir)?) } else { None };
@@ -137,7 +154,11 @@ impl Store {
             reason: format!(
                 "not a sweep directory (cannot read manifest.json: {})",
                 match e.kind() {
-                    std::io::ErrorKind::NotFound => "no such file".to_string(),
+                    std::io::ErrorKind::NotFound => format!(
+                        "no such file); a sweep file starts one there: `sweep lds SWEEP.toml --out {}` \
+                         (or lattice, adapt",
+                        crate::sys::shell::quote_path(dir)
+                    ),
                     _ => e.to_string(),
                 }
             ),

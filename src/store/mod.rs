@@ -77,6 +77,14 @@ pub enum StoreError {
     /// `manifest.json` parsed but contradicts itself or its seals: a hand edit or a damaged copy.
     #[error("{}: {source}; the manifest was edited or is damaged", path.display())]
     Damaged { path: PathBuf, source: ManifestError },
+    /// The directory cannot be written (a read-only mount, no permission): `why` as the
+    /// system says it, without its error number.
+    #[error(
+        "{}: cannot write in it ({why}); a sweep directory is written as it runs (claims, results, the \
+         joblog): make it writable, or copy it somewhere writable and give the copy",
+        dir.display()
+    )]
+    NotWritable { dir: PathBuf, why: String },
 }
 
 /// A write that failed is internal (exit 4; a full disk says so); a directory that is not a
@@ -85,7 +93,9 @@ impl From<StoreError> for crate::Error {
     fn from(e: StoreError) -> Self {
         match e {
             StoreError::Io { .. } => crate::Error::Internal(Box::new(e)),
-            StoreError::NotASweep { .. } | StoreError::Damaged { .. } => crate::Error::Input(Box::new(e)),
+            StoreError::NotASweep { .. } | StoreError::Damaged { .. } | StoreError::NotWritable { .. } => {
+                crate::Error::Input(Box::new(e))
+            }
         }
     }
 }
@@ -306,9 +316,26 @@ pub(crate) fn check_run_dir(path: &Path, hash: &str) -> Result<(), StoreError> {
 /// `flock(2)` on a lock file, held while the guard lives. Released by the kernel if we die.
 struct DirLock(File);
 
+impl Store {
+    /// Whether the directory can be written: its lock can be taken (then it is given back).
+    pub fn check_writable(&self) -> Result<(), StoreError> {
+        DirLock::take(&self.dir.join(LOCK)).map(drop)
+    }
+}
+
 impl DirLock {
     fn take(path: &Path) -> Result<DirLock, StoreError> {
-        let f = OpenOptions::new().create(true).truncate(false).write(true).open(path).map_err(io(path))?;
+        let f =
+            OpenOptions::new().create(true).truncate(false).write(true).open(path).map_err(|e| {
+                match e.raw_os_error() {
+                    Some(libc::EROFS | libc::EACCES | libc::EPERM) => {
+                        let why = e.to_string();
+                        let why = why.split(" (os error").next().unwrap_or(&why).to_lowercase();
+                        StoreError::NotWritable { dir: path.parent().unwrap_or(path).to_path_buf(), why }
+                    }
+                    _ => io(path)(e),
+                }
+            })?;
         // SAFETY: flock on a file descriptor we own.
         if unsafe { libc::flock(f.as_raw_fd(), libc::LOCK_EX) } != 0 {
             return Err(io(path)(std::io::Error::last_os_error()));

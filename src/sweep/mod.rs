@@ -143,10 +143,14 @@ fn read_text(path: &Path) -> Result<String, String> {
     String::from_utf8(bytes).map_err(|e| format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()))
 }
 
-/// Take the `[parameters]` of each file of `include` that the sweep file does not set itself
-/// (the first include that sets one wins), then drop the include: the sweep holds them now.
+/// Take the `[parameters]` of each file of `include` that the sweep file does not set itself,
+/// then drop the include: the sweep holds them now. Two includes that set one parameter the
+/// sweep file leaves out to different values are refused, naming both: which one was meant is
+/// the user's to say.
 fn include(file: &mut SweepFile, path: &Path) -> Result<(), SweepError> {
     let dir = path.parent().unwrap_or(Path::new("."));
+    // The parameters an include set, and which file set them.
+    let mut set_by: std::collections::BTreeMap<String, PathBuf> = std::collections::BTreeMap::new();
     for inc in std::mem::take(&mut file.include) {
         let full = if inc.is_absolute() { inc.clone() } else { dir.join(&inc) };
         let bad = |why: String| SweepError::Key { path: path.to_path_buf(), key: "include".into(), why };
@@ -163,7 +167,25 @@ fn include(file: &mut SweepFile, path: &Path) -> Result<(), SweepError> {
             return Err(bad(format!("{}: no [parameters] table", full.display())));
         };
         for (k, v) in params {
-            file.parameters.entry(k.clone()).or_insert_with(|| v.clone());
+            match (file.parameters.get(k), set_by.get(k)) {
+                (None, _) => {
+                    file.parameters.insert(k.clone(), v.clone());
+                    set_by.insert(k.clone(), full.clone());
+                }
+                (Some(first), Some(first_file)) if first != v => {
+                    return Err(SweepError::Key {
+                        path: path.to_path_buf(),
+                        key: format!("parameters.{k}"),
+                        why: format!(
+                            "set to {first} by {} and to {v} by {}; set it in the sweep file, or include one of them",
+                            first_file.display(),
+                            full.display()
+                        ),
+                    });
+                }
+                // The sweep file's own value wins; the same value twice is no conflict.
+                _ => {}
+            }
         }
     }
     Ok(())
@@ -189,6 +211,24 @@ mod include_tests {
         assert!(s.file.include.is_empty(), "the resolved sweep holds the parameters, not the include");
         let missing = Sweep::parse(&text.replace("powder", "nowhere"), &path).unwrap_err().to_string();
         assert!(missing.contains("include: cannot read") && missing.contains("nowhere.toml"), "{missing}");
+        // Issue 70, defect 10: two includes setting friction 0.31 and 0.5: the first won silently.
+        std::fs::write(dir.path().join("other.toml"), "[parameters]\nfriction = { value = 0.5 }\n").unwrap();
+        let two = text.replace("[\"powder.toml\"]", "[\"powder.toml\", \"other.toml\"]");
+        let both = Sweep::parse(&two, &path).unwrap_err().to_string();
+        assert!(
+            both.contains("parameters.friction")
+                && both.contains("by ")
+                && both.contains("powder.toml")
+                && both.contains("other.toml"),
+            "{both}"
+        );
+        // The same value twice, or a value the file sets itself, is no conflict.
+        std::fs::write(
+            dir.path().join("other.toml"),
+            "[parameters]\nfriction = { value = 0.31 }\ngap = 1.0\n",
+        )
+        .unwrap();
+        assert!(Sweep::parse(&two, &path).is_ok());
         std::fs::write(dir.path().join("bad.toml"), "[scene]\nlayout = \"pour\"\n").unwrap();
         let other = Sweep::parse(&text.replace("powder", "bad"), &path).unwrap_err().to_string();
         assert!(other.contains("holds [scene]; an included file holds only [parameters]"), "{other}");

@@ -15,6 +15,29 @@ pub fn quote(word: &str) -> Cow<'_, str> {
     }
 }
 
+/// A path as one shell word: [`quote`] of it when it is UTF-8; otherwise bash's `$'…'` with
+/// each byte outside printable ASCII written `\xNN`, so that a hint holding a path that is not
+/// UTF-8 still names that path (bash, zsh and ksh read it; `display()` would put U+FFFD there).
+pub fn quote_path(path: &std::path::Path) -> Cow<'_, str> {
+    use std::os::unix::ffi::OsStrExt;
+    if let Some(s) = path.to_str() {
+        return quote(s);
+    }
+    let mut out = String::from("$'");
+    for &b in path.as_os_str().as_bytes() {
+        match b {
+            b'\'' | b'\\' => {
+                out.push('\\');
+                out.push(b as char);
+            }
+            0x20..=0x7e => out.push(b as char),
+            _ => out.push_str(&format!("\\x{b:02x}")),
+        }
+    }
+    out.push('\'');
+    Cow::Owned(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -37,5 +60,17 @@ mod tests {
             assert_eq!(words(&quote(w)), [w], "{w:?} quoted as {}", quote(w));
         }
         assert_eq!(quote("runs/quick-demo_2.5"), "runs/quick-demo_2.5", "a plain path stays as written");
+    }
+
+    #[test]
+    fn a_path_that_is_not_utf8_is_quoted_so_that_bash_reads_its_bytes_back() {
+        use std::os::unix::ffi::OsStrExt;
+        // Issue 70, defect 14: a `next:` hint held U+FFFD where the byte 0xff was.
+        let raw: &[u8] = b"runs/caf\xe9 it's\xff";
+        let q = quote_path(std::path::Path::new(std::ffi::OsStr::from_bytes(raw)));
+        let out =
+            std::process::Command::new("bash").arg("-c").arg(format!("printf '%s' {q}")).output().unwrap();
+        assert_eq!(out.stdout, raw, "{q}");
+        assert_eq!(quote_path(std::path::Path::new("runs/ok name")), "'runs/ok name'");
     }
 }

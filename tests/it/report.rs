@@ -455,6 +455,9 @@ fn predict_recovers_the_stand_in_between_its_points_and_refuses_bad_input() {
     for (args, want) in [
         (vec!["predict", p(&out), "--set", "gapp=3"], "--set gapp: not a swept parameter"),
         (vec!["predict", p(&out), "--set", "gap=x"], "--set gap=x: expected a finite number"),
+        // Issue 70, defect 8: values `sweep run --set` refuses were extrapolated to.
+        (vec!["predict", p(&out), "--set", "gap=-3"], "--set gap=-3: outside the domain of gap (0, inf)"),
+        (vec!["predict", p(&out), "--set", "gap=0"], "--set gap=0: outside the domain of gap (0, inf)"),
         (vec!["predict", p(&tmp.path().join("none")), "--set", "gap=3"], "not a sweep directory"),
     ] {
         let o = sweep(&args);

@@ -177,6 +177,31 @@ fn a_result_with_parameters_of_another_point_is_not_accepted() {
     assert_eq!(result_rows(&d)[0]["mfr"], before[0]["mfr"]);
 }
 
+/// Issue 70, defect 11: a joblog cut mid-line kept the cut line, and the next attempt's line
+/// took its sequence number.
+#[test]
+fn a_joblog_cut_mid_line_drops_the_cut_line_and_numbers_stay_unique() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = finished_standin(tmp.path());
+    let log = d.join("joblog.tsv");
+    let text = std::fs::read_to_string(&log).unwrap();
+    let whole = text.lines().count();
+    // Cut the last line in its Command column.
+    let cut = text.trim_end().rfind("in.liggghts").unwrap();
+    std::fs::write(&log, &text[..cut]).unwrap();
+    let h = result_rows(&d)[2]["hash"].clone();
+    std::fs::remove_file(result_path(&d, &h)).unwrap();
+    let o = sweep(&["resume", p(&d), "-q"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let after = std::fs::read_to_string(&log).unwrap();
+    assert!(after.ends_with('\n') && after.lines().all(|l| l.split('\t').count() == 14), "{after}");
+    assert!(after.lines().count() > whole, "the new attempt's line: {after}");
+    support::assert_unique_seq(&d);
+    // The run whose line was cut has its line again.
+    let logged = store::logged_outcomes(&d).unwrap();
+    assert!(result_rows(&d).iter().all(|r| logged.contains(&r["hash"])), "{after}");
+}
+
 /// Issue 70, defect 2: the pool's claim found the edited result and reused it, so the point
 /// that "runs again" never ran, and every resume said so again.
 #[test]
@@ -317,10 +342,10 @@ fn a_full_disk_stops_the_sweep_says_where_and_resume_finishes_it() {
     // status and results.csv agree: the lost run is pending, not failed.
     let st = run::status(&out).unwrap();
     assert_eq!((st.done, st.failed, st.pending), (done, 0, 12 - done));
-    if let Ok(csv) = std::fs::read_to_string(out.join("results.csv")) {
-        assert_eq!(csv.matches(",done,").count(), done, "{csv}");
-        assert!(!csv.contains(",failed,"), "{csv}");
-    }
+    // results.csv is rewritten as runs finish, so the one from before the disk filled is there.
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    assert_eq!(csv.matches(",done,").count(), done, "{csv}");
+    assert!(!csv.contains(",failed,"), "{csv}");
 
     // A killed writer's temporary is removed on the next open.
     let dead = {
@@ -339,6 +364,68 @@ fn a_full_disk_stops_the_sweep_says_where_and_resume_finishes_it() {
     let per_hash = done_per_hash(&out);
     assert!(per_hash.len() == 12 && per_hash.values().all(|&n| n == 1), "{per_hash:?}");
     assert_unique_seq(&out);
+}
+
+/// Issue 70, defect 12: a full disk while the directory was created left it half-made, and
+/// `sweep resume` of it then said "not a sweep directory" with no next step.
+#[test]
+fn a_full_disk_at_creation_leaves_no_directory_and_resume_says_how_to_start() {
+    let tmp = tempfile::tempdir().unwrap();
+    let toml = engine_sweep(tmp.path(), "new", "stand-in", 8, 4, "");
+    let fs = tmp.path().join("fs");
+    let _mount = match Mount::tmpfs(&fs, "size=4k") {
+        Ok(m) => m,
+        Err(why) => {
+            support::skip("a full disk test", &format!("cannot mount a small tmpfs to fill: {why}"));
+            return;
+        }
+    };
+    let out = fs.join("runs/new");
+    let o = sweep(&["lds", p(&toml), "--out", p(&out), "-q"]);
+    assert_eq!(o.status.code(), Some(4), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no space left"), "{}", stderr(&o));
+    assert_eq!(std::fs::read_dir(&fs).unwrap().count(), 0, "left behind: {:?}", snapshot(&fs).keys());
+    let o = sweep(&["resume", p(&out)]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains(&format!("`sweep lds SWEEP.toml --out {}`", out.display())), "{err}");
+}
+
+/// Issue 70, defect 13: `resume` and `unclaim` of a read-only directory said the raw ".lock:
+/// Read-only file system (os error 30)", exit 4.
+#[test]
+fn a_read_only_sweep_directory_is_one_clear_line_for_resume_and_unclaim() {
+    let tmp = tempfile::tempdir().unwrap();
+    let toml = engine_sweep(tmp.path(), "ro", "stand-in", 4, 4, "");
+    let fs = tmp.path().join("fs");
+    let mount = match Mount::tmpfs(&fs, "size=16m") {
+        Ok(m) => m,
+        Err(why) => {
+            support::skip("a read-only directory test", &format!("cannot mount a tmpfs: {why}"));
+            return;
+        }
+    };
+    let out = fs.join("d");
+    let o = sweep(&["lds", p(&toml), "--out", p(&out), "-q"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    // One point to run again, so that resume has something to write.
+    let h = result_rows(&out)[1]["hash"].clone();
+    std::fs::remove_file(result_path(&out, &h)).unwrap();
+    let before = snapshot(&out);
+    mount.remount("ro");
+    for args in [vec!["resume", p(&out)], vec!["unclaim", p(&out)]] {
+        let o = sweep(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert!(
+            err.contains(&format!("{}: cannot write in it (read-only file system)", out.display())),
+            "{err}"
+        );
+        assert!(!err.contains("os error"), "{err}");
+    }
+    mount.remount("rw");
+    assert_eq!(snapshot(&out), before);
 }
 
 #[test]
