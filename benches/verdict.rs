@@ -23,7 +23,7 @@ use demsweep::analysis::emulator::Emulator;
 use demsweep::analysis::stats::{moments, Bootstrap, Moments, Statistic, STATISTICS};
 use demsweep::analysis::weights::LatticeWeights;
 use demsweep::design::halton::halton;
-use demsweep::run::standin::Point;
+use demsweep::scenes::stand_in::FlowPoint;
 use demsweep::sweep::Scrambling;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -48,7 +48,7 @@ impl F {
 
     fn clean(self, u: &[f64]) -> f64 {
         match self {
-            F::StandIn => Point {
+            F::StandIn => FlowPoint {
                 friction: 0.1 + 0.2 * u[0],
                 diameter: 1.0 + 2.0 * u[1],
                 gap: 1.0 + 4.0 * u[2],

@@ -2,7 +2,7 @@
 //! response surface whose answer is known.
 //!
 //! Two surfaces over a sweep's space: the stand-in engine's model (its deterministic per-point
-//! noise on every run, [`crate::run::standin`]), or a replay of a recorded sweep directory (an
+//! noise on every run, [`crate::scenes::stand_in`]), or a replay of a recorded sweep directory (an
 //! emulator fitted to all its done runs; a run is its mean plus normal noise at the SE the
 //! nearest recorded run measured). The truth is the noiseless surface on [`TRUTH_POINTS`]
 //! scrambled-Halton points: its four statistics, its first-order sensitivity ranking (with the
@@ -26,7 +26,7 @@ use crate::analysis::emulator::Emulator;
 use crate::analysis::sensitivity;
 use crate::analysis::stats::{moments, Bootstrap, Moments, STATISTICS};
 use crate::design::halton::{halton, Scrambling};
-use crate::run::standin::{Noise, Point};
+use crate::scenes::stand_in::{FlowPoint, Noise};
 use crate::sweep::Sweep;
 
 /// Points of the truth.
@@ -62,11 +62,11 @@ pub struct StandInSurface {
 }
 
 impl StandInSurface {
-    fn point(&self, u: &[f64]) -> Point {
+    fn point(&self, u: &[f64]) -> FlowPoint {
         let v = crate::sweep::space::scale_point(&self.sweep, u);
         let resolved = crate::point::resolve(&self.sweep, &v);
         let p = |k: &str| resolved.get(k).copied().unwrap_or(f64::NAN);
-        Point {
+        FlowPoint {
             friction: p("friction"),
             diameter: p("diameter"),
             gap: p("gap"),
@@ -106,7 +106,7 @@ impl Surface for StandInSurface {
         (self.point(u).model(&mut Noise::new(&key(u))).0, None)
     }
     fn se(&self, u: &[f64]) -> f64 {
-        crate::run::standin::MFR_NOISE * self.truth(u)
+        crate::scenes::stand_in::MFR_NOISE * self.truth(u)
     }
 }
 

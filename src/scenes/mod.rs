@@ -10,6 +10,7 @@ pub mod conveyor;
 pub mod layers;
 pub mod moving_blade;
 pub mod pour;
+pub mod stand_in;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -158,18 +159,6 @@ pub struct WarmFiles {
     pub data: &'static str,
 }
 
-/// What the stand-in engine (`[run] engine = "stand-in"`) makes up for a point of a layout: the
-/// shape of the layout's result, from a closed form in the point's parameters, not its physics.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum StandInModel {
-    /// A flow under the blade: MFR and the v_x profile from friction, diameter, gap and blade
-    /// speed.
-    Flow,
-    /// A heap of `particles` spheres: its angle of repose and packing from sliding and rolling
-    /// friction and surface energy.
-    Heap { particles: usize },
-}
-
 /// One scene layout: everything that differs from one scene to another.
 pub trait Layout: Sync {
     /// Its name in `[scene] layout`.
@@ -304,10 +293,12 @@ pub trait Layout: Sync {
         &["mfr"]
     }
 
-    /// What the stand-in engine makes up for a point of this layout.
-    fn stand_in(&self) -> StandInModel {
-        StandInModel::Flow
-    }
+    /// What the stand-in engine (`[run] engine = "stand-in"`) makes up for a point of this
+    /// layout: the shape of its result from a closed form in the point's parameters, not its
+    /// physics ([`stand_in`]), or why the point fails as a real run of it would. A result must
+    /// pass the checks this layout's results pass when read back, or the point fails as
+    /// implausible.
+    fn stand_in(&self, point: &mut stand_in::StandInPoint) -> Result<RunResult, Rejected>;
 }
 
 /// The layout `settings` names; an unknown name is refused when the sweep file is read, so here

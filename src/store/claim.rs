@@ -260,8 +260,7 @@ pub(super) fn finished_state(dir: &Path) -> Option<RunState> {
         if r.hash != name {
             return Err(RunDamage::OtherRun { theirs: super::short(&r.hash).to_string(), ours: name });
         }
-        well_formed(r)?;
-        Ok(crate::measure::plausible::check_result(r)?)
+        counts(r)
     };
     match read::<RunResult>(&result).map(|r| r.and_then(|r| own(&r).map(|()| r))) {
         Some(Ok(r)) => return Some(RunState::Done(Box::new(r))),
@@ -279,6 +278,13 @@ pub(super) fn finished_state(dir: &Path) -> Option<RunState> {
         None => {}
     }
     damaged
+}
+
+/// Whether a result counts as done when it is read back, whoever wrote it (its directory and
+/// point aside): [`well_formed`], and every number in it possible.
+pub fn counts(r: &RunResult) -> Result<(), RunDamage> {
+    well_formed(r)?;
+    Ok(crate::measure::plausible::check_result(r)?)
 }
 
 /// What the types of a `result.json` cannot say: it is of this version's format, a done run is

@@ -38,8 +38,8 @@ mod results;
 pub mod retry;
 
 pub use claim::{
-    foreign_entry, lease_alive, set_default_lease, Claim, ClaimAttempt, ClaimInfo, Heartbeat, RunDamage,
-    RunState, DEFAULT_LEASE,
+    counts, foreign_entry, lease_alive, set_default_lease, Claim, ClaimAttempt, ClaimInfo, Heartbeat,
+    RunDamage, RunState, DEFAULT_LEASE,
 };
 pub use joblog::{logged_outcomes, read_joblog, AttemptRecord, Joblog, JoblogLine, JOBLOG_HEADER};
 pub use manifest::{DesignRecord, Manifest, ManifestError, PointRecord, SpaceRecord, MANIFEST_FORMAT};

@@ -12,7 +12,7 @@ use std::time::Duration;
 use demsweep::analysis::calibration::Target;
 use demsweep::run::calibrate::{self, CalibrationWatch, Settings};
 use demsweep::run::fake::{Behaviour, FakeExecutor};
-use demsweep::run::standin::PourPoint;
+use demsweep::scenes::pour::stand_in::PourPoint;
 use demsweep::store::{self, DesignRecord, Store};
 use demsweep::sys::process::CancelToken;
 
@@ -240,7 +240,7 @@ fn the_emulator_takes_the_scatter_between_seeds_as_each_run_s_noise() {
     // The stand-in's heap scatters between seeds by ANGLE_SCATTER but reports an SE of half
     // that (ANGLE_SE), as a real pour's sectors do: repeats measure the scatter, and it, not the
     // SE, is each run's noise in the emulator and so in the likelihood.
-    use demsweep::run::standin::{ANGLE_SCATTER, ANGLE_SE};
+    use demsweep::scenes::pour::stand_in::{ANGLE_SCATTER, ANGLE_SE};
     let tmp = tempfile::tempdir().unwrap();
     let file = common::write_file(
         &tmp.path().join("rolling.toml"),

@@ -24,6 +24,7 @@ mod failures;
 mod pool;
 mod resume;
 mod screen;
+mod standin;
 mod store;
 
 // What a run measures: one point, the recoater's bounds, the steady state, the timestep's stability edge, the

@@ -442,7 +442,8 @@ fn predict_recovers_the_stand_in_between_its_points_and_refuses_bad_input() {
         assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
         let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
         let truth =
-            demsweep::run::standin::Point { friction: f, diameter: d, gap: g, blade_speed: v }.mean_mfr();
+            demsweep::scenes::stand_in::FlowPoint { friction: f, diameter: d, gap: g, blade_speed: v }
+                .mean_mfr();
         let (m, se) = (j["mfr"].as_f64().unwrap(), j["se"].as_f64().unwrap());
         assert!((m - truth).abs() <= 4.0 * se + 0.003, "{set}: {m} ± {se} vs {truth}");
         assert!(j["outside"].as_array().unwrap().is_empty());

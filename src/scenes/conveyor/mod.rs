@@ -163,6 +163,10 @@ impl Layout for Conveyor {
         None
     }
 
+    fn stand_in(&self, point: &mut crate::scenes::stand_in::StandInPoint) -> Result<RunResult, Rejected> {
+        Ok(crate::scenes::stand_in::flow(point))
+    }
+
     fn measure(&self, run: &Finished) -> Result<RunResult, Rejected> {
         measure(run)
     }

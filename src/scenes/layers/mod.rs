@@ -24,6 +24,7 @@
 
 pub mod geometry;
 pub mod measure;
+pub mod stand_in;
 
 use serde::{Deserialize, Serialize};
 
@@ -302,6 +303,10 @@ impl Layout for Layers {
 
     fn measure(&self, run: &Finished) -> Result<RunResult, Rejected> {
         measure::measure(run)
+    }
+
+    fn stand_in(&self, point: &mut crate::scenes::stand_in::StandInPoint) -> Result<RunResult, Rejected> {
+        stand_in::passes(point)
     }
 
     fn what_runs(&self, s: &Scene) -> String {

@@ -94,6 +94,10 @@ impl Layout for MovingBlade {
         Some(scene.atoms() as u64)
     }
 
+    fn stand_in(&self, point: &mut crate::scenes::stand_in::StandInPoint) -> Result<RunResult, Rejected> {
+        Ok(crate::scenes::stand_in::flow(point))
+    }
+
     fn measure(&self, run: &Finished) -> Result<RunResult, Rejected> {
         measure(run)
     }

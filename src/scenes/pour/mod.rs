@@ -29,13 +29,15 @@
 
 pub mod geometry;
 pub mod heap;
+pub mod stand_in;
 
 use crate::engine::dump::read_dump;
 use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT, VX_LAYERS};
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
 use crate::scene::{Base, Scene, GRAVITY, LAYER_FRACTION_MAX};
-use crate::scenes::{BadSetting, BuiltinTemplate, Finished, Layout, Rejected, SetupRows, StandInModel};
+use crate::scenes::stand_in::StandInPoint;
+use crate::scenes::{BadSetting, BuiltinTemplate, Finished, Layout, Rejected, SetupRows};
 
 /// The pour layout (registered in [`crate::scenes::LAYOUTS`]).
 pub struct Pour;
@@ -163,8 +165,8 @@ impl Layout for Pour {
         &["angle_of_repose", "bulk_packing", "apparent_density"]
     }
 
-    fn stand_in(&self) -> StandInModel {
-        StandInModel::Heap { particles: PARTICLES }
+    fn stand_in(&self, point: &mut StandInPoint) -> Result<RunResult, Rejected> {
+        Ok(stand_in::heap(point))
     }
 
     fn mesh(&self, scene: &Scene) -> String {
