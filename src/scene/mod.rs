@@ -12,6 +12,7 @@
 pub mod bed;
 pub mod cohesion;
 pub mod mesh;
+pub mod own;
 pub mod params;
 pub mod passage;
 pub mod pile;
@@ -154,8 +155,6 @@ pub struct Scene {
     /// A bed of the powder in place of the lattice (conveyor, `substrate = "powder"`).
     #[serde(skip)]
     pub substrate_bed: Option<bed::Bed>,
-    /// x of the gate closing the dose's region during the settle; 0: no gate.
-    pub gate_x: f64,
     // The initial pile: a jittered simple-cubic block nx × ny × nz with this spacing, from x0.
     pub pile_x0: f64,
     pub pile_x1: f64,
@@ -185,11 +184,6 @@ pub struct Scene {
     pub dump_every: u64,
     /// Steps of the measurement window.
     pub window_length_steps: u64,
-    /// Steps after the window to the end of the domain (`run_to_end`; 0: stop at the window's
-    /// end).
-    pub traverse_steps: u64,
-    /// Steps between dumps of every column over the whole run (0: none).
-    pub full_dump_every: u64,
     /// Steps between the VTK files of the particles and the blade over the spread (0: none).
     pub vtk_every: u64,
     /// Largest cell of the blade mesh, m.
@@ -202,11 +196,11 @@ pub struct Scene {
     pub vx_length: f64,
     /// Kinetic energy above which the run is unstable, J.
     pub ke_limit: f64,
-    /// The layout's own numbers, as its own type serialised (null for a layout that keeps all
-    /// of its numbers in the common fields): the template reads them as `scene.own.*`, and the
-    /// layout reads them back with [`Scene::own`].
-    #[serde(skip_serializing_if = "serde_json::Value::is_null")]
-    pub own: serde_json::Value,
+    /// The layout's own numbers, of its own type (none for a layout that keeps all of its
+    /// numbers in the common fields): the template reads them as `scene.own.*`, and the layout
+    /// reads them back with [`Scene::own`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub own: Option<own::OwnData>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
@@ -407,9 +401,19 @@ impl Base {
 }
 
 impl Scene {
-    /// The layout's own numbers (`own`) as the type `T` the layout stored there.
-    pub fn own<T: serde::de::DeserializeOwned>(&self) -> Result<T, serde_json::Error> {
-        T::deserialize(&self.own)
+    /// The layout's own numbers (`own`), if they are of the type `T` the layout stored there.
+    pub fn own<T: std::any::Any>(&self) -> Option<&T> {
+        self.own.as_ref()?.get()
+    }
+
+    /// The same, to change.
+    pub fn own_mut<T: std::any::Any>(&mut self) -> Option<&mut T> {
+        self.own.as_mut()?.get_mut()
+    }
+
+    /// Keep `data` as the layout's own numbers.
+    pub fn set_own<T: own::LayoutData>(&mut self, data: T) {
+        self.own = Some(own::OwnData::new(data));
     }
 
     /// The spread layer's thickness: the gap plus the pockets' open depth, m.

@@ -85,15 +85,13 @@ pub struct Held {
 }
 
 /// The held heap's numbers of a conveyor scene.
-pub fn held(scene: &Scene) -> Held {
+pub fn held(scene: &Scene) -> &Held {
     scene.own().expect("a conveyor scene carries its held heap")
 }
 
 /// `scene` with its held heap's numbers changed by `change`.
 pub fn with_held(mut scene: Scene, change: impl FnOnce(&mut Held)) -> Scene {
-    let mut h = held(&scene);
-    change(&mut h);
-    scene.own = serde_json::to_value(h).expect("a held heap serialises");
+    change(scene.own_mut().expect("a conveyor scene carries its held heap"));
     scene
 }
 
@@ -383,15 +381,13 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         warm_warmup_blocks: blocks((settings.warm_warmup_s * v / d).max(settings.block_diameters)),
         extend: None,
     };
-    s.own = serde_json::to_value(conveyor).expect("a held heap serialises");
-    s.gate_x = 0.0;
+    s.set_own(conveyor);
     s.rest_ke = 0.0;
     s.settle_steps = 0;
     s.approach_steps = 0;
     s.ramp_steps = 1;
     s.dump_every = block_steps;
     s.window_length_steps = max_blocks * block_steps;
-    s.traverse_steps = 0;
     s.thermo_every = block_steps.min(1000);
     let v_ref = v.max((2.0 * GRAVITY * blade_top).sqrt());
     s.ke_limit = 0.5 * mass * (10.0 * v_ref).powi(2);

@@ -475,7 +475,7 @@ pub fn platform_gap(blade_radius: f64, clearance: f64, d_max: f64) -> f64 {
 
 /// The plan a scene of this layout carries.
 pub fn plan_of(scene: &Scene) -> Plan {
-    scene.own().expect("a layers scene carries its plan")
+    scene.own::<Plan>().cloned().expect("a layers scene carries its plan")
 }
 
 /// The scene of a layers point: the moving blade's common numbers, then the well, the dose and
@@ -619,7 +619,6 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     s.gap = t + clearance;
     s.particles = dose_particles * layers;
     s.pile_n = [0, 0, 0];
-    s.gate_x = 0.0;
     s.rest_ke = 0.0;
     s.blade_x0 = tip_x0;
     s.blade_thickness = if radius > 0.0 { 0.0 } else { d };
@@ -634,11 +633,9 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     s.ramp_steps = ramp_steps;
     s.window_length_steps = fall_steps + cycle * layers as u64 - wait_steps;
     s.dump_every = 0;
-    s.traverse_steps = 0;
-    s.full_dump_every = 0;
     s.thermo_every = (cycle / 20).clamp(1, 1000);
     s.ke_limit = 0.5 * mass * (10.0 * v_ref).powi(2);
-    s.own = serde_json::to_value(plan).expect("a plan serialises");
+    s.set_own(plan);
     s
 }
 

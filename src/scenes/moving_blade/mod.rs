@@ -18,6 +18,7 @@ use crate::measure::frame::{Frame, COLUMNS};
 use crate::measure::metrics;
 use crate::measure::plausible;
 use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT};
+use crate::scene::own::OwnData;
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
 use crate::scene::{
@@ -54,6 +55,24 @@ const TEMPLATE: BuiltinTemplate = BuiltinTemplate {
 
 /// The snapshots of the window, in the run directory.
 pub const DUMP: &str = "dump.spread";
+
+/// The moving-blade layouts' own numbers (`scene.own`): what only a blade crossing its dose
+/// runs.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Spread {
+    /// x of the gate closing the dose's region during the settle; 0: no gate.
+    pub gate_x: f64,
+    /// Steps after the window to the end of the domain (`run_to_end`; 0: stop at the window's
+    /// end).
+    pub traverse_steps: u64,
+    /// Steps between dumps of every column over the whole run (0: none).
+    pub full_dump_every: u64,
+}
+
+/// The own numbers of a moving-blade scene.
+pub fn spread(scene: &Scene) -> &Spread {
+    scene.own().expect("a moving-blade scene carries its spread")
+}
 
 /// A moving-blade layout: the dose it starts from (registered in [`crate::scenes::LAYOUTS`]).
 pub struct MovingBlade(pub Dose);
@@ -304,7 +323,6 @@ pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
         substrate_spacing,
         substrate_n,
         substrate_bed: None,
-        gate_x: if gated { pile_x1 } else { 0.0 },
         pile_x0,
         pile_x1,
         pile_z1,
@@ -324,8 +342,6 @@ pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
         ramp_steps,
         dump_every,
         window_length_steps,
-        traverse_steps,
-        full_dump_every,
         vtk_every,
         mesh_cell: depth / settings.mesh_cells_across as f64,
         // Frequent enough for the engine's watcher to stop an exploding run early.
@@ -333,7 +349,11 @@ pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
         vx_band,
         vx_length: 6.0 * profile_diameter,
         ke_limit,
-        own: serde_json::Value::Null,
+        own: Some(OwnData::new(Spread {
+            gate_x: if gated { pile_x1 } else { 0.0 },
+            traverse_steps,
+            full_dump_every,
+        })),
     }
 }
 
@@ -513,8 +533,8 @@ mod tests {
         let values = [("diameter".to_string(), 2.0)].into_iter().collect();
         let thesis = SceneSettings { layout: "thesis".into(), ..SceneSettings::gated() };
         let t = crate::scenes::build(&values, &thesis).unwrap();
-        assert_eq!((t.rest_ke, t.gate_x, t.substrate_particles, t.z_lo), (0.0, 0.0, 0, 0.0));
-        assert!(s.gate_x > 0.0 && s.substrate_particles > 0 && s.z_lo == -s.diameter);
+        assert_eq!((t.rest_ke, spread(&t).gate_x, t.substrate_particles, t.z_lo), (0.0, 0.0, 0, 0.0));
+        assert!(spread(&s).gate_x > 0.0 && s.substrate_particles > 0 && s.z_lo == -s.diameter);
     }
 
     #[test]

@@ -36,7 +36,10 @@ mod pile {
             if n < s.particles {
                 assert_eq!(p[1], 1.0);
                 assert!(p[6] - r > 0.0 && p[6] + r < s.z_hi);
-                assert!(p[4] + r < s.gate_x, "the dose lies behind the gate");
+                assert!(
+                    p[4] + r < crate::scenes::moving_blade::spread(&s).gate_x,
+                    "the dose lies behind the gate"
+                );
             } else {
                 // The substrate: tops at z = 0, standing on the plate.
                 assert_eq!(p[1], 3.0);

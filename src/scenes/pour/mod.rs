@@ -265,7 +265,6 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         substrate_spacing: 0.0,
         substrate_n: [0, 0],
         substrate_bed: None,
-        gate_x: 0.0,
         pile_x0: 0.5 * width - radius,
         pile_x1: 0.5 * width + radius,
         pile_z1: column,
@@ -283,8 +282,6 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         ramp_steps: 1,
         dump_every: 0,
         window_length_steps: steps(settle_least),
-        traverse_steps: 0,
-        full_dump_every: 0,
         vtk_every: if settings.vtk {
             (crate::scene::VTK_EVERY_S / timestep).round().max(1.0) as u64
         } else {
@@ -295,7 +292,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         vx_band: 0.0,
         vx_length: 0.0,
         ke_limit: 0.5 * mass * (10.0 * v_ref).powi(2),
-        own: serde_json::Value::Null,
+        own: None,
     }
 }
 
