@@ -135,8 +135,6 @@ fn the_default_timestep_has_a_margin_of_1_5_below_the_edge_at_the_harshest_corne
         file.to_str().unwrap(),
         "--fractions",
         &fractions,
-        "--moduli",
-        "21",
         "--seeds",
         "2",
         "--ladder",
