@@ -261,9 +261,23 @@ pub(super) struct StabilityArgs {
     out: Option<PathBuf>,
 }
 
+/// The stability and fidelity benches measure LIGGGHTS runs: a sweep on the stand-in is
+/// refused by its key (it read "LIGGGHTS not found: stand-in is not a file").
+fn refuse_stand_in(sweep: &Sweep, file: &std::path::Path) -> Result<(), Error> {
+    if demsweep::run::standin::selected(sweep) {
+        return Err(flag(
+            file.display().to_string(),
+            "run.engine = \"stand-in\": the benches measure LIGGGHTS runs, and the stand-in is a made-up model; \
+             remove run.engine (liggghts on PATH) or give a LIGGGHTS executable",
+        ));
+    }
+    Ok(())
+}
+
 pub(super) fn bench_fidelity(a: FidelityArgs) -> Result<(), Error> {
     use demsweep::bench::fidelity;
     let sweep = Sweep::load(&a.sweep)?;
+    refuse_stand_in(&sweep, &a.sweep)?;
     if a.points == 0 {
         return Err(flag("--points 0", "expected at least 1"));
     }
@@ -372,6 +386,7 @@ pub(super) fn bench_stability(a: StabilityArgs) -> Result<(), Error> {
     }
     let fractions = a.fractions.unwrap_or_else(|| FRACTIONS.to_vec());
     let sweep = Sweep::load(&a.sweep)?;
+    refuse_stand_in(&sweep, &a.sweep)?;
     if let Some(why) = demsweep::scenes::lookup(&sweep.file.scene.layout).and_then(|l| l.refuses_sweeps()) {
         let why = format!(
             "scene.layout = \"{}\": the stability bench compares MFR between levels, and {why}",

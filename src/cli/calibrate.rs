@@ -83,6 +83,16 @@ pub(super) fn calibrate(a: CalibrateArgs) -> Result<(), Error> {
     if repeats == 0 {
         return Err(flag("--repeats 0", "expected at least 1 run per setting"));
     }
+    // A first batch past what any sweep runs is named by its own flag, not by the max.
+    let runs = first.saturating_mul(repeats);
+    demsweep::design::lds_size(runs).map_err(|e| {
+        let flag_name = if a.first.is_some() {
+            format!("--first {first}")
+        } else {
+            format!("design.adapt.first {first}")
+        };
+        flag(format!("{flag_name} (× {repeats} repeats)"), e)
+    })?;
     let max_src = if a.max.is_some() { "--max".to_string() } else { format!("design.adapt.max in {file}") };
     demsweep::design::lds_size(max).map_err(|e| flag(format!("{max_src} {max}"), e))?;
     if max < first * repeats {

@@ -58,7 +58,7 @@ enum Command {
     /// Points where nothing can pass under the blade are screened as MFR = 0 once a sample of
     /// them ran with MFR = 0 ([run] screen; `sweep points --screen` shows which).
     #[command(
-        after_help = "Examples:\n  sweep lds sweeps/quick.toml                      # 8 points, into runs/quick/
+        after_help = "Examples:\n  sweep lds sweeps/quick.toml                      # 48 points, into runs/quick/
   sweep lds my.toml --max 64 --out runs/my         # extend runs/my to 64 points
   sweep lds my.toml --out /scratch/me/lds --plan   # write the directory for `sweep submit`"
     )]

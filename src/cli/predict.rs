@@ -21,6 +21,17 @@ pub(super) struct PredictArgs {
 }
 
 pub(super) fn predict(a: PredictArgs) -> Result<(), Error> {
+    // A calibration's runs are pours (no MFR): it read "needs at least 8 done points" with 120.
+    if demsweep::run::calibrate::settings(&a.dir).is_some() {
+        let dir = demsweep::sys::shell::quote_path(&a.dir).into_owned();
+        return Err(super::error::flag(
+            a.dir.display().to_string(),
+            format!(
+                "a calibration directory: predict reads a spreading sweep's MFR; a calibration's answer is its \
+                 posterior (posterior.json, `sweep report {dir}`)"
+            ),
+        ));
+    }
     let p = demsweep::report::emulation::predict(&a.dir, &a.set)?;
     for name in &p.outside {
         eprintln!(

@@ -354,8 +354,7 @@ pub(super) fn check_extension(
         Some(v)
     };
     if std::mem::discriminant(&old.design) != std::mem::discriminant(&new.design) {
-        let why =
-            format!("holds a {} sweep, not a {} one", design_kind(&old.design), design_kind(&new.design));
+        let why = format!("holds {} sweep, not {} one", a_kind(&old.design), a_kind(&new.design));
         return Err(RunError::OutDir { dir: dir.to_path_buf(), why }.into());
     }
     if without_design(old_toml) != without_design(new_toml) {
@@ -386,6 +385,13 @@ pub(super) fn check_extension(
         return Err(RunError::OutDir { dir: dir.to_path_buf(), why }.into());
     }
     Ok(())
+}
+
+/// "a lattice", "an lds", "an adapt": the design's kind with its article.
+fn a_kind(d: &DesignRecord) -> String {
+    let k = design_kind(d);
+    let article = if k.starts_with(['a', 'e', 'i', 'o', 'u', 'l']) && k != "lattice" { "an" } else { "a" };
+    format!("{article} {k}")
 }
 
 fn design_kind(d: &DesignRecord) -> &'static str {

@@ -426,16 +426,24 @@ mod tests {
         // The grandchild ignores SIGTERM: only the group SIGKILL stops it.
         let script = format!("sh -c 'trap \"\" TERM; echo $$ > {}; sleep 30' & wait", pidfile.display());
         let (o, took) = run(sh(&script), Duration::from_millis(300), &CancelToken::new());
-        assert_eq!(o, ProcessOutcome::TimedOut);
-        assert!(took < Duration::from_secs(10));
+        // Timed out, not ended by its `sleep 30`: the outcome says so, not the clock.
+        assert_eq!(o, ProcessOutcome::TimedOut, "after {took:?}");
         let pid: i32 = std::fs::read_to_string(&pidfile).unwrap().trim().parse().unwrap();
-        std::thread::sleep(Duration::from_millis(100));
-        // kill(pid, 0) fails with ESRCH once the process is gone (it is reaped by init).
-        let alive = unsafe { libc::kill(pid, 0) } == 0
-            && std::fs::read_to_string(format!("/proc/{pid}/stat"))
-                .map(|s| !s.contains(") Z "))
-                .unwrap_or(false);
-        assert!(!alive, "grandchild {pid} survived the timeout");
+        // kill(pid, 0) fails with ESRCH once the process is gone (it is reaped by init); a
+        // zombie waiting for init counts as gone. Waited on, with a deadline only as a guard.
+        let alive = || {
+            // SAFETY: kill(2) with signal 0 only asks whether the process exists.
+            let exists = unsafe { libc::kill(pid, 0) } == 0;
+            exists
+                && std::fs::read_to_string(format!("/proc/{pid}/stat"))
+                    .map(|s| !s.contains(") Z "))
+                    .unwrap_or(false)
+        };
+        let t = std::time::Instant::now();
+        while alive() && t.elapsed() < Duration::from_secs(60) {
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        assert!(!alive(), "grandchild {pid} survived the timeout");
     }
 
     #[test]
@@ -463,8 +471,8 @@ mod tests {
             (calls == 2).then(|| "energy exploded".to_string())
         };
         let f = run_watched(sh("sleep 30"), Duration::from_secs(60), &CancelToken::new(), &mut watch);
-        assert_eq!(f.outcome, ProcessOutcome::Stopped("energy exploded".into()));
-        assert!(f.wall < Duration::from_secs(10));
+        // Stopped by the watcher, not ended by its `sleep 30`: the outcome says so.
+        assert_eq!(f.outcome, ProcessOutcome::Stopped("energy exploded".into()), "after {:?}", f.wall);
         assert_eq!(f.cpu, None);
     }
 
@@ -477,7 +485,7 @@ mod tests {
             t2.cancel();
         });
         let (o, took) = run(sh("sleep 30"), Duration::from_secs(60), &token);
-        assert_eq!(o, ProcessOutcome::Cancelled);
-        assert!(took < Duration::from_secs(10));
+        // Cancelled, not ended by its `sleep 30`: the outcome says so, not the clock.
+        assert_eq!(o, ProcessOutcome::Cancelled, "after {took:?}");
     }
 }

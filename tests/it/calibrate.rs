@@ -353,11 +353,41 @@ fn a_target_no_setting_reaches_is_out_of_reach_not_converged_or_identified() {
     }
     let o = common::output(common::sweep_bin().args(["status", common::p(&out)]));
     assert!(common::text(&o.stdout).contains("converged: no"), "{}", common::text(&o.stdout));
+    // Issue 70, defect 15: predict of a calibration said it "needs at least 8 done points".
+    let o = common::output(common::sweep_bin().args(["predict", common::p(&out), "--set", "friction=0.3"]));
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("a calibration directory: predict reads a spreading sweep's MFR"), "{err}");
     // Issue 70, defect 9: a pour point's page showed "MFR NaN" and v_x heights "inf".
     let o = common::output(common::sweep_bin().args(["show", common::p(&out), "0"]));
     let page = common::text(&o.stdout);
     assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
     assert!(page.contains("angle of repose") && !page.contains("MFR") && !page.contains("inf"), "{page}");
+}
+
+/// Issue 70, defect 15: messages that named the wrong thing.
+#[test]
+fn a_huge_first_batch_and_another_sweep_s_directory_are_named_as_such() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = pour_sweep(tmp.path());
+    let target = ["angle_of_repose=30±1".to_string()];
+    // It named design.adapt.max, which the file does not hold.
+    let o = calibrate(&file, &tmp.path().join("x"), &target, &["--first", "99999999999"]);
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--first 99999999999 (× 2 repeats): expected at most") && !err.contains("max"),
+        "{err}"
+    );
+    // It said "not a adapt one".
+    let lds = common::engine_sweep(tmp.path(), "spread", "stand-in", 2, 2, "");
+    let d = tmp.path().join("lds");
+    let o = common::sweep(&["lds", common::p(&lds), "--out", common::p(&d), "-q"]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let o = calibrate(&file, &d, &target, &[]);
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("holds an lds sweep, not an adapt one"), "{err}");
 }
 
 #[test]

@@ -33,6 +33,11 @@ fn alive(pid: i32) -> bool {
 }
 
 /// Wait up to `limit` for `f` to hold.
+/// How long a test waits for an event (a child gone, a check started, sweep ended by a signal)
+/// before it gives up: a guard against hanging, not a bound on how fast the event is; they
+/// happen in milliseconds on an idle machine, and within it on one loaded by LIGGGHTS runs.
+const GUARD: Duration = Duration::from_secs(60);
+
 fn wait_for(limit: Duration, mut f: impl FnMut() -> bool) -> bool {
     let t = Instant::now();
     while t.elapsed() < limit {
@@ -91,13 +96,14 @@ fn a_hanging_engine_check_times_out_naming_the_engine_and_leaves_no_scratch_dir(
     std::fs::create_dir(&scratch).unwrap();
     let mut child =
         sweep_bin().args(["run", p(&toml)]).env("TMPDIR", &scratch).stderr(Stdio::piped()).spawn().unwrap();
-    let status = wait_bounded(&mut child, Duration::from_secs(40));
+    // The check's own time limit, then the guard.
+    let status = wait_bounded(&mut child, GUARD + Duration::from_secs(40));
     let pid = read_pid(&tmp.path().join("hang.pid"));
-    let gone = wait_for(Duration::from_secs(2), || pid.is_none_or(|p| !alive(p)));
+    let gone = wait_for(GUARD, || pid.is_none_or(|p| !alive(p)));
     kill_if_alive(pid);
     let mut err = String::new();
     std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err).unwrap();
-    let status = status.expect("sweep still waits for the engine check after 40 s");
+    let status = status.expect("sweep still waits for the engine check after 100 s");
     assert!(!status.success(), "{err}");
     assert!(err.contains("liggghts") && err.contains("-h") && err.contains("did not answer"), "{err}");
     assert!(pid.is_some(), "the check did not run");
@@ -114,11 +120,11 @@ fn sigterm_or_sigint_during_the_engine_check_ends_sweep_its_child_and_scratch_di
         std::fs::create_dir(&scratch).unwrap();
         let mut child = sweep_bin().args(["run", p(&toml)]).env("TMPDIR", &scratch).spawn().unwrap();
         let pidfile = tmp.path().join("hang.pid");
-        let started = wait_for(Duration::from_secs(10), || read_pid(&pidfile).is_some());
+        let started = wait_for(GUARD, || read_pid(&pidfile).is_some());
         unsafe { libc::kill(child.id() as i32, sig) };
-        let status = wait_bounded(&mut child, Duration::from_secs(5));
+        let status = wait_bounded(&mut child, GUARD);
         let pid = read_pid(&pidfile);
-        let gone = wait_for(Duration::from_secs(2), || pid.is_none_or(|p| !alive(p)));
+        let gone = wait_for(GUARD, || pid.is_none_or(|p| !alive(p)));
         kill_if_alive(pid);
         assert!(started, "the check did not start");
         let status = status.unwrap_or_else(|| panic!("sweep ignored signal {sig}"));
@@ -136,11 +142,11 @@ fn sigkill_during_the_engine_check_leaves_no_orphan_and_the_next_start_removes_i
     std::fs::create_dir(&scratch).unwrap();
     let mut child = sweep_bin().args(["run", p(&toml)]).env("TMPDIR", &scratch).spawn().unwrap();
     let pidfile = tmp.path().join("hang.pid");
-    let started = wait_for(Duration::from_secs(10), || read_pid(&pidfile).is_some());
+    let started = wait_for(GUARD, || read_pid(&pidfile).is_some());
     child.kill().unwrap();
     child.wait().unwrap();
     let pid = read_pid(&pidfile);
-    let gone = wait_for(Duration::from_secs(2), || pid.is_none_or(|p| !alive(p)));
+    let gone = wait_for(GUARD, || pid.is_none_or(|p| !alive(p)));
     kill_if_alive(pid);
     assert!(started, "the check did not start");
     assert!(gone, "the check is an orphan");
@@ -161,13 +167,12 @@ fn a_wrapper_engine_that_does_not_exec_leaves_no_process_behind_when_sweep_is_ki
     let d = tmp.path().join("d");
     let mut child = sweep_bin().args(["lds", p(&toml), "--out", p(&d), "-q", "--jobs", "2"]).spawn().unwrap();
     let two = || std::fs::read_to_string(&pids).map_or(0, |s| s.lines().count()) >= 2;
-    wait_for(Duration::from_secs(20), two);
+    wait_for(GUARD, two);
     child.kill().unwrap();
     child.wait().unwrap();
     let text = std::fs::read_to_string(&pids).unwrap_or_default();
     let pids: Vec<i32> = text.lines().filter_map(|l| l.trim().parse().ok()).collect();
-    let survivors: Vec<i32> =
-        pids.iter().copied().filter(|&p| !wait_for(Duration::from_secs(3), || !alive(p))).collect();
+    let survivors: Vec<i32> = pids.iter().copied().filter(|&p| !wait_for(GUARD, || !alive(p))).collect();
     for &pid in &survivors {
         kill_if_alive(Some(pid));
     }

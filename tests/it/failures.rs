@@ -80,8 +80,11 @@ fn a_hanging_job_is_killed_at_its_timeout_and_the_sweep_goes_on() {
     let out = tmp.path().join("out");
     let mut exec =
         FakeExecutor::new(|v, _| if v[0] < 2.5 { Behaviour::Hang } else { Behaviour::Succeed(MS) });
-    // Long enough for a 1 ms job to start and end on a loaded machine (tests run beside LIGGGHTS).
-    exec.timeout = 2000 * MS;
+    // The timeout is the event the hanging jobs end on; for the 1 ms jobs it is only a guard,
+    // far beyond a start and end on a loaded machine (tests run beside LIGGGHTS, where 2 s was
+    // once too short). The hanging points run at once on the two slots: the test waits one
+    // timeout.
+    exec.timeout = 10_000 * MS;
     let sum =
         run::start(&s, lds(8, 8), &out, &exec, &support::quiet(2), &mut RunAll, &CancelToken::new()).unwrap();
     let (manifest, _) = store::Store::read_manifest(&out).unwrap();

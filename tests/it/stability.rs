@@ -77,7 +77,9 @@ fn bad_bench_input_is_one_line_and_writes_nothing() {
     let pour = pour.to_str().unwrap();
     // Issue 70, defects 5 and 6: a seed count that asked for 800 GB, a pour (no MFR), and
     // flags of the ladder that does not run, once ignored without a word.
-    let cases: [(&str, &[&str], &str); 8] = [
+    let standin = support::engine_sweep(tmp.path(), "standin", "stand-in", 2, 2, "");
+    let standin = standin.to_str().unwrap();
+    let cases: [(&str, &[&str], &str); 9] = [
         (f, &["--fractions", "0.3,0.2"], "increasing"),
         (f, &["--fractions", "1.5"], "(0, 1]"),
         (f, &["--moduli", "3"], "[5, 1000] MPa"),
@@ -90,6 +92,8 @@ fn bad_bench_input_is_one_line_and_writes_nothing() {
         ),
         (f, &["--ladder", "timestep", "--moduli", "10,5"], "--moduli 10,5: only the stiffness ladder"),
         (pour, &[], "scene.layout = \"pour\": the stability bench compares MFR"),
+        // Defect 15: it said "LIGGGHTS not found: stand-in is not a file".
+        (standin, &[], "run.engine = \"stand-in\": the benches measure LIGGGHTS runs"),
     ];
     for (file, extra, says) in cases {
         let r = sweep(&[&["bench", "stability", file, "--out", o][..], extra].concat());

@@ -54,6 +54,9 @@ pub struct PrefixSums {
 pub enum NotExtendable {
     #[error("its run left no {KEPT_RESTART} (runs from before runs could be extended): run it again")]
     NoRestart,
+    /// Its restart is there but is no regular file (issue 70: a FIFO read "left no restart").
+    #[error("{} is not a regular file (a FIFO, a device or a directory): remove it and run the point again", path.display())]
+    NotAFile { path: PathBuf },
     #[error("cannot unpack its restart into {}: {why}", path.display())]
     Unpack { path: PathBuf, why: String },
     #[error(
@@ -88,6 +91,12 @@ pub fn earlier_blocks(parts: &[PathBuf]) -> Result<(Vec<Block>, Option<String>),
 pub fn continuation(scene: &Scene, parts: &[PathBuf], part_dir: &Path) -> Result<Scene, NotExtendable> {
     let last = parts.last().ok_or(NotExtendable::NoRestart)?;
     if !last.join(KEPT_RESTART).is_file() && !last.join(RESTART).is_file() {
+        // One that is there but no regular file (a FIFO, a device) is named as such.
+        if let Some(name) =
+            [KEPT_RESTART, RESTART].into_iter().find(|n| last.join(n).symlink_metadata().is_ok())
+        {
+            return Err(NotExtendable::NotAFile { path: last.join(name) });
+        }
         return Err(NotExtendable::NoRestart);
     }
     let c = super::held(scene);
