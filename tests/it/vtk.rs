@@ -111,7 +111,17 @@ fn run_with_vtk_writes_particle_and_blade_files_paraview_reads() {
     assert_ne!(gated, text, "sweeps/quick.toml names its layout");
     std::fs::write(&quick, gated).unwrap();
     let o = Command::new(env!("CARGO_BIN_EXE_sweep"))
-        .args(["run", quick.to_str().unwrap(), "--vtk", "--json", "--out", out.to_str().unwrap()])
+        // At the thesis's speed: the demo's machine speeds take several times the blade travel time.
+        .args([
+            "run",
+            quick.to_str().unwrap(),
+            "--set",
+            "blade_speed=1.4",
+            "--vtk",
+            "--json",
+            "--out",
+            out.to_str().unwrap(),
+        ])
         .stdin(Stdio::null())
         .output()
         .unwrap();
@@ -173,7 +183,17 @@ fn the_conveyor_writes_vtk_files_too() {
     let out = tmp.path().join("point");
     let quick = Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps/quick.toml");
     let o = Command::new(env!("CARGO_BIN_EXE_sweep"))
-        .args(["run", quick.to_str().unwrap(), "--vtk", "--json", "--out", out.to_str().unwrap()])
+        // At the thesis's speed: the demo's machine speeds take several times the blade travel time.
+        .args([
+            "run",
+            quick.to_str().unwrap(),
+            "--set",
+            "blade_speed=1.4",
+            "--vtk",
+            "--json",
+            "--out",
+            out.to_str().unwrap(),
+        ])
         .stdin(Stdio::null())
         .output()
         .unwrap();
