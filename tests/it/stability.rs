@@ -111,7 +111,7 @@ fn bad_bench_input_is_one_line_and_writes_nothing() {
 }
 
 /// 1.5× the default timestep (the default itself runs in every other LIGGGHTS test, so the
-/// timestep ladder runs alone) at the
+/// timestep ladder runs alone, at the corner's modulus, 21 MPa) at the
 /// harshest corner (D 1 mm, gap 5 mm, v 1.6 m/s, μ 0.3), two pile seeds, on a window of 20 D starting 15 D past the gate (about half the
 /// default run's CPU): every run must end cleanly — no lost atoms, no exploding energy, no
 /// LIGGGHTS error, a pile that comes to rest — with a positive MFR. The MFR drift is not judged
