@@ -6,6 +6,7 @@
 pub mod deck;
 mod error;
 pub mod extend;
+pub mod passes;
 
 pub use error::PointError;
 
@@ -339,6 +340,14 @@ pub fn execute_from(
         RunOutcome::Failed(f)
     };
     let fail = |class, reason, log_tail, wall| fail_measured(class, reason, log_tail, wall, None);
+    if let Some(by) = ctx.layout.by_pass(&p.scene) {
+        // Its passes so far are kept: it goes on from the last.
+        if let Err(e) = std::fs::create_dir_all(run_dir).and_then(|_| p.deck.write(run_dir)) {
+            let why = format!("cannot write the deck in {}: {e}", run_dir.display());
+            return fail(FailureClass::CouldNotStart, why, String::new(), 0.0);
+        }
+        return passes::execute(ctx, p, &p.scene, by, run_dir, cancel);
+    }
     let stale = [RESULT, FAILURE, crate::engine::LOG].map(String::from);
     for file in stale.iter().chain(&ctx.layout.run_files(&ctx.sweep.file.scene)) {
         let _ = std::fs::remove_file(run_dir.join(file));

@@ -114,6 +114,11 @@ pub struct SceneSettings {
     /// for [`DEFAULT_SEARCH_PASSES`] passes (at most `layers` less six), a loose bed never.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub search_passes: Option<usize>,
+    /// Layers layout: the fewest passes before a point may stop on its steady layer; it runs
+    /// pass by pass until the steady rule holds or it reaches `layers`, the most. Not set: the
+    /// search's passes and [`crate::scenes::layers::STOP_KEPT_PASSES`] laid ones after them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub least_layers: Option<usize>,
     /// Layers layout: the blade's profile, `"flat"` (default: a box, the thesis's) or `"round"`
     /// (a cylinder of `blade_radius_mm`, its lowest line the tip).
     #[serde(skip_serializing_if = "is_flat")]
@@ -260,6 +265,7 @@ impl SceneSettings {
         s.layers = self.layers;
         s.bed = self.bed.clone();
         s.search_passes = self.search_passes;
+        s.least_layers = self.least_layers;
         s.blade_profile = self.blade_profile.clone();
         s.blade_radius_mm = self.blade_radius_mm;
         s.blade_clearance_mm = self.blade_clearance_mm;
@@ -379,6 +385,7 @@ impl Default for SceneSettings {
             layers: DEFAULT_LAYERS,
             bed: "loose".into(),
             search_passes: None,
+            least_layers: None,
             blade_profile: "flat".into(),
             blade_radius_mm: DEFAULT_BLADE_RADIUS_MM,
             blade_clearance_mm: 0.0,

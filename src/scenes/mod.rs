@@ -159,6 +159,14 @@ pub struct WarmFiles {
     pub data: &'static str,
 }
 
+/// How a layout's point runs pass by pass ([`Layout::by_pass`]): the fewest passes before it
+/// may stop, and the most.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ByPass {
+    pub least: usize,
+    pub most: usize,
+}
+
 /// One scene layout: everything that differs from one scene to another.
 pub trait Layout: Sync {
     /// Its name in `[scene] layout`.
@@ -291,6 +299,29 @@ pub trait Layout: Sync {
     /// this layout's runs to: names of `run::calibrate::QUANTITIES`.
     fn calibration_targets(&self) -> &'static [&'static str] {
         &["mfr"]
+    }
+
+    /// How a point of `scene` runs pass by pass, if it does (`crate::point::passes`): one engine
+    /// run a pass, each from the restart the pass before wrote, measured after each from the
+    /// least on, until the measure says it is done.
+    fn by_pass(&self, _scene: &Scene) -> Option<ByPass> {
+        None
+    }
+
+    /// `scene`'s deck for pass `k` alone, going on from `before`: the restart and the log the
+    /// pass before left (`None` for the first pass).
+    fn pass_scene(&self, scene: &Scene, _k: usize, _before: Option<(&str, &str)>) -> Result<Scene, String> {
+        Ok(scene.clone())
+    }
+
+    /// `scene` as measured once passes 1 to `k` have run.
+    fn measured_through(&self, scene: &Scene, _k: usize) -> Scene {
+        scene.clone()
+    }
+
+    /// The files passes `from` to `to` write besides their deck, log and restart.
+    fn pass_files(&self, _from: usize, _to: usize) -> Vec<String> {
+        Vec::new()
     }
 
     /// What the stand-in engine (`[run] engine = "stand-in"`) makes up for a point of this

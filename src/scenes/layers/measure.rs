@@ -38,7 +38,9 @@
 use std::collections::HashSet;
 use std::path::Path;
 
-use super::{plan_of, Plan, FUSED_DEPTH_LAG1, FUSED_PACKING_LAG1, MIN_STEADY_PASSES, TREND_FALSE_ALARM};
+use super::{
+    plan_of, Plan, FUSED_DEPTH_LAG1, FUSED_PACKING_LAG1, MIN_STEADY_PASSES, STOP_KEPT_PASSES, TREND_FALSE_ALARM,
+};
 use crate::engine::dump::read_dump;
 use crate::measure::steady::{ar1_se_factor, mser, student_quantile, trend_z};
 use crate::outcome::layers::{LayerSeries, PassRecord};
@@ -305,6 +307,20 @@ pub fn layer_dump(k: usize) -> String {
     format!("dump.layer.{k}")
 }
 
+/// Whether a steady layer keeps the drop: a fused bed's steady passes each keep a whole layer of
+/// solid, so their mean relative density is 1 within Student's quantile at [`TREND_FALSE_ALARM`]
+/// of its SE; one that creeps behind can look flat over a few passes (a fused bed fed half the
+/// dose, replayed, would have stopped at pass 12 of 24, its packing 5 SE off). A loose bed
+/// keeps what it keeps.
+pub fn keeps_the_drop(plan: &Plan, series: &LayerSeries) -> bool {
+    if !plan.fused {
+        return true;
+    }
+    let kept = series.passes.len() + 1 - series.steady_from;
+    let limit = student_quantile(kept as f64 - 1.0, TREND_FALSE_ALARM);
+    (1.0 - series.relative_density).abs() <= limit * series.relative_density_se
+}
+
 /// Why a series is not steady. A fused bed whose passes after the transient each leave less
 /// than the drop, beyond a Student t test of their mean at [`TREND_FALSE_ALARM`], falls behind
 /// the platform: that is said first, with what may make it keep pace.
@@ -351,10 +367,11 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         return Err(Rejected::new(FailureClass::LostAtoms, line.trim().to_string()));
     }
     let lines = parse_log(&run.run.log);
-    if lines.len() != plan.passes.len() || lines.iter().enumerate().any(|(i, l)| l.k != i + 1) {
+    let reached = plan.reached();
+    if lines.len() != reached || lines.iter().enumerate().any(|(i, l)| l.k != i + 1) {
         return Err(Rejected::new(
             FailureClass::Unparsable,
-            format!("the log reports {} of {} passes", lines.len(), plan.passes.len()),
+            format!("the log reports {} of {reached} passes", lines.len()),
         ));
     }
     let grains: Vec<Vec<Grain>> = lines
@@ -402,6 +419,19 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         layers: Some(Box::new(series.clone())),
         ..run.record(steps)
     };
+    let kept = series.passes.len() + 1 - series.steady_from;
+    if series.steady && reached < plan.most() && (kept < STOP_KEPT_PASSES || !keeps_the_drop(&plan, &series)) {
+        return Err(Rejected::measured(
+            FailureClass::Unsteady,
+            format!(
+                "steady over passes {}–{reached} only: a point stops short of its {} passes once {STOP_KEPT_PASSES} are{}",
+                series.steady_from,
+                plan.most(),
+                if plan.fused { " and they keep the whole drop" } else { "" }
+            ),
+            result,
+        ));
+    }
     if !series.steady {
         let why = unsteady_why(&plan, &series);
         return Err(Rejected::measured(

@@ -35,7 +35,7 @@ use crate::scene::{
     prime_seed, Base, Feed, FeedClass, Scene, GRAVITY, LAYER_FRACTION_MAX, MIN_INSERT_VOLUME,
 };
 use crate::scenes::moving_blade::{self, Dose};
-use crate::scenes::{BadSetting, BuiltinTemplate, Finished, Layout, Rejected, SetupRows};
+use crate::scenes::{BadSetting, BuiltinTemplate, ByPass, Finished, Layout, Rejected, SetupRows};
 
 /// Dose of one pass on a loose bed over what the plate's layer can hold at
 /// [`LAYER_FRACTION_MAX`] (times `scene.supply_factor`): twice what a steady loose pass leaves,
@@ -201,17 +201,68 @@ pub struct Plan {
     pub pass_steps: u64,
     pub rest_steps: u64,
     pub wait_steps: u64,
+    /// Every pass the machine is built for: its box and its faces reach the last of them, so
+    /// that `sweep extend` can add passes up to it ([`EXTEND_ROOM`] times the most).
     pub passes: Vec<Pass>,
+    /// The most passes a point runs (`scene.layers`); 0 in a plan read from an older result: all.
+    #[serde(default)]
+    pub most_passes: usize,
+    /// The passes this deck runs, from 1: every pass in the deck `sweep render` writes, one in
+    /// a point's run by the pass.
+    #[serde(default = "first")]
+    pub first_pass: usize,
+    #[serde(default)]
+    pub last_pass: usize,
+    /// A deck of a point's run by the pass: each pass readies the next one's dose and lift,
+    /// whether or not the point runs it.
+    #[serde(default)]
+    pub by_pass: bool,
+    /// The state the deck's first pass goes on from, if it is not the first.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub resume: Option<Resume>,
+    /// The fewest passes before the point may stop on its steady layer (the most: `passes`).
+    #[serde(default)]
+    pub least_passes: usize,
     pub feed: Vec<FeedClass>,
     pub volume_limit: f64,
     pub distribution_seed: u64,
 }
 
+fn first() -> usize {
+    1
+}
+
+/// Where a pass goes on from: the restart the last pass wrote, and on a fused bed the solid's
+/// top it left (m).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Resume {
+    pub restart: String,
+    pub solid: f64,
+}
+
 impl Plan {
     /// Steps of the whole run: the first dose's fall, then each pass with its rest and wait.
     pub fn total_steps(&self) -> u64 {
-        let n = self.passes.len() as u64;
+        let n = self.most() as u64;
         self.fall_steps + n * (self.pass_steps + self.rest_steps) + n.saturating_sub(1) * self.wait_steps
+    }
+
+    /// The most passes a point runs.
+    pub fn most(&self) -> usize {
+        if self.most_passes == 0 {
+            self.passes.len()
+        } else {
+            self.most_passes
+        }
+    }
+
+    /// The last pass this deck runs (a plan read from an older result runs every pass).
+    pub fn reached(&self) -> usize {
+        if self.last_pass == 0 {
+            self.most()
+        } else {
+            self.last_pass
+        }
     }
 
     /// The platform's drop before pass `k` (from 1): the first includes the clearance.
@@ -264,6 +315,17 @@ impl Layout for Layers {
                 ),
             });
         }
+        if let Some(least) = s.least_layers {
+            if !(1..=s.layers).contains(&least) {
+                return Err(BadSetting {
+                    key: "scene.least_layers",
+                    why: format!(
+                        "{least}: expected a whole number of passes from 1 to scene.layers = {} (the most a point runs)",
+                        s.layers
+                    ),
+                });
+            }
+        }
         if !matches!(s.blade_profile.as_str(), "flat" | "round") {
             return Err(BadSetting {
                 key: "scene.blade_profile",
@@ -313,7 +375,7 @@ impl Layout for Layers {
         let plan = plan_of(s);
         format!(
             "{} passes of {} particles' dose onto a {} bed, {} steps",
-            plan.passes.len(),
+            plan.most(),
             plan.dose_particles,
             if plan.fused { "fused" } else { "loose" },
             plan.total_steps()
@@ -378,6 +440,44 @@ impl Layout for Layers {
     fn run_files(&self, s: &SceneSettings) -> Vec<String> {
         // One dump per pass; the log is the run's own.
         (1..=s.layers.max(1)).map(measure::layer_dump).collect()
+    }
+
+    fn by_pass(&self, scene: &Scene) -> Option<ByPass> {
+        let plan = plan_of(scene);
+        Some(ByPass { least: plan.least_passes.max(1), most: plan.most() })
+    }
+
+    fn pass_scene(&self, scene: &Scene, k: usize, before: Option<(&str, &str)>) -> Result<Scene, String> {
+        let mut plan = plan_of(scene);
+        plan.resume = match before {
+            None if k == 1 => None,
+            None => return Err(format!("pass {k} goes on from pass {}'s restart, and there is none", k - 1)),
+            Some((restart, log)) => {
+                let solid = if plan.fused {
+                    let solids = measure::parse_solids(log);
+                    solids.iter().find(|(j, _)| *j == k - 1).map(|s| s.1).ok_or_else(|| {
+                        format!("pass {}'s log does not say where its solid's top is", k - 1)
+                    })?
+                } else {
+                    0.0
+                };
+                Some(Resume { restart: restart.to_string(), solid })
+            }
+        };
+        plan.first_pass = k;
+        plan.last_pass = k;
+        plan.by_pass = true;
+        Ok(with_plan(scene, plan))
+    }
+
+    fn measured_through(&self, scene: &Scene, k: usize) -> Scene {
+        let mut plan = plan_of(scene);
+        plan.last_pass = k;
+        with_plan(scene, plan)
+    }
+
+    fn pass_files(&self, from: usize, to: usize) -> Vec<String> {
+        (from..=to).map(measure::layer_dump).collect()
     }
 
     fn pile(&self, _scene: &Scene) -> String {
@@ -457,6 +557,25 @@ pub fn search_passes(s: &SceneSettings) -> usize {
     s.search_passes.unwrap_or_else(|| DEFAULT_SEARCH_PASSES.min(s.layers.saturating_sub(MIN_LAID_PASSES)))
 }
 
+/// How many times its most passes (`scene.layers`) a point's box and faces are built for:
+/// `sweep extend` adds passes up to that many (a restart keeps the box it was written with).
+pub const EXTEND_ROOM: usize = 2;
+
+/// Laid passes a point's steady layer keeps, at the least, before it stops on it short of its
+/// most passes (a fused bed's also keeping the whole drop: [`measure::keeps_the_drop`]): with
+/// three, the slope test (|t| within 12.7 at 5 %) let a transient pass for steady. Replayed on
+/// the 35 recorded runs, stopping so saves 15 % of their passes, the answer where it stops
+/// within 0.83 combined SE of all its passes' (RMS; one of 28 beyond 2); at five 7 %, at three
+/// 26 % with three beyond 2 (docs/study/layers/stop_rule.py). At its most passes a point is
+/// judged on [`MIN_STEADY_PASSES`] as before.
+pub const STOP_KEPT_PASSES: usize = 4;
+
+/// The fewest passes before a point may stop on its steady layer: as set, or the search's and
+/// [`STOP_KEPT_PASSES`] after it (never above the most, `layers`).
+pub fn least_passes(s: &SceneSettings) -> usize {
+    s.least_layers.unwrap_or(search_passes(s) + STOP_KEPT_PASSES).min(s.layers.max(1))
+}
+
 /// The blade's tip over the feed platform and the wall. A round blade's arc closes on a flat
 /// face in a wedge: with less than the largest diameter under its tip it grinds the powder on the
 /// feed platform into the face, and a soft powder is pressed through it (measured at
@@ -471,6 +590,13 @@ pub fn platform_gap(blade_radius: f64, clearance: f64, d_max: f64) -> f64 {
     } else {
         clearance
     }
+}
+
+/// `scene` carrying `plan`.
+fn with_plan(scene: &Scene, plan: Plan) -> Scene {
+    let mut s = scene.clone();
+    s.own = serde_json::to_value(plan).expect("a plan serialises");
+    s
 }
 
 /// The plan a scene of this layout carries.
@@ -527,7 +653,9 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let (dose_height, first_dose_height) =
         (region_height(dose_solid, dose_fraction), region_height(first_solid, dose_fraction));
     let dose_lift = 0.5 * d;
-    let last_top = layers as f64 * t;
+    // The box and the machine's faces reach the last pass `sweep extend` may add.
+    let room = EXTEND_ROOM * layers;
+    let last_top = room as f64 * t;
     // A search may set the solid below the plate (the depth it asks for deeper than the layers so
     // far): the feed platform's and the wall's faces reach that far down too.
     let search_passes = search_passes(settings);
@@ -564,7 +692,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let rest_steps = steps((2.0 * 10.0 * d / GRAVITY).sqrt());
     let wait_steps = later_fall_steps.saturating_sub(pass_steps - clear_steps + rest_steps);
     let cycle = pass_steps + rest_steps + wait_steps;
-    let passes = (1..=layers)
+    let passes = (1..=room)
         .map(|k| {
             let tip = k as f64 * t + clearance;
             Pass {
@@ -606,6 +734,12 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         pass_steps,
         rest_steps,
         wait_steps,
+        first_pass: 1,
+        most_passes: layers,
+        last_pass: layers,
+        by_pass: false,
+        resume: None,
+        least_passes: least_passes(settings),
         passes,
         feed,
         volume_limit,

@@ -1,0 +1,231 @@
+//! A point run pass by pass ([`crate::scenes::Layout::by_pass`]): one engine run a pass, each
+//! going on from the restart the pass before wrote, until the layout's measure of every pass so
+//! far says the point is done — steady, or at its most passes.
+//!
+//! In the run directory, pass k leaves its deck `in.pass.k`, its log `log.pass.k` (renamed from
+//! the engine's log once the pass ended well), its record `pass.k.json` (the run's hash, the
+//! pass's clocks) and the restart `restart.pass.k`, kept until pass k + 1 has ended. A point that
+//! is interrupted (Ctrl-C, a lost node, a kill) resumes from its last recorded pass: it loses at
+//! most the pass that was running. Every pass is its own engine run whether or not the point was
+//! interrupted, so an interrupted point ends where an uninterrupted one does.
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use serde::{Deserialize, Serialize};
+
+use super::{cut_off, PointContext, Prepared, FAILURE, RESULT};
+use crate::engine::{EngineRun, LogLimits, RunStatus, LOG};
+use crate::outcome::{FailureClass, RunFailure, RunOutcome, RunResult};
+use crate::scene::Scene;
+use crate::scenes::{ByPass, Finished};
+use crate::sys::atomic::write_json;
+use crate::sys::process::CancelToken;
+
+/// The deck of pass `k`.
+pub fn pass_input(k: usize) -> String {
+    format!("in.pass.{k}")
+}
+
+/// The log of pass `k`, once it ended well.
+pub fn pass_log(k: usize) -> String {
+    format!("log.pass.{k}")
+}
+
+/// The record of pass `k`.
+pub fn pass_record(k: usize) -> String {
+    format!("pass.{k}.json")
+}
+
+/// The restart pass `k` wrote.
+pub fn pass_restart(k: usize) -> String {
+    format!("restart.pass.{k}")
+}
+
+/// What a finished pass records: whose it is and what it cost.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PassRecord {
+    pub hash: String,
+    pub k: usize,
+    pub wall_time: f64,
+    pub cpu_time: Option<f64>,
+}
+
+/// The passes of a point already run in `run_dir` that it can go on from: every one from the
+/// first recorded with its log, the last with its restart. `Err`: a record there is another
+/// run's.
+pub fn finished_passes(run_dir: &Path, hash: &str) -> Result<Vec<PassRecord>, String> {
+    let mut done: Vec<PassRecord> = Vec::new();
+    for k in 1.. {
+        let path = run_dir.join(pass_record(k));
+        let Some(record) = std::fs::read_to_string(&path)
+            .ok()
+            .and_then(|t| serde_json::from_str::<PassRecord>(&t).ok())
+        else {
+            break;
+        };
+        if record.hash != hash {
+            return Err(format!(
+                "{} is run {}'s, not this point's ({hash}): remove the run directory to run the point again",
+                path.display(),
+                record.hash
+            ));
+        }
+        if record.k != k || !run_dir.join(pass_log(k)).is_file() {
+            break;
+        }
+        done.push(record);
+    }
+    // Only the last pass's restart is kept: go on from the last pass that has one.
+    while let Some(last) = done.last() {
+        if run_dir.join(pass_restart(last.k)).is_file() {
+            break;
+        }
+        // Without a restart the passes before cannot be gone on from either: start again.
+        done.clear();
+    }
+    Ok(done)
+}
+
+/// Every pass's log, in order, as one.
+fn joined_logs(run_dir: &Path, passes: usize) -> String {
+    (1..=passes)
+        .map(|k| std::fs::read_to_string(run_dir.join(pass_log(k))).unwrap_or_default())
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// Remove what passes after `kept` left (an interrupted pass's log, dumps, deck, restart).
+fn remove_after(ctx: &PointContext, run_dir: &Path, kept: usize, most: usize) {
+    for k in kept + 1..=most.max(kept + 1) {
+        for f in [pass_input(k), pass_log(k), pass_record(k), pass_restart(k)] {
+            let _ = std::fs::remove_file(run_dir.join(f));
+        }
+    }
+    for f in ctx.layout.pass_files(kept + 1, most) {
+        let _ = std::fs::remove_file(run_dir.join(f));
+    }
+    let _ = std::fs::remove_file(run_dir.join(LOG));
+}
+
+/// Run `p` (whose scene is `scene`) in `run_dir` pass by pass, from its last recorded pass, until
+/// its layout says it is done or it has run `by.most` passes. Writes `result.json` or
+/// `failure.json`; a cancelled run writes neither and keeps its passes.
+pub fn execute(
+    ctx: &PointContext,
+    p: &Prepared,
+    scene: &Scene,
+    by: ByPass,
+    run_dir: &Path,
+    cancel: &CancelToken,
+) -> RunOutcome {
+    let fail_measured = |class, reason, log_tail, wall, measured| {
+        let f = RunFailure { measured, ..RunFailure::of(&p.hash, class, reason, log_tail, wall) };
+        let _ = write_json(&run_dir.join(FAILURE), &f);
+        RunOutcome::Failed(f)
+    };
+    let fail = |class, reason, log_tail, wall| fail_measured(class, reason, log_tail, wall, None);
+    for f in [RESULT, FAILURE] {
+        let _ = std::fs::remove_file(run_dir.join(f));
+    }
+    let mut done = match finished_passes(run_dir, &p.hash) {
+        Ok(d) => d,
+        Err(why) => return fail(FailureClass::CouldNotStart, why, String::new(), 0.0),
+    };
+    remove_after(ctx, run_dir, done.len(), by.most);
+    let limits = LogLimits { ke_limit: scene.ke_limit, atoms: ctx.layout.atoms_kept(scene) };
+    let spent = |done: &[PassRecord]| done.iter().map(|r| r.wall_time).sum::<f64>();
+    for k in done.len() + 1..=by.most {
+        let before = (k > 1).then(|| {
+            (pass_restart(k - 1), std::fs::read_to_string(run_dir.join(pass_log(k - 1))).unwrap_or_default())
+        });
+        let pass = match ctx.layout.pass_scene(scene, k, before.as_ref().map(|(r, l)| (r.as_str(), l.as_str())))
+            .map_err(|e| e.to_string())
+            .and_then(|s| ctx.template.render(&s).map_err(|e| e.to_string()))
+        {
+            Ok(input) => input,
+            Err(why) => {
+                return fail(FailureClass::CouldNotStart, format!("pass {k}: {why}"), String::new(), spent(&done))
+            }
+        };
+        if let Err(e) = std::fs::write(run_dir.join(pass_input(k)), pass) {
+            let why = format!("cannot write {} in {}: {e}", pass_input(k), run_dir.display());
+            return fail(FailureClass::CouldNotStart, why, String::new(), spent(&done));
+        }
+        let left = ctx.timeout.saturating_sub(Duration::from_secs_f64(spent(&done)));
+        let run = ctx.engine.run(run_dir, &pass_input(k), &limits, left, cancel);
+        match run.status {
+            RunStatus::Cancelled => return RunOutcome::Cancelled,
+            RunStatus::Failed { class, reason, log_tail } => {
+                return fail(class, format!("pass {k}: {reason}"), log_tail, spent(&done) + run.wall_time)
+            }
+            RunStatus::Ok => {}
+        }
+        if let Some(reason) = cut_off(run_dir) {
+            let f = RunFailure::of(&p.hash, FailureClass::Unparsable, reason, String::new(), run.wall_time);
+            return RunOutcome::Failed(f);
+        }
+        let record = PassRecord { hash: p.hash.clone(), k, wall_time: run.wall_time, cpu_time: run.cpu_time };
+        let kept = std::fs::rename(run_dir.join(LOG), run_dir.join(pass_log(k)))
+            .and_then(|_| write_json(&run_dir.join(pass_record(k)), &record));
+        if let Err(e) = kept {
+            let why = format!("cannot keep pass {k}'s log in {}: {e}", run_dir.display());
+            return fail(FailureClass::Unparsable, why, String::new(), spent(&done) + run.wall_time);
+        }
+        if k > 1 {
+            let _ = std::fs::remove_file(run_dir.join(pass_restart(k - 1)));
+        }
+        done.push(record);
+        if k < by.least {
+            continue;
+        }
+        match measure(ctx, p, scene, k, run_dir, &done, &run) {
+            Ok(result) => {
+                if let Err(e) = write_json(&run_dir.join(RESULT), &result) {
+                    let why = format!("cannot write {RESULT}: {e}");
+                    return fail(FailureClass::Unparsable, why, String::new(), spent(&done));
+                }
+                return RunOutcome::Done(result);
+            }
+            // Not steady yet: the next pass, if the point may run one.
+            Err(r) if r.class == FailureClass::Unsteady && k < by.most => continue,
+            Err(r) => return fail_measured(r.class, r.reason, String::new(), spent(&done), r.measured),
+        }
+    }
+    fail(
+        FailureClass::Unparsable,
+        format!("no pass measured: {} of at most {} run", done.len(), by.most),
+        String::new(),
+        spent(&done),
+    )
+}
+
+/// The layout's measure of passes 1 to `k`.
+fn measure(
+    ctx: &PointContext,
+    p: &Prepared,
+    scene: &Scene,
+    k: usize,
+    run_dir: &Path,
+    done: &[PassRecord],
+    last: &EngineRun,
+) -> Result<RunResult, crate::scenes::Rejected> {
+    let cpu: Option<f64> = done.iter().map(|r| r.cpu_time).sum();
+    let all = EngineRun {
+        status: RunStatus::Ok,
+        wall_time: done.iter().map(|r| r.wall_time).sum(),
+        cpu_time: cpu,
+        warnings: last.warnings.clone(),
+        log: joined_logs(run_dir, k),
+    };
+    let earlier: [PathBuf; 0] = [];
+    ctx.layout.measure(&Finished {
+        scene: &ctx.layout.measured_through(scene, k),
+        parameters: &p.parameters,
+        hash: &p.hash,
+        run_dir,
+        run: &all,
+        engine_version: &ctx.engine.version,
+        earlier: &earlier,
+    })
+}
