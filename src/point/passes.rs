@@ -58,9 +58,8 @@ pub fn finished_passes(run_dir: &Path, hash: &str) -> Result<Vec<PassRecord>, St
     let mut done: Vec<PassRecord> = Vec::new();
     for k in 1.. {
         let path = run_dir.join(pass_record(k));
-        let Some(record) = std::fs::read_to_string(&path)
-            .ok()
-            .and_then(|t| serde_json::from_str::<PassRecord>(&t).ok())
+        let Some(record) =
+            std::fs::read_to_string(&path).ok().and_then(|t| serde_json::from_str::<PassRecord>(&t).ok())
         else {
             break;
         };
@@ -139,13 +138,20 @@ pub fn execute(
         let before = (k > 1).then(|| {
             (pass_restart(k - 1), std::fs::read_to_string(run_dir.join(pass_log(k - 1))).unwrap_or_default())
         });
-        let pass = match ctx.layout.pass_scene(scene, k, before.as_ref().map(|(r, l)| (r.as_str(), l.as_str())))
+        let pass = match ctx
+            .layout
+            .pass_scene(scene, k, before.as_ref().map(|(r, l)| (r.as_str(), l.as_str())))
             .map_err(|e| e.to_string())
             .and_then(|s| ctx.template.render(&s).map_err(|e| e.to_string()))
         {
             Ok(input) => input,
             Err(why) => {
-                return fail(FailureClass::CouldNotStart, format!("pass {k}: {why}"), String::new(), spent(&done))
+                return fail(
+                    FailureClass::CouldNotStart,
+                    format!("pass {k}: {why}"),
+                    String::new(),
+                    spent(&done),
+                )
             }
         };
         if let Err(e) = std::fs::write(run_dir.join(pass_input(k)), pass) {

@@ -182,7 +182,19 @@ fn a_layers_lattice_reports_every_point_done_or_failed_and_answers_in_the_layer_
 #[test]
 fn a_bad_layer_count_or_thickness_is_refused_in_one_line() {
     let (_tmp, dir) = support::cwd();
-    for (extra, key) in [("layers = 0", "scene.layers"), ("bed = \"molten\"", "scene.bed")] {
+    for (extra, key) in [
+        ("layers = 0", "scene.layers"),
+        ("bed = \"molten\"", "scene.bed"),
+        // More least passes than the most.
+        ("layers = 4\nleast_layers = 5", "scene.least_layers"),
+        // A radius that overflowed the blade's mesh (it panicked), one that took minutes to mesh.
+        ("blade_profile = \"round\"\nblade_radius_mm = 1e155", "scene.blade_radius_mm"),
+        ("blade_profile = \"round\"\nblade_radius_mm = 1e10", "scene.blade_radius_mm"),
+        ("blade_profile = \"round\"\nblade_radius_mm = 0", "scene.blade_radius_mm"),
+        // A radius a flat blade would ignore, a clearance of a kilometre.
+        ("blade_radius_mm = 3.0", "scene.blade_radius_mm"),
+        ("blade_clearance_mm = 1e6", "scene.blade_clearance_mm"),
+    ] {
         let sweep = bed(&dir, extra);
         let out = support::sweep(&[
             "render",

@@ -39,7 +39,8 @@ use std::collections::HashSet;
 use std::path::Path;
 
 use super::{
-    plan_of, Plan, FUSED_DEPTH_LAG1, FUSED_PACKING_LAG1, MIN_STEADY_PASSES, STOP_KEPT_PASSES, TREND_FALSE_ALARM,
+    plan_of, Plan, FUSED_DEPTH_LAG1, FUSED_PACKING_LAG1, MIN_STEADY_PASSES, STOP_KEPT_PASSES,
+    TREND_FALSE_ALARM,
 };
 use crate::engine::dump::read_dump;
 use crate::measure::steady::{ar1_se_factor, mser, student_quantile, trend_z};
@@ -420,7 +421,8 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         ..run.record(steps)
     };
     let kept = series.passes.len() + 1 - series.steady_from;
-    if series.steady && reached < plan.most() && (kept < STOP_KEPT_PASSES || !keeps_the_drop(&plan, &series)) {
+    if series.steady && reached < plan.most() && (kept < STOP_KEPT_PASSES || !keeps_the_drop(&plan, &series))
+    {
         return Err(Rejected::measured(
             FailureClass::Unsteady,
             format!(

@@ -24,21 +24,22 @@
 
 pub mod geometry;
 pub mod measure;
+mod plan;
 pub mod stand_in;
+
+use plan::{derive, with_plan};
+pub use plan::{plan_of, platform_gap, Pass, Plan, Resume};
 
 use serde::{Deserialize, Serialize};
 
 use crate::outcome::RunResult;
 use crate::scene::plausible::short;
 use crate::scene::settings::{SceneSettings, DEFAULT_SEARCH_PASSES};
-use crate::scene::{
-    prime_seed, Base, Feed, FeedClass, Scene, GRAVITY, LAYER_FRACTION_MAX, MIN_INSERT_VOLUME,
-};
-use crate::scenes::moving_blade::{self, Dose};
+use crate::scene::{Base, Scene};
 use crate::scenes::{BadSetting, BuiltinTemplate, ByPass, Finished, Layout, Rejected, SetupRows};
 
 /// Dose of one pass on a loose bed over what the plate's layer can hold at
-/// [`LAYER_FRACTION_MAX`] (times `scene.supply_factor`): twice what a steady loose pass leaves,
+/// [`crate::scene::LAYER_FRACTION_MAX`] (times `scene.supply_factor`): twice what a steady loose pass leaves,
 /// so that the last of the plate is covered.
 pub const DOSE_FACTOR: f64 = 2.0;
 /// The same on a fused bed, whose steady pass must leave a whole drop of solid (a loose one
@@ -52,7 +53,7 @@ fn fused(s: &SceneSettings) -> bool {
     Bed::parse(&s.bed) == Some(Bed::Fused)
 }
 
-/// The dose of one pass over what the plate's layer holds at [`LAYER_FRACTION_MAX`], before
+/// The dose of one pass over what the plate's layer holds at [`crate::scene::LAYER_FRACTION_MAX`], before
 /// `scene.supply_factor`.
 fn dose_factor(s: &SceneSettings) -> f64 {
     if fused(s) {
@@ -131,150 +132,6 @@ impl Bed {
     }
 }
 
-/// One pass of the blade, as the deck runs it.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Pass {
-    /// From 1.
-    pub k: usize,
-    /// Height of the machine's top surface — the feed platform and the wall — over the plate, m.
-    pub top: f64,
-    /// Height of the blade's tip over the plate, m.
-    pub tip: f64,
-    /// Step at which the blade starts (its ramp counts from it).
-    pub start: u64,
-    /// Prime seed of this pass's dose.
-    pub seed: u64,
-}
-
-/// The layers layout's own numbers (`scene.own`). Lengths in m.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Plan {
-    pub fused: bool,
-    pub layer_thickness: f64,
-    /// Fused bed: the first passes that search for the steady depth (not layers on the one
-    /// before), and the deepest powder under the tip they may ask for.
-    #[serde(default)]
-    pub search_passes: usize,
-    #[serde(default)]
-    pub search_max_depth: f64,
-    /// Least deposit a search pass counts (a pass that left almost nothing multiplies the depth
-    /// by at most [`SEARCH_MAX_GROWTH`]).
-    #[serde(default)]
-    pub search_least_deposit: f64,
-    /// The blade's tip over the plate's k drops (the first layer is a drop and this deep).
-    pub clearance: f64,
-    /// The blade's tip over the feed platform and the wall: the clearance, but a round blade's
-    /// at least the largest diameter ([`platform_gap`]).
-    #[serde(default)]
-    pub platform_gap: f64,
-    pub plate_x0: f64,
-    pub plate_x1: f64,
-    /// Plate area (length × depth), m².
-    pub plate_area: f64,
-    /// The feed platform's back end (its top runs from here to `plate_x0`).
-    pub feed_x0: f64,
-    /// How far the feed platform's and the wall's faces reach below their top: past the plate
-    /// at the last pass.
-    pub block_depth: f64,
-    /// The round blade's radius (0: flat).
-    pub blade_radius: f64,
-    /// x of the blade's lowest line at the start (flat: its rear face), and its travel in a pass.
-    pub tip_x0: f64,
-    pub travel: f64,
-    /// The dose's insertion region above the top surface.
-    pub dose_x0: f64,
-    pub dose_x1: f64,
-    pub dose_lift: f64,
-    pub dose_height: f64,
-    /// The first dose's region height: it fills the clearance too.
-    pub first_dose_height: f64,
-    pub dose_fraction: f64,
-    /// Downward speed the dose is inserted at, m/s (0 unless it is sparse).
-    pub dose_speed: f64,
-    pub dose_particles: usize,
-    /// Steps of the first dose's fall before the first pass.
-    pub fall_steps: u64,
-    /// Steps of a pass until the blade has cleared the feed platform (the next dose goes in).
-    pub clear_steps: u64,
-    /// Steps of the blade's whole pass, the rest after it, and the wait for the rest of the
-    /// next dose's fall before the next pass.
-    pub pass_steps: u64,
-    pub rest_steps: u64,
-    pub wait_steps: u64,
-    /// Every pass the machine is built for: its box and its faces reach the last of them, so
-    /// that `sweep extend` can add passes up to it ([`EXTEND_ROOM`] times the most).
-    pub passes: Vec<Pass>,
-    /// The most passes a point runs (`scene.layers`); 0 in a plan read from an older result: all.
-    #[serde(default)]
-    pub most_passes: usize,
-    /// The passes this deck runs, from 1: every pass in the deck `sweep render` writes, one in
-    /// a point's run by the pass.
-    #[serde(default = "first")]
-    pub first_pass: usize,
-    #[serde(default)]
-    pub last_pass: usize,
-    /// A deck of a point's run by the pass: each pass readies the next one's dose and lift,
-    /// whether or not the point runs it.
-    #[serde(default)]
-    pub by_pass: bool,
-    /// The state the deck's first pass goes on from, if it is not the first.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub resume: Option<Resume>,
-    /// The fewest passes before the point may stop on its steady layer (the most: `passes`).
-    #[serde(default)]
-    pub least_passes: usize,
-    pub feed: Vec<FeedClass>,
-    pub volume_limit: f64,
-    pub distribution_seed: u64,
-}
-
-fn first() -> usize {
-    1
-}
-
-/// Where a pass goes on from: the restart the last pass wrote, and on a fused bed the solid's
-/// top it left (m).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Resume {
-    pub restart: String,
-    pub solid: f64,
-}
-
-impl Plan {
-    /// Steps of the whole run: the first dose's fall, then each pass with its rest and wait.
-    pub fn total_steps(&self) -> u64 {
-        let n = self.most() as u64;
-        self.fall_steps + n * (self.pass_steps + self.rest_steps) + n.saturating_sub(1) * self.wait_steps
-    }
-
-    /// The most passes a point runs.
-    pub fn most(&self) -> usize {
-        if self.most_passes == 0 {
-            self.passes.len()
-        } else {
-            self.most_passes
-        }
-    }
-
-    /// The last pass this deck runs (a plan read from an older result runs every pass).
-    pub fn reached(&self) -> usize {
-        if self.last_pass == 0 {
-            self.most()
-        } else {
-            self.last_pass
-        }
-    }
-
-    /// The platform's drop before pass `k` (from 1): the first includes the clearance.
-    pub fn drop_before(&self, k: usize) -> f64 {
-        if k == 1 {
-            self.layer_thickness + self.clearance
-        } else {
-            self.layer_thickness
-        }
-    }
-}
-
 impl Layout for Layers {
     fn name(&self) -> &'static str {
         "layers"
@@ -332,18 +189,29 @@ impl Layout for Layers {
                 why: format!("\"{}\": expected \"flat\" or \"round\"", s.blade_profile),
             });
         }
-        for (key, v, least) in [
-            ("scene.blade_radius_mm", s.blade_radius_mm, f64::MIN_POSITIVE),
-            ("scene.blade_clearance_mm", s.blade_clearance_mm, 0.0),
-            ("scene.plate_diameters", s.plate_diameters, 10.0),
-            ("scene.supply_factor", s.supply_factor, 0.5),
+        // Bounded above too: a radius of 1e155 mm overflowed the blade's mesh, 1e10 took minutes
+        // to mesh. A machine's blade or roller is millimetres to centimetres.
+        for (key, v, least, most) in [
+            ("scene.blade_radius_mm", s.blade_radius_mm, 0.0, MAX_BLADE_RADIUS_MM),
+            ("scene.blade_clearance_mm", s.blade_clearance_mm, 0.0, MAX_CLEARANCE_MM),
+            ("scene.plate_diameters", s.plate_diameters, 10.0, MAX_PLATE_DIAMETERS),
+            ("scene.supply_factor", s.supply_factor, 0.5, 100.0),
         ] {
-            if !(v.is_finite() && v >= least) {
-                return Err(BadSetting {
-                    key,
-                    why: format!("{v}: expected a finite number of at least {least}"),
-                });
+            let radius = key == "scene.blade_radius_mm";
+            let ok = v.is_finite() && v <= most && if radius { v > least } else { v >= least };
+            if !ok {
+                let lower = if radius { format!("above {least}") } else { format!("from {least}") };
+                return Err(BadSetting { key, why: format!("{v}: expected a number {lower} to {most}") });
             }
+        }
+        if s.blade_profile == "flat" && s.blade_radius_mm != crate::scene::settings::DEFAULT_BLADE_RADIUS_MM {
+            return Err(BadSetting {
+                key: "scene.blade_radius_mm",
+                why: format!(
+                    "{}: a flat blade has no radius; expected it only with blade_profile = \"round\"",
+                    s.blade_radius_mm
+                ),
+            });
         }
         if s.substrate == "powder" {
             return Err(BadSetting {
@@ -557,6 +425,13 @@ pub fn search_passes(s: &SceneSettings) -> usize {
     s.search_passes.unwrap_or_else(|| DEFAULT_SEARCH_PASSES.min(s.layers.saturating_sub(MIN_LAID_PASSES)))
 }
 
+/// Largest round blade, mm.
+pub const MAX_BLADE_RADIUS_MM: f64 = 100.0;
+/// Highest blade tip over the machine's top surface, mm.
+pub const MAX_CLEARANCE_MM: f64 = 10.0;
+/// Longest build plate, in diameters (10,000 D is 300 mm of a 30 µm powder).
+pub const MAX_PLATE_DIAMETERS: f64 = 10_000.0;
+
 /// How many times its most passes (`scene.layers`) a point's box and faces are built for:
 /// `sweep extend` adds passes up to that many (a restart keeps the box it was written with).
 pub const EXTEND_ROOM: usize = 2;
@@ -574,203 +449,6 @@ pub const STOP_KEPT_PASSES: usize = 4;
 /// [`STOP_KEPT_PASSES`] after it (never above the most, `layers`).
 pub fn least_passes(s: &SceneSettings) -> usize {
     s.least_layers.unwrap_or(search_passes(s) + STOP_KEPT_PASSES).min(s.layers.max(1))
-}
-
-/// The blade's tip over the feed platform and the wall. A round blade's arc closes on a flat
-/// face in a wedge: with less than the largest diameter under its tip it grinds the powder on the
-/// feed platform into the face, and a soft powder is pressed through it (measured at
-/// Ti-6Al-4V 15–45 µm with no clearance: 29 particles inside the platform after the first pass,
-/// 65 after the second, thrown out at up to 10 m/s, and the neighbour lists rebuilt every 10
-/// steps for 1.7 × the crossing's CPU; docs/study/layers.md "The platform gap"). So it rides at
-/// least that high over both; a flat blade meets the powder with its vertical face and keeps the
-/// clearance.
-pub fn platform_gap(blade_radius: f64, clearance: f64, d_max: f64) -> f64 {
-    if blade_radius > 0.0 {
-        clearance.max(d_max)
-    } else {
-        clearance
-    }
-}
-
-/// `scene` carrying `plan`.
-fn with_plan(scene: &Scene, plan: Plan) -> Scene {
-    let mut s = scene.clone();
-    s.own = serde_json::to_value(plan).expect("a plan serialises");
-    s
-}
-
-/// The plan a scene of this layout carries.
-pub fn plan_of(scene: &Scene) -> Plan {
-    scene.own::<Plan>().cloned().expect("a layers scene carries its plan")
-}
-
-/// The scene of a layers point: the moving blade's common numbers, then the well, the dose and
-/// the passes.
-fn derive(base: Base, settings: &SceneSettings) -> Scene {
-    let t = base.layer_thickness;
-    let clearance = settings.blade_clearance_mm * 1e-3;
-    let mut s = moving_blade::derive(base.clone(), settings, Dose::Free);
-    let Base { psd, d, speed: v, timestep: dt, .. } = base;
-    let fused = fused(settings);
-    let layers = settings.layers.max(1);
-    let plate_len = settings.plate_diameters.max(10.0) * d;
-    let feed_len = FEED_OVER_PLATE * plate_len;
-    let radius = if settings.blade_profile == "round" { settings.blade_radius_mm * 1e-3 } else { 0.0 };
-    // The blade's x extent about its lowest line: behind and ahead of it.
-    let (behind, ahead) = if radius > 0.0 {
-        let half = radius * (0.5 * ROUND_ARC_SHARE * std::f64::consts::PI).sin();
-        (half, half)
-    } else {
-        (0.0, d)
-    };
-    let d_max = psd.max_diameter();
-    let platform_gap = platform_gap(radius, clearance, d_max);
-    let tip_x0 = 0.5 * d + behind + d;
-    let front0 = tip_x0 + ahead;
-    let dose_x0 = front0 + 0.5 * d;
-    let plate_x0 = dose_x0 + feed_len + d;
-    let plate_x1 = plate_x0 + plate_len;
-    // The tip runs past the plate's end by two diameters: everything ahead of it is in the pit.
-    let travel = plate_x1 + 2.0 * d - tip_x0;
-    let x_hi = plate_x1 + 2.0 * d + ahead + PIT_DIAMETERS * d;
-
-    let dose_x1 = plate_x0 - d;
-    // Every dose is dose_factor layers of the drop; the first fills the drop and the clearance.
-    // LIGGGHTS refuses to insert into a region under its floor once shrunk by the largest
-    // diameter (MIN_INSERT_VOLUME): a fine powder in thin layers gets its dose inserted sparser
-    // in a taller region at the same depth, not a wider box (which would multiply the particles
-    // of every layer).
-    let w = s.depth;
-    let dose_for = |drop: f64| {
-        dose_factor(settings) * settings.supply_factor * plate_len * drop * LAYER_FRACTION_MAX * w
-    };
-    let dose_len = dose_x1 - dose_x0;
-    let (dose_solid, first_solid) = (dose_for(t), dose_for(t + clearance));
-    let shrunk_area = (dose_len - d_max) * (w - d_max);
-    let dose_fraction = DOSE_FRACTION.min(dose_solid / (dose_len * w) * shrunk_area / MIN_INSERT_VOLUME);
-    let dose_particles = (dose_solid / psd.mean_volume()).ceil() as usize;
-    let region_height = |solid: f64, fraction: f64| solid / (fraction * dose_len * w) + d_max;
-    let (dose_height, first_dose_height) =
-        (region_height(dose_solid, dose_fraction), region_height(first_solid, dose_fraction));
-    let dose_lift = 0.5 * d;
-    // The box and the machine's faces reach the last pass `sweep extend` may add.
-    let room = EXTEND_ROOM * layers;
-    let last_top = room as f64 * t;
-    // A search may set the solid below the plate (the depth it asks for deeper than the layers so
-    // far): the feed platform's and the wall's faces reach that far down too.
-    let search_passes = search_passes(settings);
-    let search_max_depth = if search_passes > 0 { SEARCH_MAX_DEPTH_LAYERS * t } else { 0.0 };
-    let block_depth = last_top + clearance + 2.0 * d + search_max_depth;
-    // The pit holds a pass's excess dose below the plate.
-    let pit_depth = 10.0 * d + first_solid / (LAYER_FRACTION_MAX * PIT_DIAMETERS * d * w);
-    // The blade stands above the first dose as it would lie at DOSE_FRACTION (a sparse dose
-    // falls in front of it and settles lower).
-    let blade_height = (dose_lift + region_height(first_solid, DOSE_FRACTION) + 2.0 * d)
-        .max(radius * (1.0 - (0.5 * ROUND_ARC_SHARE * std::f64::consts::PI).cos()) + 2.0 * d);
-    let z_top = last_top + clearance + blade_height.max(dose_lift + first_dose_height) + 2.0 * d;
-
-    let steps = |time: f64| ((time / dt).ceil() as u64).max(1);
-    // The dose falls from the top of its region, and as long again to come down in a heap. The
-    // first dose falls before the first pass; every later one is inserted as soon as the blade
-    // has cleared the feed platform, and falls while the blade crosses the plate (what is left
-    // of its fall is waited for before the next pass).
-    // A sparse dose is thrown down so that it lands in about the time the dense one falls (at
-    // most at MAX_DOSE_SPEED): its tall region would otherwise take longer to fall than a pass.
-    let dense_height = dose_lift + region_height(dose_solid, DOSE_FRACTION);
-    let dense_fall = (2.0 * dense_height / GRAVITY).sqrt();
-    let dose_speed = ((dose_lift + dose_height - dense_height).max(0.0) / dense_fall).min(MAX_DOSE_SPEED);
-    let fall = |height: f64| {
-        let h = dose_lift + height;
-        steps(2.0 * ((dose_speed * dose_speed + 2.0 * GRAVITY * h).sqrt() - dose_speed) / GRAVITY)
-    };
-    let (fall_steps, later_fall_steps) = (fall(first_dose_height), fall(dose_height));
-    let ramp_time = 2.0 * RAMP_DIAMETERS * d / v;
-    let ramp_steps = steps(ramp_time);
-    let pass_steps = steps(travel / v + 0.5 * ramp_time);
-    let clear_travel = (plate_x0 - (tip_x0 - behind)).min(travel);
-    let clear_steps = steps(clear_travel / v + 0.5 * ramp_time).min(pass_steps);
-    let rest_steps = steps((2.0 * 10.0 * d / GRAVITY).sqrt());
-    let wait_steps = later_fall_steps.saturating_sub(pass_steps - clear_steps + rest_steps);
-    let cycle = pass_steps + rest_steps + wait_steps;
-    let passes = (1..=room)
-        .map(|k| {
-            let tip = k as f64 * t + clearance;
-            Pass {
-                k,
-                top: tip - platform_gap,
-                tip,
-                start: fall_steps + (k as u64 - 1) * cycle,
-                seed: prime_seed(settings.seed, 100 + k),
-            }
-        })
-        .collect();
-    let Feed { classes: feed, volume_limit } = Feed::of(&psd, settings.seed);
-    let plan = Plan {
-        fused,
-        layer_thickness: t,
-        search_passes,
-        search_max_depth,
-        search_least_deposit: t / SEARCH_MAX_GROWTH,
-        clearance,
-        platform_gap,
-        plate_x0,
-        plate_x1,
-        plate_area: plate_len * w,
-        feed_x0: 0.5 * d,
-        block_depth,
-        blade_radius: radius,
-        tip_x0,
-        travel,
-        dose_x0,
-        dose_x1,
-        dose_lift,
-        dose_height,
-        first_dose_height,
-        dose_fraction,
-        dose_speed,
-        dose_particles,
-        fall_steps,
-        clear_steps,
-        pass_steps,
-        rest_steps,
-        wait_steps,
-        first_pass: 1,
-        most_passes: layers,
-        last_pass: layers,
-        by_pass: false,
-        resume: None,
-        least_passes: least_passes(settings),
-        passes,
-        feed,
-        volume_limit,
-        distribution_seed: prime_seed(settings.seed, 0),
-    };
-
-    let mass = (first_solid / psd.mean_volume() + dose_particles as f64 * layers as f64)
-        * s.material.density
-        * psd.mean_volume();
-    let v_ref = v.max((2.0 * GRAVITY * z_top).sqrt());
-    s.gap = t + clearance;
-    s.particles = dose_particles * layers;
-    s.pile_n = [0, 0, 0];
-    s.rest_ke = 0.0;
-    s.blade_x0 = tip_x0;
-    s.blade_thickness = if radius > 0.0 { 0.0 } else { d };
-    s.blade_top = blade_height;
-    s.x_hi = x_hi;
-    // The feed platform's and the wall's faces reach block_depth under their top, which stands
-    // lower than the plate's drops where the platform gap exceeds the clearance.
-    s.z_lo = -(block_depth.max(pit_depth) + d + (platform_gap - clearance));
-    s.z_hi = z_top + v * v / GRAVITY;
-    s.settle_steps = 0;
-    s.approach_steps = 0;
-    s.ramp_steps = ramp_steps;
-    s.window_length_steps = fall_steps + cycle * layers as u64 - wait_steps;
-    s.dump_every = 0;
-    s.thermo_every = (cycle / 20).clamp(1, 1000);
-    s.ke_limit = 0.5 * mass * (10.0 * v_ref).powi(2);
-    s.set_own(plan);
-    s
 }
 
 #[cfg(test)]
