@@ -281,3 +281,92 @@ plate_diameters = 10
         assert!(p["deposit_m"].as_f64().unwrap() > 0.0, "{p}");
     }
 }
+
+/// The passes' records of a point's run directory, and its result.
+fn passes_of(dir: &Path) -> Vec<Value> {
+    let r: Value = serde_json::from_str(&std::fs::read_to_string(dir.join("result.json")).unwrap()).unwrap();
+    r["layers"]["passes"].as_array().unwrap().clone()
+}
+
+#[test]
+fn a_layers_point_killed_in_its_third_pass_goes_on_from_its_second_and_ends_as_an_uninterrupted_one() {
+    support::require_liggghts!(
+        "a_layers_point_killed_in_its_third_pass_goes_on_from_its_second_and_ends_as_an_uninterrupted_one"
+    );
+    let (_tmp, dir) = support::cwd();
+    let sweep = bed(&dir, "layers = 4\nleast_layers = 4");
+    let run = |out: &Path| {
+        support::sweep_bin()
+            .args(["run", support::p(&sweep), "--set", "blade_speed=0.5", "--out", support::p(out)])
+            .output()
+            .unwrap()
+    };
+    let whole = dir.join("whole");
+    let out = run(&whole);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // Every pass is its own engine run, and only the last one's restart is kept.
+    for k in 1..=4 {
+        assert!(whole.join(format!("log.pass.{k}")).is_file(), "pass {k}'s log");
+    }
+    assert!(whole.join("restart.pass.4").is_file() && !whole.join("restart.pass.3").exists());
+
+    // Killed (SIGKILL, the whole process group) once pass 3's engine run has started.
+    let cut = dir.join("cut");
+    use std::os::unix::process::CommandExt;
+    let mut child = support::sweep_bin()
+        .args(["run", support::p(&sweep), "--set", "blade_speed=0.5", "--out", support::p(&cut)])
+        .process_group(0)
+        .spawn()
+        .unwrap();
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(600);
+    while !cut.join("in.pass.3").is_file() {
+        assert!(std::time::Instant::now() < deadline, "pass 3 never started");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let pgid = child.id() as i32;
+    // SAFETY: kill(2) on the child's own process group.
+    unsafe { libc::kill(-pgid, libc::SIGKILL) };
+    let _ = child.wait();
+    assert!(!cut.join("pass.3.json").exists() && cut.join("restart.pass.2").is_file());
+    let cpu_12: f64 = (1..=2)
+        .map(|k| {
+            let r: Value =
+                serde_json::from_str(&std::fs::read_to_string(cut.join(format!("pass.{k}.json"))).unwrap())
+                    .unwrap();
+            r["cpu_time"].as_f64().unwrap()
+        })
+        .sum();
+    // Run again: it goes on from pass 2's restart, passes 1 and 2 not run again.
+    let out = run(&cut);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let first_log = std::fs::read_to_string(cut.join("log.pass.1")).unwrap();
+    assert!(first_log.contains("demsweep: layer 1"), "pass 1's log kept");
+    let r: Value = serde_json::from_str(&std::fs::read_to_string(cut.join("result.json")).unwrap()).unwrap();
+    assert!(r["cpu_time"].as_f64().unwrap() > cpu_12, "the point's CPU counts its passes before the kill");
+    // Each pass goes on from the restart the pass before wrote either way: the same passes.
+    let (a, b) = (passes_of(&whole), passes_of(&cut));
+    assert_eq!(a.len(), 4);
+    assert_eq!(a, b, "an interrupted point ends where an uninterrupted one does");
+}
+
+#[test]
+fn a_layers_point_stops_once_its_steady_layer_holds_and_at_its_most_passes_otherwise() {
+    support::require_liggghts!(
+        "a_layers_point_stops_once_its_steady_layer_holds_and_at_its_most_passes_otherwise"
+    );
+    let (_tmp, dir) = support::cwd();
+    let sweep = bed(&dir, "layers = 9\nleast_layers = 5");
+    let (code, r, stderr) = run_point(&sweep, "blade_speed=0.5");
+    let layers = if code == 0 { &r["layers"] } else { &r["measured"]["layers"] };
+    let passes = layers["passes"].as_array().unwrap_or_else(|| panic!("exit {code}: {stderr}\n{r}"));
+    let ran = passes.len();
+    assert!((5..=9).contains(&ran), "between the least and the most passes: {ran}");
+    if code == 0 {
+        // Steady: it stopped at the first pass from the least on where its steady layer kept at
+        // least four passes, and no later.
+        let kept = ran + 1 - layers["steady_from"].as_u64().unwrap() as usize;
+        assert!(kept >= 4 || ran == 9, "stopped at pass {ran} with {kept} steady passes");
+    } else {
+        assert_eq!(ran, 9, "a point not steady runs its most passes: {stderr}");
+    }
+}
