@@ -83,7 +83,7 @@ pub fn passes(point: &mut StandInPoint) -> Result<RunResult, Rejected> {
         surface_energy: point.get("surface_energy"),
     };
     let p = model.packing();
-    let n = plan.passes.len();
+    let n = plan.most();
     let mean_volume: f64 =
         scene.size_classes.iter().map(|c| c.fraction * std::f64::consts::PI / 6.0 * c.diameter.powi(3)).sum();
     let dose = scene.particles / n.max(1);
