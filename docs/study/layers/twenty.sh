@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# Gaboriault et al. 2025's 20 measured layers (issue: the experiment in step): PS1–PS3 on
+# sweeps/layers-gaboriault.toml at 21 passes (the baseline pass and their layers 1–20, every pass
+# run: least_layers = layers = 21), optionally at another plate length (PLATE=diameters). Each
+# point runs pass by pass in runs/twenty/<label>/: an interrupted study goes on from each point's
+# last pass (run it again), and the passes' records (pass.k.json: clocks) are copied to
+# record/twenty/<label>/ as they finish, the result to record/twenty-<label>.json at the end.
+#   nice bash docs/study/layers/twenty.sh [PS1|PS2|PS3]
+set -euo pipefail
+cd "$(dirname "$0")/../../.."
+out=docs/study/layers/record
+plate=${PLATE:-24}
+mkdir -p "$out/twenty" runs/twenty
+cases="PS1 0.20 0.10 3.5e-4
+PS2 0.20 0.20 2.5e-4
+PS3 0.40 0.36 8.0e-5"
+want=${1:-}
+toml=$(mktemp --suffix=.toml)
+sed -e "s/^layers = [0-9]*$/layers = 21\nleast_layers = 21/" -e "s/^plate_diameters = .*$/plate_diameters = $plate/" \
+  sweeps/layers-gaboriault.toml > "$toml"
+grep -q "^least_layers = 21$" "$toml"
+while read -r label mu mur gamma; do
+  [ -n "$want" ] && [ "$want" != "$label" ] && continue
+  name=$label-plate$plate
+  [ -s "$out/twenty-$name.json" ] && { echo "$name: recorded"; continue; }
+  ours=$(python3 -c "print(f'{4/3*$gamma:.4g}')")
+  dir=runs/twenty/$name
+  ( while sleep 30; do mkdir -p "$out/twenty/$name"; cp "$dir"/pass.*.json "$out/twenty/$name/" 2>/dev/null || true; done ) &
+  copier=$!
+  "${SWEEP:-target/release/sweep}" run "$toml" --json --out "$dir" \
+    --set "blade_speed=0.1,friction=$mu,rolling_friction=$mur,surface_energy=$ours" \
+    > "$out/twenty-$name.json.part" 2> "$out/twenty-$name.err" || true
+  kill $copier 2>/dev/null || true
+  mkdir -p "$out/twenty/$name"; cp "$dir"/pass.*.json "$out/twenty/$name/" 2>/dev/null || true
+  if grep -q '"layers"' "$out/twenty-$name.json.part"; then
+    mv "$out/twenty-$name.json.part" "$out/twenty-$name.json"
+  else
+    rm -f "$out/twenty-$name.json.part"   # interrupted: run again to go on from its last pass
+  fi
+done <<< "$cases"
+rm -f "$toml"
