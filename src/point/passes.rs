@@ -75,12 +75,8 @@ pub fn finished_passes(run_dir: &Path, hash: &str) -> Result<Vec<PassRecord>, St
         }
         done.push(record);
     }
-    // Only the last pass's restart is kept: go on from the last pass that has one.
-    while let Some(last) = done.last() {
-        if run_dir.join(pass_restart(last.k)).is_file() {
-            break;
-        }
-        // Without a restart the passes before cannot be gone on from either: start again.
+    // Only the last pass's restart is kept: without it the point starts again.
+    if done.last().is_some_and(|last| !run_dir.join(pass_restart(last.k)).is_file()) {
         done.clear();
     }
     Ok(done)
