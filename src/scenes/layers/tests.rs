@@ -3,6 +3,7 @@ use std::collections::BTreeMap;
 use super::measure::{parse_log, parse_solids, passes, steady_layer, Grain, PassLine};
 use super::*;
 use crate::scene::settings::SceneSettings;
+use crate::scene::{LAYER_FRACTION_MAX, MIN_INSERT_VOLUME};
 
 fn settings() -> SceneSettings {
     SceneSettings {
