@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# A single-node Slurm on this machine, for trying `sweep submit` and for tests/it/cluster.rs:
+# A single-node Slurm on this machine, for trying `sweep submit` and for tests/it/cluster/:
 # munged, slurmctld and slurmd on localhost, started as plain daemons (no systemd), with their
 # configuration, state and logs under one directory.
 #

@@ -49,6 +49,7 @@ mod report;
 
 // What a hostile run found, each defect with its regression test; the answer a sweep ends with.
 mod answer;
+mod hostile;
 
 // How the code is laid out: the layering of src/ that docs/architecture.md states.
 mod architecture;
