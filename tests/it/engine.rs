@@ -13,7 +13,7 @@ use demsweep::run::{self, RunAll, RunOptions};
 use demsweep::sweep::Sweep;
 use demsweep::sys::process::CancelToken;
 
-use crate::support::{self, engine_sweep, fake_engine, lds, p, script, MS};
+use crate::support::{self, engine_sweep, fake_engine, lds, p, script, GUARD, MS};
 
 /// `sweep` with no standard input.
 fn sweep_bin() -> Command {
@@ -32,12 +32,7 @@ fn alive(pid: i32) -> bool {
     }
 }
 
-/// Wait up to `limit` for `f` to hold.
-/// How long a test waits for an event (a child gone, a check started, sweep ended by a signal)
-/// before it gives up: a guard against hanging, not a bound on how fast the event is; they
-/// happen in milliseconds on an idle machine, and within it on one loaded by LIGGGHTS runs.
-const GUARD: Duration = Duration::from_secs(60);
-
+/// Wait up to `limit` for `f` to hold; whether it did.
 fn wait_for(limit: Duration, mut f: impl FnMut() -> bool) -> bool {
     let t = Instant::now();
     while t.elapsed() < limit {

@@ -13,7 +13,7 @@ use crate::support::{self as common, p, stderr as err};
 pub(crate) fn sweep_in(cwd: &Path, args: &[&str]) -> Output {
     let mut c = Command::new(common::SWEEP);
     c.current_dir(cwd).args(args).stdin(Stdio::null());
-    finish_within(c, Duration::from_secs(60))
+    finish_within(c, common::GUARD)
 }
 
 /// Run `c` to its end, failing the test (and killing it) if it takes longer than `limit`: a
@@ -280,7 +280,7 @@ fn a_sweep_file_or_include_that_is_a_fifo_a_device_or_huge_is_refused_at_once() 
         ] {
             let mut c = Command::new(common::SWEEP);
             c.current_dir(dir).args(&args).stdin(Stdio::null());
-            let o = finish_within(c, Duration::from_secs(20));
+            let o = finish_within(c, common::GUARD);
             let e = err(&o);
             assert_eq!(o.status.code(), Some(2), "{args:?}: {e}");
             assert!(e.contains(file.as_str()) && e.contains(says), "{args:?}: {e}");

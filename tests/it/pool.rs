@@ -84,19 +84,15 @@ fn status_counts_runs_claimed_by_a_live_sweep_as_running() {
     let cancel = CancelToken::new();
     std::thread::scope(|sc| {
         let h = sc.spawn(|| run::start(&s, lds(4, 4), &out, &exec, &support::quiet(2), &mut RunAll, &cancel));
+        // The runs hang: two running is the event waited on, the deadline only a guard.
         let mut seen = None;
-        for _ in 0..200 {
-            if let Ok(st) = run::status(&out) {
-                if st.running == 2 {
-                    seen = Some(st);
-                    break;
-                }
-            }
-            std::thread::sleep(50 * MS);
-        }
+        support::wait_until("two runs seen running", support::GUARD, || {
+            seen = run::status(&out).ok().filter(|st| st.running == 2);
+            seen.is_some()
+        });
         cancel.cancel();
         let sum = h.join().unwrap().unwrap();
-        let st = seen.expect("two runs seen running");
+        let st = seen.unwrap();
         assert_eq!((st.running, st.pending, st.done), (2, 2, 0));
         assert_eq!((sum.done, sum.pending, sum.exit_code()), (0, 4, 130));
     });

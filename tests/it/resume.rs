@@ -111,7 +111,7 @@ fn killed_and_interrupted_sweeps_resume_to_the_uninterrupted_results() {
     let lds = ["lds", sweep.to_str().unwrap(), "--max", "3", "--step", "3", "--jobs", "1", "-q", "--out", d];
     let (status, groups) = interrupt(&lds, &dir, libc::SIGKILL);
     assert_eq!(std::os::unix::process::ExitStatusExt::signal(&status), Some(libc::SIGKILL));
-    wait_until("the killed sweep's jobs to die", Duration::from_secs(10), || alive_in(&groups).is_empty());
+    wait_until("the killed sweep's jobs to die", support::GUARD, || alive_in(&groups).is_empty());
     let finished_before: Vec<String> = attempts(&dir).into_keys().collect();
     // The run cut off by the kill left its claim: status shows it as interrupted.
     let st = output(support::sweep_bin().args(["status", "--json"]).arg(&dir));

@@ -74,6 +74,12 @@ pub fn repo(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
 }
 
+/// How long a test waits for an event (a child gone, a check started, a claim renewed, sweep
+/// ended by a signal) before it gives up: a guard against hanging, not a bound on how fast the
+/// event is; they happen in milliseconds on an idle machine, and within it on one loaded by
+/// LIGGGHTS runs.
+pub const GUARD: Duration = Duration::from_secs(60);
+
 /// Wait up to `limit` for `cond` to hold, looking every 50 ms; fail naming `what` if it never does.
 pub fn wait_until(what: &str, limit: Duration, mut cond: impl FnMut() -> bool) {
     let t = Instant::now();
