@@ -116,9 +116,14 @@ enum Command {
     /// --se is recorded as the sweep's precision when it chooses its own, so points run later
     /// run to it too. An interrupted or failed extension leaves the point's earlier result.
     /// Then `sweep report DIR`.
+    ///
+    /// A layers sweep is extended by passes (--passes N): each point that was not steady at its
+    /// most passes goes on from its last pass, measured after each, until it is steady or has
+    /// run N more (at most twice the sweep's scene.layers in all); a steady point runs nothing.
     #[command(
         after_help = "Examples:\n  sweep extend runs/ad                             # the first batch to the sweep's precision
-  sweep extend runs/quick --se 0.002               # every point to an SE of 0.002"
+  sweep extend runs/quick --se 0.002               # every point to an SE of 0.002
+  sweep extend runs/ti64-layers --passes 6         # layers points not yet steady: up to 6 more passes"
     )]
     Extend(sweep::ExtendArgs),
     /// Counts of a sweep directory: done, failed, running, screened, pending; the screen's verdict.

@@ -128,8 +128,12 @@ pub(super) struct ExtendArgs {
     /// The sweep directory (holding manifest.json).
     dir: PathBuf,
     /// The SE of MFR to extend every point to (default: the sweep's recorded precision).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "passes")]
     se: Option<f64>,
+    /// A layers sweep: the most passes each point not steady at its most may add (it stops
+    /// once steady; up to twice the sweep's scene.layers in all).
+    #[arg(long)]
+    passes: Option<usize>,
     /// Concurrent LIGGGHTS runs (default: the machine's cores).
     #[arg(long)]
     jobs: Option<usize>,
@@ -384,20 +388,42 @@ pub(super) fn extend(a: ExtendArgs) -> Result<(), Error> {
             eprintln!("{line}");
         }
     };
-    let s = demsweep::run::extend::extend_sweep(&a.dir, a.se, jobs, &cancel, &say)?;
+    use demsweep::run::extend::{extend_sweep, Extension};
+    let how = match a.passes {
+        Some(n) => Extension::Passes(n),
+        None => Extension::Se(a.se),
+    };
+    let s = extend_sweep(&a.dir, how, jobs, &cancel, &say)?;
     let dir = demsweep::sys::shell::quote_path(&a.dir).into_owned();
-    let mut parts = vec![format!("{} extended ({:.0} CPU s)", s.extended, s.cpu_s)];
-    parts.push(format!("{} within it already", s.met));
+    let mut parts = if s.by_pass {
+        vec![format!("{} steady now ({:.0} CPU s)", s.extended, s.cpu_s), format!("{} steady already", s.met)]
+    } else {
+        vec![
+            format!("{} extended ({:.0} CPU s)", s.extended, s.cpu_s),
+            format!("{} within it already", s.met),
+        ]
+    };
     if s.not_extendable > 0 {
         parts.push(format!("{} not extendable", s.not_extendable));
     }
-    if s.failed > 0 {
+    if s.failed > 0 && s.by_pass {
+        parts.push(format!("{} still not steady or failed", s.failed));
+    } else if s.failed > 0 {
         parts.push(format!("{} failed (they keep their earlier result)", s.failed));
     }
     if s.busy > 0 {
         parts.push(format!("{} held by another process", s.busy));
     }
-    println!("extend to SE {}: {} done points; {}", s.target, s.points, parts.join(", "));
+    if s.by_pass {
+        println!(
+            "extend by up to {} passes: {} finished points; {}",
+            a.passes.unwrap_or(0),
+            s.points,
+            parts.join(", ")
+        );
+    } else {
+        println!("extend to SE {}: {} done points; {}", s.target, s.points, parts.join(", "));
+    }
     if s.at_cap > 0 {
         println!(
             "{} of those extended reached the window cap first (a longer window: a larger scene.window_cap_diameters)",

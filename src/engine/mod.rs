@@ -481,16 +481,22 @@ pub fn chatter(warning: &str) -> Option<&'static str> {
     )
 }
 
-/// Read the thermo blocks (`thermo_style custom step atoms ke`) and warnings of a log.
-fn analyse_log(log: &str, limits: &LogLimits) -> LogAnalysis {
-    let mut a = LogAnalysis::default();
-    let mut in_block = false;
-    let mut max_atoms = 0u64;
+/// The distinct LIGGGHTS warnings of a log, in order.
+pub fn distinct_warnings(log: &str) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
     for w in warnings(log) {
-        if !a.warnings.contains(&w) {
-            a.warnings.push(w);
+        if !out.contains(&w) {
+            out.push(w);
         }
     }
+    out
+}
+
+/// Read the thermo blocks (`thermo_style custom step atoms ke`) and warnings of a log.
+fn analyse_log(log: &str, limits: &LogLimits) -> LogAnalysis {
+    let mut a = LogAnalysis { warnings: distinct_warnings(log), ..LogAnalysis::default() };
+    let mut in_block = false;
+    let mut max_atoms = 0u64;
     for line in log.lines() {
         let t = line.trim();
         if t.starts_with("WARNING") {

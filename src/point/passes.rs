@@ -14,6 +14,7 @@ use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
 
+use super::extend::Extended;
 use super::{cut_off, PointContext, Prepared, FAILURE, RESULT};
 use crate::engine::{EngineRun, LogLimits, RunStatus, LOG};
 use crate::outcome::{FailureClass, RunFailure, RunOutcome, RunResult};
@@ -105,7 +106,8 @@ fn remove_after(ctx: &PointContext, run_dir: &Path, kept: usize, most: usize) {
 
 /// Run `p` (whose scene is `scene`) in `run_dir` pass by pass, from its last recorded pass, until
 /// its layout says it is done or it has run `by.most` passes. Writes `result.json` or
-/// `failure.json`; a cancelled run writes neither and keeps its passes.
+/// `failure.json` (removing the other); a cancelled run writes neither and keeps its passes and
+/// what an earlier attempt concluded.
 pub fn execute(
     ctx: &PointContext,
     p: &Prepared,
@@ -116,21 +118,47 @@ pub fn execute(
 ) -> RunOutcome {
     let fail_measured = |class, reason, log_tail, wall, measured| {
         let f = RunFailure { measured, ..RunFailure::of(&p.hash, class, reason, log_tail, wall) };
+        let _ = std::fs::remove_file(run_dir.join(RESULT));
         let _ = write_json(&run_dir.join(FAILURE), &f);
         RunOutcome::Failed(f)
     };
     let fail = |class, reason, log_tail, wall| fail_measured(class, reason, log_tail, wall, None);
-    for f in [RESULT, FAILURE] {
-        let _ = std::fs::remove_file(run_dir.join(f));
-    }
     let mut done = match finished_passes(run_dir, &p.hash) {
         Ok(d) => d,
         Err(why) => return fail(FailureClass::CouldNotStart, why, String::new(), 0.0),
     };
-    remove_after(ctx, run_dir, done.len(), by.most);
+    remove_after(ctx, run_dir, done.len(), by.most.max(done.len()));
     let limits = LogLimits { ke_limit: scene.ke_limit, atoms: ctx.layout.atoms_kept(scene) };
     let spent = |done: &[PassRecord]| done.iter().map(|r| r.wall_time).sum::<f64>();
-    for k in done.len() + 1..=by.most {
+    let mut k = done.len();
+    loop {
+        // Measured from the least on: after each pass, and at once when a point goes on from
+        // passes that already reach it (a run cut off before its result was written, more
+        // passes allowed by `sweep extend`).
+        if k >= by.least {
+            match measure(ctx, p, scene, k, run_dir, &done) {
+                Ok(result) => {
+                    if let Err(e) = write_json(&run_dir.join(RESULT), &result) {
+                        let why = format!("cannot write {RESULT}: {e}");
+                        return fail(FailureClass::Unparsable, why, String::new(), spent(&done));
+                    }
+                    let _ = std::fs::remove_file(run_dir.join(FAILURE));
+                    return RunOutcome::Done(result);
+                }
+                // Not steady yet: the next pass, if the point may run one.
+                Err(r) if r.class == FailureClass::Unsteady && k < by.most => {}
+                Err(r) => return fail_measured(r.class, r.reason, String::new(), spent(&done), r.measured),
+            }
+        }
+        if k >= by.most {
+            return fail(
+                FailureClass::Unparsable,
+                format!("no pass measured: {k} of at most {} run", by.most),
+                String::new(),
+                spent(&done),
+            );
+        }
+        k += 1;
         let before = (k > 1).then(|| {
             (pass_restart(k - 1), std::fs::read_to_string(run_dir.join(pass_log(k - 1))).unwrap_or_default())
         });
@@ -178,28 +206,59 @@ pub fn execute(
             let _ = std::fs::remove_file(run_dir.join(pass_restart(k - 1)));
         }
         done.push(record);
-        if k < by.least {
-            continue;
-        }
-        match measure(ctx, p, scene, k, run_dir, &done, &run) {
-            Ok(result) => {
-                if let Err(e) = write_json(&run_dir.join(RESULT), &result) {
-                    let why = format!("cannot write {RESULT}: {e}");
-                    return fail(FailureClass::Unparsable, why, String::new(), spent(&done));
-                }
-                return RunOutcome::Done(result);
-            }
-            // Not steady yet: the next pass, if the point may run one.
-            Err(r) if r.class == FailureClass::Unsteady && k < by.most => continue,
-            Err(r) => return fail_measured(r.class, r.reason, String::new(), spent(&done), r.measured),
-        }
     }
-    fail(
-        FailureClass::Unparsable,
-        format!("no pass measured: {} of at most {} run", done.len(), by.most),
-        String::new(),
-        spent(&done),
-    )
+}
+
+/// The finished point of `p` in `run_dir` given up to `more` passes beyond those it ran (`sweep
+/// extend --passes`): a point that was not steady at its most goes on from its last pass,
+/// measured after each, until it is steady or at its new most. Its earlier outcome stands until
+/// the new one is written; a steady point runs nothing.
+pub fn extend(
+    ctx: &PointContext,
+    p: &Prepared,
+    run_dir: &Path,
+    more: usize,
+    cancel: &CancelToken,
+) -> Extended {
+    let read = |file: &str| std::fs::read_to_string(run_dir.join(file)).ok();
+    if read(RESULT).and_then(|t| serde_json::from_str::<RunResult>(&t).ok()).is_some() {
+        return Extended::Met;
+    }
+    let Some(failure) = read(FAILURE).and_then(|t| serde_json::from_str::<RunFailure>(&t).ok()) else {
+        return Extended::NotExtendable("it has not finished: `sweep resume` runs it".into());
+    };
+    let before = match failure.measured {
+        Some(m) if failure.class == FailureClass::Unsteady => m,
+        _ => {
+            return Extended::NotExtendable(format!(
+                "it failed ({}), not for want of passes: {}",
+                failure.class.as_str(),
+                failure.reason
+            ))
+        }
+    };
+    let ran = match finished_passes(run_dir, &p.hash) {
+        Ok(done) if !done.is_empty() => done.len(),
+        Ok(_) => {
+            return Extended::NotExtendable("its last pass's restart is gone: run the point again".into())
+        }
+        Err(why) => return Extended::NotExtendable(why),
+    };
+    let scene = match ctx.layout.with_most_passes(&p.scene, ran + more) {
+        Ok(s) => s,
+        Err(why) => return Extended::NotExtendable(format!("no room for {more} more passes: {why}")),
+    };
+    let Some(by) = ctx.layout.by_pass(&scene) else {
+        return Extended::NotExtendable(format!(
+            "the {} layout does not run pass by pass",
+            ctx.layout.name()
+        ));
+    };
+    match execute(ctx, p, &scene, by, run_dir, cancel) {
+        RunOutcome::Done(after) => Extended::Done { before, after: Box::new(after) },
+        RunOutcome::Failed(f) => Extended::Failed(Box::new(f)),
+        RunOutcome::Cancelled => Extended::Cancelled,
+    }
 }
 
 /// The layout's measure of passes 1 to `k`.
@@ -210,15 +269,15 @@ fn measure(
     k: usize,
     run_dir: &Path,
     done: &[PassRecord],
-    last: &EngineRun,
 ) -> Result<RunResult, crate::scenes::Rejected> {
     let cpu: Option<f64> = done.iter().map(|r| r.cpu_time).sum();
+    let log = joined_logs(run_dir, k);
     let all = EngineRun {
         status: RunStatus::Ok,
         wall_time: done.iter().map(|r| r.wall_time).sum(),
         cpu_time: cpu,
-        warnings: last.warnings.clone(),
-        log: joined_logs(run_dir, k),
+        warnings: crate::engine::distinct_warnings(&log),
+        log,
     };
     let earlier: [PathBuf; 0] = [];
     ctx.layout.measure(&Finished {

@@ -1,7 +1,9 @@
 //! `sweep extend`: raise a finished sweep's precision without running its points again. Every
 //! done point whose SE of MFR is above the target is continued from where its run ended
 //! ([`crate::point::extend`]) until its SE meets the target or its window the cap; the warm-up,
-//! most of a point's cost, is not paid twice.
+//! most of a point's cost, is not paid twice. A sweep whose points run pass by pass (layers) is
+//! extended by passes instead: each point not steady at its most goes on from its last pass
+//! ([`crate::point::passes::extend`]).
 //!
 //! The target is `--se`, else the sweep's recorded precision (`precision.json`: an adaptive
 //! sweep's first batch runs to the scene's own target, coarser than the rest). A `--se` is
@@ -43,6 +45,18 @@ pub struct ExtendSummary {
     /// Points another live process holds.
     pub busy: usize,
     pub interrupted: bool,
+    /// Extended by passes (`--passes`): `met` counts the steady points, `failed` those still
+    /// not steady (or failed otherwise) at their new most.
+    pub by_pass: bool,
+}
+
+/// What to extend a sweep's points to.
+#[derive(Debug, Clone, Copy)]
+pub enum Extension {
+    /// An SE of MFR (None: the sweep's recorded precision).
+    Se(Option<f64>),
+    /// Up to this many more passes for each point not steady at its most.
+    Passes(usize),
 }
 
 /// One done point to extend.
@@ -53,11 +67,11 @@ struct Job {
     hash: String,
 }
 
-/// Extend the done points of the sweep in `dir` to `target` (None: the sweep's recorded
-/// precision) on `jobs` concurrent runs; `progress` hears of each point as it ends.
+/// Extend the finished points of the sweep in `dir` as `how` says on `jobs` concurrent runs;
+/// `progress` hears of each point as it ends.
 pub fn extend_sweep(
     dir: &Path,
-    target: Option<f64>,
+    how: Extension,
     jobs: usize,
     cancel: &CancelToken,
     progress: &(dyn Fn(&str) + Sync),
@@ -68,6 +82,36 @@ pub fn extend_sweep(
     if crate::run::standin::selected(&sweep) {
         return Err(refuse("its engine is the stand-in, whose runs have no window to continue".into()));
     }
+    let ctx = PointContext::new(sweep)?;
+    let (manifest, _) = Store::read_manifest(dir)?;
+    // Whether its points run pass by pass: the layout's answer for its first point.
+    let by_pass = match manifest.points.first() {
+        Some(first) => ctx.layout.by_pass(&point::prepare(&ctx, &first.values)?.scene).is_some(),
+        None => false,
+    };
+    let target = match (how, by_pass) {
+        (Extension::Passes(more), true) => {
+            if more == 0 {
+                return Err(refuse("--passes 0: expected at least one more pass".into()));
+            }
+            return run_jobs(dir, &ctx, &manifest, Mode::Passes(more), jobs, cancel, progress);
+        }
+        (Extension::Passes(_), false) => {
+            return Err(refuse(
+                "--passes extends a sweep whose points run pass by pass (scene.layout = \"layers\"); \
+                 this sweep's points run to an SE: --se"
+                    .into(),
+            ))
+        }
+        (Extension::Se(_), true) => {
+            return Err(refuse(
+                "its points run pass by pass (scene.layout = \"layers\"): give --passes N, the most \
+                 passes each point not yet steady may add"
+                    .into(),
+            ))
+        }
+        (Extension::Se(target), false) => target,
+    };
     let recorded = precision::read(dir);
     let target = match (target, &recorded) {
         (Some(t), _) => t,
@@ -78,18 +122,8 @@ pub fn extend_sweep(
             )))
         }
     };
-    let ctx = PointContext::new(sweep)?;
-    let store = Store::open(dir);
-    let (manifest, _) = Store::read_manifest(dir)?;
-    let mut seen = BTreeSet::new();
-    let todo: VecDeque<Job> = manifest
-        .points
-        .iter()
-        .filter(|p| seen.insert(p.hash.clone()) && store.run_dir(&p.hash).join(point::RESULT).is_file())
-        .map(|p| Job { index: p.index, values: p.values.clone(), seed: p.seed, hash: p.hash.clone() })
-        .collect();
     // A layout whose runs have no SE target has no window to continue.
-    if let Some(first) = todo.front() {
+    if let Some(first) = manifest.points.first() {
         let p = point::prepare(&ctx, &first.values)?;
         if ctx.layout.with_precision(&p.scene, target).is_none() {
             let why = format!(
@@ -103,7 +137,48 @@ pub fn extend_sweep(
         crate::sys::atomic::write_json(&dir.join(PRECISION), &p)
             .map_err(|e| refuse(format!("cannot write {PRECISION}: {e}")))?;
     }
-    let summary = Mutex::new(ExtendSummary { target, points: todo.len(), ..ExtendSummary::default() });
+    run_jobs(dir, &ctx, &manifest, Mode::Se(target), jobs, cancel, progress)
+}
+
+/// What one point is extended to.
+#[derive(Debug, Clone, Copy)]
+enum Mode {
+    Se(f64),
+    Passes(usize),
+}
+
+/// Extend every finished point of `manifest` as `mode` says, `jobs` at a time: an SE target
+/// continues the done points, more passes the points that finished at all (a steady one runs
+/// nothing, one not steady at its most goes on).
+fn run_jobs(
+    dir: &Path,
+    ctx: &PointContext,
+    manifest: &crate::store::Manifest,
+    mode: Mode,
+    jobs: usize,
+    cancel: &CancelToken,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<ExtendSummary> {
+    let store = Store::open(dir);
+    let mut seen = BTreeSet::new();
+    let finished = |hash: &str| {
+        let run = store.run_dir(hash);
+        run.join(point::RESULT).is_file()
+            || (matches!(mode, Mode::Passes(_)) && run.join(point::FAILURE).is_file())
+    };
+    let todo: VecDeque<Job> = manifest
+        .points
+        .iter()
+        .filter(|p| seen.insert(p.hash.clone()) && finished(&p.hash))
+        .map(|p| Job { index: p.index, values: p.values.clone(), seed: p.seed, hash: p.hash.clone() })
+        .collect();
+    let target = match mode {
+        Mode::Se(t) => t,
+        Mode::Passes(_) => f64::NAN,
+    };
+    let by_pass = matches!(mode, Mode::Passes(_));
+    let summary =
+        Mutex::new(ExtendSummary { target, points: todo.len(), by_pass, ..ExtendSummary::default() });
     let queue = Mutex::new(todo);
     let _heartbeat = store.heartbeat();
     std::thread::scope(|scope| {
@@ -113,7 +188,7 @@ pub fn extend_sweep(
                     return;
                 }
                 let Some(job) = queue.lock().unwrap().pop_front() else { return };
-                let line = one(&ctx, &store, &job, target, cancel, &summary);
+                let line = one(ctx, &store, &job, mode, cancel, &summary);
                 if let Some(line) = line {
                     progress(&line);
                 }
@@ -122,7 +197,7 @@ pub fn extend_sweep(
     });
     let mut summary = summary.into_inner().unwrap();
     summary.interrupted = cancel.is_cancelled();
-    if summary.extended > 0 {
+    if summary.extended > 0 || (by_pass && summary.failed > 0) {
         crate::run::rewrite_results(dir)?;
     }
     Ok(summary)
@@ -141,7 +216,7 @@ fn one(
     ctx: &PointContext,
     store: &Store,
     job: &Job,
-    target: f64,
+    mode: Mode,
     cancel: &CancelToken,
     summary: &Mutex<ExtendSummary>,
 ) -> Option<String> {
@@ -167,7 +242,10 @@ fn one(
         None => ctx,
     };
     let outcome = match point::prepare(ctx, &job.values) {
-        Ok(p) if p.hash == job.hash => extend::extend(ctx, &p, &store.run_dir(&job.hash), target, cancel),
+        Ok(p) if p.hash == job.hash => match mode {
+            Mode::Se(target) => extend::extend(ctx, &p, &store.run_dir(&job.hash), target, cancel),
+            Mode::Passes(more) => point::passes::extend(ctx, &p, &store.run_dir(&job.hash), more, cancel),
+        },
         Ok(p) => Extended::NotExtendable(format!("its deck renders to another hash now ({})", p.hash)),
         Err(e) => Extended::NotExtendable(format!("cannot render its deck: {e}")),
     };
@@ -178,7 +256,24 @@ fn one(
     match outcome {
         Extended::Met => {
             s.met += 1;
-            None
+            let Mode::Passes(_) = mode else { return None };
+            let r: Option<crate::outcome::RunResult> =
+                std::fs::read_to_string(store.run_dir(&job.hash).join(point::RESULT))
+                    .ok()
+                    .and_then(|t| serde_json::from_str(&t).ok());
+            Some(format!("{of}: steady already: {}", r.map_or(String::new(), |r| answer(ctx, &r))))
+        }
+        Extended::Done { before, after } if matches!(mode, Mode::Passes(_)) => {
+            let cpu = after.cpu_time.unwrap_or(0.0) - before.cpu_time.unwrap_or(0.0);
+            s.cpu_s += cpu;
+            s.extended += 1;
+            Some(format!("{of}: steady now, {} ({cpu:.0} CPU s more)", answer(ctx, &after)))
+        }
+        Extended::Failed(f) if matches!(mode, Mode::Passes(_)) => {
+            s.failed += 1;
+            let still =
+                if f.class == crate::outcome::FailureClass::Unsteady { "still not steady" } else { "failed" };
+            Some(format!("{of}: {still}: {}", f.reason))
         }
         Extended::Done { before, after } => {
             let (a, b) = (before.mfr_se.unwrap_or(f64::NAN), after.mfr_se.unwrap_or(f64::NAN));
@@ -213,6 +308,14 @@ fn one(
         }
         Extended::Cancelled => None,
     }
+}
+
+/// A pass-by-pass point's answer in its own terms: the layout's quantity with its SE, and its
+/// detail (where its steady layer starts, of how many passes).
+fn answer(ctx: &PointContext, r: &crate::outcome::RunResult) -> String {
+    let name = ctx.layout.answer_name(&ctx.sweep.file.scene);
+    let detail = ctx.layout.answer_detail(r).map_or(String::new(), |d| format!("; {d}"));
+    format!("{name} {:.3} ± {:.3}{detail}", r.mfr, r.mfr_se.unwrap_or(f64::NAN))
 }
 
 #[cfg(test)]

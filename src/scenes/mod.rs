@@ -314,6 +314,12 @@ pub trait Layout: Sync {
         Ok(scene.clone())
     }
 
+    /// `scene` run to at most `most` passes (`sweep extend --passes`), if its machine is built
+    /// for them; `Err` says why not.
+    fn with_most_passes(&self, _scene: &Scene, _most: usize) -> Result<Scene, String> {
+        Err(format!("the {} layout does not run pass by pass", self.name()))
+    }
+
     /// `scene` as measured once passes 1 to `k` have run.
     fn measured_through(&self, scene: &Scene, _k: usize) -> Scene {
         scene.clone()

@@ -370,3 +370,110 @@ fn a_layers_point_stops_once_its_steady_layer_holds_and_at_its_most_passes_other
         assert_eq!(ran, 9, "a point not steady runs its most passes: {stderr}");
     }
 }
+
+/// The passes a layers point measured, whether it ended steady (result.json) or not
+/// (failure.json's measure).
+fn measured_passes(run: &Path) -> Vec<Value> {
+    let read = |f: &str| {
+        std::fs::read_to_string(run.join(f)).ok().map(|t| serde_json::from_str::<Value>(&t).unwrap())
+    };
+    let layers = match (read("result.json"), read("failure.json")) {
+        (Some(r), _) => r["layers"].clone(),
+        (None, Some(f)) => f["measured"]["layers"].clone(),
+        (None, None) => panic!("{}: neither result.json nor failure.json", run.display()),
+    };
+    layers["passes"].as_array().unwrap_or_else(|| panic!("no passes in {layers}")).clone()
+}
+
+/// The one run directory of a one-point sweep directory.
+fn only_run(sweep_dir: &Path) -> PathBuf {
+    let runs: Vec<PathBuf> =
+        std::fs::read_dir(sweep_dir.join("runs")).unwrap().map(|e| e.unwrap().path()).collect();
+    assert_eq!(runs.len(), 1, "{runs:?}");
+    runs[0].clone()
+}
+
+#[test]
+fn sweep_extend_gives_a_layers_point_not_steady_at_its_most_more_passes_and_survives_a_kill() {
+    support::require_liggghts!(
+        "sweep_extend_gives_a_layers_point_not_steady_at_its_most_more_passes_and_survives_a_kill"
+    );
+    let (_tmp, dir) = support::cwd();
+    // Two passes: too few for a steady layer (three after the transient), so the point fails
+    // as unsteady; its machine is built for four.
+    let sweep = bed(&dir, "layers = 2\nleast_layers = 2\n[design.lds]\nstep = 1\nmax = 1");
+    let unsteady = |name: &str| {
+        let d = dir.join(name);
+        let out = support::sweep(&["lds", support::p(&sweep), "--out", support::p(&d)]);
+        let run = only_run(&d);
+        let f: Value = serde_json::from_str(
+            &std::fs::read_to_string(run.join("failure.json"))
+                .unwrap_or_else(|_| panic!("not a failure: {}", support::stderr(&out))),
+        )
+        .unwrap();
+        assert_eq!(f["class"], "unsteady", "{f}");
+        assert_eq!(measured_passes(&run).len(), 2);
+        (d, run)
+    };
+    let (whole, whole_run) = unsteady("whole");
+    // An SE means nothing to a point run by the pass: one line naming --passes, nothing changed.
+    let failure_before = std::fs::read(whole_run.join("failure.json")).unwrap();
+    let out = support::sweep(&["extend", support::p(&whole)]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = support::stderr(&out);
+    assert!(err.contains("--passes") && err.lines().count() == 1, "{err}");
+    assert_eq!(std::fs::read(whole_run.join("failure.json")).unwrap(), failure_before);
+
+    let first_log = std::fs::read(whole_run.join("log.pass.1")).unwrap();
+    let out = support::sweep(&["extend", support::p(&whole), "--passes", "2"]);
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), support::stderr(&out));
+    assert!(stdout.contains("extend by up to 2 passes: 1 finished points"), "{stdout}\n{stderr}");
+    // It went on from pass 2: passes 1 and 2 not run again, 3 and 4 run (it may stop steady
+    // only at its new most: four passes cannot keep four after the transient before it).
+    assert_eq!(std::fs::read(whole_run.join("log.pass.1")).unwrap(), first_log, "pass 1 ran again");
+    let passes = measured_passes(&whole_run);
+    assert_eq!(passes.len(), 4, "{stderr}");
+    let steady = whole_run.join("result.json").is_file();
+    assert_eq!(steady, stderr.contains("steady now"), "{stderr}");
+    assert_eq!(!steady, stderr.contains("still not steady"), "{stderr}");
+    // Again: a steady point says so and runs nothing; one at its machine's last pass says why.
+    let out = support::sweep(&["extend", support::p(&whole), "--passes", "2"]);
+    let stderr = support::stderr(&out);
+    if steady {
+        assert!(stderr.contains("steady already"), "{stderr}");
+    } else {
+        assert!(
+            stderr.contains("no room for 2 more passes") && stderr.contains("built for 4 passes"),
+            "{stderr}"
+        );
+    }
+    assert!(!whole_run.join("log.pass.5").exists());
+
+    // Killed (SIGKILL, the whole process group) in the extension's first pass: the point keeps
+    // its earlier outcome, and extending it again goes on from pass 2 to where the
+    // uninterrupted extension ended.
+    let (cut, cut_run) = unsteady("cut");
+    use std::os::unix::process::CommandExt;
+    let mut child = support::sweep_bin()
+        .args(["extend", support::p(&cut), "--passes", "2"])
+        .process_group(0)
+        .spawn()
+        .unwrap();
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(600);
+    while !cut_run.join("in.pass.3").is_file() {
+        assert!(std::time::Instant::now() < deadline, "pass 3 never started");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    // SAFETY: kill(2) on the child's own process group.
+    unsafe { libc::kill(-(child.id() as i32), libc::SIGKILL) };
+    let _ = child.wait();
+    assert!(cut_run.join("failure.json").is_file() && !cut_run.join("pass.3.json").exists());
+    let out = support::sweep(&["extend", support::p(&cut), "--passes", "2"]);
+    assert!(out.status.code().is_some(), "{}", support::stderr(&out));
+    assert_eq!(
+        measured_passes(&cut_run),
+        passes,
+        "an interrupted extension ends where an uninterrupted one does"
+    );
+    assert_eq!(cut_run.join("result.json").is_file(), steady);
+}

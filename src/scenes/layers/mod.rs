@@ -338,6 +338,20 @@ impl Layout for Layers {
         Ok(with_plan(scene, plan))
     }
 
+    fn with_most_passes(&self, scene: &Scene, most: usize) -> Result<Scene, String> {
+        let mut plan = plan_of(scene);
+        let room = plan.passes.len();
+        if most > room {
+            return Err(format!(
+                "its machine is built for {room} passes (twice the sweep's scene.layers): run the point \
+                 again with a larger scene.layers"
+            ));
+        }
+        plan.most_passes = most;
+        plan.last_pass = most;
+        Ok(with_plan(scene, plan))
+    }
+
     fn measured_through(&self, scene: &Scene, k: usize) -> Scene {
         let mut plan = plan_of(scene);
         plan.last_pass = k;
