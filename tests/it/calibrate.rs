@@ -6,7 +6,7 @@
 
 use crate::support as common;
 use std::collections::HashMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use demsweep::analysis::calibration::Target;
@@ -194,14 +194,20 @@ engine = "stand-in"
     assert!(said.contains("converged: yes"), "{said}");
 }
 
+/// A stand-in pour with one free parameter, rolling friction 0.05–0.3 at friction 0.3, in
+/// `dir/rolling.toml`.
+fn rolling_pour(dir: &Path) -> PathBuf {
+    common::write_file(
+        &dir.join("rolling.toml"),
+        "name = \"r\"\n[parameters]\nfriction = 0.3\nrolling_friction = { lo = 0.05, hi = 0.3 }\n\
+         [scene]\nlayout = \"pour\"\n[run]\nengine = \"stand-in\"\n",
+    )
+}
+
 #[test]
 fn one_free_parameter_is_recovered_and_drawn_as_a_curve() {
     let tmp = tempfile::tempdir().unwrap();
-    let file = common::write_file(
-        &tmp.path().join("rolling.toml"),
-        "name = \"r\"\n[parameters]\nfriction = 0.3\nrolling_friction = { lo = 0.05, hi = 0.3 }\n\
-         [scene]\nlayout = \"pour\"\n[run]\nengine = \"stand-in\"\n",
-    );
+    let file = rolling_pour(tmp.path());
     let out = tmp.path().join("out");
     let targets = [format!("angle_of_repose={}±0.5", truth().mean_angle())];
     let o = calibrate(&file, &out, &targets, &["--first", "8", "--batch", "2", "--max", "20"]);
@@ -242,11 +248,7 @@ fn the_emulator_takes_the_scatter_between_seeds_as_each_run_s_noise() {
     // SE, is each run's noise in the emulator and so in the likelihood.
     use demsweep::scenes::pour::stand_in::{ANGLE_SCATTER, ANGLE_SE};
     let tmp = tempfile::tempdir().unwrap();
-    let file = common::write_file(
-        &tmp.path().join("rolling.toml"),
-        "name = \"r\"\n[parameters]\nfriction = 0.3\nrolling_friction = { lo = 0.05, hi = 0.3 }\n\
-         [scene]\nlayout = \"pour\"\n[run]\nengine = \"stand-in\"\n",
-    );
+    let file = rolling_pour(tmp.path());
     let targets = [format!("angle_of_repose={}±0.5", truth().mean_angle())];
     let out = tmp.path().join("out");
     let o =

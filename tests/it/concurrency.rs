@@ -13,8 +13,8 @@ use demsweep::store;
 use demsweep::sys::process::CancelToken;
 
 use crate::support::{
-    self, assert_unique_seq, attempt_counts, attempts, done_per_hash, failed_sweep, hashes, joblog, lds, now,
-    p, plant_claim, quick_sweep, results, run_two_at_once, standin, stderr, sweep, MS,
+    self, assert_unique_seq, attempt_counts, attempts, done_per_hash, failed_sweep, joblog, lds, now, p,
+    plant_claim, quick_sweep, results, run_two_at_once, stderr, sweep, MS,
 };
 
 // ---- two sweeps, two resumes ----
@@ -163,10 +163,7 @@ fn retry_failed_in_three_concurrent_resumes_runs_each_failed_point_once_more() {
 #[test]
 fn status_names_the_holder_of_a_foreign_claim_and_unclaim_releases_it() {
     let tmp = tempfile::tempdir().unwrap();
-    let toml = standin(tmp.path(), 4);
-    let d = tmp.path().join("d");
-    assert_eq!(sweep(&["lds", p(&toml), "--out", p(&d), "-q"]).status.code(), Some(0));
-    let h = hashes(&d);
+    let (d, h) = support::finished_standin(tmp.path(), 4);
     // Two runs not done yet, claimed elsewhere.
     for hash in &h[..2] {
         std::fs::remove_dir_all(d.join("runs").join(hash)).unwrap();

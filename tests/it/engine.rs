@@ -64,6 +64,16 @@ fn hanging_check(dir: &Path) -> PathBuf {
     engine_sweep(dir, "engine", p(&engine), 2, 2, "")
 }
 
+/// `sweep run` of [`hanging_check`]'s sweep in `dir`, with `dir/tmp` as its TMPDIR: the running
+/// process and that scratch directory.
+fn run_hanging_check(dir: &Path, stderr: Stdio) -> (std::process::Child, PathBuf) {
+    let toml = hanging_check(dir);
+    let scratch = dir.join("tmp");
+    std::fs::create_dir(&scratch).unwrap();
+    let child = sweep_bin().args(["run", p(&toml)]).env("TMPDIR", &scratch).stderr(stderr).spawn().unwrap();
+    (child, scratch)
+}
+
 /// Kill what a test started and may have left behind (by pid), so a failing test leaves no
 /// process running.
 fn kill_if_alive(pid: Option<i32>) {
@@ -86,11 +96,7 @@ fn wait_bounded(child: &mut std::process::Child, limit: Duration) -> Option<std:
 #[test]
 fn a_hanging_engine_check_times_out_naming_the_engine_and_leaves_no_scratch_dir() {
     let tmp = tempfile::tempdir().unwrap();
-    let toml = hanging_check(tmp.path());
-    let scratch = tmp.path().join("tmp");
-    std::fs::create_dir(&scratch).unwrap();
-    let mut child =
-        sweep_bin().args(["run", p(&toml)]).env("TMPDIR", &scratch).stderr(Stdio::piped()).spawn().unwrap();
+    let (mut child, scratch) = run_hanging_check(tmp.path(), Stdio::piped());
     // The check's own time limit, then the guard.
     let status = wait_bounded(&mut child, GUARD + Duration::from_secs(40));
     let pid = read_pid(&tmp.path().join("hang.pid"));
@@ -110,10 +116,7 @@ fn a_hanging_engine_check_times_out_naming_the_engine_and_leaves_no_scratch_dir(
 fn sigterm_or_sigint_during_the_engine_check_ends_sweep_its_child_and_scratch_dir() {
     for sig in [libc::SIGTERM, libc::SIGINT] {
         let tmp = tempfile::tempdir().unwrap();
-        let toml = hanging_check(tmp.path());
-        let scratch = tmp.path().join("tmp");
-        std::fs::create_dir(&scratch).unwrap();
-        let mut child = sweep_bin().args(["run", p(&toml)]).env("TMPDIR", &scratch).spawn().unwrap();
+        let (mut child, scratch) = run_hanging_check(tmp.path(), Stdio::inherit());
         let pidfile = tmp.path().join("hang.pid");
         let started = wait_for(GUARD, || read_pid(&pidfile).is_some());
         unsafe { libc::kill(child.id() as i32, sig) };
@@ -132,10 +135,7 @@ fn sigterm_or_sigint_during_the_engine_check_ends_sweep_its_child_and_scratch_di
 #[test]
 fn sigkill_during_the_engine_check_leaves_no_orphan_and_the_next_start_removes_its_scratch_dir() {
     let tmp = tempfile::tempdir().unwrap();
-    let toml = hanging_check(tmp.path());
-    let scratch = tmp.path().join("tmp");
-    std::fs::create_dir(&scratch).unwrap();
-    let mut child = sweep_bin().args(["run", p(&toml)]).env("TMPDIR", &scratch).spawn().unwrap();
+    let (mut child, scratch) = run_hanging_check(tmp.path(), Stdio::inherit());
     let pidfile = tmp.path().join("hang.pid");
     let started = wait_for(GUARD, || read_pid(&pidfile).is_some());
     child.kill().unwrap();

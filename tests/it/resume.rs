@@ -6,7 +6,7 @@
 
 use std::collections::BTreeSet;
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Stdio};
 use std::time::Duration;
 
 use demsweep::run::fake::{Behaviour, FakeExecutor};
@@ -15,8 +15,8 @@ use demsweep::store;
 use demsweep::sys::process::CancelToken;
 
 use crate::support::{
-    self, assert_unique_seq, attempts, done_per_hash, hashes, joblog, lds, now, output, p, plant_claim,
-    results, standin, stderr, sweep, wait_until, MS,
+    self, assert_unique_seq, attempts, done_per_hash, joblog, lds, now, output, p, plant_claim, results,
+    stderr, sweep, wait_until, MS,
 };
 
 // ---- on LIGGGHTS ----
@@ -185,22 +185,19 @@ fn an_interrupted_sweep_resumes_without_rerunning_finished_points() {
 #[test]
 fn a_stale_claim_and_a_half_written_run_dir_are_cleaned_and_rerun() {
     let tmp = tempfile::tempdir().unwrap();
-    let s = support::fake_sweep(tmp.path(), "");
-    let out = tmp.path().join("out");
-    let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    run::start(&s, lds(3, 3), &out, &exec, &support::quiet(1), &mut RunAll, &CancelToken::new()).unwrap();
-    let (manifest, _) = store::Store::read_manifest(&out).unwrap();
+    let (out, manifest) = support::fake_finished(tmp.path());
     let run = out.join("runs").join(&manifest.points[1].hash);
     // A process that died mid-run: no result, a log, and its claim.
     std::fs::remove_file(run.join("result.json")).unwrap();
     std::fs::write(run.join("log.liggghts"), "half").unwrap();
-    let mut dead = std::process::Command::new("true").spawn().unwrap();
-    let pid = dead.id();
-    dead.wait().unwrap();
-    let claim = serde_json::json!({
-        "host": demsweep::sys::host::hostname(), "pid": pid, "start_ticks": 1, "session": "x", "claimed_at": 0.0
-    });
-    std::fs::write(run.join("claim"), claim.to_string()).unwrap();
+    plant_claim(
+        &out,
+        &manifest.points[1].hash,
+        &demsweep::sys::host::hostname(),
+        support::dead_pid(),
+        0.0,
+        None,
+    );
     assert_eq!(run::status(&out).unwrap().pending, 1);
 
     let exec2 = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
@@ -214,22 +211,12 @@ fn a_stale_claim_and_a_half_written_run_dir_are_cleaned_and_rerun() {
 #[test]
 fn a_killed_attempt_shows_as_interrupted_in_status_and_the_joblog() {
     let tmp = tempfile::tempdir().unwrap();
-    let s = support::fake_sweep(tmp.path(), "");
-    let out = tmp.path().join("out");
-    let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    run::start(&s, lds(3, 3), &out, &exec, &support::quiet(1), &mut RunAll, &CancelToken::new()).unwrap();
-    let (manifest, _) = store::Store::read_manifest(&out).unwrap();
+    let (out, manifest) = support::fake_finished(tmp.path());
     let hash = &manifest.points[2].hash;
     let run = out.join("runs").join(hash);
     // What a SIGKILL mid-run leaves: the claim of a process that is gone, no result.
     std::fs::remove_file(run.join("result.json")).unwrap();
-    let mut dead = Command::new("true").spawn().unwrap();
-    let pid = dead.id();
-    dead.wait().unwrap();
-    let claim = serde_json::json!({
-        "host": demsweep::sys::host::hostname(), "pid": pid, "start_ticks": 1, "session": "killed", "claimed_at": 1.7e9
-    });
-    std::fs::write(run.join("claim"), claim.to_string()).unwrap();
+    plant_claim(&out, hash, &demsweep::sys::host::hostname(), support::dead_pid(), 1.7e9, None);
     let st = run::status(&out).unwrap();
     assert_eq!((st.done, st.pending, st.interrupted), (2, 1, 1));
     let o = support::sweep_bin().arg("status").arg(&out).output().unwrap();
@@ -270,10 +257,7 @@ fn drop_joblog_lines(d: &Path, hash: &str) {
 #[test]
 fn a_result_without_its_joblog_line_gets_one_and_its_dead_claim_is_removed() {
     let tmp = tempfile::tempdir().unwrap();
-    let toml = standin(tmp.path(), 4);
-    let d = tmp.path().join("d");
-    assert_eq!(sweep(&["lds", p(&toml), "--out", p(&d), "-q"]).status.code(), Some(0));
-    let h = hashes(&d);
+    let (d, h) = support::finished_standin(tmp.path(), 4);
     // What a kill between result.json and the joblog line leaves: the result, the dead
     // process's claim, and no line.
     drop_joblog_lines(&d, &h[2]);
@@ -302,10 +286,7 @@ fn a_result_with_neither_its_joblog_line_nor_a_claim_gets_its_line() {
     // A kill after the claim was given back and before the line (as the chaos storms found):
     // the result alone.
     let tmp = tempfile::tempdir().unwrap();
-    let toml = standin(tmp.path(), 4);
-    let d = tmp.path().join("d");
-    assert_eq!(sweep(&["lds", p(&toml), "--out", p(&d), "-q"]).status.code(), Some(0));
-    let h = hashes(&d);
+    let (d, h) = support::finished_standin(tmp.path(), 4);
     drop_joblog_lines(&d, &h[1]);
     let o = sweep(&["resume", p(&d), "-q"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
@@ -320,10 +301,7 @@ fn a_result_with_neither_its_joblog_line_nor_a_claim_gets_its_line() {
 fn a_claim_torn_by_a_kill_in_a_finished_run_is_removed_on_resume() {
     // A kill between creating the claim file and writing it leaves it empty.
     let tmp = tempfile::tempdir().unwrap();
-    let toml = standin(tmp.path(), 4);
-    let d = tmp.path().join("d");
-    assert_eq!(sweep(&["lds", p(&toml), "--out", p(&d), "-q"]).status.code(), Some(0));
-    let h = hashes(&d);
+    let (d, h) = support::finished_standin(tmp.path(), 4);
     let claim = d.join("runs").join(&h[3]).join("claim");
     std::fs::write(&claim, "").unwrap();
     let o = sweep(&["resume", p(&d), "-q"]);

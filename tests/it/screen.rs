@@ -38,6 +38,18 @@ fn closed(v: &[f64]) -> bool {
     v[0] < 2.5
 }
 
+/// Runs of 20 ms whose screen closes the points at gap 2, which measure no flow; the others
+/// measure [`fake_mfr`].
+fn screened_exec() -> FakeExecutor {
+    FakeExecutor::new(|_, _| Behaviour::Succeed(20 * MS)).with_closed(closed).with_mfr(|v| {
+        if closed(v) {
+            0.0
+        } else {
+            fake_mfr(v)
+        }
+    })
+}
+
 /// A 3 × 3 lattice: three points at gap 2 are closed.
 fn lattice3() -> DesignRecord {
     DesignRecord::Lattice { levels: vec![3] }
@@ -68,13 +80,7 @@ fn a_verified_screen_skips_the_closed_points_and_counts_them_as_zero() {
     let tmp = tempfile::tempdir().unwrap();
     let s = fake_sweep(tmp.path(), "screen_sample = 0.0\nscreen_sample_min = 1");
     let out = tmp.path().join("out");
-    let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(20 * MS)).with_closed(closed).with_mfr(|v| {
-        if closed(v) {
-            0.0
-        } else {
-            fake_mfr(v)
-        }
-    });
+    let exec = screened_exec();
     let mut seen = Seen::default();
     let sum =
         run::start(&s, lattice3(), &out, &exec, &support::quiet(2), &mut seen, &CancelToken::new()).unwrap();
@@ -167,13 +173,7 @@ fn an_array_task_runs_the_verification_sample_before_it_skips_its_own_closed_poi
     let tmp = tempfile::tempdir().unwrap();
     let s = fake_sweep(tmp.path(), "screen_sample = 0.0\nscreen_sample_min = 1");
     let out = tmp.path().join("out");
-    let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(20 * MS)).with_closed(closed).with_mfr(|v| {
-        if closed(v) {
-            0.0
-        } else {
-            fake_mfr(v)
-        }
-    });
+    let exec = screened_exec();
     // Lay the sweep out without running it, as `sweep lds` does before its first run.
     let plan = run::plan(&exec, &s, &lattice3(), &CancelToken::new()).unwrap();
     let manifest = Manifest {

@@ -7,7 +7,7 @@
 //! disk under a real run.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 
 use demsweep::run::fake::{Behaviour, FakeExecutor};
 use demsweep::run::{self, RunAll};
@@ -286,11 +286,7 @@ fn an_overflowing_mfr_leaves_no_nan_or_inf_in_convergence_or_the_verdict() {
 #[test]
 fn an_unreadable_result_is_named_in_status_and_run_again() {
     let tmp = tempfile::tempdir().unwrap();
-    let s = support::fake_sweep(tmp.path(), "");
-    let out = tmp.path().join("out");
-    let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    run::start(&s, lds(3, 3), &out, &exec, &support::quiet(1), &mut RunAll, &CancelToken::new()).unwrap();
-    let (manifest, _) = store::Store::read_manifest(&out).unwrap();
+    let (out, manifest) = support::fake_finished(tmp.path());
     let result = out.join("runs").join(&manifest.points[1].hash).join("result.json");
     std::fs::write(&result, "{\"format\": 1, \"hash\": ").unwrap();
     let o = support::sweep_bin().arg("status").arg(&out).output().unwrap();
@@ -348,12 +344,7 @@ fn a_full_disk_stops_the_sweep_says_where_and_resume_finishes_it() {
     assert!(!csv.contains(",failed,"), "{csv}");
 
     // A killed writer's temporary is removed on the next open.
-    let dead = {
-        let mut c = Command::new("true").spawn().unwrap();
-        let pid = c.id();
-        c.wait().unwrap();
-        pid
-    };
+    let dead = support::dead_pid();
     let stale = out.join(format!(".results.csv.tmp.{}.{dead}.0", demsweep::sys::atomic::temporary_host()));
     mount.remount("size=4m");
     std::fs::write(&stale, "half").unwrap();

@@ -259,6 +259,17 @@ pub fn standin(dir: &Path, max: usize) -> PathBuf {
     engine_sweep(dir, "standin", "stand-in", max, max, "")
 }
 
+/// A finished stand-in sweep of `max` points in one space, in `root/d`: the directory and its
+/// points' hashes in manifest order.
+pub fn finished_standin(root: &Path, max: usize) -> (PathBuf, Vec<String>) {
+    let toml = standin(root, max);
+    let d = root.join("d");
+    let o = sweep(&["lds", p(&toml), "--out", p(&d), "-q"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let h = hashes(&d);
+    (d, h)
+}
+
 /// An executable shell script `dir/name` holding `text`.
 pub fn script(dir: &Path, name: &str, text: &str) -> PathBuf {
     use std::os::unix::fs::PermissionsExt;
@@ -409,6 +420,26 @@ pub fn assert_unique_seq(dir: &Path) {
     let seqs: BTreeSet<u64> = lines.iter().map(|l| l.seq).collect();
     assert_eq!(seqs.len(), lines.len(), "repeated joblog seq: {lines:?}");
     assert_eq!(seqs, (1..=lines.len() as u64).collect(), "seq is not 1..n");
+}
+
+/// Three points of a fake sweep (`lds(3, 3)`), each run once to success, one at a time, in
+/// `root/out`: the directory and its manifest.
+pub fn fake_finished(root: &Path) -> (PathBuf, demsweep::store::Manifest) {
+    let s = fake_sweep(root, "");
+    let out = root.join("out");
+    let exec = demsweep::run::fake::FakeExecutor::new(|_, _| demsweep::run::fake::Behaviour::Succeed(MS));
+    let cancel = demsweep::sys::process::CancelToken::new();
+    demsweep::run::start(&s, lds(3, 3), &out, &exec, &quiet(1), &mut demsweep::run::RunAll, &cancel).unwrap();
+    let (manifest, _) = store::Store::read_manifest(&out).unwrap();
+    (out, manifest)
+}
+
+/// The pid of a process that has ended and been reaped: what a killed run's claim names.
+pub fn dead_pid() -> u32 {
+    let mut c = Command::new("true").spawn().unwrap();
+    let pid = c.id();
+    c.wait().unwrap();
+    pid
 }
 
 /// A claim in `runs/<hash>/claim` as another process wrote it.

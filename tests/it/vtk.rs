@@ -97,6 +97,27 @@ fn series(dir: &Path, prefix: &str) -> BTreeMap<u64, std::path::PathBuf> {
         .collect()
 }
 
+/// `sweep run FILE --vtk --json --out OUT` at the thesis's blade speed (the demo's machine
+/// speeds take several times the blade travel time), which must succeed: its output.
+fn run_vtk(file: &Path, out: &Path) -> std::process::Output {
+    let o = Command::new(env!("CARGO_BIN_EXE_sweep"))
+        .args([
+            "run",
+            support::p(file),
+            "--set",
+            "blade_speed=1.4",
+            "--vtk",
+            "--json",
+            "--out",
+            support::p(out),
+        ])
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    o
+}
+
 #[test]
 fn run_with_vtk_writes_particle_and_blade_files_paraview_reads() {
     support::require_liggghts!("run_with_vtk_writes_particle_and_blade_files_paraview_reads");
@@ -110,22 +131,7 @@ fn run_with_vtk_writes_particle_and_blade_files_paraview_reads() {
     let gated = text.replacen("layout = \"conveyor\"", "layout = \"gated\"", 1);
     assert_ne!(gated, text, "sweeps/quick.toml names its layout");
     std::fs::write(&quick, gated).unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_sweep"))
-        // At the thesis's speed: the demo's machine speeds take several times the blade travel time.
-        .args([
-            "run",
-            quick.to_str().unwrap(),
-            "--set",
-            "blade_speed=1.4",
-            "--vtk",
-            "--json",
-            "--out",
-            out.to_str().unwrap(),
-        ])
-        .stdin(Stdio::null())
-        .output()
-        .unwrap();
-    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = run_vtk(&quick, &out);
     // The deck's own atom count: the data file it reads ("N atoms"), powder and substrate.
     let data = std::fs::read_to_string(out.join("pile.data")).unwrap();
     let atoms: usize = data
@@ -182,22 +188,7 @@ fn the_conveyor_writes_vtk_files_too() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("point");
     let quick = Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps/quick.toml");
-    let o = Command::new(env!("CARGO_BIN_EXE_sweep"))
-        // At the thesis's speed: the demo's machine speeds take several times the blade travel time.
-        .args([
-            "run",
-            quick.to_str().unwrap(),
-            "--set",
-            "blade_speed=1.4",
-            "--vtk",
-            "--json",
-            "--out",
-            out.to_str().unwrap(),
-        ])
-        .stdin(Stdio::null())
-        .output()
-        .unwrap();
-    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    run_vtk(&quick, &out);
     let particles = series(&out, "particles_");
     assert!(particles.len() >= 3, "{particles:?}");
     assert_eq!(series(&out, "blade_").len(), particles.len());
