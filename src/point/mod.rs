@@ -281,10 +281,10 @@ pub fn execute(ctx: &PointContext, p: &Prepared, run_dir: &Path, cancel: &Cancel
 
 /// What is run for `p` under `start`: the scene, the deck (the hashed deck's files with its input
 /// rendered from that scene, when it differs) and the warm start's particles and record.
-struct Started {
-    scene: Scene,
+pub(crate) struct Started {
+    pub(crate) scene: Scene,
     deck: Deck,
-    warm: Option<(Warm, WarmStart)>,
+    pub(crate) warm: Option<(Warm, WarmStart)>,
     mfr_se_target: Option<f64>,
 }
 
@@ -346,7 +346,12 @@ pub fn execute_from(
             let why = format!("cannot write the deck in {}: {e}", run_dir.display());
             return fail(FailureClass::CouldNotStart, why, String::new(), 0.0);
         }
-        return passes::execute(ctx, p, &p.scene, by, run_dir, cancel);
+        let (scene, warm) = match passes::warm_start(ctx, p, run_dir, || started(ctx, p, start)) {
+            Ok(s) => s,
+            Err(why) => return fail(FailureClass::CouldNotStart, why, String::new(), 0.0),
+        };
+        let by = ctx.layout.by_pass(&scene).unwrap_or(by);
+        return passes::execute(ctx, p, &scene, by, run_dir, cancel, warm.as_ref());
     }
     let stale = [RESULT, FAILURE, crate::engine::LOG].map(String::from);
     for file in stale.iter().chain(&ctx.layout.run_files(&ctx.sweep.file.scene)) {

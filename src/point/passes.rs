@@ -15,9 +15,9 @@ use std::time::Duration;
 use serde::{Deserialize, Serialize};
 
 use super::extend::Extended;
-use super::{cut_off, PointContext, Prepared, FAILURE, RESULT};
+use super::{cut_off, PointContext, Prepared, Started, FAILURE, RESULT};
 use crate::engine::{EngineRun, LogLimits, RunStatus, LOG};
-use crate::outcome::{FailureClass, RunFailure, RunOutcome, RunResult};
+use crate::outcome::{FailureClass, RunFailure, RunOutcome, RunResult, WarmStart};
 use crate::scene::Scene;
 use crate::scenes::{ByPass, Finished};
 use crate::sys::atomic::write_json;
@@ -41,6 +41,50 @@ pub fn pass_record(k: usize) -> String {
 /// The restart pass `k` wrote.
 pub fn pass_restart(k: usize) -> String {
     format!("restart.pass.{k}")
+}
+
+/// Where a point run by the pass started from, when it started from a finished neighbour: kept
+/// in its run directory so that it resumes from the same whichever neighbours are done by then.
+pub const WARM_START: &str = "warm-start.json";
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct PassWarm {
+    record: WarmStart,
+    /// The layout's own account of the state it started from ([`crate::scenes::Warm`]'s data).
+    data: String,
+}
+
+/// The scene a point run by the pass runs, and the warm start it records: a point that has run
+/// a pass goes on as it began (warm from the start it recorded, else cold); one that has not
+/// starts as `fresh` says (a neighbour's state, or cold) and records a warm start.
+pub(super) fn warm_start(
+    ctx: &PointContext,
+    p: &Prepared,
+    run_dir: &Path,
+    fresh: impl FnOnce() -> Started,
+) -> Result<(Scene, Option<WarmStart>), String> {
+    let file = run_dir.join(WARM_START);
+    if run_dir.join(pass_record(1)).is_file() {
+        return recorded_start(ctx, &p.scene, run_dir);
+    }
+    let _ = std::fs::remove_file(&file);
+    let Started { scene, warm, .. } = fresh();
+    let Some((w, record)) = warm else { return Ok((scene, None)) };
+    write_json(&file, &PassWarm { record: record.clone(), data: w.data })
+        .map_err(|e| format!("cannot write {}: {e}", file.display()))?;
+    Ok((scene, Some(record)))
+}
+
+/// `scene` as the point in `run_dir` began: from the warm start it recorded, else cold.
+fn recorded_start(
+    ctx: &PointContext,
+    scene: &Scene,
+    run_dir: &Path,
+) -> Result<(Scene, Option<WarmStart>), String> {
+    let file = run_dir.join(WARM_START);
+    let Ok(text) = std::fs::read_to_string(&file) else { return Ok((scene.clone(), None)) };
+    let w: PassWarm = serde_json::from_str(&text).map_err(|e| format!("{}: {e}", file.display()))?;
+    Ok((ctx.layout.warm_again(scene, &w.data)?, Some(w.record)))
 }
 
 /// What a finished pass records: whose it is and what it cost.
@@ -115,6 +159,7 @@ pub fn execute(
     by: ByPass,
     run_dir: &Path,
     cancel: &CancelToken,
+    warm: Option<&WarmStart>,
 ) -> RunOutcome {
     let fail_measured = |class, reason, log_tail, wall, measured| {
         let f = RunFailure { measured, ..RunFailure::of(&p.hash, class, reason, log_tail, wall) };
@@ -137,7 +182,8 @@ pub fn execute(
         // passes allowed by `sweep extend`).
         if k >= by.least {
             match measure(ctx, p, scene, k, run_dir, &done) {
-                Ok(result) => {
+                Ok(mut result) => {
+                    result.warm_start = warm.cloned();
                     if let Err(e) = write_json(&run_dir.join(RESULT), &result) {
                         let why = format!("cannot write {RESULT}: {e}");
                         return fail(FailureClass::Unparsable, why, String::new(), spent(&done));
@@ -147,7 +193,13 @@ pub fn execute(
                 }
                 // Not steady yet: the next pass, if the point may run one.
                 Err(r) if r.class == FailureClass::Unsteady && k < by.most => {}
-                Err(r) => return fail_measured(r.class, r.reason, String::new(), spent(&done), r.measured),
+                Err(r) => {
+                    let measured = r.measured.map(|mut m| {
+                        m.warm_start = warm.cloned();
+                        m
+                    });
+                    return fail_measured(r.class, r.reason, String::new(), spent(&done), measured);
+                }
             }
         }
         if k >= by.most {
@@ -244,7 +296,11 @@ pub fn extend(
         }
         Err(why) => return Extended::NotExtendable(why),
     };
-    let scene = match ctx.layout.with_most_passes(&p.scene, ran + more) {
+    let (began, warm) = match recorded_start(ctx, &p.scene, run_dir) {
+        Ok(s) => s,
+        Err(why) => return Extended::NotExtendable(why),
+    };
+    let scene = match ctx.layout.with_most_passes(&began, ran + more) {
         Ok(s) => s,
         Err(why) => return Extended::NotExtendable(format!("no room for {more} more passes: {why}")),
     };
@@ -254,7 +310,7 @@ pub fn extend(
             ctx.layout.name()
         ));
     };
-    match execute(ctx, p, &scene, by, run_dir, cancel) {
+    match execute(ctx, p, &scene, by, run_dir, cancel, warm.as_ref()) {
         RunOutcome::Done(after) => Extended::Done { before, after: Box::new(after) },
         RunOutcome::Failed(f) => Extended::Failed(Box::new(f)),
         RunOutcome::Cancelled => Extended::Cancelled,

@@ -37,6 +37,11 @@ pub enum ColdStart {
     OtherSizes,
     #[error("nothing of its heap fits this point")]
     NothingFits,
+    /// A loose bed's state is every layer's particles.
+    #[error("a loose bed starts cold")]
+    LooseBed,
+    #[error("it has no steady layer to start from")]
+    NoSteadyLayer,
 }
 
 /// Every layout, in the order `scene.layout`'s error lists them.
@@ -312,6 +317,12 @@ pub trait Layout: Sync {
     /// pass before left (`None` for the first pass).
     fn pass_scene(&self, scene: &Scene, _k: usize, _before: Option<(&str, &str)>) -> Result<Scene, String> {
         Ok(scene.clone())
+    }
+
+    /// `to` started again from the warm start it recorded (`data`, the [`Warm`]'s), when a point
+    /// run by the pass resumes.
+    fn warm_again(&self, _to: &Scene, _data: &str) -> Result<Scene, String> {
+        Err(format!("the {} layout does not resume a warm start", self.name()))
     }
 
     /// `scene` run to at most `most` passes (`sweep extend --passes`), if its machine is built

@@ -477,3 +477,88 @@ fn sweep_extend_gives_a_layers_point_not_steady_at_its_most_more_passes_and_surv
     );
     assert_eq!(cut_run.join("result.json").is_file(), steady);
 }
+
+/// The run directories of a sweep directory with their result (or failure's measure).
+fn measured_runs(sweep_dir: &Path) -> Vec<(PathBuf, Value)> {
+    let mut runs: Vec<(PathBuf, Value)> = std::fs::read_dir(sweep_dir.join("runs"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .map(|run| {
+            let read = |f: &str| {
+                std::fs::read_to_string(run.join(f)).ok().map(|t| serde_json::from_str::<Value>(&t).unwrap())
+            };
+            let r =
+                read("result.json").or_else(|| read("failure.json").map(|f| f["measured"].clone())).unwrap();
+            (run, r)
+        })
+        .collect();
+    runs.sort_by(|a, b| a.0.cmp(&b.0));
+    runs
+}
+
+#[test]
+fn a_fused_bed_warm_started_from_its_neighbour_searches_from_its_depth_and_resumes_as_it_began() {
+    support::require_liggghts!(
+        "a_fused_bed_warm_started_from_its_neighbour_searches_from_its_depth_and_resumes_as_it_began"
+    );
+    let (_tmp, dir) = support::cwd();
+    let sweep = bed(&dir, "bed = \"fused\"\nlayers = 12\nwarm_start = true\n[design.lds]\nstep = 2\nmax = 2");
+    let lds =
+        |out: &Path| support::sweep(&["lds", support::p(&sweep), "--jobs", "1", "--out", support::p(out)]);
+    let whole = dir.join("whole");
+    lds(&whole);
+    let runs = measured_runs(&whole);
+    assert_eq!(runs.len(), 2);
+    let (warm, cold): (Vec<_>, Vec<_>) = runs.iter().partition(|(_, r)| !r["warm_start"].is_null());
+    assert_eq!((warm.len(), cold.len()), (1, 1), "the second point starts from the first");
+    let ((warm_run, w), (cold_run, c)) = (warm[0], cold[0]);
+    assert_eq!(w["warm_start"]["from"], c["hash"]);
+    let searched =
+        |r: &Value| r["layers"]["passes"].as_array().unwrap().iter().filter(|p| p["search"] == true).count();
+    assert_eq!((searched(c), searched(w)), (6, 2), "six search passes cold, two warm");
+    // Its first pass lies on a solid set at the neighbour's steady depth (in layer thicknesses)
+    // under its tip, not on the plate.
+    let depth_layers = c["layers"]["effective_thickness_m"].as_f64().unwrap()
+        / c["layers"]["layer_thickness_m"].as_f64().unwrap();
+    let first = &w["layers"]["passes"][0];
+    let depth =
+        first["effective_thickness_m"].as_f64().unwrap() / w["layers"]["layer_thickness_m"].as_f64().unwrap();
+    assert!(
+        (depth - depth_layers).abs() < 1e-9,
+        "first pass {depth} layers under the tip, neighbour's {depth_layers}"
+    );
+    let plate_floor = "plate.stl type 2 move 0 0 0.0\n";
+    assert!(std::fs::read_to_string(cold_run.join("in.pass.1")).unwrap().contains(plate_floor));
+    assert!(!std::fs::read_to_string(warm_run.join("in.pass.1")).unwrap().contains(plate_floor));
+    assert!(warm_run.join("warm-start.json").is_file());
+
+    // Killed in the warm point's third pass, then resumed with its neighbour's result gone: it
+    // goes on from the warm start it recorded and ends where the uninterrupted sweep's did.
+    let cut = dir.join("cut");
+    use std::os::unix::process::CommandExt;
+    let mut child = support::sweep_bin()
+        .args(["lds", support::p(&sweep), "--jobs", "1", "--out", support::p(&cut)])
+        .process_group(0)
+        .spawn()
+        .unwrap();
+    let warm_cut = cut.join("runs").join(warm_run.file_name().unwrap());
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(600);
+    while !warm_cut.join("in.pass.3").is_file() {
+        assert!(std::time::Instant::now() < deadline, "the warm point's pass 3 never started");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    // SAFETY: kill(2) on the child's own process group.
+    unsafe { libc::kill(-(child.id() as i32), libc::SIGKILL) };
+    let _ = child.wait();
+    let neighbour = cut.join("runs").join(cold_run.file_name().unwrap()).join("result.json");
+    std::fs::remove_file(&neighbour).unwrap();
+    let out = support::sweep(&["resume", support::p(&cut), "--jobs", "1"]);
+    assert!(out.status.code().is_some(), "{}", support::stderr(&out));
+    let resumed =
+        measured_runs(&cut).into_iter().find(|(run, _)| run.file_name() == warm_run.file_name()).unwrap().1;
+    assert_eq!(resumed["warm_start"], w["warm_start"]);
+    assert_eq!(
+        resumed["layers"]["passes"], w["layers"]["passes"],
+        "a resumed warm point ends as an uninterrupted one"
+    );
+}

@@ -172,7 +172,8 @@ pub fn passes(
     let d = scene.diameter;
     let area = plan.plate_area;
     let mut out = Vec::with_capacity(lines.len());
-    let (mut mass_before, mut floor_before, mut surface_before) = (0.0, 0.0, 0.0);
+    // A warm-started fused bed's first pass lies on the solid it was given, not the plate.
+    let (mut mass_before, mut floor_before, mut surface_before) = (0.0, plan.first_floor.unwrap_or(0.0), 0.0);
     let mut ids_before: HashSet<u64> = HashSet::new();
     let mut volume_after_first = 0.0;
     for (line, gs) in lines.iter().zip(grains) {

@@ -26,6 +26,7 @@ pub mod geometry;
 pub mod measure;
 mod plan;
 pub mod stand_in;
+pub mod warm;
 
 use plan::{derive, with_plan};
 pub use plan::{plan_of, platform_gap, Pass, Plan, Resume};
@@ -336,6 +337,25 @@ impl Layout for Layers {
         plan.last_pass = k;
         plan.by_pass = true;
         Ok(with_plan(scene, plan))
+    }
+
+    fn warm_start(
+        &self,
+        _from: &Scene,
+        from_dir: &std::path::Path,
+        to: &Scene,
+        _to_pile: &str,
+        _distance: f64,
+    ) -> Result<crate::scenes::Warm, crate::scenes::ColdStart> {
+        warm::start(from_dir, to)
+    }
+
+    fn warm_again(&self, to: &Scene, data: &str) -> Result<Scene, String> {
+        warm::again(to, data)
+    }
+
+    fn warm_start_files(&self) -> Option<crate::scenes::WarmFiles> {
+        Some(crate::scenes::WarmFiles { state: crate::point::RESULT, data: warm::WARM_DATA })
     }
 
     fn with_most_passes(&self, scene: &Scene, most: usize) -> Result<Scene, String> {

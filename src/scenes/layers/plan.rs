@@ -107,6 +107,10 @@ pub struct Plan {
     /// The fewest passes before the point may stop on its steady layer (the most: `passes`).
     #[serde(default)]
     pub least_passes: usize,
+    /// A fused bed warm-started from a finished neighbour: the solid's top under the first pass
+    /// (its depth of powder the neighbour's steady one), m; cold, the plate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub first_floor: Option<f64>,
     pub feed: Vec<FeedClass>,
     pub volume_limit: f64,
     pub distribution_seed: u64,
@@ -323,6 +327,7 @@ pub(super) fn derive(base: Base, settings: &SceneSettings) -> Scene {
         by_pass: false,
         resume: None,
         least_passes: least_passes(settings),
+        first_floor: None,
         passes,
         feed,
         volume_limit,
