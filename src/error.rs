@@ -41,6 +41,10 @@ pub enum Error {
     /// Interrupted (Ctrl-C / SIGTERM) before anything was said about it.
     #[error("interrupted")]
     Interrupted,
+    /// Interrupted (Ctrl-C / SIGTERM); the command said what stopped and the command that goes
+    /// on (`sweep extend`, `sweep bench`).
+    #[error("interrupted")]
+    InterruptedSaid,
     /// A sweep stopped by a signal; it said how far it got and how to resume.
     #[error("interrupted: {finished} of {total} points finished")]
     SweepInterrupted { finished: usize, total: usize },
@@ -58,7 +62,7 @@ impl Error {
             Error::Engine(_) => exit::ENGINE,
             Error::Internal(_) => exit::INTERNAL,
             // Death by signal n is 128 + n (SIGINT: 130, SIGTERM: 143).
-            Error::Interrupted | Error::SweepInterrupted { .. } => {
+            Error::Interrupted | Error::InterruptedSaid | Error::SweepInterrupted { .. } => {
                 crate::sys::process::interrupt_signal().map_or(exit::INTERRUPTED, |s| 128 + s)
             }
             Error::RunsFailed { .. } => exit::RUNS_FAILED,
@@ -68,7 +72,7 @@ impl Error {
     /// Whether the command has already said this on stderr (the failed runs with their reasons,
     /// how far an interrupted sweep got), so that `main` adds no line of its own.
     pub fn told(&self) -> bool {
-        matches!(self, Error::RunsFailed { .. } | Error::SweepInterrupted { .. })
+        matches!(self, Error::RunsFailed { .. } | Error::InterruptedSaid | Error::SweepInterrupted { .. })
     }
 }
 
@@ -122,6 +126,7 @@ mod tests {
         // Failed runs and a stopped sweep were reported where they happened; the rest is not.
         assert!(Error::RunsFailed { failed: 2, total: 9 }.told());
         assert!(Error::SweepInterrupted { finished: 3, total: 9 }.told());
+        assert!(Error::InterruptedSaid.told());
         assert!(!Error::Interrupted.told() && !Error::from(io()).told());
     }
 

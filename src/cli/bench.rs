@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use super::error::flag;
+use super::error::{flag, on_interrupt_say, this_command};
 use super::jobs;
 use clap::{Args, Subcommand};
 use demsweep::bench::BenchError;
@@ -296,9 +296,15 @@ pub(super) fn bench_fidelity(a: FidelityArgs) -> Result<(), Error> {
     let out = a.out.unwrap_or_else(|| PathBuf::from("runs").join(format!("{}-fidelity", sweep.file.name)));
     driver::check_out_dir(&out)?;
     demsweep::sys::process::install_interrupt_handler();
+    // The bench reads the runs it finds back: the same command goes on.
+    let said = on_interrupt_say(format!(
+        "the runs finished so far are kept in {}; `{}` goes on, reading them back",
+        demsweep::sys::shell::quote_path(&out),
+        this_command()
+    ));
     let mut contexts = Vec::new();
     for v in &variants {
-        contexts.push(PointContext::new(v.sweep.clone())?);
+        contexts.push(PointContext::new(v.sweep.clone()).map_err(&said)?);
     }
     let plan = fidelity::FidelityPlan { points, seeds: a.seeds, jobs, out };
     let cancel = CancelToken::new();
@@ -316,7 +322,7 @@ pub(super) fn bench_fidelity(a: FidelityArgs) -> Result<(), Error> {
             if r.reused { " (read back)" } else { "" }
         )
     };
-    let runs = fidelity::run(&variants, &contexts, &plan, &cancel, &show)?;
+    let runs = fidelity::run(&variants, &contexts, &plan, &cancel, &show).map_err(&said)?;
     let find = |n: &str| variants.iter().position(|v| v.name == n);
     let (cells, summaries) =
         fidelity::analyse(&runs, &variants, plan.points.len(), find("reference"), find("thesis"));
@@ -427,7 +433,13 @@ pub(super) fn bench_stability(a: StabilityArgs) -> Result<(), Error> {
         return Err(RunError::OutDir { dir: out, why: "not empty".into() }.into());
     }
     demsweep::sys::process::install_interrupt_handler();
-    let ctx = PointContext::new(sweep)?;
+    // A stability bench refuses a directory that is not empty: it starts again, it does not go on.
+    let said = on_interrupt_say(format!(
+        "the stability map was not written; its runs so far are in {0}, which a bench does not go on from: remove {0} and run `{1}` again",
+        demsweep::sys::shell::quote_path(&out),
+        this_command()
+    ));
+    let ctx = PointContext::new(sweep).map_err(&said)?;
     // Every level's scene must build (the bound aside) before anything is written.
     let plan = stability::StabilityPlan {
         corner,
@@ -466,7 +478,7 @@ pub(super) fn bench_stability(a: StabilityArgs) -> Result<(), Error> {
             r.verdict
         );
     };
-    let results = stability::run(&ctx, &plan, &cancel, &show)?;
+    let results = stability::run(&ctx, &plan, &cancel, &show).map_err(&said)?;
     let files = stability::write(&plan.out, &results, &format!("Stability map at {heading}"))?;
     let default = ctx.sweep.file.scene.rayleigh_fraction;
     let (safe, edge) = stability::edge(&results, "timestep");

@@ -37,3 +37,26 @@ impl From<CliError> for Error {
 pub(super) fn flag(given: impl Into<String>, why: impl std::fmt::Display) -> Error {
     CliError::Flag { given: given.into(), why: why.to_string() }.into()
 }
+
+/// What a command that is not a sweep's run says when a signal stops it: `note` (what stopped,
+/// the command that goes on) is also the line the interrupt's watchdog says should the process
+/// have to end before the command returns. Returns the mapping of the command's error: an
+/// interruption said once, as `interrupted: NOTE`, not a bare `error: interrupted`.
+pub(super) fn on_interrupt_say(note: String) -> impl Fn(Error) -> Error {
+    demsweep::sys::process::on_interrupt_say(note.clone());
+    move |e| match e {
+        Error::Interrupted => {
+            eprintln!("interrupted: {note}");
+            Error::InterruptedSaid
+        }
+        e => e,
+    }
+}
+
+/// The command line as typed, `sweep` and its arguments quoted for a shell: the command that
+/// goes on where running it again resumes (an interrupted `sweep bench fidelity`).
+pub(super) fn this_command() -> String {
+    let args: Vec<String> =
+        std::env::args().skip(1).map(|a| demsweep::sys::shell::quote(&a).into_owned()).collect();
+    format!("sweep {}", args.join(" "))
+}

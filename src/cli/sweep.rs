@@ -381,6 +381,16 @@ pub(super) fn extend(a: ExtendArgs) -> Result<(), Error> {
     }
     let jobs = super::jobs(a.jobs)?;
     demsweep::sys::process::install_interrupt_handler();
+    let dir = demsweep::sys::shell::quote_path(&a.dir).into_owned();
+    // The same extension goes on: the points extended keep their extension.
+    let again = match (a.passes, a.se) {
+        (Some(n), _) => format!("sweep extend {dir} --passes {n}"),
+        (None, Some(se)) => format!("sweep extend {dir} --se {se}"),
+        (None, None) => format!("sweep extend {dir}"),
+    };
+    let said = super::error::on_interrupt_say(format!(
+        "the points not extended keep their results; `{again}` goes on"
+    ));
     let cancel = CancelToken::new();
     let quiet = a.quiet;
     let say = |line: &str| {
@@ -393,8 +403,7 @@ pub(super) fn extend(a: ExtendArgs) -> Result<(), Error> {
         Some(n) => Extension::Passes(n),
         None => Extension::Se(a.se),
     };
-    let s = extend_sweep(&a.dir, how, jobs, &cancel, &say)?;
-    let dir = demsweep::sys::shell::quote_path(&a.dir).into_owned();
+    let s = extend_sweep(&a.dir, how, jobs, &cancel, &say).map_err(&said)?;
     let mut parts = if s.by_pass {
         vec![format!("{} steady now ({:.0} CPU s)", s.extended, s.cpu_s), format!("{} steady already", s.met)]
     } else {
@@ -431,8 +440,7 @@ pub(super) fn extend(a: ExtendArgs) -> Result<(), Error> {
         );
     }
     if s.interrupted {
-        eprintln!("interrupted: the points not extended keep their results; `sweep extend {dir}` goes on");
-        return Err(Error::Interrupted);
+        return Err(said(Error::Interrupted));
     }
     println!("next: sweep report {dir}");
     if s.failed > 0 {

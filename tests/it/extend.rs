@@ -194,7 +194,12 @@ fn an_interrupted_extend_leaves_every_result_whole_and_goes_on_when_run_again() 
     unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
     let o = child.wait_with_output().unwrap();
     assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
-    assert!(stderr(&o).contains("`sweep extend"), "{}", stderr(&o));
+    // What stopped and the same extension to go on, said once (not a bare "error: interrupted").
+    let said = format!(
+        "interrupted: the points not extended keep their results; `sweep extend {} --se {se_flag}` goes on",
+        support::p(&dir)
+    );
+    assert!(stderr(&o).contains(&said) && !stderr(&o).contains("error: interrupted"), "{}", stderr(&o));
     // Every result is whole: the earlier one, or one extended before the signal.
     for (i, r) in results(&dir).iter().enumerate() {
         if r["extensions"].is_null() {

@@ -385,3 +385,51 @@ fn an_interrupt_during_the_final_report_ends_the_process_within_its_grace() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(out.join("report/report.html").exists());
 }
+
+/// `sweep bench` stopped by SIGINT in a run says what stopped and the command that goes on, once,
+/// not a bare `error: interrupted`: the fidelity bench reads its finished runs back, so the same
+/// command goes on; the stability bench refuses a directory that is not empty, so it starts again.
+#[test]
+fn an_interrupted_bench_says_what_stopped_and_the_command_that_goes_on() {
+    let tmp = tempfile::tempdir().unwrap();
+    let started = tmp.path().join("started");
+    // `-h` answers as LIGGGHTS; a run marks that it started, then waits to be stopped.
+    let engine = support::fake_engine(tmp.path(), &format!("touch {}\nexec sleep 1000", p(&started)));
+    let file = support::engine_sweep(tmp.path(), "bench", p(&engine), 4, 4, "");
+    for (bench, flags, says) in [
+        (
+            "fidelity",
+            &["--points", "1", "--seeds", "1", "--presets", "fast"][..],
+            "goes on, reading them back",
+        ),
+        (
+            "stability",
+            &["--seeds", "1", "--ladder", "timestep", "--fractions", "0.1,0.2"][..],
+            "run `sweep bench",
+        ),
+    ] {
+        let out = tmp.path().join(bench);
+        let _ = std::fs::remove_file(&started);
+        let child = support::sweep_bin()
+            .args(["bench", bench, p(&file)])
+            .args(flags)
+            .args(["--jobs", "1", "--out", p(&out)])
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        wait_until("a bench run to start", support::GUARD, || started.exists());
+        // SAFETY: signalling the child we spawned.
+        unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+        let o = child.wait_with_output().unwrap();
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(130), "{bench}: {err}");
+        assert!(!err.contains("error: interrupted"), "{bench}: {err}");
+        // Said by the command or, had the process to end first, by the interrupt's watchdog.
+        let line =
+            err.lines().find(|l| l.starts_with("interrupted")).unwrap_or_else(|| panic!("{bench}: {err}"));
+        assert!(line.contains(&format!("`sweep bench {bench} ")) && line.contains(says), "{bench}: {line}");
+        assert!(line.contains(p(&out)), "{bench}: names where its runs are: {line}");
+    }
+}
