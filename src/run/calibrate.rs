@@ -472,10 +472,29 @@ pub fn start<E: Executor>(
         return Err(RunError::OutDir { dir: out.to_path_buf(), why }.into());
     }
     super::create(sweep, design, out, exec, opts.progress, cancel)?;
+    name_first_batch(out)?;
     let text = serde_json::to_string_pretty(settings).expect("settings serialise");
     crate::sys::atomic::write(&out.join(SETTINGS), text.as_bytes())
         .map_err(|e| RunError::Write { path: out.join(SETTINGS), source: e })?;
     run(out, exec, opts, watch, cancel)
+}
+
+/// What a calibration's batches are labelled: `calibrate 44`, the space of its first 44 points.
+const BATCH: &str = "calibrate";
+
+/// Name the first batch as the later ones are named, `calibrate N`, not `adapt N` after the
+/// adaptive design that plans it (a calibration's first batch was shown as "adapt 40"). A
+/// directory made before is renamed alike when it runs again: a label is shown and matched
+/// within one process, never parsed, so nothing read from it changes.
+fn name_first_batch(out: &Path) -> Result<()> {
+    Store::open(out).update_manifest(|now| -> Result<Option<(Manifest, String)>> {
+        let Some((mut m, toml)) = now else { return Ok(None) };
+        let Some(first) = m.spaces.first_mut() else { return Ok(None) };
+        let Some(n) = first.label.strip_prefix("adapt ") else { return Ok(None) };
+        first.label = format!("{BATCH} {n}");
+        Ok(Some((m, toml)))
+    })?;
+    Ok(())
 }
 
 /// Run a calibration directory until its credible region stops shrinking, `max` points have
@@ -551,7 +570,7 @@ fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &CalibrationWatch, ran: u
         exec,
         &manifest,
         &planned,
-        "calibrate",
+        BATCH,
         |_| false,
         |rows| write_batches(dir, &sweep, label, k + 1, rows),
     )

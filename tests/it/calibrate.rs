@@ -212,6 +212,11 @@ fn one_free_parameter_is_recovered_and_drawn_as_a_curve() {
     let targets = [format!("angle_of_repose={}±0.5", truth().mean_angle())];
     let o = calibrate(&file, &out, &targets, &["--first", "8", "--batch", "2", "--max", "20"]);
     assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    // Every batch is labelled as the calibration's, the first (8 settings × 2 seeds) too: it
+    // was "adapt 16", after the design that plans it.
+    let (manifest, _) = demsweep::store::Store::read_manifest(&out).unwrap();
+    let labels: Vec<&str> = manifest.spaces.iter().map(|s| s.label.as_str()).collect();
+    assert!(labels[0] == "calibrate 16" && labels.iter().all(|l| l.starts_with("calibrate ")), "{labels:?}");
     let par = &posterior(&out)["parameters"][0];
     let (lo, hi) = (par["lo"].as_f64().unwrap(), par["hi"].as_f64().unwrap());
     // The stand-in's heap scatters by 1° between seeds against a target of ±0.5°: pinned to
