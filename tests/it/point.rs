@@ -7,7 +7,7 @@ use std::process::Command;
 
 use serde_json::Value;
 
-use crate::support::{self, p, run_point};
+use crate::support::{self, assert_measured, p, run_point, Measured};
 
 /// A sweep file over the thesis's D and gap ranges at μ = 0.3, v = 1.6 m/s, written to `dir`.
 fn thesis_space(dir: &Path) -> PathBuf {
@@ -34,12 +34,29 @@ fn filled_layers(r: &Value) -> usize {
 /// within three times the counting noise 1/√n of the n particles counted when that is larger.
 const FLUX_AGREEMENT: f64 = 0.10;
 
-fn assert_open_case(r: &Value, what: &str) {
+/// MFRs of [`thesis_space`]'s points, from `sweep run SPACE --set diameter=D,gap=G --seeds 5`
+/// (seeds 12345–12349, the first the file's; LIGGGHTS 3.8, 2026-12-06). The lab-frame scene
+/// reports no SE of its own: the seeds' SD is the noise.
+///
+/// D 2 mm, gap 4 mm: 0.0591, 0.0756, 0.0653, 0.0705, 0.0611.
+const D2_GAP4: Measured = Measured { mean: 0.0663, sd: 0.0068 };
+/// D 1 mm, gap 5 mm: 0.0460, 0.0526, 0.0443, 0.0489, 0.0448.
+const D1_GAP5: Measured = Measured { mean: 0.0473, sd: 0.0035 };
+/// D 3 mm, gap 5 mm: 0.1156, 0.1057, 0.0796, 0.1119, 0.0821.
+const D3_GAP5: Measured = Measured { mean: 0.0990, sd: 0.0170 };
+/// D 1 mm, gap 1 mm (a sphere passes from a pocket at a time): 0.0104, 0.0083, 0.0124, 0.0124,
+/// 0.0062.
+const D1_GAP1: Measured = Measured { mean: 0.0099, sd: 0.0027 };
+/// The thesis's layout at D 3 mm, gap 4 mm, from its test's sweep file below (`--set gap=4
+/// --seeds 5`): 0.1168, 0.1417, 0.1152 (seed 12347, failed as unsteady: its measured MFR),
+/// 0.1168, 0.1261.
+const THESIS_GAP4: Measured = Measured { mean: 0.1233, sd: 0.0111 };
+
+fn assert_open_case(r: &Value, m: &Measured, what: &str) {
     let (mfr, flux) = (r["mfr"].as_f64().unwrap(), r["mfr_flux"].as_f64().unwrap());
     let n = r["mfr_particles"].as_u64().unwrap() as f64;
     assert!(mfr > 0.0, "{what}: MFR {mfr}");
-    // MFR is the layer's packing fraction over the gap: it cannot exceed random close packing.
-    assert!(mfr < 0.64, "{what}: MFR {mfr} above random close packing");
+    assert_measured(mfr, 0.0, m, what);
     let tolerance = FLUX_AGREEMENT.max(3.0 / n.sqrt());
     assert!((mfr - flux).abs() <= tolerance * mfr, "{what}: MFR {mfr} vs flux {flux} ({n} counted)");
 }
@@ -50,7 +67,7 @@ fn gap_of_two_diameters_flows_and_fills_the_profile() {
     let dir = tempfile::tempdir().unwrap();
     let (code, r, err) = run_point(&thesis_space(dir.path()), "diameter=2,gap=4");
     assert_eq!(code, 0, "{err}");
-    assert_open_case(&r, "D = 2 mm, gap = 4 mm");
+    assert_open_case(&r, &D2_GAP4, "D = 2 mm, gap = 4 mm");
     assert!(filled_layers(&r) >= 6, "v_x profile: {}", r["vx"]);
     // Every filled layer in front of the blade moves forward, no faster than ~the blade.
     for v in r["vx"].as_array().unwrap().iter().filter_map(Value::as_f64) {
@@ -79,14 +96,15 @@ fn thesis_corners_run_without_errors_or_lost_atoms() {
             assert_eq!(mfr, 0.0, "D = {d}, gap = {gap}");
             assert_eq!(r["mfr_flux"].as_f64().unwrap(), 0.0);
         } else if gap > d {
-            assert_open_case(&r, &format!("D = {d}, gap = {gap}"));
+            let m = if d == 1.0 { &D1_GAP5 } else { &D3_GAP5 };
+            assert_open_case(&r, m, &format!("D = {d}, gap = {gap}"));
         } else {
             // Between: a particle passes only from a pocket of the substrate, one at a time or
             // none, as the pile's seed has it. Whatever passed is counted alike by the deposit
-            // and the flux, and stays below random close packing.
+            // and the flux, and stays near what the seeds measured.
             let what = format!("D = {d}, gap = {gap}");
             let (flux, n) = (r["mfr_flux"].as_f64().unwrap(), r["mfr_particles"].as_u64().unwrap() as f64);
-            assert!(mfr < 0.64, "{what}: MFR {mfr} above random close packing");
+            assert_measured(mfr, 0.0, &D1_GAP1, &what);
             if mfr == 0.0 {
                 assert_eq!(flux, 0.0, "{what}: nothing deposited, yet a flux {flux}");
             } else {
@@ -284,10 +302,10 @@ fn the_thesis_layout_runs_on_a_smooth_plate() {
     // The first scene's flow decays over the window; its run is either steady or reported
     // unsteady with what it measured, never silently averaged.
     match code {
-        0 => assert_open_case(&r, "thesis layout"),
+        0 => assert_open_case(&r, &THESIS_GAP4, "thesis layout"),
         1 => {
             assert_eq!(r["class"], "unsteady", "{r}");
-            assert_open_case(&r["measured"], "thesis layout, unsteady");
+            assert_open_case(&r["measured"], &THESIS_GAP4, "thesis layout, unsteady");
         }
         _ => panic!("{err}\n{r}"),
     }

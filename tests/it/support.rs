@@ -442,6 +442,27 @@ pub fn dead_pid() -> u32 {
     pid
 }
 
+/// A point's MFR measured over pile seeds (`sweep run FILE --set … --seeds 5`): their mean and
+/// standard deviation. A regression test's reference: one run is one seed's draw from it.
+pub struct Measured {
+    pub mean: f64,
+    pub sd: f64,
+}
+
+/// MFR within 4 noise of the seeds' mean, the noise the larger of their SD and the run's own SE
+/// `se` (0 where the scene reports none): a run that far off happens about once in 16,000 by
+/// chance, and a change that moves MFR further is caught (the former bound, MFR under random
+/// close packing's 0.64, let through any MFR up to 5–60 times the measured ones).
+pub fn assert_measured(mfr: f64, se: f64, m: &Measured, what: &str) {
+    let noise = m.sd.max(se);
+    assert!(
+        (mfr - m.mean).abs() <= 4.0 * noise,
+        "{what}: MFR {mfr} ± {se} against {} ± {} (SD over the seeds measured)",
+        m.mean,
+        m.sd
+    );
+}
+
 /// A claim in `runs/<hash>/claim` as another process wrote it.
 pub fn plant_claim(d: &Path, hash: &str, host: &str, pid: u32, claimed_at: f64, lease: Option<(f64, f64)>) {
     let mut c = serde_json::json!({

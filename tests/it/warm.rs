@@ -92,7 +92,12 @@ fn a_point_starts_from_its_finished_neighbour_and_keeps_its_hash() {
         cold["mfr"].as_f64().unwrap(),
         cold["mfr_se"].as_f64().unwrap(),
     );
-    assert!((a - b).abs() <= 4.0 * sa.hypot(sb) + 0.1 * b, "warm {a} ± {sa}, cold {b} ± {sb}");
+    // Within 4.5 combined SE. On docs/study/warm-start's thesis space (20 flowing points run
+    // warm on the defaults and cold, record/thesis-{scaled,cold}.tar.gz), z = ΔMFR / combined SE
+    // had mean +0.14, SD 1.38 and at most 3.92: 4.5 is over 3 SD of z and past the worst; the
+    // relative difference, +1.3 ± 2.2 %, shows no bias to allow for. (The bound was 4 SE + 10 %
+    // of MFR, about 38 % at the 5 % target.)
+    assert!((a - b).abs() <= 4.5 * sa.hypot(sb), "warm {a} ± {sa}, cold {b} ± {sb}");
     // The warm start cut the transient: fewer blocks dropped before its window than from rest.
     // (Not its total steps: the stop rule may want a longer window after a shorter warm-up, and
     // at this point it did once, 27 + 26 blocks against 45 + 8.)
