@@ -364,6 +364,7 @@ mod tests {
                 effective_thickness_se_m: 7e-7,
                 covered_fraction: 0.84,
                 roughness_d: 0.5,
+                numerical_error: None,
             })),
             ..RunResult::default()
         };

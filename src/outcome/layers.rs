@@ -73,6 +73,34 @@ pub struct LayerSeries {
     pub covered_fraction: f64,
     #[serde(deserialize_with = "super::nan_if_null")]
     pub roughness_d: f64,
+    /// How far the scene's numerical choices may move the steady layer, beside its SE (not in
+    /// it): `None` in a result written before it was stated.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub numerical_error: Option<NumericalError>,
+}
+
+/// The numerical error of a steady layer: each numerical choice's measured move
+/// (`crate::scenes::layers::numerics`) and their root sum of squares.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NumericalError {
+    /// Of the packing (and the relative density), absolute.
+    pub packing: f64,
+    /// Of the depth under the blade, as a fraction of it.
+    pub depth_fraction: f64,
+    /// Of the covered fraction, absolute.
+    pub covered_fraction: f64,
+    pub terms: Vec<NumericalTerm>,
+    /// The choices whose move at this scene's value was not measured.
+    pub unmeasured: Vec<String>,
+}
+
+/// One numerical choice's measured move of the steady layer.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NumericalTerm {
+    pub choice: String,
+    pub packing: f64,
+    pub depth_fraction: f64,
+    pub covered_fraction: f64,
 }
 
 #[cfg(test)]

@@ -487,6 +487,7 @@ mod tests {
                 effective_thickness_se_m: 7e-7,
                 covered_fraction: covered,
                 roughness_d: 0.5,
+                numerical_error: None,
             };
             let result = crate::outcome::RunResult {
                 mfr: packing,

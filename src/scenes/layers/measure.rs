@@ -249,6 +249,7 @@ pub fn steady_layer(plan: &Plan, passes: Vec<PassRecord>) -> LayerSeries {
         covered_fraction: pick(&|p| p.covered_fraction, 0.0).0,
         roughness_d: pick(&|p| p.roughness_d, 0.0).0,
         passes,
+        numerical_error: None,
     }
 }
 
@@ -382,7 +383,10 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         .collect::<Result<_, _>>()
         .map_err(|e| Rejected::new(FailureClass::Unparsable, e))?;
     let solids = parse_solids(&run.run.log);
-    let series = steady_layer(&plan, passes(scene, &plan, &lines, &solids, &grains));
+    let series = LayerSeries {
+        numerical_error: Some(super::numerics::of(scene, &plan)),
+        ..steady_layer(&plan, passes(scene, &plan, &lines, &solids, &grains))
+    };
     let (answer, answer_se) = if plan.fused {
         (series.packing, series.packing_se)
     } else {

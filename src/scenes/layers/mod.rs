@@ -24,6 +24,7 @@
 
 pub mod geometry;
 pub mod measure;
+pub mod numerics;
 mod plan;
 pub mod stand_in;
 pub mod warm;
@@ -399,12 +400,16 @@ impl Layout for Layers {
         let l = r.layers.as_ref()?;
         Some(format!(
             // To 0.1 µm: a steady depth's SE is often under a micrometre, and "± 0" says nothing.
-            "{:.1} ± {:.1} µm of powder under the blade ({:.1} × the layer thickness), steady from pass {} of {}",
+            "{:.1} ± {:.1} µm of powder under the blade ({:.1} × the layer thickness), steady from pass {} of {}{}",
             l.effective_thickness_m * 1e6,
             l.effective_thickness_se_m * 1e6,
             l.effective_thickness_m / l.layer_thickness_m,
             l.steady_from,
-            l.passes.len()
+            l.passes.len(),
+            l.numerical_error.as_ref().map_or(String::new(), |e| format!(
+                "; numerical error {}",
+                numerics::summary(e, l.effective_thickness_m)
+            ))
         ))
     }
 
@@ -428,6 +433,24 @@ impl Layout for Layers {
             l.covered_fraction,
             l.roughness_d
         ));
+        if let Some(e) = &l.numerical_error {
+            lines.push(format!(
+                "numerical error  {} (beside the SE, not in it)",
+                numerics::summary(e, l.effective_thickness_m)
+            ));
+            for t in &e.terms {
+                lines.push(format!(
+                    "                 {}: packing {:.3}, depth {:.1} %, cover {:.2}",
+                    t.choice,
+                    t.packing,
+                    100.0 * t.depth_fraction,
+                    t.covered_fraction
+                ));
+            }
+            if !e.unmeasured.is_empty() {
+                lines.push(format!("                 not measured: {}", e.unmeasured.join(", ")));
+            }
+        }
         lines.push("pass  deposit µm  rel. density  depth µm  packing  covered  rough D".into());
         for p in &l.passes {
             lines.push(format!(

@@ -164,6 +164,7 @@ fn series_result(point: &StandInPoint, plan: &Plan, passes: Vec<PassRecord>, fir
         covered_fraction: over(|p| p.covered_fraction).0,
         roughness_d: over(|p| p.roughness_d).0,
         passes,
+        numerical_error: Some(super::numerics::of(point.scene, plan)),
     };
     let answer = |p: &PassRecord| if plan.fused { p.packing } else { p.relative_density };
     let (mfr, mfr_se) =
