@@ -109,13 +109,20 @@ fn one_point_under_each_preset_is_measured_against_the_reference_and_read_back_o
     assert!(deck.contains("The thesis's full traverse"), "{deck}");
     let fast_dir = out.join("runs").join(&by["fast"]["hash"]);
     assert!(!fast_dir.join("dump.full").exists());
-    // Errors against the reference: zero for itself; for the others within 60 % of the
-    // reference's MFR. The presets' worst over 16 runs was 0.017 at MFR ≈ 0.07, one point
-    // scatters seed to seed by up to 23 % (docs/fidelity.md), and the thesis preset was seen
-    // 0.030 (42 %) off at this point; a preset that doubles or zeroes MFR fails (the former
-    // bound, 0.05, let an MFR of zero pass).
+    // Errors against the reference: zero for itself; for the others within the presets' measured
+    // bias and the scatter of a one-seed difference. `sweep bench fidelity space.toml --points 1
+    // --seeds 3` of this file (seeds 12345–12347, LIGGGHTS 3.8, 2026-12-06) gave MFR fast 0.0554,
+    // 0.0626, 0.0447; reference 0.0547, 0.0596, 0.0586; thesis 0.0645, 0.0609, 0.0645: a pooled
+    // SD between seeds of 0.0055 (6 df), so 0.0078 for the difference of two one-seed runs, and
+    // biases against the reference of −0.0034 ± 0.0054 (fast) and +0.0056 ± 0.0019 (thesis).
+    // The bound is the larger bias and 3 SD of the difference: 0.0056 + 3 × 0.0078 = 0.029, about
+    // half the reference's MFR — a one-seed comparison at this point cannot be held tighter. (It
+    // was 60 % of the reference's MFR; a preset that doubles or zeroes MFR fails either way.)
+    const WORST_ERROR: f64 = 0.029;
     let ref_mfr = reference["mfr"].as_f64().unwrap();
-    assert!(ref_mfr > 0.02, "the reference point flows: MFR {ref_mfr}");
+    // The reference flows as it did on those seeds (mean 0.0577, the pooled SD for its noise).
+    let measured = support::Measured { mean: 0.0577, sd: 0.0055 };
+    support::assert_measured(ref_mfr, 0.0, &measured, "the reference point");
     let summary = rows(&out.join("fidelity-summary.csv"));
     assert_eq!(summary.len(), 3);
     for s in &summary {
@@ -124,7 +131,7 @@ fn one_point_under_each_preset_is_measured_against_the_reference_and_read_back_o
             assert_eq!(worst, 0.0);
             assert_eq!(s["speedup_vs_reference"], "1.00");
         } else {
-            assert!(worst <= 0.6 * ref_mfr, "{s:?} against the reference's MFR {ref_mfr}");
+            assert!(worst <= WORST_ERROR, "{s:?} against the reference's MFR {ref_mfr}");
         }
         assert!(s["speedup_vs_thesis"].parse::<f64>().unwrap() > 0.0);
     }
