@@ -515,7 +515,8 @@ fn a_fused_bed_warm_started_from_its_neighbour_searches_from_its_depth_and_resum
     assert_eq!(w["warm_start"]["from"], c["hash"]);
     let searched =
         |r: &Value| r["layers"]["passes"].as_array().unwrap().iter().filter(|p| p["search"] == true).count();
-    assert_eq!((searched(c), searched(w)), (6, 2), "six search passes cold, two warm");
+    let warm_search = demsweep::scenes::layers::warm::WARM_SEARCH_PASSES;
+    assert_eq!((searched(c), searched(w)), (6, warm_search), "six search passes cold, fewer warm");
     // Its first pass lies on a solid set at the neighbour's steady depth (in layer thicknesses)
     // under its tip, not on the plate.
     let depth_layers = c["layers"]["effective_thickness_m"].as_f64().unwrap()

@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# The machine's question as a sweep: sweeps/ti64-layers.toml on its 3-level lattice (30, 55,
+# 80 µm × 0.05, 0.1, 0.2 m/s; nine points, the shipped file, no hand-set key), one point at a
+# time so that each later point warm-starts from its finished neighbours. Resumable: run it
+# again and it goes on (each point from its last pass). Every finished point's result and each
+# pass's record are copied to record/machine-lattice/ as they land, so a session that stops
+# keeps what ran.
+#   nice bash docs/study/layers/machine-lattice.sh
+set -euo pipefail
+cd "$(dirname "$0")/../../.."
+sweep=${SWEEP:-target/release/sweep}
+dir=runs/machine-lattice
+out=docs/study/layers/record/machine-lattice
+mkdir -p "$out"
+copy() {
+  for run in "$dir"/runs/*/; do
+    [ -d "$run" ] || continue
+    h=$(basename "$run"); mkdir -p "$out/$h"
+    cp "$run"/pass.*.json "$run"/result.json "$run"/failure.json "$run"/warm-start.json "$out/$h/" 2>/dev/null || true
+  done
+}
+( while sleep 60; do copy; done ) &
+copier=$!
+trap 'kill $copier 2>/dev/null || true; copy' EXIT
+if [ -f "$dir/manifest.json" ]; then
+  "$sweep" resume "$dir" --jobs 1 || true
+else
+  "$sweep" lattice sweeps/ti64-layers.toml --levels 3 --jobs 1 --out "$dir" || true
+fi
+cp "$dir"/summary.json "$dir"/results.csv "$out/" 2>/dev/null || true
