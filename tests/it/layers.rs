@@ -55,10 +55,10 @@ fn each_layer_lies_on_the_one_before_and_the_platform_drops_by_the_layer_thickne
     }
 
     let (code, r, stderr) = run_point(&sweep, "blade_speed=0.5");
-    // A 4-pass bed may not yet be steady; its passes are measured either way.
-    let layers: &Value = if code == 0 { &r["layers"] } else { &r["measured"]["layers"] };
-    assert!(layers.is_object(), "exit {code}: {stderr}\n{r}");
-    let passes = layers["passes"].as_array().unwrap();
+    // Four passes of this loose bed are steady from pass 2 (its record: packing 0.22 ± 0.02): a
+    // run that failed fails the test, whatever its passes measured.
+    assert_eq!(code, 0, "the run failed: {}\n{stderr}", r["reason"]);
+    let passes = r["layers"]["passes"].as_array().unwrap_or_else(|| panic!("no passes: {r}"));
     assert_eq!(passes.len(), 4);
     let f = |p: &Value, k: &str| p[k].as_f64().unwrap_or_else(|| panic!("{k} in {p}"));
     for p in passes {
@@ -85,12 +85,14 @@ fn a_fused_bed_s_search_pass_sets_the_next_depth_by_its_deposit_and_the_layers_a
     );
     let (_tmp, dir) = support::cwd();
     // The round blade (the machine sweeps'), which no other LIGGGHTS test spreads with.
-    let sweep = bed(&dir, "bed = \"fused\"\nlayers = 4\nsearch_passes = 1\nblade_profile = \"round\"");
+    // Six passes: with four the steady layer had two passes after its transient, too few, and
+    // the run failed as unsteady; with six it is steady from pass 4 (10.5 CPU s).
+    let sweep = bed(&dir, "bed = \"fused\"\nlayers = 6\nsearch_passes = 1\nblade_profile = \"round\"");
     let (code, r, stderr) = run_point(&sweep, "blade_speed=0.5");
-    let layers: &Value = if code == 0 { &r["layers"] } else { &r["measured"]["layers"] };
-    assert!(layers.is_object(), "exit {code}: {stderr}\n{r}");
-    let passes = layers["passes"].as_array().unwrap();
-    assert_eq!(passes.len(), 4);
+    assert_eq!(code, 0, "the run failed: {}\n{stderr}", r["reason"]);
+    let layers = &r["layers"];
+    let passes = layers["passes"].as_array().unwrap_or_else(|| panic!("no passes: {r}"));
+    assert_eq!(passes.len(), 6);
     let f = |k: usize, key: &str| passes[k - 1][key].as_f64().unwrap_or_else(|| panic!("{key} in {r}"));
     let t = 3e-3;
     assert_eq!(passes[0]["search"], true, "{r}");
@@ -102,7 +104,7 @@ fn a_fused_bed_s_search_pass_sets_the_next_depth_by_its_deposit_and_the_layers_a
     let asked = (f(1, "effective_thickness_m") * t / counted).clamp(t, 20.0 * t);
     assert!((f(2, "effective_thickness_m") - asked).abs() < 1e-9, "asked {asked}: {r}");
     // Then layers on the one before: the solid rises by each deposit, the platform by a drop.
-    for k in 3..=4 {
+    for k in 3..=6 {
         let expected = f(k - 1, "effective_thickness_m") + t - f(k - 1, "deposit_m");
         assert!((f(k, "effective_thickness_m") - expected).abs() < 1e-9, "pass {k}: {r}");
     }
@@ -111,12 +113,15 @@ fn a_fused_bed_s_search_pass_sets_the_next_depth_by_its_deposit_and_the_layers_a
 }
 
 #[test]
-fn a_layers_lattice_reports_every_point_done_or_failed_and_answers_in_the_layer_s_terms() {
+fn a_layers_lattice_runs_every_point_to_its_steady_layer_and_answers_in_the_layer_s_terms() {
     support::require_liggghts!(
-        "a_layers_lattice_reports_every_point_done_or_failed_and_answers_in_the_layer_s_terms"
+        "a_layers_lattice_runs_every_point_to_its_steady_layer_and_answers_in_the_layer_s_terms"
     );
     let (_tmp, dir) = support::cwd();
-    let sweep = bed(&dir, "bed = \"fused\"\nlayers = 5\nsearch_passes = 1");
+    // A loose bed, five passes: both corners (0.2 and 0.8 m/s) steady, 14 CPU s. (A fused bed of
+    // five passes was steady at neither: two passes after the transient at 0.2 m/s, and at
+    // 0.8 m/s the bed fell behind, each pass leaving 0.39 of the drop.)
+    let sweep = bed(&dir, "layers = 5");
     let out = support::sweep(&[
         "lattice",
         support::p(&sweep),
@@ -132,17 +137,17 @@ fn a_layers_lattice_reports_every_point_done_or_failed_and_answers_in_the_layer_
     let summary: Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("s/summary.json")).unwrap()).unwrap();
     let counts = &summary["counts"];
-    assert_eq!(counts["done"].as_u64().unwrap() + counts["failed"].as_u64().unwrap(), 2, "{counts}");
+    // Both points done: a failed run fails the test, with the failures the summary counts.
+    assert_eq!(counts["done"].as_u64().unwrap(), 2, "{counts}\n{stderr}");
     let recommended =
         stdout.lines().find(|l| l.starts_with("recommended:")).unwrap_or_else(|| panic!("{stdout}"));
-    // Done or not, the setup speaks of a bed dosed pass by pass: no initial pile, no window of
-    // travel, no MFR.
+    // The setup speaks of a bed dosed pass by pass: no initial pile, no window of travel, no MFR.
     let page = std::fs::read_to_string(dir.join("s/report/report.html")).unwrap();
     for pile in ["initial pile", "measured over", "MFR = 0"] {
         assert!(!page.contains(pile), "the layers report says {pile:?}");
     }
     // The centre sentence counts a pass's dose, not every dose's particles as one number.
-    assert!(page.contains("5 passes of ") && page.contains(" particles' dose onto a fused bed"), "centre");
+    assert!(page.contains("5 passes of ") && page.contains(" particles' dose onto a loose bed"), "centre");
     // Its setup lists what a layers point reads: the layer thickness, not the gap above a plate,
     // a held heap's height, a mono-sized powder's Weibull parameters, the plate's substrate or the
     // v_x band in front of the blade.
@@ -156,26 +161,14 @@ fn a_layers_lattice_reports_every_point_done_or_failed_and_answers_in_the_layer_
     for row in [r#"<th class="l">substrate</th>"#, "v_x band"] {
         assert!(!page.contains(row), "the layers report lists {row:?}");
     }
-    if counts["done"].as_u64().unwrap() > 0 {
-        assert!(recommended.contains("steady-layer packing"), "{recommended}");
-        assert!(recommended.contains("µm of powder under the blade"), "{recommended}");
-        // The page speaks of what was measured: its statistics, distribution and emulator are of
-        // the packing, not of an MFR no layers run measures.
-        let html = std::fs::read_to_string(dir.join("s/report/report.html")).unwrap();
-        assert!(
-            html.contains("steady-layer packing of the runs")
-                || html.contains("steady-layer packing distribution")
-        );
-        for mfr in ["MFR distribution", "Emulator of MFR", "statistic of MFR", "<th>MFR"] {
-            assert!(!html.contains(mfr), "the layers report says {mfr:?}");
-        }
-    } else {
-        assert!(recommended.contains("no point is done: 2 failed"), "{recommended}");
-        let html = std::fs::read_to_string(dir.join("s/report/report.html")).unwrap();
-        assert!(
-            html.contains("No steady-layer packing was measured"),
-            "the layers report names another measure"
-        );
+    // A loose bed is judged by its relative density (a fused one by its packing), in the answer
+    // and on the page: its statistics and distribution are of it, not of an MFR no layers run
+    // measures.
+    assert!(recommended.contains("steady-layer relative density"), "{recommended}");
+    assert!(recommended.contains("µm of powder under the blade"), "{recommended}");
+    assert!(page.contains("steady-layer relative density distribution"), "no distribution of the measure");
+    for mfr in ["MFR distribution", "Emulator of MFR", "statistic of MFR", "<th>MFR"] {
+        assert!(!page.contains(mfr), "the layers report says {mfr:?}");
     }
 }
 
@@ -238,8 +231,7 @@ friction        = 0.3
 restitution     = 0.4
 [scene]
 layout = "layers"
-bed = "fused"
-layers = 2
+layers = 5
 plate_diameters = 10
 "#,
     );
@@ -255,7 +247,7 @@ plate_diameters = 10
         it.next().unwrap().parse().unwrap()
     };
     let inserts: Vec<&str> = input.lines().filter(|l| l.contains("insert/pack")).collect();
-    assert_eq!(inserts.len(), 2, "one dose a pass");
+    assert_eq!(inserts.len(), 5, "one dose a pass");
     for line in &inserts {
         let fraction = word_after(line, "volumefraction_region");
         assert!(fraction > 0.0 && fraction < 0.3, "{line}");
@@ -270,12 +262,13 @@ plate_diameters = 10
     let depth: f64 = depth.parse().unwrap();
     assert!(depth < 10.0 * 40e-6, "depth {depth}");
 
+    // A loose bed, five passes: steady from pass 3 (7.4 CPU s). Two passes of a fused bed, as
+    // this test ran, are never steady (it read the failed run's passes); and a fused bed of this
+    // powder at 0.1 m/s falls behind, each pass leaving 0.54 of the drop (0.61 at twice the dose).
     let (code, r, stderr) = run_point(&sweep, "blade_speed=0.1");
-    // Two passes are too few for a steady layer; both are measured either way.
-    let layers: &Value = if code == 0 { &r["layers"] } else { &r["measured"]["layers"] };
-    assert!(layers.is_object(), "exit {code}: {stderr}\n{r}");
-    let passes = layers["passes"].as_array().unwrap();
-    assert_eq!(passes.len(), 2, "{r}");
+    assert_eq!(code, 0, "the run failed: {}\n{stderr}", r["reason"]);
+    let passes = r["layers"]["passes"].as_array().unwrap_or_else(|| panic!("no passes: {r}"));
+    assert_eq!(passes.len(), 5, "{r}");
     for p in passes {
         assert!(p["particles"].as_u64().unwrap() > 0, "the pass deposited nothing: {p}");
         assert!(p["deposit_m"].as_f64().unwrap() > 0.0, "{p}");
