@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# "A pass is its crossing" (issue 67): each cut of a layers pass measured alone against the
+# baseline, a whole point each (it stops once steady), one LIGGGHTS run at a time:
+#   machine — sweeps/ti64-layers.toml at 50 µm and 0.1 m/s (the shipped file, no hand-set key);
+#   PS1     — sweeps/layers-gaboriault.toml at 0.1 m/s, Gaboriault et al.'s PS1 (the file's own
+#             friction 0.20, rolling 0.10 and 4.667e-4 J/m², docs/study/layers/twenty.sh);
+#   single  — sweeps/ti64-machine.toml's single layer at 0.08 m/s, for the cost ratio.
+# The binary is $SWEEP (one built per cut, e.g. /tmp/sweep-A); LABEL names it in the records;
+# SEED=n runs every scene at another seed (`seed = n`, the label's records -seedn).
+# Each run keeps its directory under runs/cuts/<label>-<scene>/, so an interrupted study goes on
+# from each point's last pass (run it again); the passes' records (pass.k.json: clocks) go to
+# record/cuts/<label>-<scene>/ and the result to record/cuts/<label>-<scene>.json.
+#   SWEEP=/tmp/sweep-base nice bash docs/study/layers/cuts.sh base machine PS1
+set -euo pipefail
+cd "$(dirname "$0")/../../.."
+sweep=${SWEEP:-target/release/sweep}
+label=$1
+shift
+out=docs/study/layers/record/cuts
+mkdir -p "$out" runs/cuts
+# The shipped files, with a timeout long enough for a machine shared with other work.
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+seed=${SEED:-}
+for f in ti64-layers layers-gaboriault ti64-machine; do
+  if grep -q '^timeout_s = ' "sweeps/$f.toml"; then
+    sed -e 's/^timeout_s = .*$/timeout_s = 40000/' "sweeps/$f.toml" > "$tmp/$f.toml"
+  else
+    sed -e 's/^\[scene\]$/[run]\ntimeout_s = 40000\n\n[scene]/' "sweeps/$f.toml" > "$tmp/$f.toml"
+  fi
+  grep -q '^timeout_s = 40000$' "$tmp/$f.toml"
+  if [ -n "$seed" ]; then
+    sed -i -e "s/^\[scene\]$/[scene]\nseed = $seed/" "$tmp/$f.toml"
+    grep -q "^seed = $seed$" "$tmp/$f.toml"
+  fi
+done
+for scene in "$@"; do
+  case $scene in
+    machine) file=ti64-layers set=layer_thickness=0.05,blade_speed=0.1 ;;
+    PS1) file=layers-gaboriault set=blade_speed=0.1,friction=0.20,rolling_friction=0.10,surface_energy=4.667e-4 ;;
+    single) file=ti64-machine set=blade_speed=0.08 ;;
+    *) echo "unknown scene $scene" >&2; exit 2 ;;
+  esac
+  name=$label-$scene${seed:+-seed$seed}
+  [ -s "$out/$name.json" ] && { echo "$name: recorded"; continue; }
+  dir=runs/cuts/$name
+  ( while sleep 60; do mkdir -p "$out/$name"; cp "$dir"/pass.*.json "$out/$name/" 2>/dev/null || true; done ) &
+  copier=$!
+  "$sweep" run "$tmp/$file.toml" --json --out "$dir" --set "$set" > "$out/$name.json.part" 2> "$out/$name.err" || true
+  kill $copier 2>/dev/null || true
+  mkdir -p "$out/$name"; cp "$dir"/pass.*.json "$out/$name/" 2>/dev/null || true
+  if grep -q '"cpu_time"' "$out/$name.json.part"; then
+    mv "$out/$name.json.part" "$out/$name.json"
+  else
+    rm -f "$out/$name.json.part"   # interrupted: run again to go on from its last pass
+  fi
+done
