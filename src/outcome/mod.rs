@@ -14,6 +14,8 @@ use serde::{Deserialize, Serialize};
 
 /// Version of `result.json` / `failure.json`.
 pub const RESULT_FORMAT: u32 = 1;
+/// The file a finished run writes its [`RunResult`] to, in its run directory.
+pub const RESULT_FILE: &str = "result.json";
 
 /// Number of v_x layers in front of the blade (thesis Appendix A).
 pub const VX_LAYERS: usize = 12;

@@ -25,7 +25,7 @@ use crate::sys::atomic::write_json;
 use crate::sys::process::CancelToken;
 
 /// File names in a run directory.
-pub const RESULT: &str = "result.json";
+pub const RESULT: &str = crate::outcome::RESULT_FILE;
 pub const FAILURE: &str = "failure.json";
 
 /// What every point of a sweep shares: the sweep, the engine, the template.

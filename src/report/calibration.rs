@@ -393,8 +393,9 @@ fn answer(
         (None, Some(_)) => (
             "not converged".to_string(),
             format!(
-                "the credible intervals still moved by more than {:.0} % of their width at {} points; a larger --max continues",
+                "the credible intervals did not stay within {:.0} % of their width for {} batches in a row by {} points; a larger --max continues",
                 100.0 * settings.tolerance,
+                settings.hold.max(1),
                 manifest.points.len()
             ),
         ),

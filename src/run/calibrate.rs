@@ -378,11 +378,20 @@ impl CalibrationWatch {
                 format!("{} {} [{}, {}]", par.name, v(m.median), v(m.lo), v(m.hi))
             })
             .collect();
+        // The rule needs `hold` batches in a row within the tolerance: one is not enough.
+        let within = |b: &Batch| b.change.is_some_and(|c| c <= self.settings.tolerance);
+        let in_a_row = self.batches[..=k].iter().rev().take_while(|b| within(b)).count();
+        let hold = self.settings.hold.max(1);
         let verdict = match b.change {
             None => "nothing to compare with yet".to_string(),
-            Some(c) if c <= self.settings.tolerance => {
+            Some(c) if in_a_row >= hold => {
                 format!("intervals moved {:.0} % of their width: the rule holds", 100.0 * c)
             }
+            Some(c) if in_a_row > 0 => format!(
+                "intervals moved {:.0} % of their width, within {:.0} % ({in_a_row} of {hold} batches in a row)",
+                100.0 * c,
+                100.0 * self.settings.tolerance
+            ),
             Some(c) => format!("intervals moved {:.0} % of their width", 100.0 * c),
         };
         let conv = if self.converged_at == Some(k) { "; converged" } else { "" };

@@ -305,21 +305,17 @@ fn a_layers_point_killed_in_its_third_pass_goes_on_from_its_second_and_ends_as_a
 
     // Killed (SIGKILL, the whole process group) once pass 3's engine run has started.
     let cut = dir.join("cut");
-    use std::os::unix::process::CommandExt;
-    let mut child = support::sweep_bin()
-        .args(["run", support::p(&sweep), "--set", "blade_speed=0.5", "--out", support::p(&cut)])
-        .process_group(0)
-        .spawn()
-        .unwrap();
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(600);
-    while !cut.join("in.pass.3").is_file() {
-        assert!(std::time::Instant::now() < deadline, "pass 3 never started");
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    let pgid = child.id() as i32;
-    // SAFETY: kill(2) on the child's own process group.
-    unsafe { libc::kill(-pgid, libc::SIGKILL) };
-    let _ = child.wait();
+    kill_once(
+        support::sweep_bin().args([
+            "run",
+            support::p(&sweep),
+            "--set",
+            "blade_speed=0.5",
+            "--out",
+            support::p(&cut),
+        ]),
+        &cut.join("in.pass.3"),
+    );
     assert!(!cut.join("pass.3.json").exists() && cut.join("restart.pass.2").is_file());
     let cpu_12: f64 = (1..=2)
         .map(|k| {
@@ -364,18 +360,37 @@ fn a_layers_point_stops_once_its_steady_layer_holds_and_at_its_most_passes_other
     }
 }
 
-/// The passes a layers point measured, whether it ended steady (result.json) or not
-/// (failure.json's measure).
-fn measured_passes(run: &Path) -> Vec<Value> {
+/// What a layers point measured, whether it ended steady (result.json) or not (failure.json's
+/// measure).
+fn measured(run: &Path) -> Value {
     let read = |f: &str| {
         std::fs::read_to_string(run.join(f)).ok().map(|t| serde_json::from_str::<Value>(&t).unwrap())
     };
-    let layers = match (read("result.json"), read("failure.json")) {
-        (Some(r), _) => r["layers"].clone(),
-        (None, Some(f)) => f["measured"]["layers"].clone(),
+    match (read("result.json"), read("failure.json")) {
+        (Some(r), _) => r,
+        (None, Some(f)) => f["measured"].clone(),
         (None, None) => panic!("{}: neither result.json nor failure.json", run.display()),
-    };
+    }
+}
+
+/// The passes a layers point measured, steady or not.
+fn measured_passes(run: &Path) -> Vec<Value> {
+    let layers = measured(run)["layers"].clone();
     layers["passes"].as_array().unwrap_or_else(|| panic!("no passes in {layers}")).clone()
+}
+
+/// Run `cmd` in its own process group and SIGKILL the group once `file` exists.
+fn kill_once(cmd: &mut std::process::Command, file: &Path) {
+    use std::os::unix::process::CommandExt;
+    let mut child = cmd.process_group(0).spawn().unwrap();
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(600);
+    while !file.is_file() {
+        assert!(std::time::Instant::now() < deadline, "{} never appeared", file.display());
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    // SAFETY: kill(2) on the child's own process group.
+    unsafe { libc::kill(-(child.id() as i32), libc::SIGKILL) };
+    let _ = child.wait();
 }
 
 /// The one run directory of a one-point sweep directory.
@@ -446,20 +461,10 @@ fn sweep_extend_gives_a_layers_point_not_steady_at_its_most_more_passes_and_surv
     // its earlier outcome, and extending it again goes on from pass 2 to where the
     // uninterrupted extension ended.
     let (cut, cut_run) = unsteady("cut");
-    use std::os::unix::process::CommandExt;
-    let mut child = support::sweep_bin()
-        .args(["extend", support::p(&cut), "--passes", "2"])
-        .process_group(0)
-        .spawn()
-        .unwrap();
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(600);
-    while !cut_run.join("in.pass.3").is_file() {
-        assert!(std::time::Instant::now() < deadline, "pass 3 never started");
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    // SAFETY: kill(2) on the child's own process group.
-    unsafe { libc::kill(-(child.id() as i32), libc::SIGKILL) };
-    let _ = child.wait();
+    kill_once(
+        support::sweep_bin().args(["extend", support::p(&cut), "--passes", "2"]),
+        &cut_run.join("in.pass.3"),
+    );
     assert!(cut_run.join("failure.json").is_file() && !cut_run.join("pass.3.json").exists());
     let out = support::sweep(&["extend", support::p(&cut), "--passes", "2"]);
     assert!(out.status.code().is_some(), "{}", support::stderr(&out));
@@ -477,11 +482,7 @@ fn measured_runs(sweep_dir: &Path) -> Vec<(PathBuf, Value)> {
         .unwrap()
         .map(|e| e.unwrap().path())
         .map(|run| {
-            let read = |f: &str| {
-                std::fs::read_to_string(run.join(f)).ok().map(|t| serde_json::from_str::<Value>(&t).unwrap())
-            };
-            let r =
-                read("result.json").or_else(|| read("failure.json").map(|f| f["measured"].clone())).unwrap();
+            let r = measured(&run);
             (run, r)
         })
         .collect();
@@ -529,21 +530,11 @@ fn a_fused_bed_warm_started_from_its_neighbour_searches_from_its_depth_and_resum
     // Killed in the warm point's third pass, then resumed with its neighbour's result gone: it
     // goes on from the warm start it recorded and ends where the uninterrupted sweep's did.
     let cut = dir.join("cut");
-    use std::os::unix::process::CommandExt;
-    let mut child = support::sweep_bin()
-        .args(["lds", support::p(&sweep), "--jobs", "1", "--out", support::p(&cut)])
-        .process_group(0)
-        .spawn()
-        .unwrap();
     let warm_cut = cut.join("runs").join(warm_run.file_name().unwrap());
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(600);
-    while !warm_cut.join("in.pass.3").is_file() {
-        assert!(std::time::Instant::now() < deadline, "the warm point's pass 3 never started");
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    // SAFETY: kill(2) on the child's own process group.
-    unsafe { libc::kill(-(child.id() as i32), libc::SIGKILL) };
-    let _ = child.wait();
+    kill_once(
+        support::sweep_bin().args(["lds", support::p(&sweep), "--jobs", "1", "--out", support::p(&cut)]),
+        &warm_cut.join("in.pass.3"),
+    );
     let neighbour = cut.join("runs").join(cold_run.file_name().unwrap()).join("result.json");
     std::fs::remove_file(&neighbour).unwrap();
     let out = support::sweep(&["resume", support::p(&cut), "--jobs", "1"]);

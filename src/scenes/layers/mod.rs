@@ -356,7 +356,7 @@ impl Layout for Layers {
     }
 
     fn warm_start_files(&self) -> Option<crate::scenes::WarmFiles> {
-        Some(crate::scenes::WarmFiles { state: crate::point::RESULT, data: warm::WARM_DATA })
+        Some(crate::scenes::WarmFiles { state: crate::outcome::RESULT_FILE, data: warm::WARM_DATA })
     }
 
     fn with_most_passes(&self, scene: &Scene, most: usize) -> Result<Scene, String> {

@@ -11,8 +11,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::plan::{plan_of, with_plan};
-use crate::outcome::RunResult;
-use crate::point::RESULT;
+use crate::outcome::{RunResult, RESULT_FILE};
 use crate::scene::Scene;
 use crate::scenes::{ColdStart, Warm};
 
@@ -37,7 +36,7 @@ pub fn start(from_dir: &Path, to: &Scene) -> Result<Warm, ColdStart> {
     if !plan.fused {
         return Err(ColdStart::LooseBed);
     }
-    let from: RunResult = std::fs::read_to_string(from_dir.join(RESULT))
+    let from: RunResult = std::fs::read_to_string(from_dir.join(RESULT_FILE))
         .ok()
         .and_then(|t| serde_json::from_str(&t).ok())
         .ok_or(ColdStart::NoSteadyLayer)?;
