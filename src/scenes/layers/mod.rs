@@ -70,6 +70,15 @@ pub const DOSE_FRACTION: f64 = 0.3;
 /// Fastest a sparse dose is thrown down, m/s: a few times a dense dose's landing speed, well
 /// under a speed at which a fine powder's contacts need a shorter timestep.
 pub const MAX_DOSE_SPEED: f64 = 0.5;
+/// The dose is at rest for the blade once its rms speed, and the bed's, is under this share of
+/// the blade's speed: what the blade then meets carries a ten-thousandth of the kinetic energy it
+/// gives it. Measured at the Ti-6Al-4V machine point, a dose reaches it about a third of a fall
+/// after landing, where the fixed wait was a whole fall (docs/study/layers.md "A pass is its
+/// crossing").
+pub const DOSE_REST_SHARE: f64 = 0.01;
+/// Checks of the rest criterion over the fixed wait's measure of a dose's fall (the fall and as
+/// long again): the blade starts at most a twentieth of it after the dose is at rest.
+pub const SETTLE_CHECKS: u64 = 20;
 /// Length of the feed platform the dose lies on, over the plate's length.
 const FEED_OVER_PLATE: f64 = 0.5;
 /// Length of the pit beyond the plate, in diameters: it holds one pass's excess dose.

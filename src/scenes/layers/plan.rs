@@ -5,9 +5,9 @@
 use serde::{Deserialize, Serialize};
 
 use super::{
-    dose_factor, fused, least_passes, search_passes, DOSE_FRACTION, EXTEND_ROOM, FEED_OVER_PLATE,
-    MAX_DOSE_SPEED, PIT_DIAMETERS, RAMP_DIAMETERS, ROUND_ARC_SHARE, SEARCH_MAX_DEPTH_LAYERS,
-    SEARCH_MAX_GROWTH,
+    dose_factor, fused, least_passes, search_passes, DOSE_FRACTION, DOSE_REST_SHARE, EXTEND_ROOM,
+    FEED_OVER_PLATE, MAX_DOSE_SPEED, PIT_DIAMETERS, RAMP_DIAMETERS, ROUND_ARC_SHARE, SEARCH_MAX_DEPTH_LAYERS,
+    SEARCH_MAX_GROWTH, SETTLE_CHECKS,
 };
 use crate::scene::settings::SceneSettings;
 use crate::scene::{
@@ -24,8 +24,6 @@ pub struct Pass {
     pub top: f64,
     /// Height of the blade's tip over the plate, m.
     pub tip: f64,
-    /// Step at which the blade starts (its ramp counts from it).
-    pub start: u64,
     /// Prime seed of this pass's dose.
     pub seed: u64,
 }
@@ -76,15 +74,26 @@ pub struct Plan {
     /// Downward speed the dose is inserted at, m/s (0 unless it is sparse).
     pub dose_speed: f64,
     pub dose_particles: usize,
-    /// Steps of the first dose's fall before the first pass.
+    /// Most steps of the first dose's fall before the first pass.
     pub fall_steps: u64,
     /// Steps of a pass until the blade has cleared the feed platform (the next dose goes in).
     pub clear_steps: u64,
-    /// Steps of the blade's whole pass, the rest after it, and the wait for the rest of the
+    /// Steps of the blade's whole pass, the rest after it, and the most wait for the rest of the
     /// next dose's fall before the next pass.
     pub pass_steps: u64,
     pub rest_steps: u64,
     pub wait_steps: u64,
+    /// The blade starts once the dose and the bed are at rest: their rms speeds under
+    /// `rest_speed` (m/s), checked every `settle_check_steps`, at most `fall_checks` times before
+    /// the first pass and `wait_checks` before each later one (the fall and the wait above).
+    #[serde(default)]
+    pub rest_speed: f64,
+    #[serde(default)]
+    pub settle_check_steps: u64,
+    #[serde(default)]
+    pub fall_checks: u64,
+    #[serde(default)]
+    pub wait_checks: u64,
     /// Every pass the machine is built for: its box and its faces reach the last of them, so
     /// that `sweep extend` can add passes up to it ([`EXTEND_ROOM`] times the most).
     pub passes: Vec<Pass>,
@@ -129,7 +138,7 @@ pub struct Resume {
 }
 
 impl Plan {
-    /// Steps of the whole run: the first dose's fall, then each pass with its rest and wait.
+    /// Most steps of the whole run: the first dose's fall, then each pass with its rest and wait.
     pub fn total_steps(&self) -> u64 {
         let n = self.most() as u64;
         self.fall_steps + n * (self.pass_steps + self.rest_steps) + n.saturating_sub(1) * self.wait_steps
@@ -278,17 +287,18 @@ pub(super) fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let clear_steps = steps(clear_travel / v + 0.5 * ramp_time).min(pass_steps);
     let rest_steps = steps((2.0 * 10.0 * d / GRAVITY).sqrt());
     let wait_steps = later_fall_steps.saturating_sub(pass_steps - clear_steps + rest_steps);
+    // The fall and the wait above are the most: the blade starts as soon as the dose has landed
+    // and it and the bed are at rest for the blade — their rms speeds a hundredth of its own
+    // (DOSE_REST_SHARE) — checked SETTLE_CHECKS times a fall.
+    let rest_speed = DOSE_REST_SHARE * v;
+    let settle_check_steps = later_fall_steps.div_ceil(SETTLE_CHECKS);
+    let (fall_checks, wait_checks) =
+        (fall_steps.div_ceil(settle_check_steps), wait_steps.div_ceil(settle_check_steps));
     let cycle = pass_steps + rest_steps + wait_steps;
     let passes = (1..=room)
         .map(|k| {
             let tip = k as f64 * t + clearance;
-            Pass {
-                k,
-                top: tip - platform_gap,
-                tip,
-                start: fall_steps + (k as u64 - 1) * cycle,
-                seed: prime_seed(settings.seed, 100 + k),
-            }
+            Pass { k, top: tip - platform_gap, tip, seed: prime_seed(settings.seed, 100 + k) }
         })
         .collect();
     let Feed { classes: feed, volume_limit } = Feed::of(&psd, settings.seed);
@@ -321,6 +331,10 @@ pub(super) fn derive(base: Base, settings: &SceneSettings) -> Scene {
         pass_steps,
         rest_steps,
         wait_steps,
+        rest_speed,
+        settle_check_steps,
+        fall_checks,
+        wait_checks,
         first_pass: 1,
         most_passes: layers,
         last_pass: layers,

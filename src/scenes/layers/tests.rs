@@ -34,7 +34,6 @@ fn the_platform_drops_by_the_layer_thickness_before_every_pass() {
     for pair in plan.passes.windows(2) {
         assert!((pair[1].top - pair[0].top - 1e-4).abs() < 1e-12, "drop {}", pair[1].top - pair[0].top);
         assert!((pair[1].tip - pair[1].top - 5e-5).abs() < 1e-12, "clearance");
-        assert!(pair[1].start > pair[0].start + plan.pass_steps, "passes overlap");
     }
     // The first layer is the drop and the clearance over the bare plate.
     assert!((plan.drop_before(1) - 1.5e-4).abs() < 1e-12);
@@ -46,6 +45,20 @@ fn the_platform_drops_by_the_layer_thickness_before_every_pass() {
     let last = plan.passes.last().unwrap();
     assert!(last.tip + sc.blade_top < sc.z_hi);
     assert!(last.top - plan.block_depth > sc.z_lo && last.top - plan.block_depth < 0.0);
+}
+
+#[test]
+fn the_blade_starts_once_the_dose_is_at_rest_and_at_the_latest_when_the_fixed_wait_ends() {
+    let plan = plan_of(&scene(&settings()));
+    // At rest for the blade: a hundredth of its speed.
+    assert!((plan.rest_speed - DOSE_REST_SHARE * 0.1).abs() < 1e-15);
+    // The checks reach the whole fixed fall and wait, and no check further.
+    for (checks, most) in [(plan.fall_checks, plan.fall_steps), (plan.wait_checks, plan.wait_steps)] {
+        assert!(checks * plan.settle_check_steps >= most, "{checks} checks for {most} steps");
+        assert!(checks.saturating_sub(1) * plan.settle_check_steps < most.max(1));
+    }
+    // A later dose's fall and wait are at most SETTLE_CHECKS checks (the first, taller, more).
+    assert!(plan.wait_checks <= SETTLE_CHECKS && plan.fall_checks > 0);
 }
 
 #[test]
