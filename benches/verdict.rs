@@ -123,6 +123,7 @@ fn crit(rule: Rule, tol: f64, hold: usize) -> Criteria {
         hold,
         min_points: 0,
         lattice_weights: LatticeWeights::Trapezoid,
+        judged: [true; 4],
     }
 }
 

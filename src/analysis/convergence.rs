@@ -18,6 +18,11 @@
 //!   `floor` in absolute terms, held for `hold` comparisons (the default before "scaled"; kept so
 //!   that older sweep files mean what they meant).
 //!
+//! `statistics` names which of the four a rule judges (default all four): a sweep whose
+//! question is the mean over its space (the demo) judges the mean alone, as the thesis's
+//! 10,000-point lattice is what knows the skewness and kurtosis. A statistic not judged is still
+//! computed and shown, and counts as within.
+//!
 //! Either way a space with fewer than `min_points` points is never the converged one (an
 //! extended sweep is judged again only past its old extent). An undefined statistic (S = 0)
 //! or a relative change from exactly zero is never "within".
@@ -52,6 +57,27 @@ pub struct ConvergenceSettings {
     /// `"trapezoid"` (default: a complete lattice's points weighted by the trapezoid rule) or
     /// `"equal"` (the thesis). See [`crate::analysis::weights`].
     pub lattice_weights: String,
+    /// The statistics the rule judges, of `mean`, `std`, `skewness`, `kurtosis` (default all
+    /// four; absent from a file that judges all four).
+    #[serde(skip_serializing_if = "judges_all")]
+    pub statistics: Vec<String>,
+}
+
+fn every_statistic() -> Vec<String> {
+    STATISTICS.iter().map(|s| s.name().to_string()).collect()
+}
+
+fn judges_all(names: &[String]) -> bool {
+    STATISTICS.iter().all(|s| names.iter().any(|n| n == s.name()))
+}
+
+/// `statistics` as the rule reads it: whether each of [`STATISTICS`] is judged; `None` for a
+/// name that is none of the four, or for none at all.
+pub fn judged_statistics(names: &[String]) -> Option<[bool; 4]> {
+    if names.is_empty() || names.iter().any(|n| !STATISTICS.iter().any(|s| s.name() == n)) {
+        return None;
+    }
+    Some(STATISTICS.map(|s| names.iter().any(|n| n == s.name())))
 }
 
 impl Default for ConvergenceSettings {
@@ -63,6 +89,7 @@ impl Default for ConvergenceSettings {
             hold: 2,
             min_points: 0,
             lattice_weights: "trapezoid".into(),
+            statistics: every_statistic(),
         }
     }
 }
@@ -108,6 +135,13 @@ pub struct Criteria {
     pub min_points: usize,
     /// How a complete lattice's points are weighted in its statistics.
     pub lattice_weights: LatticeWeights,
+    /// Whether each of mean, std, skewness, kurtosis is judged (the others count as within).
+    #[serde(skip_serializing_if = "all_true")]
+    pub judged: [bool; 4],
+}
+
+fn all_true(j: &[bool; 4]) -> bool {
+    j.iter().all(|&b| b)
 }
 
 impl Criteria {
@@ -130,23 +164,40 @@ impl Criteria {
             hold: c.hold.max(1),
             min_points: c.min_points,
             lattice_weights: LatticeWeights::parse(&c.lattice_weights).unwrap_or(LatticeWeights::Trapezoid),
+            judged: judged_statistics(&c.statistics).unwrap_or([true; 4]),
         }
+    }
+
+    /// Whether statistic `s` is judged.
+    pub fn judges(&self, s: Statistic) -> bool {
+        STATISTICS.iter().zip(self.judged).any(|(&t, j)| t == s && j)
+    }
+
+    /// "every statistic", or "the mean", "the mean and std": what the rule's words name.
+    fn which(&self) -> String {
+        if all_true(&self.judged) {
+            return "every statistic".into();
+        }
+        let names: Vec<&str> = STATISTICS.iter().filter(|&&s| self.judges(s)).map(|s| s.name()).collect();
+        format!("the {}", names.join(" and "))
     }
 
     /// One line for the terminal and the report.
     pub fn describe(&self) -> String {
         let t = self.tolerance * 100.0;
+        let which = self.which();
+        let one = if all_true(&self.judged) { "any one statistic".to_string() } else { format!("any one of {which}") };
         match self.rule {
             Rule::Any => {
-                format!("rule \"any\" (thesis): any one statistic within {t}% of the previous space")
+                format!("rule \"any\" (thesis): {one} within {t}% of the previous space")
             }
             Rule::All => format!(
-                "rule \"all\": every statistic within {t}% (or {} absolute) of the previous space, \
+                "rule \"all\": {which} within {t}% (or {} absolute) of the previous space, \
                  for {} consecutive space(s)",
                 self.floor, self.hold
             ),
             Rule::Scaled => format!(
-                "rule \"scaled\": every statistic moved by at most {t}% of its scale since the previous \
+                "rule \"scaled\": {which} moved by at most {t}% of its scale since the previous \
                  space and the half-width of its 95% interval at most {t}% of its scale, for {} \
                  consecutive space(s)",
                 self.hold
@@ -236,6 +287,14 @@ fn g(v: f64) -> String {
 pub fn change(s: Statistic, prev: &SpaceStats, cur: &SpaceStats, c: &Criteria) -> Change {
     let idx = STATISTICS.iter().position(|&t| t == s).expect("one of the four");
     let noise = cur.noise[idx];
+    if !c.judged[idx] {
+        let (p, v) = (s.of(&prev.moments), s.of(&cur.moments));
+        let abs = p.zip(v).map(|(p, v)| v - p);
+        let rel = p.zip(abs).and_then(|(p, a)| (p != 0.0).then(|| a.abs() / p.abs()));
+        let scale = scale(s, &cur.moments);
+        let test = "not judged (convergence.statistics)".to_string();
+        return Change { abs, rel, scale, noise, within: true, test };
+    }
     let (Some(p), Some(v)) = (s.of(&prev.moments), s.of(&cur.moments)) else {
         let test = "failed: undefined (no spread in the space)".to_string();
         return Change { abs: None, rel: None, scale: None, noise, within: false, test };
@@ -305,7 +364,7 @@ pub fn judge(spaces: &[SpaceStats], c: &Criteria) -> Vec<Judgement> {
         };
         let changes = STATISTICS.map(|s| change(s, prev, cur, c));
         let holds = match c.rule {
-            Rule::Any => changes.iter().any(|ch| ch.within),
+            Rule::Any => changes.iter().zip(c.judged).any(|(ch, j)| j && ch.within),
             Rule::All | Rule::Scaled => changes.iter().all(|ch| ch.within),
         };
         let streak = if holds { out[k - 1].streak + 1 } else { 0 };
@@ -420,6 +479,7 @@ mod tests {
             hold,
             min_points: 0,
             lattice_weights: LatticeWeights::Equal,
+            judged: [true; 4],
         }
     }
 
@@ -431,6 +491,7 @@ mod tests {
             hold: 1,
             min_points: 0,
             lattice_weights: LatticeWeights::Equal,
+            judged: [true; 4],
         }
     }
 
@@ -442,6 +503,7 @@ mod tests {
             hold,
             min_points: 0,
             lattice_weights: LatticeWeights::Equal,
+            judged: [true; 4],
         }
     }
 
@@ -451,6 +513,33 @@ mod tests {
             .enumerate()
             .map(|(k, m)| SpaceStats { n: 400 * (k + 1), moments: *m, noise: [Some(0.0); 4] })
             .collect()
+    }
+
+    #[test]
+    fn a_rule_that_judges_the_mean_alone_converges_while_the_skewness_still_moves() {
+        // Mean 0.50 → 0.51 → 0.505: moved 2 % and 1 % of its scale 0.5 (≤ 5 %); the skewness
+        // swings 0.1 → 0.9 → −0.5, beyond 5 % of its scale (1) every time.
+        let mut s = spaces(&[m(0.50, 0.1, 0.1, 2.0), m(0.51, 0.1, 0.9, 2.0), m(0.505, 0.1, -0.5, 2.0)]);
+        for sp in &mut s {
+            sp.noise = [Some(0.01); 4];
+        }
+        let every = judge(&s, &scaled(0.05, 2));
+        assert!(every.iter().all(|j| !j.converged), "the skewness moves: not converged");
+        let names = vec!["mean".to_string()];
+        let mean_only = Criteria { judged: judged_statistics(&names).unwrap(), ..scaled(0.05, 2) };
+        let j = judge(&s, &mean_only);
+        assert_eq!(j.iter().map(|j| j.converged).collect::<Vec<_>>(), [false, false, true]);
+        let skew = &j[2].changes.as_ref().unwrap()[2];
+        assert!(skew.within && skew.test.starts_with("not judged"), "{skew:?}");
+        assert_eq!(skew.abs, Some(-1.4), "a statistic not judged is still measured");
+        assert!(mean_only.describe().contains("the mean moved by at most 5%"), "{}", mean_only.describe());
+        // A mean that moves fails it, whatever the others do.
+        let moved = spaces(&[m(0.50, 0.1, 0.0, 2.0), m(0.60, 0.1, 0.0, 2.0), m(0.70, 0.1, 0.0, 2.0)]);
+        assert!(judge(&moved, &mean_only).iter().all(|j| !j.converged));
+        // Names other than the four, or none, are refused.
+        assert_eq!(judged_statistics(&["median".to_string()]), None);
+        assert_eq!(judged_statistics(&[]), None);
+        assert_eq!(judged_statistics(&every_statistic()), Some([true; 4]));
     }
 
     #[test]

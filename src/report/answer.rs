@@ -253,7 +253,7 @@ fn failing_tests(a: &Analysis) -> Vec<String> {
     out
 }
 
-/// Rule "scaled": the points at which every statistic's 95% bootstrap interval would be within
+/// Rule "scaled": the points at which every judged statistic's 95% bootstrap interval would be within
 /// the tolerance of its scale, if the half-widths of the last space narrow as 1/√N (a multiple
 /// of `step`), and the statistic whose interval is the widest; `None` under another rule or
 /// without intervals.
@@ -264,6 +264,7 @@ fn points_to_know(a: &Analysis, step: usize) -> Option<(usize, &'static str)> {
     let changes = a.spaces.last()?.changes.as_ref()?;
     let (ratio, widest) = STATISTICS
         .iter()
+        .filter(|&&st| a.criteria.judges(st))
         .filter_map(|st| {
             let c = changes.get(st.name())?;
             let r = c.noise? / (a.criteria.tolerance * c.scale?);
@@ -297,6 +298,10 @@ fn next(a: &Analysis) -> Option<String> {
                          tolerance at N = {}: every one is within it at about {n} points",
                         ((n as f64) / a.counts.points.max(1) as f64).sqrt(),
                         a.counts.points
+                    ),
+                    Some((n, _)) => format!(
+                        "{more}; the 95% intervals narrow as 1/√N: every statistic the rule judges is known \
+                         within the tolerance at about {n} points"
                     ),
                     _ => more,
                 }

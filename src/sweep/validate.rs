@@ -229,6 +229,15 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<Params, SweepErr
             format!("\"{}\": expected \"trapezoid\" or \"equal\"", c.lattice_weights),
         ));
     }
+    if crate::analysis::convergence::judged_statistics(&c.statistics).is_none() {
+        return Err(bad(
+            "convergence.statistics",
+            format!(
+                "{:?}: expected one or more of \"mean\", \"std\", \"skewness\", \"kurtosis\"",
+                c.statistics
+            ),
+        ));
+    }
     for (k, v) in [("convergence.tolerance", c.tolerance), ("convergence.floor", c.floor)] {
         if !v.is_finite() || v < 0.0 {
             return Err(bad(k, format!("{v}: expected a finite number ≥ 0")));

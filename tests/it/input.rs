@@ -130,6 +130,13 @@ fn values_that_make_no_sense_are_named() {
         &["--lds", "2"],
         &["convergence.tolerance", "-0.1"],
     );
+    for bad in ["[\"median\"]", "[]"] {
+        rejects(
+            &format!("{BASE}[convergence]\nstatistics = {bad}\n"),
+            &["--lds", "2"],
+            &["convergence.statistics", "expected one or more of \"mean\", \"std\", \"skewness\", \"kurtosis\""],
+        );
+    }
     rejects(
         &format!("{BASE}[design.lds]\nseed = -1\n"),
         &["--lds", "2"],
