@@ -20,7 +20,7 @@ use crate::analysis::adapt::new_run_noise;
 use crate::analysis::calibration::{self as cal, Emulated, Pick, Posterior, Scatter, Target};
 use crate::analysis::emulator::Emulator;
 use crate::error::Result;
-use crate::outcome::RunResult;
+use crate::scenes::quantity::{Measured, Quantity};
 use crate::run::batches::{self, Planned, Sequential};
 use crate::run::pool::{Executor, Flow};
 use crate::run::{PointExecutor, SpaceHook, SweepExecutor};
@@ -48,85 +48,14 @@ pub struct Settings {
     pub hold: usize,
 }
 
-/// A quantity a run measures that a calibration can target.
-pub struct Quantity {
-    pub name: &'static str,
-    pub unit: &'static str,
-    /// Its value in a result, with the result's SE of it where it gives one.
-    read: fn(&RunResult) -> Option<Measured>,
-    /// Runs of each setting by default (`--repeats`): 2 for a heap's quantities, whose own SE
-    /// (over one heap's sectors) understates the scatter between seeds; 1 for MFR, whose SE is
-    /// over the window's batches.
-    pub repeats: usize,
-    /// The values it can take: a target outside is a slip, and its SD is at most this width.
-    possible: (f64, f64),
-    /// Whether the lower end itself is a value it can take: MFR can be 0 (nothing passes), a
-    /// heap's angle and packing cannot.
-    lo_possible: bool,
-}
-
-/// A measured value and the run's SE of it, where it gives one.
-pub type Measured = (f64, Option<f64>);
-
-/// Every quantity a calibration can target; a layout says which of them its runs measure
-/// ([`crate::scenes::Layout::calibration_targets`]).
-pub const QUANTITIES: &[Quantity] = &[
-    Quantity {
-        name: "angle_of_repose",
-        unit: "°",
-        read: |r| r.heap.as_ref().map(|h| (h.angle_deg, Some(h.angle_se_deg).filter(|s| *s > 0.0))),
-        repeats: 2,
-        possible: (0.0, 90.0),
-        lo_possible: false,
-    },
-    Quantity {
-        name: "bulk_packing",
-        unit: "-",
-        read: |r| r.heap.as_ref().map(|h| (h.packing, None)),
-        repeats: 2,
-        // Spheres pack no denser than π/√18 (face-centred cubic).
-        possible: (0.0, 0.7405),
-        lo_possible: false,
-    },
-    // ASTM B212's apparent density (a Hall funnel's free-poured fill of a cup) as the heap's
-    // packing times the material's density: both a free-poured, unconsolidated packing.
-    Quantity {
-        name: "apparent_density",
-        unit: "g/cm³",
-        read: |r| {
-            let density = r.parameters.get("density")?;
-            r.heap.as_ref().map(|h| (h.packing * density / 1000.0, None))
-        },
-        repeats: 2,
-        // The heap's packing (at most 0.7405) times the densest material (25,000 kg/m³).
-        possible: (0.0, 20.0),
-        lo_possible: false,
-    },
-    Quantity {
-        name: "mfr",
-        unit: "-",
-        read: |r| r.mfr.is_finite().then_some((r.mfr, r.mfr_se)),
-        repeats: 1,
-        possible: (0.0, 1.0),
-        lo_possible: true,
-    },
-];
-
-impl Quantity {
-    /// Its value in `r`, with the result's SE of it where it gives one.
-    pub fn read(&self, r: &RunResult) -> Option<Measured> {
-        (self.read)(r)
-    }
-}
-
 /// Runs of each setting by default for `targets` (checked): the most any of them asks.
 pub fn default_repeats(targets: &[Target]) -> usize {
     targets.iter().filter_map(|t| quantity(&t.name)).map(|q| q.repeats).max().unwrap_or(1)
 }
 
-/// The quantity named `name`.
+/// The quantity named `name`, of any layout.
 pub fn quantity(name: &str) -> Option<&'static Quantity> {
-    QUANTITIES.iter().find(|q| q.name == name)
+    crate::scenes::quantity::lookup(name)
 }
 
 /// Why a sweep cannot be calibrated against its targets: the sentence after the flag.
@@ -142,7 +71,7 @@ pub enum TargetsRefused {
     NoFreeParameter { path: std::path::PathBuf },
     #[error("--target: expected at least one, e.g. --target angle_of_repose=34.0±1.0")]
     NoTarget,
-    /// Not one of [`QUANTITIES`] (`all`: their names).
+    /// Not a quantity of any layout (`all`: their names).
     #[error("--target {name}: not a quantity a run measures; expected one of {all}")]
     Unknown { name: String, all: String },
     /// A quantity the sweep's layout does not measure (`measured`: those it does).
@@ -197,15 +126,14 @@ pub fn check(sweep: &Sweep, targets: &[Target]) -> std::result::Result<(), Targe
     if targets.is_empty() {
         return Err(TargetsRefused::NoTarget);
     }
-    let measured: Vec<&str> =
-        QUANTITIES.iter().filter(|q| measures.contains(&q.name)).map(|q| q.name).collect();
+    let measured: Vec<&str> = measures.iter().map(|q| q.name).collect();
     for (k, t) in targets.iter().enumerate() {
         match quantity(&t.name) {
             None => {
-                let all: Vec<&str> = QUANTITIES.iter().map(|q| q.name).collect();
+                let all: Vec<&str> = crate::scenes::quantity::every().map(|q| q.name).collect();
                 return Err(TargetsRefused::Unknown { name: t.name.clone(), all: all.join(", ") });
             }
-            Some(q) if !measures.contains(&q.name) => {
+            Some(q) if !measured.contains(&q.name) => {
                 return Err(TargetsRefused::NotMeasured {
                     name: t.name.clone(),
                     layout: layout.clone(),

@@ -10,6 +10,7 @@ pub mod conveyor;
 pub mod layers;
 pub mod moving_blade;
 pub mod pour;
+pub mod quantity;
 pub mod stand_in;
 
 use std::collections::BTreeMap;
@@ -301,9 +302,9 @@ pub trait Layout: Sync {
     }
 
     /// The quantities of a result a calibration (`sweep calibrate --target NAME=…`) can fit
-    /// this layout's runs to: names of `run::calibrate::QUANTITIES`.
-    fn calibration_targets(&self) -> &'static [&'static str] {
-        &["mfr"]
+    /// this layout's runs to ([`quantity`]).
+    fn calibration_targets(&self) -> &'static [quantity::Quantity] {
+        std::slice::from_ref(&quantity::MFR)
     }
 
     /// How a point of `scene` runs pass by pass, if it does (`crate::point::passes`): one engine

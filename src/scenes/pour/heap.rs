@@ -9,6 +9,43 @@
 //! a random packing away from walls, so the cylinder starts one diameter above the plate).
 
 use crate::outcome::heap::Heap;
+use crate::scenes::quantity::Quantity;
+
+/// What a calibration can fit a pour to: the heap's angle of repose, its packing, and the
+/// apparent density they make.
+pub const CALIBRATION_TARGETS: &[Quantity] = &[
+    Quantity {
+        name: "angle_of_repose",
+        unit: "°",
+        read: |r| r.heap.as_ref().map(|h| (h.angle_deg, Some(h.angle_se_deg).filter(|s| *s > 0.0))),
+        repeats: 2,
+        possible: (0.0, 90.0),
+        lo_possible: false,
+    },
+    Quantity {
+        name: "bulk_packing",
+        unit: "-",
+        read: |r| r.heap.as_ref().map(|h| (h.packing, None)),
+        repeats: 2,
+        // Spheres pack no denser than π/√18 (face-centred cubic).
+        possible: (0.0, 0.7405),
+        lo_possible: false,
+    },
+    // ASTM B212's apparent density (a Hall funnel's free-poured fill of a cup) as the heap's
+    // packing times the material's density: both a free-poured, unconsolidated packing.
+    Quantity {
+        name: "apparent_density",
+        unit: "g/cm³",
+        read: |r| {
+            let density = r.parameters.get("density")?;
+            r.heap.as_ref().map(|h| (h.packing * density / 1000.0, None))
+        },
+        repeats: 2,
+        // The heap's packing (at most 0.7405) times the densest material (25,000 kg/m³).
+        possible: (0.0, 20.0),
+        lo_possible: false,
+    },
+];
 
 /// Azimuthal sectors of the profile.
 pub const SECTORS: usize = 8;

@@ -36,7 +36,9 @@ use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT, VX_LAYERS};
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
 use crate::scene::{Base, Scene, GRAVITY, LAYER_FRACTION_MAX};
+use crate::scenes::quantity::Quantity;
 use crate::scenes::stand_in::StandInPoint;
+use heap::CALIBRATION_TARGETS;
 use crate::scenes::{BadSetting, BuiltinTemplate, Finished, Layout, Rejected, SetupRows};
 
 /// The pour layout (registered in [`crate::scenes::LAYOUTS`]).
@@ -161,8 +163,8 @@ impl Layout for Pour {
         vec![HEAP_DUMP.into()]
     }
 
-    fn calibration_targets(&self) -> &'static [&'static str] {
-        &["angle_of_repose", "bulk_packing", "apparent_density"]
+    fn calibration_targets(&self) -> &'static [Quantity] {
+        CALIBRATION_TARGETS
     }
 
     fn stand_in(&self, point: &mut StandInPoint) -> Result<RunResult, Rejected> {
