@@ -397,9 +397,12 @@ fn execute<E: Executor>(
     }
     // Closed points about to run (again): their present status is no evidence.
     let awaiting: BTreeSet<usize> = queued.keys().copied().filter(|&i| manifest.points[i].closed).collect();
-    let fixed = crate::point::fixed_columns(sweep);
+    let columns = crate::store::Columns {
+        fixed: crate::point::fixed_columns(sweep),
+        layout: crate::scenes::of(&sweep.file.scene).map_err(crate::point::PointError::Layout)?,
+    };
     let mut rep =
-        Reporter::new(store, manifest, status, opts.progress, hook, screen, sample.clone(), awaiting, fixed)?;
+        Reporter::new(store, manifest, status, opts.progress, hook, screen, sample.clone(), awaiting, columns)?;
     if rep.verdict == Verdict::Refuted {
         queued.append(&mut held);
     }

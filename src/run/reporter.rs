@@ -63,8 +63,8 @@ pub(super) struct Reporter<'a> {
     /// Runs another process holds, waited for: the progress line names the holder.
     held: BTreeMap<String, store::ClaimInfo>,
     pub(super) verdict: Verdict,
-    /// The fixed parameters' columns of results.csv.
-    fixed: Vec<(String, f64)>,
+    /// results.csv's columns of the fixed parameters and of the layout's own quantities.
+    columns: store::Columns,
 }
 
 /// `1 held by node7 (pid 4242, lease renewed 12 s ago)`: the runs other processes hold, which
@@ -111,7 +111,7 @@ impl<'a> Reporter<'a> {
         screen: Screen,
         sample: BTreeSet<usize>,
         awaiting: BTreeSet<usize>,
-        fixed: Vec<(String, f64)>,
+        columns: store::Columns,
     ) -> Result<Reporter<'a>> {
         let mut member_of = vec![Vec::new(); manifest.points.len()];
         for (k, s) in manifest.spaces.iter().enumerate() {
@@ -147,7 +147,7 @@ impl<'a> Reporter<'a> {
             awaiting,
             held: BTreeMap::new(),
             verdict: Verdict::Pending,
-            fixed,
+            columns,
         };
         rep.judge_screen();
         for (k, s) in manifest.spaces.iter().enumerate() {
@@ -156,7 +156,7 @@ impl<'a> Reporter<'a> {
         store::write_results(
             store.dir(),
             &manifest.parameters,
-            &rep.fixed,
+            &rep.columns,
             &manifest.points,
             &rep.status,
             &rep.sample,
@@ -300,7 +300,7 @@ impl<'a> Reporter<'a> {
         match store::write_results(
             self.store.dir(),
             &self.manifest.parameters,
-            &self.fixed,
+            &self.columns,
             &self.manifest.points,
             &self.status,
             &self.sample,

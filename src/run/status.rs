@@ -220,6 +220,9 @@ pub fn rewrite_results(dir: &Path) -> Result<()> {
     let (m, toml) = Store::read_manifest(dir)?;
     let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
     let (status, sample, _) = Screen::of(&sweep).statuses(&Store::open(dir), &m);
-    let fixed = crate::point::fixed_columns(&sweep);
-    Ok(crate::store::write_results(dir, &m.parameters, &fixed, &m.points, &status, &sample)?)
+    let columns = crate::store::Columns {
+        fixed: crate::point::fixed_columns(&sweep),
+        layout: crate::scenes::of(&sweep.file.scene).map_err(crate::point::PointError::Layout)?,
+    };
+    Ok(crate::store::write_results(dir, &m.parameters, &columns, &m.points, &status, &sample)?)
 }

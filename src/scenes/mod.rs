@@ -283,6 +283,17 @@ pub trait Layout: Sync {
         None
     }
 
+    /// The layout's own quantities in results.csv, by their own names, after the common
+    /// columns (none: the common MFR, v_x and layer columns say it all).
+    fn result_columns(&self) -> &'static [&'static str] {
+        &[]
+    }
+
+    /// A result's values of [`Layout::result_columns`], one each (empty where not measured).
+    fn result_values(&self, _r: &RunResult) -> Vec<String> {
+        Vec::new()
+    }
+
     /// What `sweep run` prints of a result above its particles, steps and times, if not MFR
     /// and v_x.
     fn result_lines(&self, _r: &RunResult) -> Option<Vec<String>> {

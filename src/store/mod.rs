@@ -43,7 +43,7 @@ pub use claim::{
 };
 pub use joblog::{logged_outcomes, read_joblog, AttemptRecord, Joblog, JoblogLine, JOBLOG_HEADER};
 pub use manifest::{DesignRecord, Manifest, ManifestError, PointRecord, SpaceRecord, MANIFEST_FORMAT};
-pub use results::{write_results, PointStatus};
+pub use results::{write_results, Columns, PointStatus};
 
 use std::fs::{self, File, OpenOptions};
 use std::os::unix::io::AsRawFd;

@@ -4,9 +4,17 @@ use std::path::Path;
 
 use super::{io, PointRecord, StoreError};
 use crate::outcome::{RunFailure, RunResult, VX_LAYERS};
+use crate::scenes::Layout;
 
 /// results.csv's columns of the spread layer's quality.
 pub const LAYER_COLUMNS: [&str; 4] = ["layer_cv", "layer_cv_noise", "covered_fraction", "roughness_d"];
+
+/// The columns of results.csv besides the common ones: the fixed parameters' (after the swept
+/// ones) and the layout's own quantities (last).
+pub struct Columns {
+    pub fixed: Vec<(String, f64)>,
+    pub layout: &'static dyn Layout,
+}
 
 /// The state of one design point in results.csv.
 #[derive(Debug, Clone, PartialEq)]
@@ -35,11 +43,13 @@ impl PointStatus {
 /// batch means over the steady window), stop (`target` or `cap`: what ended the window), and
 /// the spread layer's quality where the run measured it ([`crate::measure::layer`]): layer_cv and
 /// layer_cv_noise (–), covered_fraction (–), roughness_d (top-surface RMS height, in D); then
-/// layer_packing and its SE (the deposit's packing over the gap and the pockets it fills).
+/// layer_packing and its SE (the deposit's packing over the gap and the pockets it fills); last,
+/// the layout's own quantities by their names ([`Layout::result_columns`]: a layers point's
+/// steady layer, a pour's heap), of a done run or of what a failed one measured.
 pub fn write_results(
     dir: &Path,
     parameters: &[String],
-    fixed: &[(String, f64)],
+    columns: &Columns,
     points: &[PointRecord],
     status: &[PointStatus],
     sample: &std::collections::BTreeSet<usize>,
@@ -48,12 +58,15 @@ pub fn write_results(
     let mut w = csv::Writer::from_writer(Vec::new());
     let mut header: Vec<String> = vec!["index".into()];
     header.extend(parameters.iter().cloned());
+    let fixed = &columns.fixed;
     header.extend(fixed.iter().map(|f| f.0.clone()));
     header.extend(["status", "failure", "mfr", "mfr_flux", "mfr_particles", "steady"].map(String::from));
     header.extend((1..=VX_LAYERS).map(|k| format!("vx_{k}")));
     header.extend(["runtime_s", "hash", "quality", "screen", "mfr_se", "stop"].map(String::from));
     header.extend(LAYER_COLUMNS.map(String::from));
     header.extend(["layer_packing", "layer_packing_se"].map(String::from));
+    let own = columns.layout.result_columns();
+    header.extend(own.iter().map(|c| c.to_string()));
     w.write_record(&header).expect("in-memory csv");
     for (p, s) in points.iter().zip(status) {
         let mut row: Vec<String> = vec![p.index.to_string()];
@@ -131,6 +144,15 @@ pub fn write_results(
             _ => (None, None),
         };
         row.extend([packing.0, packing.1].map(|v| v.map_or(String::new(), |v| v.to_string())));
+        let measured = match s {
+            PointStatus::Done(r) => Some(&**r),
+            PointStatus::Failed(f) => f.measured.as_deref(),
+            _ => None,
+        };
+        match measured {
+            Some(r) => row.extend(columns.layout.result_values(r)),
+            None => row.extend(std::iter::repeat_n(String::new(), own.len())),
+        }
         w.write_record(&row).expect("in-memory csv");
     }
     let bytes = w.into_inner().expect("in-memory csv");

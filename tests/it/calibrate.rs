@@ -271,6 +271,15 @@ fn the_emulator_takes_the_scatter_between_seeds_as_each_run_s_noise() {
     // Each setting ran three times, with three seeds: three runs of the same values.
     let rows = common::result_rows(&out);
     assert_eq!(rows.len() % 3, 0, "{}", rows.len());
+    // results.csv names the heap's quantities: each done row's angle is its result's.
+    for row in rows.iter().filter(|r| r["status"] == "done") {
+        let r: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(out.join("runs").join(&row["hash"]).join("result.json")).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(row["angle_of_repose_deg"].parse::<f64>().ok(), r["heap"]["angle_deg"].as_f64(), "{row:?}");
+        assert_eq!(row["bulk_packing"].parse::<f64>().ok(), r["heap"]["packing"].as_f64(), "{row:?}");
+    }
     let (manifest, _) = Store::read_manifest(&out).unwrap();
     for k in (0..manifest.points.len()).step_by(3) {
         let p = &manifest.points[k..k + 3];

@@ -61,6 +61,23 @@ fn a_stand_in_sweep_of_every_layout_finishes_and_a_resume_runs_nothing() {
         let not_done: Vec<_> = rows.iter().filter(|r| r["status"] != "done").collect();
         assert!(!rows.is_empty() && not_done.is_empty(), "{what}: {not_done:?}");
         assert_eq!((first, resumed, ran), (Some(0), Some(0), 0), "{what}");
+        // A layers point's own quantities by their own names: results.csv's columns are
+        // result.json's steady layer, the depth in µm.
+        if what.starts_with("layers") {
+            for row in &rows {
+                let r: serde_json::Value = serde_json::from_str(
+                    &std::fs::read_to_string(out.join("runs").join(&row["hash"]).join("result.json")).unwrap(),
+                )
+                .unwrap();
+                let l = &r["layers"];
+                let col = |c: &str| row[c].parse::<f64>().unwrap_or_else(|_| panic!("{what}: {c} {row:?}"));
+                assert_eq!(col("relative_density"), l["relative_density"].as_f64().unwrap(), "{what}");
+                assert_eq!(col("steady_packing_se"), l["packing_se"].as_f64().unwrap(), "{what}");
+                assert!((col("depth_um") - 1e6 * l["effective_thickness_m"].as_f64().unwrap()).abs() < 1e-6);
+                assert_eq!(col("passes") as usize, l["passes"].as_array().unwrap().len(), "{what}");
+                assert_eq!(col("steady_from"), l["steady_from"].as_f64().unwrap(), "{what}");
+            }
+        }
     }
 }
 

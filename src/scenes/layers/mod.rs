@@ -40,6 +40,26 @@ use crate::scene::settings::{SceneSettings, DEFAULT_SEARCH_PASSES};
 use crate::scene::{Base, Scene};
 use crate::scenes::{BadSetting, BuiltinTemplate, ByPass, Finished, Layout, Rejected, SetupRows};
 
+
+/// A layers point's steady layer in results.csv: relative density and packing with their SE,
+/// the powder under the blade (µm), cover, roughness (in D), the first steady pass and the
+/// passes run, and the numerical error beside the SE (packing, µm of depth, cover).
+const RESULT_COLUMNS: [&str; 13] = [
+    "relative_density",
+    "relative_density_se",
+    "steady_packing",
+    "steady_packing_se",
+    "depth_um",
+    "depth_se_um",
+    "steady_covered_fraction",
+    "steady_roughness_d",
+    "steady_from",
+    "passes",
+    "numerical_error_packing",
+    "numerical_error_depth_um",
+    "numerical_error_cover",
+];
+
 /// Dose of one pass on a loose bed over what the plate's layer can hold at
 /// [`crate::scene::LAYER_FRACTION_MAX`] (times `scene.supply_factor`): twice what a steady loose pass leaves,
 /// so that the last of the plate is covered.
@@ -420,6 +440,32 @@ impl Layout for Layers {
                 numerics::summary(e, l.effective_thickness_m)
             ))
         ))
+    }
+
+    fn result_columns(&self) -> &'static [&'static str] {
+        &RESULT_COLUMNS
+    }
+
+    fn result_values(&self, r: &RunResult) -> Vec<String> {
+        let Some(l) = r.layers.as_ref() else { return vec![String::new(); RESULT_COLUMNS.len()] };
+        let um = |m: f64| m * 1e6;
+        let e = l.numerical_error.as_ref();
+        let values = [
+            Some(l.relative_density),
+            Some(l.relative_density_se),
+            Some(l.packing),
+            Some(l.packing_se),
+            Some(um(l.effective_thickness_m)),
+            Some(um(l.effective_thickness_se_m)),
+            Some(l.covered_fraction),
+            Some(l.roughness_d),
+            Some(l.steady_from as f64),
+            Some(l.passes.len() as f64),
+            e.map(|e| e.packing),
+            e.map(|e| um(e.depth_fraction * l.effective_thickness_m)),
+            e.map(|e| e.covered_fraction),
+        ];
+        values.iter().map(|v| v.filter(|v| v.is_finite()).map_or(String::new(), |v| v.to_string())).collect()
     }
 
     fn result_lines(&self, r: &RunResult) -> Option<Vec<String>> {

@@ -163,6 +163,17 @@ impl Layout for Pour {
         vec![HEAP_DUMP.into()]
     }
 
+    fn result_columns(&self) -> &'static [&'static str] {
+        &["angle_of_repose_deg", "angle_of_repose_se_deg", "bulk_packing", "heap_height_mm"]
+    }
+
+    fn result_values(&self, r: &RunResult) -> Vec<String> {
+        match &r.heap {
+            Some(h) => [h.angle_deg, h.angle_se_deg, h.packing, h.height_mm].map(|v| v.to_string()).to_vec(),
+            None => vec![String::new(); 4],
+        }
+    }
+
     fn calibration_targets(&self) -> &'static [Quantity] {
         CALIBRATION_TARGETS
     }
