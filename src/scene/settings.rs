@@ -133,6 +133,11 @@ pub struct SceneSettings {
     /// Layers layout: length of the build plate along the travel, in diameters.
     #[serde(skip_serializing_if = "is_default_plate")]
     pub plate_diameters: f64,
+    /// Layers layout, loose bed: the bed deeper than this many diameters under the machine's
+    /// top surface, at rest and beyond the blade's reach, stops moving and its particles are not
+    /// searched against each other (0: the whole bed moves).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub freeze_depth_diameters: f64,
     /// Size distribution of the particles.
     pub size_distribution: SizeDistributionSpec,
     /// How the `surface_energy` parameter is carried to the deck's softened contact
@@ -270,6 +275,7 @@ impl SceneSettings {
         s.blade_radius_mm = self.blade_radius_mm;
         s.blade_clearance_mm = self.blade_clearance_mm;
         s.plate_diameters = self.plate_diameters;
+        s.freeze_depth_diameters = self.freeze_depth_diameters;
         s.size_distribution = self.size_distribution.clone();
         s.cohesion_scaling = self.cohesion_scaling;
         s.material_youngs_gpa = self.material_youngs_gpa;
@@ -390,6 +396,7 @@ impl Default for SceneSettings {
             blade_radius_mm: DEFAULT_BLADE_RADIUS_MM,
             blade_clearance_mm: 0.0,
             plate_diameters: DEFAULT_PLATE_DIAMETERS,
+            freeze_depth_diameters: 0.0,
             size_distribution: SizeDistributionSpec::default(),
             cohesion_scaling: CohesionScaling::PullOff,
             material_youngs_gpa: 0.0,

@@ -78,6 +78,56 @@ fn each_layer_lies_on_the_one_before_and_the_platform_drops_by_the_layer_thickne
     }
 }
 
+/// The particles of a pass's dump over the plate: id and centre.
+fn plate_dump(run: &Path, k: usize) -> Vec<(u64, [f64; 3])> {
+    let text = std::fs::read_to_string(run.join(format!("dump.layer.{k}"))).unwrap();
+    let mut lines = text.lines().skip_while(|l| !l.starts_with("ITEM: ATOMS"));
+    lines.next();
+    lines
+        .map(|l| {
+            let v: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
+            (v[0] as u64, [v[1], v[2], v[3]])
+        })
+        .collect()
+}
+
+#[test]
+fn a_loose_bed_deep_under_the_top_is_held_still_and_every_particle_keeps_its_id() {
+    support::require_liggghts!("a_loose_bed_deep_under_the_top_is_held_still_and_every_particle_keeps_its_id");
+    let (_tmp, dir) = support::cwd();
+    // 2 mm spheres in 3 mm layers: from pass 3 the bed 3 D (6 mm) under the top is held still.
+    let sweep = bed(&dir, "layers = 4\nfreeze_depth_diameters = 3");
+    let run = dir.join("run");
+    let o = support::sweep(&["run", support::p(&sweep), "--set", "blade_speed=0.5", "--out", support::p(&run)]);
+    // Four passes may or may not make a steady layer; every pass must have run.
+    let err = support::stderr(&o);
+    assert!(o.status.success() || err.contains("(unsteady)"), "{err}");
+    assert!(run.join("dump.layer.4").is_file(), "{err}");
+    // Where pass k's deck holds the bed still: under this height (m), if anywhere.
+    let cut = |k: usize| -> Option<f64> {
+        let deck = std::fs::read_to_string(run.join(format!("in.pass.{k}"))).unwrap();
+        let head = format!("region deep{k} block");
+        let line = deck.lines().find(|l| l.starts_with(&head))?;
+        Some(line.split_whitespace().nth(8).unwrap().parse().unwrap())
+    };
+    assert_eq!(cut(2), None, "pass 2's top is under 6 mm: nothing held still");
+    let mut held = 0;
+    for k in 3..=4 {
+        let z = cut(k).unwrap_or_else(|| panic!("pass {k} holds nothing still"));
+        let (before, after) = (plate_dump(&run, k - 1), plate_dump(&run, k));
+        let now: std::collections::HashMap<u64, [f64; 3]> = after.iter().copied().collect();
+        for (id, x) in before.iter().filter(|(_, x)| x[2] < z) {
+            // The same particle, under the same id, exactly where it was.
+            assert_eq!(now.get(id), Some(x), "pass {k}: particle {id} below {z} m moved or lost its id");
+            held += 1;
+        }
+        // This pass's new particles have ids the last dump did not hold.
+        let ids: std::collections::HashSet<u64> = before.iter().map(|p| p.0).collect();
+        assert!(after.iter().any(|(id, _)| !ids.contains(id)), "pass {k}: no new particle");
+    }
+    assert!(held > 20, "{held} particles held still over two passes");
+}
+
 #[test]
 fn a_fused_bed_s_search_pass_sets_the_next_depth_by_its_deposit_and_the_layers_after_it_are_laid() {
     support::require_liggghts!(

@@ -5,11 +5,13 @@
 # point runs pass by pass in runs/twenty/<label>/: an interrupted study goes on from each point's
 # last pass (run it again), and the passes' records (pass.k.json: clocks) are copied to
 # record/twenty/<label>/ as they finish, the result to record/twenty-<label>.json at the end.
+# FREEZE=diameters holds the loose bed still that deep under the top surface (label -freezeN).
 #   nice bash docs/study/layers/twenty.sh [PS1|PS2|PS3]
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 out=docs/study/layers/record
 plate=${PLATE:-24}
+freeze=${FREEZE:-0}
 mkdir -p "$out/twenty" runs/twenty
 cases="PS1 0.20 0.10 3.5e-4
 PS2 0.20 0.20 2.5e-4
@@ -19,9 +21,11 @@ toml=$(mktemp --suffix=.toml)
 sed -e "s/^layers = [0-9]*$/layers = 21\nleast_layers = 21/" -e "s/^plate_diameters = .*$/plate_diameters = $plate/" \
   sweeps/layers-gaboriault.toml > "$toml"
 grep -q "^least_layers = 21$" "$toml"
+[ "$freeze" != 0 ] && sed -i "s/^least_layers = 21$/least_layers = 21\nfreeze_depth_diameters = $freeze/" "$toml"
 while read -r label mu mur gamma; do
   [ -n "$want" ] && [ "$want" != "$label" ] && continue
   name=$label-plate$plate
+  [ "$freeze" != 0 ] && name=$name-freeze$freeze
   [ -s "$out/twenty-$name.json" ] && { echo "$name: recorded"; continue; }
   ours=$(python3 -c "print(f'{4/3*$gamma:.4g}')")
   dir=runs/twenty/$name

@@ -44,6 +44,11 @@ use crate::scenes::{BadSetting, BuiltinTemplate, ByPass, Finished, Layout, Rejec
 /// A layers point's steady layer in results.csv: relative density and packing with their SE,
 /// the powder under the blade (µm), cover, roughness (in D), the first steady pass and the
 /// passes run, and the numerical error beside the SE (packing, µm of depth, cover).
+/// The least depth under the top surface a loose bed may be held still from, in diameters: the
+/// blade's tip stands about a layer under the top and moves the bed a few diameters below it.
+const MIN_FREEZE_DEPTH_DIAMETERS: f64 = 3.0;
+const MAX_FREEZE_DEPTH_DIAMETERS: f64 = 1000.0;
+
 const RESULT_COLUMNS: [&str; 13] = [
     "relative_density",
     "relative_density_se",
@@ -227,6 +232,7 @@ impl Layout for Layers {
             ("scene.blade_clearance_mm", s.blade_clearance_mm, 0.0, MAX_CLEARANCE_MM),
             ("scene.plate_diameters", s.plate_diameters, 10.0, MAX_PLATE_DIAMETERS),
             ("scene.supply_factor", s.supply_factor, 0.5, 100.0),
+            ("scene.freeze_depth_diameters", s.freeze_depth_diameters, 0.0, MAX_FREEZE_DEPTH_DIAMETERS),
         ] {
             let radius = key == "scene.blade_radius_mm";
             let ok = v.is_finite() && v <= most && if radius { v > least } else { v >= least };
@@ -241,6 +247,24 @@ impl Layout for Layers {
                 why: format!(
                     "{}: a flat blade has no radius; expected it only with blade_profile = \"round\"",
                     s.blade_radius_mm
+                ),
+            });
+        }
+        if s.freeze_depth_diameters > 0.0 && fused(s) {
+            return Err(BadSetting {
+                key: "scene.freeze_depth_diameters",
+                why: format!(
+                    "{}: a fused bed keeps no powder under its layers to hold still; expected it only with bed = \"loose\"",
+                    s.freeze_depth_diameters
+                ),
+            });
+        }
+        if s.freeze_depth_diameters > 0.0 && s.freeze_depth_diameters < MIN_FREEZE_DEPTH_DIAMETERS {
+            return Err(BadSetting {
+                key: "scene.freeze_depth_diameters",
+                why: format!(
+                    "{}: expected 0 (off) or at least {MIN_FREEZE_DEPTH_DIAMETERS} diameters, below the blade's reach",
+                    s.freeze_depth_diameters
                 ),
             });
         }

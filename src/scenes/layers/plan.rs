@@ -120,6 +120,10 @@ pub struct Plan {
     /// (its depth of powder the neighbour's steady one), m; cold, the plate.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub first_floor: Option<f64>,
+    /// Loose bed: the bed deeper than this under a pass's top surface is held still and not
+    /// searched against itself, m (0: none).
+    #[serde(default)]
+    pub freeze_depth: f64,
     pub feed: Vec<FeedClass>,
     pub volume_limit: f64,
     pub distribution_seed: u64,
@@ -342,6 +346,7 @@ pub(super) fn derive(base: Base, settings: &SceneSettings) -> Scene {
         resume: None,
         least_passes: least_passes(settings),
         first_floor: None,
+        freeze_depth: if fused { 0.0 } else { settings.freeze_depth_diameters * d },
         passes,
         feed,
         volume_limit,

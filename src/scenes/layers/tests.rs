@@ -523,3 +523,51 @@ fn a_trendless_layer_is_called_unsteady_at_the_rule_s_stated_rate() {
     let rate = unsteady as f64 / points as f64;
     assert!(rate < 0.06, "{rate} of trendless fused beds called unsteady");
 }
+
+#[test]
+fn a_loose_bed_is_held_still_below_its_freeze_depth_from_the_first_pass_whose_top_is_that_deep() {
+    // Refused where it cannot mean anything: a fused bed, a depth inside the blade's reach.
+    let fused = SceneSettings { bed: "fused".into(), freeze_depth_diameters: 10.0, ..settings() };
+    assert_eq!(Layers.check_settings(&fused).unwrap_err().key, "scene.freeze_depth_diameters");
+    for bad in [1.0, -1.0, f64::NAN, 1e9] {
+        let s = SceneSettings { freeze_depth_diameters: bad, ..settings() };
+        let err = Layers.check_settings(&s).unwrap_err();
+        assert_eq!(err.key, "scene.freeze_depth_diameters", "{bad}");
+        assert!(!err.why.contains('\n'));
+    }
+    let s = SceneSettings { layers: 8, freeze_depth_diameters: 3.0, ..settings() };
+    assert!(Layers.check_settings(&s).is_ok());
+    let sc = scene(&s);
+    let plan = plan_of(&sc);
+    assert!((plan.freeze_depth - 3.0 * sc.diameter).abs() < 1e-18);
+    let mut tera = tera::Tera::default();
+    tera.add_raw_template("layers", TEMPLATE.source).unwrap();
+    let mut context = tera::Context::new();
+    context.insert("scene", &sc);
+    let deck = tera.render("layers", &context).unwrap();
+    // A pass holds still what lies below its top minus the depth, once that is above the plate;
+    // the plate is then measured over every particle, held still or not.
+    for p in &plan.passes[..8] {
+        let cut = p.top - plan.freeze_depth;
+        let line = format!("region deep{} block", p.k);
+        match deck.lines().find(|l| l.starts_with(&line)) {
+            Some(l) => {
+                assert!(cut > 0.0, "pass {}: {l}", p.k);
+                let z: f64 = l.split_whitespace().nth(8).unwrap().parse().unwrap();
+                assert!((z - cut).abs() < 1e-15, "{l}");
+            }
+            None => assert!(cut <= 0.0, "pass {} holds nothing still", p.k),
+        }
+    }
+    assert!(deck.contains("group powder subtract powder frozen"));
+    assert!(deck.contains("variable platemass equal mass(all,plate)"));
+    assert!(deck.contains("dump layer8 all custom"));
+    // Off (the default), the deck measures the powder as before.
+    let off = tera.render("layers", &{
+        let mut c = tera::Context::new();
+        c.insert("scene", &scene(&SceneSettings { layers: 8, ..settings() }));
+        c
+    });
+    let off = off.unwrap();
+    assert!(!off.contains("frozen") && off.contains("mass(powder,plate)"));
+}
