@@ -237,6 +237,14 @@ pub(super) fn run_one(a: RunArgs) -> Result<(), Error> {
             eprintln!("the screen closes this point: nothing can pass under the blade (a sweep counts it as MFR = 0)");
         }
     }
+    // Said once on Ctrl-C: what is kept and what goes on.
+    let said = super::error::on_interrupt_say(match &a.out {
+        Some(d) => format!(
+            "{} is kept: the same command again goes on from its last finished pass (a layers point) or runs the point again",
+            d.display()
+        ),
+        None => "nothing is kept (no --out): the same command runs the point again".into(),
+    });
     let cancel = demsweep::sys::process::CancelToken::new();
     let outcome = match (&ctx, &prepared) {
         (Some(ctx), Some(p)) => point::execute(ctx, p, &dir, &cancel),
@@ -271,7 +279,7 @@ pub(super) fn run_one(a: RunArgs) -> Result<(), Error> {
             }
             Err(Error::RunsFailed { failed: 1, total: 1 })
         }
-        RunOutcome::Cancelled => Err(Error::Interrupted),
+        RunOutcome::Cancelled => Err(said(Error::Interrupted)),
     }
 }
 

@@ -386,6 +386,28 @@ fn a_layers_point_killed_in_its_third_pass_goes_on_from_its_second_and_ends_as_a
     let (a, b) = (passes_of(&whole), passes_of(&cut));
     assert_eq!(a.len(), 4);
     assert_eq!(a, b, "an interrupted point ends where an uninterrupted one does");
+
+    // Ctrl-C in a pass: exit 130 and one line that says what is kept and how it goes on.
+    let ctrl_c = dir.join("ctrl-c");
+    let child = support::sweep_bin()
+        .args(["run", support::p(&sweep), "--set", "blade_speed=0.5", "--out", support::p(&ctrl_c)])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    support::wait_until("pass 2 to start", std::time::Duration::from_secs(120), || {
+        ctrl_c.join("in.pass.2").is_file()
+    });
+    // SAFETY: kill(2) on our own child.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    let o = child.wait_with_output().unwrap();
+    let err = support::stderr(&o);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    let said = format!(
+        "interrupted: {} is kept: the same command again goes on from its last finished pass",
+        ctrl_c.display()
+    );
+    assert!(err.contains(&said) && !err.contains("error: interrupted"), "{err}");
 }
 
 #[test]
