@@ -18,6 +18,7 @@ use crate::engine::{Engine, LogLimits, RunStatus};
 use crate::error::{hint, Result};
 use crate::outcome::{FailureClass, RunFailure, RunOutcome, WarmStart};
 use crate::point::deck::{Deck, Template};
+use crate::scene::settings::SceneSettings;
 use crate::scene::{mesh, params, Scene};
 use crate::scenes::{Finished, Layout, Warm};
 use crate::sweep::{ParamKind, Parameter, Sweep};
@@ -126,6 +127,7 @@ pub fn fixed_values(sweep: &Sweep) -> Vec<FixedValue> {
     params::CATALOGUE
         .iter()
         .filter(|p| !sweep.swept.iter().any(|s| s.name == p.name))
+        .filter(|p| crate::scenes::shown(&sweep.file.scene, p.name))
         .map(|p| {
             let written = sweep.fixed.iter().find_map(|f| match f.kind {
                 ParamKind::Fixed(v) if f.name == p.name => Some(v),
@@ -223,7 +225,7 @@ pub fn prepare(ctx: &PointContext, swept_values: &[f64]) -> Result<Prepared, Poi
     let scene = crate::scenes::build(&parameters, &ctx.sweep.file.scene)
         .map_err(|source| PointError::Scene { path: ctx.sweep.path.clone(), source })?;
     let mut deck = Deck::new(&ctx.template, ctx.layout, &scene, &ctx.engine.identity())?;
-    deck.header = header(&parameters, &deck.hash);
+    deck.header = header(&parameters, &ctx.sweep.file.scene, &deck.hash);
     Ok(Prepared { hash: deck.hash.clone(), parameters, scene, deck })
 }
 
@@ -237,9 +239,10 @@ pub fn cut_off(run_dir: &Path) -> Option<String> {
 }
 
 /// The deck's first lines: every parameter of the point with its unit, and the run's hash.
-fn header(parameters: &BTreeMap<String, f64>, hash: &str) -> String {
+fn header(parameters: &BTreeMap<String, f64>, settings: &SceneSettings, hash: &str) -> String {
     let values: Vec<String> = params::CATALOGUE
         .iter()
+        .filter(|p| crate::scenes::shown(settings, p.name))
         .filter_map(|p| {
             let v = crate::scene::plausible::show(*parameters.get(p.name)?);
             Some(if p.unit == "-" {

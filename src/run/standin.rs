@@ -88,7 +88,9 @@ impl Executor for StandIn {
         let hash_of = |version: u32| {
             let mut h = Sha256::new();
             h.update(format!("{NAME} {version}\n"));
-            for (k, v) in &parameters {
+            // A parameter the point does not read (a roller's speed ratio on a blade) is left
+            // out, so that every other point draws the noise it drew before it existed.
+            for (k, v) in parameters.iter().filter(|(k, _)| crate::scenes::shown(&self.sweep.file.scene, k)) {
                 h.update(format!("{k}={:016x}\n", v.to_bits()));
             }
             // A repeat with its own seed draws its own noise.

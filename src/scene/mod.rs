@@ -310,6 +310,9 @@ pub struct Base {
     /// How far the platform drops between passes (layers layout), m.
     pub layer_thickness: f64,
     pub speed: f64,
+    /// A roller's surface speed about its axis over its travel speed (counter-rotation
+    /// positive); read only by the layers layout's roller.
+    pub roller_speed_ratio: f64,
     pub material: PowderMaterial,
     pub rayleigh_time: f64,
     pub timestep: f64,
@@ -384,6 +387,7 @@ impl Base {
             heap_height: get("heap_height") * mm,
             layer_thickness: get("layer_thickness") * mm,
             speed,
+            roller_speed_ratio: get("roller_speed_ratio"),
             material: PowderMaterial {
                 density,
                 youngs_modulus: youngs,

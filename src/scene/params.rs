@@ -128,6 +128,16 @@ pub const CATALOGUE: &[ParamInfo] = &[
         description: "blade speed in +x",
     },
     ParamInfo {
+        name: "roller_speed_ratio",
+        unit: "-",
+        // 0: a roller that does not turn — and no roller at all elsewhere ([`ONLY_WHERE_READ`]).
+        default: 0.0,
+        min: Bound::None,
+        max: Bound::None,
+        description: "a roller's surface speed about its axis over its travel speed; counter-rotation \
+                      positive, forward rolling −1 (layers layout, blade_profile = \"roller\")",
+    },
+    ParamInfo {
         name: "density",
         unit: "kg/m3",
         default: 7980.0,
@@ -178,6 +188,13 @@ pub const CATALOGUE: &[ParamInfo] = &[
         description: "Weibull scale λ of the diameter distribution (size_distribution = weibull)",
     },
 ];
+
+/// Parameters a layout reads only in some of its setups (the roller's speed ratio, only with
+/// `blade_profile = "roller"`). Where a point does not read one it is refused when set away from
+/// its default, not only when swept — a speed ratio given for a blade would otherwise be dropped
+/// without a word — and it is left out of the point's deck header and results.csv, so that the
+/// points that never read it are written as before it existed.
+pub const ONLY_WHERE_READ: &[&str] = &["roller_speed_ratio"];
 
 pub fn lookup(name: &str) -> Option<&'static ParamInfo> {
     CATALOGUE.iter().find(|p| p.name == name)

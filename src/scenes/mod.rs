@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 use crate::engine::EngineRun;
 use crate::outcome::{FailureClass, RunResult};
 use crate::scene::settings::SceneSettings;
-use crate::scene::{plausible, Base, Scene, SceneError};
+use crate::scene::{params, plausible, Base, Scene, SceneError};
 pub use conveyor::warm::Warm;
 
 /// Why a point starts cold instead of from a finished neighbour's state ([`Layout::warm_start`]).
@@ -69,8 +69,28 @@ pub fn ignored(settings: &SceneSettings, name: &str) -> Option<String> {
         return Some(why.to_string());
     }
     let layout = lookup(&settings.layout)?;
-    layout.ignores(name).map(|why| format!("the {} layout {why}", layout.name()))
+    layout.ignores(settings, name).map(|why| format!("the {} layout {why}", layout.name()))
 }
+
+/// Why a point of `settings` refuses the parameter `name` set to `value`: one read only in some
+/// setups ([`params::ONLY_WHERE_READ`]), set away from its default where it is not read.
+pub fn set_but_unread(settings: &SceneSettings, name: &str, value: f64) -> Option<String> {
+    let info = params::lookup(name)?;
+    // Exactly the default: a value nobody set (the catalogue's own number), not a measurement.
+    if !params::ONLY_WHERE_READ.contains(&name) || value == info.default {
+        return None;
+    }
+    ignored(settings, name)
+}
+
+/// Whether a point of `settings` lists the parameter `name` in its deck's header and
+/// results.csv: every parameter but one read only in some setups where it is not read.
+pub fn shown(settings: &SceneSettings, name: &str) -> bool {
+    !params::ONLY_WHERE_READ.contains(&name) || ignored(settings, name).is_none()
+}
+
+/// Why a layout without a roller ignores `roller_speed_ratio` ([`Layout::ignores`]).
+pub const NO_ROLLER: &str = "has no roller; only the layers layout turns one (blade_profile = \"roller\")";
 
 /// A built-in deck template.
 #[derive(Debug, Clone, Copy)]
@@ -202,7 +222,7 @@ pub trait Layout: Sync {
     /// Why a catalogue parameter, or a `[scene]` key named `scene.…`, plays no part in this
     /// layout's scene, if it plays none: a sweep of such a parameter is refused, and the report
     /// leaves it out of the setup every point shares.
-    fn ignores(&self, _name: &str) -> Option<&'static str> {
+    fn ignores(&self, _settings: &SceneSettings, _name: &str) -> Option<&'static str> {
         None
     }
 
@@ -375,6 +395,11 @@ pub fn of(settings: &SceneSettings) -> Result<&'static dyn Layout, SceneError> {
 /// settings: the common part, the layout's geometry, then the plausibility bounds.
 pub fn build(values: &BTreeMap<String, f64>, settings: &SceneSettings) -> Result<Scene, SceneError> {
     let layout = of(settings)?;
+    for (name, &value) in values {
+        if let Some(why) = set_but_unread(settings, name, value) {
+            return Err(SceneError::Invalid { name: name.clone(), value, why });
+        }
+    }
     let scene = layout.derive(Base::new(values, settings)?, settings);
     if !settings.force_bounds {
         let held = layout.held_heap(&scene).map(|h| (h.heap_particles, h.heap_height_mm * 1e-3));

@@ -196,6 +196,13 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<Params, SweepErr
             return Err(bad(&format!("parameters.{}", p.name), format!("swept, but {why}")));
         }
     }
+    for p in &fixed {
+        if let ParamKind::Fixed(v) = p.kind {
+            if let Some(why) = crate::scenes::set_but_unread(&file.scene, &p.name, v) {
+                return Err(bad(&format!("parameters.{}", p.name), format!("{v}, but {why}")));
+            }
+        }
+    }
     let d = &file.design;
     if d.lattice_levels.is_empty() {
         return Err(bad(

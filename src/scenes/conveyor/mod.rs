@@ -173,9 +173,10 @@ impl Layout for Conveyor {
         format!("a heap held at {} particles, at most {} steps", held(sc).heap_particles, sc.spread_steps())
     }
 
-    fn ignores(&self, name: &str) -> Option<&'static str> {
+    fn ignores(&self, _settings: &SceneSettings, name: &str) -> Option<&'static str> {
         match name {
             "layer_thickness" => Some(super::ONE_LAYER),
+            "roller_speed_ratio" => Some(super::NO_ROLLER),
             _ => None,
         }
     }

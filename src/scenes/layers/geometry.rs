@@ -3,7 +3,8 @@
 //!
 //! - `blade.stl`: the blade with its lowest line at z = 0 — a box one diameter thick (flat) or
 //!   the lowest [`ROUND_ARC_SHARE`] of a cylinder's half circle about a y axis with vertical
-//!   faces above (round);
+//!   faces above (round), or a whole cylinder (roller: it turns, so every side of it comes
+//!   down to the powder);
 //! - `feed.stl`: the feed platform, top at z = 0, from the box's back to the plate;
 //! - `wall.stl`: the wall after the plate, one diameter thick, top at z = 0;
 //! - `plate.stl`: the build plate, top at z = 0;
@@ -15,7 +16,7 @@
 
 use std::fmt::Write;
 
-use super::{Plan, ROUND_ARC_SHARE};
+use super::{Plan, ROLLER_SEGMENTS, ROUND_ARC_SHARE};
 use crate::scene::mesh::box_stl;
 use crate::scene::Scene;
 
@@ -34,20 +35,30 @@ pub fn blade_stl(s: &Scene, plan: &Plan) -> String {
             s.mesh_cell,
         );
     }
-    // The arc from angle −φ to +φ about the lowest line (angle 0), φ = share × 90°, then
-    // vertical faces from its ends up to the blade's top, and a lid.
     let r = plan.blade_radius;
     let (xc, zc) = (plan.tip_x0, r);
-    let phi = 0.5 * ROUND_ARC_SHARE * std::f64::consts::PI;
+    // Angle a from the lowest line (0), counter-clockwise seen from −y.
     let point = |a: f64| [xc + r * a.sin(), zc - r * a.cos()];
     let mut profile: Vec<[f64; 2]> = Vec::new();
-    let top = s.blade_top.max(point(phi)[1] + s.diameter);
-    profile.push([point(-phi)[0], top]);
-    for i in 0..=ARC_SEGMENTS {
-        profile.push(point(-phi + 2.0 * phi * i as f64 / ARC_SEGMENTS as f64));
+    if plan.roller {
+        // The whole circle, from its top down the back, under it and up the front.
+        let pi = std::f64::consts::PI;
+        for i in 0..ROLLER_SEGMENTS {
+            profile.push(point(-pi + 2.0 * pi * i as f64 / ROLLER_SEGMENTS as f64));
+        }
+        profile.push(profile[0]);
+    } else {
+        // The arc from angle −φ to +φ about the lowest line, φ = share × 90°, then vertical faces
+        // from its ends up to the blade's top, and a lid.
+        let phi = 0.5 * ROUND_ARC_SHARE * std::f64::consts::PI;
+        let top = s.blade_top.max(point(phi)[1] + s.diameter);
+        profile.push([point(-phi)[0], top]);
+        for i in 0..=ARC_SEGMENTS {
+            profile.push(point(-phi + 2.0 * phi * i as f64 / ARC_SEGMENTS as f64));
+        }
+        profile.push([point(phi)[0], top]);
+        profile.push(profile[0]);
     }
-    profile.push([point(phi)[0], top]);
-    profile.push(profile[0]);
     let mut out = String::from("solid blade\n");
     // Each segment of the profile extruded across the depth, in cells no larger than the mesh
     // cell along both (LIGGGHTS 3.8's mesh build fails on elements large against the depth).

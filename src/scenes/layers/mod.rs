@@ -128,6 +128,9 @@ pub const MAX_LAYERS: usize = 100;
 pub const SEARCH_MAX_DEPTH_LAYERS: f64 = 20.0;
 /// Most a search pass may multiply the depth by (a pass that deposited almost nothing).
 pub const SEARCH_MAX_GROWTH: f64 = 3.0;
+/// Segments of a roller's whole circle: the round blade's angle a segment (a roller turns, so
+/// all of it is meshed; the round blade meshes [`ROUND_ARC_SHARE`] of a half circle in 48).
+pub const ROLLER_SEGMENTS: usize = 128;
 /// Share of a round blade's half circle that is meshed, centred on its lowest line (Gaboriault
 /// et al.'s case generator meshes 0.75 of it; above it the blade's faces are vertical).
 pub const ROUND_ARC_SHARE: f64 = 0.75;
@@ -219,10 +222,10 @@ impl Layout for Layers {
                 });
             }
         }
-        if !matches!(s.blade_profile.as_str(), "flat" | "round") {
+        if !matches!(s.blade_profile.as_str(), "flat" | "round" | "roller") {
             return Err(BadSetting {
                 key: "scene.blade_profile",
-                why: format!("\"{}\": expected \"flat\" or \"round\"", s.blade_profile),
+                why: format!("\"{}\": expected \"flat\", \"round\" or \"roller\"", s.blade_profile),
             });
         }
         // Bounded above too: a radius of 1e155 mm overflowed the blade's mesh, 1e10 took minutes
@@ -245,7 +248,7 @@ impl Layout for Layers {
             return Err(BadSetting {
                 key: "scene.blade_radius_mm",
                 why: format!(
-                    "{}: a flat blade has no radius; expected it only with blade_profile = \"round\"",
+                    "{}: a flat blade has no radius; expected it only with blade_profile = \"round\" or \"roller\"",
                     s.blade_radius_mm
                 ),
             });
@@ -305,8 +308,11 @@ impl Layout for Layers {
         )
     }
 
-    fn ignores(&self, name: &str) -> Option<&'static str> {
+    fn ignores(&self, settings: &SceneSettings, name: &str) -> Option<&'static str> {
         match name {
+            "roller_speed_ratio" if settings.blade_profile != "roller" => Some(
+                "turns no roller with this blade: only blade_profile = \"roller\" reads roller_speed_ratio",
+            ),
             "gap" => Some("sets its blade layer_thickness (and scene.blade_clearance_mm) above the bed"),
             "heap_height" => Some("doses each pass by scene.supply_factor; only the conveyor layout holds a heap of a set height"),
             "scene.substrate" => Some("spreads onto its own bed of the powder (scene.bed)"),
@@ -332,10 +338,13 @@ impl Layout for Layers {
                 ),
                 (
                     "blade profile",
-                    if s.blade_profile == "round" {
-                        format!("round, radius {} mm", short(s.blade_radius_mm))
-                    } else {
-                        "flat".into()
+                    match s.blade_profile.as_str() {
+                        "round" => format!("round, radius {} mm", short(s.blade_radius_mm)),
+                        "roller" => format!(
+                            "roller, radius {} mm (roller_speed_ratio turns it)",
+                            short(s.blade_radius_mm)
+                        ),
+                        _ => "flat".into(),
                     },
                 ),
                 ("blade clearance over the plate's drops (mm)", short(s.blade_clearance_mm)),

@@ -571,3 +571,58 @@ fn a_loose_bed_is_held_still_below_its_freeze_depth_from_the_first_pass_whose_to
     let off = off.unwrap();
     assert!(!off.contains("frozen") && off.contains("mass(powder,plate)"));
 }
+
+#[test]
+fn the_roller_is_a_whole_circle_about_its_axis_turning_at_minus_its_ratio_over_its_radius() {
+    let s = SceneSettings { blade_profile: "roller".into(), blade_radius_mm: 1.0, ..settings() };
+    let mut v =
+        values(&[("diameter", 0.065), ("layer_thickness", 0.1), ("blade_speed", 0.1), ("density", 4386.0)]);
+    v.insert("roller_speed_ratio".into(), 3.0);
+    let sc = crate::scenes::build(&v, &s).unwrap();
+    let plan = plan_of(&sc);
+    assert!(plan.roller);
+    assert_eq!(plan.roller_speed_ratio, 3.0);
+    // ω about +y per unit travel speed: counter-rotating, the lowest line runs ahead (ω < 0).
+    assert!((plan.roller_spin + 3.0 / 1e-3).abs() < 1e-9, "{}", plan.roller_spin);
+    // It is taken away only once all of it is past the plate (what it carries falls in the
+    // pit), and it stays inside the box.
+    let r = plan.blade_radius;
+    assert!(plan.tip_x0 + plan.travel - r > plan.plate_x1, "the roller is taken away over the plate");
+    assert!(plan.tip_x0 + plan.travel + r < sc.x_hi, "the roller leaves the box");
+    // Every vertex on the circle of radius r about (tip_x0, r), all the way round.
+    let angles: Vec<f64> = Layers
+        .mesh(&sc)
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("vertex"))
+        .map(|l| {
+            let p: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
+            let (x, z) = (p[0] - plan.tip_x0, p[2] - r);
+            assert!(((x * x + z * z).sqrt() - r).abs() < 1e-9 * r, "vertex {p:?} off the circle");
+            z.atan2(x)
+        })
+        .collect();
+    let step = 2.0 * std::f64::consts::PI / ROLLER_SEGMENTS as f64;
+    for k in 0..ROLLER_SEGMENTS {
+        let a = -std::f64::consts::PI + k as f64 * step;
+        assert!(angles.iter().any(|b| (b - a)
+            .rem_euclid(2.0 * std::f64::consts::PI)
+            .min((a - b).rem_euclid(2.0 * std::f64::consts::PI))
+            < 1e-9));
+    }
+    // The deck turns it; a roller that does not turn (ratio 0) and a round blade are not turned.
+    let render = |sc: &Scene| {
+        let mut tera = tera::Tera::default();
+        tera.add_raw_template("layers", TEMPLATE.source).unwrap();
+        let mut context = tera::Context::new();
+        context.insert("scene", sc);
+        tera.render("layers", &context).unwrap()
+    };
+    assert_eq!(render(&sc).matches("rotate/variable").count(), s.layers);
+    v.insert("roller_speed_ratio".into(), 0.0);
+    assert!(!render(&crate::scenes::build(&v, &s).unwrap()).contains("rotate/variable"));
+    let round = SceneSettings { blade_profile: "round".into(), ..s.clone() };
+    assert!(crate::scenes::build(&v, &round).is_ok());
+    v.insert("roller_speed_ratio".into(), 1.0);
+    let err = crate::scenes::build(&v, &round).unwrap_err().to_string();
+    assert!(err.contains("roller_speed_ratio") && err.contains("turns no roller"), "{err}");
+}

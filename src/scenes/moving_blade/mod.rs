@@ -129,8 +129,9 @@ impl Layout for MovingBlade {
         vec![DUMP.into()]
     }
 
-    fn ignores(&self, name: &str) -> Option<&'static str> {
+    fn ignores(&self, _settings: &SceneSettings, name: &str) -> Option<&'static str> {
         match name {
+            "roller_speed_ratio" => Some(super::NO_ROLLER),
             "heap_height" => {
                 Some("pushes the heap its pile leaves; only the conveyor layout holds one of a set height")
             }

@@ -138,9 +138,9 @@ impl Layout for Pour {
         )
     }
 
-    fn ignores(&self, name: &str) -> Option<&'static str> {
+    fn ignores(&self, _settings: &SceneSettings, name: &str) -> Option<&'static str> {
         match name {
-            "gap" | "heap_height" | "layer_thickness" | "scene.vx_band_diameters" => {
+            "gap" | "heap_height" | "layer_thickness" | "roller_speed_ratio" | "scene.vx_band_diameters" => {
                 Some("pours a heap on the plate: it has no blade")
             }
             "blade_speed" => Some("lifts its cylinder at a fixed speed in √(g·D)"),
