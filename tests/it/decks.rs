@@ -31,6 +31,7 @@ const CASES: &[(&str, &str, Edits)] = &[
         &[("bed = \"fused\"", "bed = \"loose\""), ("blade_profile = \"round\"", "blade_profile = \"flat\"")],
     ),
     ("layers-gaboriault", "sweeps/layers-gaboriault.toml", &[]),
+    ("roller", "sweeps/roller.toml", &[]),
 ];
 
 /// `case point file sha256` for every file `sweep render` writes.

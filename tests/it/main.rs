@@ -38,6 +38,7 @@ mod point;
 mod pour;
 mod powders;
 mod recoater;
+mod roller;
 mod stability;
 mod steady;
 mod study_layers;
