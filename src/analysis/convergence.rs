@@ -186,7 +186,11 @@ impl Criteria {
     pub fn describe(&self) -> String {
         let t = self.tolerance * 100.0;
         let which = self.which();
-        let one = if all_true(&self.judged) { "any one statistic".to_string() } else { format!("any one of {which}") };
+        let one = if all_true(&self.judged) {
+            "any one statistic".to_string()
+        } else {
+            format!("any one of {which}")
+        };
         match self.rule {
             Rule::Any => {
                 format!("rule \"any\" (thesis): {one} within {t}% of the previous space")

@@ -401,8 +401,17 @@ fn execute<E: Executor>(
         fixed: crate::point::fixed_columns(sweep),
         layout: crate::scenes::of(&sweep.file.scene).map_err(crate::point::PointError::Layout)?,
     };
-    let mut rep =
-        Reporter::new(store, manifest, status, opts.progress, hook, screen, sample.clone(), awaiting, columns)?;
+    let mut rep = Reporter::new(
+        store,
+        manifest,
+        status,
+        opts.progress,
+        hook,
+        screen,
+        sample.clone(),
+        awaiting,
+        columns,
+    )?;
     if rep.verdict == Verdict::Refuted {
         queued.append(&mut held);
     }

@@ -277,7 +277,11 @@ fn the_emulator_takes_the_scatter_between_seeds_as_each_run_s_noise() {
             &std::fs::read_to_string(out.join("runs").join(&row["hash"]).join("result.json")).unwrap(),
         )
         .unwrap();
-        assert_eq!(row["angle_of_repose_deg"].parse::<f64>().ok(), r["heap"]["angle_deg"].as_f64(), "{row:?}");
+        assert_eq!(
+            row["angle_of_repose_deg"].parse::<f64>().ok(),
+            r["heap"]["angle_deg"].as_f64(),
+            "{row:?}"
+        );
         assert_eq!(row["bulk_packing"].parse::<f64>().ok(), r["heap"]["packing"].as_f64(), "{row:?}");
     }
     let (manifest, _) = Store::read_manifest(&out).unwrap();

@@ -134,7 +134,10 @@ fn values_that_make_no_sense_are_named() {
         rejects(
             &format!("{BASE}[convergence]\nstatistics = {bad}\n"),
             &["--lds", "2"],
-            &["convergence.statistics", "expected one or more of \"mean\", \"std\", \"skewness\", \"kurtosis\""],
+            &[
+                "convergence.statistics",
+                "expected one or more of \"mean\", \"std\", \"skewness\", \"kurtosis\"",
+            ],
         );
     }
     rejects(

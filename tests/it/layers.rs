@@ -93,12 +93,15 @@ fn plate_dump(run: &Path, k: usize) -> Vec<(u64, [f64; 3])> {
 
 #[test]
 fn a_loose_bed_deep_under_the_top_is_held_still_and_every_particle_keeps_its_id() {
-    support::require_liggghts!("a_loose_bed_deep_under_the_top_is_held_still_and_every_particle_keeps_its_id");
+    support::require_liggghts!(
+        "a_loose_bed_deep_under_the_top_is_held_still_and_every_particle_keeps_its_id"
+    );
     let (_tmp, dir) = support::cwd();
     // 2 mm spheres in 3 mm layers: from pass 3 the bed 3 D (6 mm) under the top is held still.
     let sweep = bed(&dir, "layers = 4\nfreeze_depth_diameters = 3");
     let run = dir.join("run");
-    let o = support::sweep(&["run", support::p(&sweep), "--set", "blade_speed=0.5", "--out", support::p(&run)]);
+    let o =
+        support::sweep(&["run", support::p(&sweep), "--set", "blade_speed=0.5", "--out", support::p(&run)]);
     // Four passes may or may not make a steady layer; every pass must have run.
     let err = support::stderr(&o);
     assert!(o.status.success() || err.contains("(unsteady)"), "{err}");

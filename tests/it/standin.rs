@@ -66,7 +66,8 @@ fn a_stand_in_sweep_of_every_layout_finishes_and_a_resume_runs_nothing() {
         if what.starts_with("layers") {
             for row in &rows {
                 let r: serde_json::Value = serde_json::from_str(
-                    &std::fs::read_to_string(out.join("runs").join(&row["hash"]).join("result.json")).unwrap(),
+                    &std::fs::read_to_string(out.join("runs").join(&row["hash"]).join("result.json"))
+                        .unwrap(),
                 )
                 .unwrap();
                 let l = &r["layers"];

@@ -40,7 +40,6 @@ use crate::scene::settings::{SceneSettings, DEFAULT_SEARCH_PASSES};
 use crate::scene::{Base, Scene};
 use crate::scenes::{BadSetting, BuiltinTemplate, ByPass, Finished, Layout, Rejected, SetupRows};
 
-
 /// A layers point's steady layer in results.csv: relative density and packing with their SE,
 /// the powder under the blade (µm), cover, roughness (in D), the first steady pass and the
 /// passes run, and the numerical error beside the SE (packing, µm of depth, cover).

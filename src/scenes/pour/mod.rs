@@ -38,8 +38,8 @@ use crate::scene::settings::SceneSettings;
 use crate::scene::{Base, Scene, GRAVITY, LAYER_FRACTION_MAX};
 use crate::scenes::quantity::Quantity;
 use crate::scenes::stand_in::StandInPoint;
-use heap::CALIBRATION_TARGETS;
 use crate::scenes::{BadSetting, BuiltinTemplate, Finished, Layout, Rejected, SetupRows};
+use heap::CALIBRATION_TARGETS;
 
 /// The pour layout (registered in [`crate::scenes::LAYOUTS`]).
 pub struct Pour;
