@@ -18,6 +18,22 @@ const POLL_MIN: Duration = Duration::from_millis(1);
 const POLL: Duration = Duration::from_millis(20);
 /// Time between SIGTERM and SIGKILL when a job is stopped.
 pub const KILL_GRACE: Duration = Duration::from_secs(2);
+/// How long after a job died of a signal ours may still arrive, when one signal was sent to both.
+const SIGNAL_SKEW: Duration = Duration::from_secs(1);
+
+/// Whether `cancel` is set now or within `skew`.
+fn cancelled_within(cancel: &CancelToken, skew: Duration) -> bool {
+    let until = Instant::now() + skew;
+    loop {
+        if cancel.is_cancelled() {
+            return true;
+        }
+        if Instant::now() >= until {
+            return false;
+        }
+        std::thread::sleep(POLL);
+    }
+}
 
 /// A flag that stops running children and new starts; cloned into every worker.
 #[derive(Clone, Debug, Default)]
@@ -107,10 +123,19 @@ pub fn run_watched(
         match reap(&child) {
             Ok(Some((status, used))) => {
                 cpu = Some(used);
-                break match (status.code(), status.signal()) {
+                let ended = match (status.code(), status.signal()) {
                     (Some(code), _) => ProcessOutcome::Exited(code),
                     (None, Some(sig)) => ProcessOutcome::Signalled(sig),
                     (None, None) => ProcessOutcome::Exited(-1),
+                };
+                // A signal that stops us can reach the job first (Slurm's scancel and a
+                // terminal's Ctrl-C signal every process of the job at once): a job killed by a
+                // signal while we are being stopped was cancelled, not failed.
+                let killed = matches!(ended, ProcessOutcome::Signalled(_) | ProcessOutcome::Exited(128..));
+                break if killed && cancelled_within(cancel, SIGNAL_SKEW) {
+                    ProcessOutcome::Cancelled
+                } else {
+                    ended
                 };
             }
             Ok(None) => {}
