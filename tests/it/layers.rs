@@ -9,10 +9,16 @@ use crate::support::{self, run_point};
 
 /// A layers sweep at D = 2 mm over blade speed, with `extra` in `[scene]`.
 fn bed(dir: &Path, extra: &str) -> PathBuf {
+    bed_file(dir, "layers", "", extra)
+}
+
+/// The same bed as the sweep `name` (in `name.toml`), with `parameters` after the common ones and
+/// `extra` in `[scene]`: the roller's tests spread it too.
+pub(crate) fn bed_file(dir: &Path, name: &str, parameters: &str, extra: &str) -> PathBuf {
     support::write_file(
-        &dir.join("layers.toml"),
+        &dir.join(format!("{name}.toml")),
         &format!(
-            r#"name = "layers"
+            r#"name = "{name}"
 [parameters]
 blade_speed     = {{ lo = 0.2, hi = 0.8, unit = "m/s" }}
 diameter        = 2.0
@@ -20,6 +26,7 @@ layer_thickness = {{ value = 3.0, unit = "mm" }}
 friction        = 0.3
 rolling_friction = 0.1
 restitution     = 0.4
+{parameters}
 [scene]
 layout = "layers"
 plate_diameters = 12

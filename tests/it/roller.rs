@@ -10,26 +10,11 @@ use crate::support::{self, run_point};
 /// A loose-bed layers sweep of 2 mm spheres spread by a roller of radius 5 mm, with `parameters`
 /// after the common ones and `extra` in `[scene]`.
 fn roller(dir: &Path, parameters: &str, extra: &str) -> PathBuf {
-    support::write_file(
-        &dir.join("roller.toml"),
-        &format!(
-            r#"name = "roller"
-[parameters]
-blade_speed     = {{ lo = 0.2, hi = 0.8, unit = "m/s" }}
-diameter        = 2.0
-layer_thickness = {{ value = 3.0, unit = "mm" }}
-friction        = 0.3
-rolling_friction = 0.1
-restitution     = 0.4
-{parameters}
-[scene]
-layout = "layers"
-plate_diameters = 12
-blade_profile = "roller"
-blade_radius_mm = 5
-{extra}
-"#
-        ),
+    crate::layers::bed_file(
+        dir,
+        "roller",
+        parameters,
+        &format!("blade_profile = \"roller\"\nblade_radius_mm = 5\n{extra}"),
     )
 }
 
