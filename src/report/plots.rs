@@ -199,7 +199,15 @@ pub(super) fn statistics(a: &Analysis) -> Res<Figure> {
             let unit =
                 if st.name() == "std" || st.name() == "mean" { format!("{q} (–)") } else { "(–)".into() };
             let mut c = ChartBuilder::on(panel)
-                .caption(format!("{} of {q}", st.name()), (FONT, AXIS_FONT))
+                .caption(
+                    // A statistic the rule does not judge (`convergence.statistics`) says so.
+                    format!(
+                        "{} of {q}{}",
+                        st.name(),
+                        if a.criteria.judges(st) { "" } else { " (not judged)" }
+                    ),
+                    (FONT, AXIS_FONT),
+                )
                 .margin(10)
                 .x_label_area_size(44)
                 .y_label_area_size(72)
