@@ -9,6 +9,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 sweep=${SWEEP:-target/release/sweep}
+jobs=${JOBS:-1}   # 2 on a two-core machine to itself: the first two points start cold
 dir=runs/machine-lattice
 out=docs/study/layers/record/machine-lattice
 mkdir -p "$out"
@@ -23,8 +24,8 @@ copy() {
 copier=$!
 trap 'kill $copier 2>/dev/null || true; copy' EXIT
 if [ -f "$dir/manifest.json" ]; then
-  "$sweep" resume "$dir" --jobs 1 || true
+  "$sweep" resume "$dir" --jobs "$jobs" || true
 else
-  "$sweep" lattice sweeps/ti64-layers.toml --levels 3 --jobs 1 --out "$dir" || true
+  "$sweep" lattice sweeps/ti64-layers.toml --levels 3 --jobs "$jobs" --out "$dir" || true
 fi
 cp "$dir"/summary.json "$dir"/results.csv "$out/" 2>/dev/null || true
