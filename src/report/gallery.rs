@@ -1,9 +1,9 @@
 //! The report's figures, in the order the page shows them: the failure map, then per space
 //! the MFR histogram, the statistics against N, the scatter, the pair maps, the v_x profiles and
-//! the lattice panels.
+//! the lattice panels; a sweep run pass by pass, each point's passes and a top view of its layer.
 
 use super::plots::{self, Figure, Res};
-use super::{maps, Analysis, PointRow};
+use super::{maps, passes, Analysis, PointRow};
 
 /// Every figure of the report. With no MFR measured (every run failed) only the failure map:
 /// empty plots say nothing.
@@ -38,9 +38,11 @@ pub fn draw_all(a: &Analysis) -> Res<Vec<Figure>> {
             cells: maps::CellValue::Points,
         },
     )?);
-    if a.points.iter().any(|p| p.done().is_some()) {
+    // A layout that measures no v_x (a layers sweep) gets no empty profile panels.
+    if a.points.iter().any(|p| p.done().is_some_and(|(r, _)| r.vx.iter().any(Option::is_some))) {
         out.push(plots::profiles(a)?);
+        out.extend(plots::lattice_panels(a)?);
     }
-    out.extend(plots::lattice_panels(a)?);
+    out.extend(passes::draw(a)?);
     Ok(out)
 }

@@ -370,6 +370,7 @@ fn measured_sections(a: &Analysis, figures: &[Figure]) -> Value {
             "covered": figures_named(figures, |n| n.starts_with("map-covered-")),
             "profiles": profiles,
             "lattice": figures_named(figures, |n| n.starts_with("lattice-")),
+            "passes": figures_named(figures, |n| n == "passes" || n == "top-view"),
         },
     })
 }

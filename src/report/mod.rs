@@ -21,6 +21,7 @@ mod gallery;
 mod html;
 mod maps;
 mod page;
+mod passes;
 mod plots;
 mod setup;
 pub mod show;

@@ -7,6 +7,7 @@
 //! `match` to extend elsewhere.
 
 pub mod conveyor;
+pub mod figures;
 pub mod layers;
 pub mod moving_blade;
 pub mod pour;
@@ -379,6 +380,22 @@ pub trait Layout: Sync {
     /// pass the checks this layout's results pass when read back, or the point fails as
     /// implausible.
     fn stand_in(&self, point: &mut stand_in::StandInPoint) -> Result<RunResult, Rejected>;
+
+    /// A done point's answer pass by pass, for the report, if it runs pass by pass.
+    fn pass_series(&self, _r: &RunResult) -> Option<figures::PassSeries> {
+        None
+    }
+
+    /// A top view of the layer the last pass of a done point of `scene` left, read from its run
+    /// directory, for the report; `Err` says why it cannot be drawn.
+    fn top_view(
+        &self,
+        _scene: &Scene,
+        _run_dir: &Path,
+        _r: &RunResult,
+    ) -> Option<Result<figures::TopView, String>> {
+        None
+    }
 }
 
 /// The layout `settings` names; an unknown name is refused when the sweep file is read, so here

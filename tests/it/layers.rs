@@ -230,6 +230,12 @@ fn a_layers_lattice_runs_every_point_to_its_steady_layer_and_answers_in_the_laye
     for mfr in ["MFR distribution", "Emulator of MFR", "statistic of MFR", "<th>MFR"] {
         assert!(!page.contains(mfr), "the layers report says {mfr:?}");
     }
+    // Each point pass by pass and its last layer from above, both points drawn; no v_x panels,
+    // which a layers run does not measure.
+    let report = dir.join("s/report");
+    assert!(report.join("passes.png").exists() && report.join("top-view.png").exists());
+    assert!(!report.join("profiles.png").exists(), "empty v_x profiles drawn");
+    assert!(page.contains("seen from above") && !page.contains("not drawn:"), "the top view");
 }
 
 #[test]

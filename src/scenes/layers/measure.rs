@@ -289,7 +289,7 @@ fn series_tested(plan: &Plan) -> usize {
     }
 }
 
-fn read_grains(path: &Path) -> Result<Vec<Grain>, String> {
+pub(super) fn read_grains(path: &Path) -> Result<Vec<Grain>, String> {
     let snaps = read_dump(path, &["id", "x", "y", "z", "radius"]).map_err(|e| e.to_string())?;
     let last = snaps.last().ok_or_else(|| format!("{}: no snapshot", path.display()))?;
     let c = |n| last.column(n).expect("required column");

@@ -27,10 +27,13 @@ pub mod measure;
 pub mod numerics;
 mod plan;
 pub mod stand_in;
+mod top_view;
 pub mod warm;
 
 use plan::{derive, with_plan};
 pub use plan::{plan_of, platform_gap, Pass, Plan, Resume};
+
+use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
@@ -498,6 +501,20 @@ impl Layout for Layers {
             e.map(|e| e.covered_fraction),
         ];
         values.iter().map(|v| v.filter(|v| v.is_finite()).map_or(String::new(), |v| v.to_string())).collect()
+    }
+
+    fn pass_series(&self, r: &RunResult) -> Option<crate::scenes::figures::PassSeries> {
+        let l = r.layers.as_ref()?;
+        Some(top_view::pass_series(l, l.bed == "fused"))
+    }
+
+    fn top_view(
+        &self,
+        scene: &Scene,
+        run_dir: &Path,
+        r: &RunResult,
+    ) -> Option<Result<crate::scenes::figures::TopView, String>> {
+        Some(top_view::top_view(scene, run_dir, r.layers.as_ref()?.passes.len()))
     }
 
     fn result_lines(&self, r: &RunResult) -> Option<Vec<String>> {
