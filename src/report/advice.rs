@@ -169,7 +169,13 @@ pub fn advise(
         let (a, b) = (&recommended[0], &recommended[1]);
         a.mfr - b.mfr > 2.0 * (a.mfr_se.powi(2) + b.mfr_se.powi(2)).sqrt()
     });
-    let conclusions = conclusions(parameters, points, sensitivity, recommended.first());
+    // The thesis's claims are of MFR under a blade: a layout that answers with another quantity
+    // (a steady layer's packing) is not judged by them.
+    let conclusions = if answer_name == "MFR" {
+        conclusions(parameters, points, sensitivity, recommended.first())
+    } else {
+        Vec::new()
+    };
     Advice { classes, criterion, recommended, best_is_distinct, conclusions }
 }
 

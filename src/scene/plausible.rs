@@ -215,6 +215,10 @@ pub fn short(v: f64) -> String {
     let s = format!("{v:.3}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
     if s.is_empty() || s == "-" {
+        // A value under a thousandth is not 0: a surface energy of 1e-4 J/m² must read so.
+        if v != 0.0 && v.is_finite() {
+            return round_to(v, 3);
+        }
         "0".into()
     } else {
         s.to_string()
@@ -254,5 +258,12 @@ mod tests {
         assert_eq!(show(37057656.0), "37057656");
         assert_eq!(show(1.5e-6), "1.5e-6");
         assert_eq!(round_to(1.2345678901234567, 12), "1.23456789012");
+    }
+
+    #[test]
+    fn a_short_number_under_a_thousandth_is_not_shown_as_zero() {
+        assert_eq!(short(1e-4), "0.0001");
+        assert_eq!(short(-4.667e-4), "-0.000467");
+        assert_eq!((short(0.0), short(-0.0), short(0.1234)), ("0".into(), "0".into(), "0.123".into()));
     }
 }

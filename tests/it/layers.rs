@@ -236,6 +236,8 @@ fn a_layers_lattice_runs_every_point_to_its_steady_layer_and_answers_in_the_laye
     assert!(report.join("passes.png").exists() && report.join("top-view.png").exists());
     assert!(!report.join("profiles.png").exists(), "empty v_x profiles drawn");
     assert!(page.contains("seen from above") && !page.contains("not drawn:"), "the top view");
+    // The thesis's claims are of MFR: a layers sweep is not judged by them.
+    assert!(!page.contains("The thesis's conclusions"), "thesis conclusions on a layers report");
 }
 
 #[test]
