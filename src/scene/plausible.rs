@@ -214,7 +214,7 @@ pub fn show(v: f64) -> String {
 pub fn short(v: f64) -> String {
     let s = format!("{v:.3}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s.is_empty() || s == "-" {
+    if matches!(s, "" | "-" | "0" | "-0") {
         // A value under a thousandth is not 0: a surface energy of 1e-4 J/m² must read so.
         if v != 0.0 && v.is_finite() {
             return round_to(v, 3);
