@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The machine's question as a sweep: sweeps/ti64-layers.toml on its 3-level lattice (30, 55,
-# 80 µm × 0.05, 0.1, 0.2 m/s; nine points, the shipped file, no hand-set key), one point at a
-# time so that each later point warm-starts from its finished neighbours. Resumable: run it
+# 80 µm × 0.05, 0.1, 0.2 m/s; nine points, the shipped file, no hand-set key: every point
+# searches for its depth from the bare plate, warm starts being off by default). Resumable: run it
 # again and it goes on (each point from its last pass). Every finished point's result and each
 # pass's record are copied to record/machine-lattice/ as they land, so a session that stops
 # keeps what ran.
