@@ -173,7 +173,7 @@ pub(super) fn render(a: RenderArgs) -> Result<(), Error> {
         a.out.display(),
         prepared.deck.file_names().join(","),
         ctx.layout.what_runs(s),
-        s.substrate_particles,
+        s.substrate().map_or(0, |sub| sub.substrate_particles),
         s.timestep,
         &prepared.hash[..16]
     );
@@ -491,8 +491,9 @@ fn print_flow(r: &demsweep::outcome::RunResult, scene: &demsweep::scene::Scene) 
         if r.steady { "steady" } else { "NOT steady" }
     );
     let cell = |s: String| format!("{s:>6}");
-    let heights: Vec<String> =
-        (1..=r.vx.len()).map(|k| cell(format!("{:.2}", scene.layer_height(k) * 1e3))).collect();
+    let heights: Vec<String> = (1..=r.vx.len())
+        .map(|k| cell(scene.layer_height(k).map_or("-".into(), |z| format!("{:.2}", z * 1e3))))
+        .collect();
     let vx: Vec<String> =
         r.vx.iter().map(|v| cell(v.map(|v| format!("{v:.3}")).unwrap_or_else(|| "-".into()))).collect();
     println!("v_x in front of the blade, layer k at z = gap + k·D/2 above the plate:");

@@ -31,8 +31,9 @@ pub const GRID_PER_D: f64 = 4.0;
 /// Length right behind the blade left out of the deposit, in D (still being laid down).
 pub const SETTLE_MARGIN: f64 = 2.0;
 
-/// The layer at `frame` (the window's last snapshot) over the strip from `x0` to `x1`.
-pub fn measure(scene: &Scene, frame: &Frame, x0: f64, x1: f64) -> Option<Layer> {
+/// The layer at `frame` (the window's last snapshot) over the strip from `x0` to `x1`, under a
+/// blade at `gap`.
+pub fn measure(scene: &Scene, gap: f64, frame: &Frame, x0: f64, x1: f64) -> Option<Layer> {
     let d = scene.diameter;
     let x1 = x1 - SETTLE_MARGIN * d;
     let y = frame.y.as_ref()?;
@@ -41,7 +42,7 @@ pub fn measure(scene: &Scene, frame: &Frame, x0: f64, x1: f64) -> Option<Layer> 
     }
     let radius = |m: f64| (3.0 * m / (4.0 * std::f64::consts::PI * scene.material.density)).cbrt();
     let deposit: Vec<usize> =
-        (0..frame.len()).filter(|&i| frame.x[i] >= x0 && frame.x[i] < x1 && frame.z[i] < scene.gap).collect();
+        (0..frame.len()).filter(|&i| frame.x[i] >= x0 && frame.x[i] < x1 && frame.z[i] < gap).collect();
 
     // Uniformity along the travel.
     // Whole bins over the strip (the small epsilon keeps an exact multiple from rounding down).

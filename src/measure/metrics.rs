@@ -27,6 +27,7 @@ use std::collections::HashMap;
 
 use crate::measure::frame::Frame;
 use crate::outcome::VX_LAYERS;
+use crate::scene::blade::{Blade, Window};
 use crate::scene::Scene;
 
 /// False-alarm rate of the steadiness test: the p-value below which the flow is unsteady.
@@ -56,28 +57,36 @@ pub struct Metrics {
 }
 
 /// Compute the metrics of a run from its snapshots (any order; steps as the scene planned).
-pub fn compute(scene: &Scene, frames: &[Frame]) -> Result<Metrics, MetricsError> {
-    let (t1, t2) = scene.window_steps();
-    let steps: Vec<u64> = (t1..=t2).step_by(scene.dump_every as usize).collect();
-    let window: Vec<&Frame> = steps
+pub fn compute(
+    scene: &Scene,
+    blade: &Blade,
+    window: &Window,
+    frames: &[Frame],
+) -> Result<Metrics, MetricsError> {
+    let (t1, t2) = window.steps();
+    let dump_every = window.dump_every;
+    let steps: Vec<u64> = (t1..=t2).step_by(dump_every as usize).collect();
+    let at = |step: u64| blade.rear_at(scene.timestep, step);
+    let frames_of_window: Vec<&Frame> = steps
         .iter()
         .map(|&step| frames.iter().find(|f| f.step == step).ok_or(MetricsError::MissingSnapshot(step)))
         .collect::<Result<_, _>>()?;
 
     // Crossings of the rear (deposit) and front (cross-check) faces per snapshot interval.
-    let rear: Vec<Crossing> = window.windows(2).map(|p| crossing(scene, p[0], p[1], Face::Rear)).collect();
-    let front: Vec<Crossing> = window.windows(2).map(|p| crossing(scene, p[0], p[1], Face::Front)).collect();
+    let rear: Vec<Crossing> =
+        frames_of_window.windows(2).map(|p| crossing(scene, blade, p[0], p[1], Face::Rear)).collect();
+    let front: Vec<Crossing> =
+        frames_of_window.windows(2).map(|p| crossing(scene, blade, p[0], p[1], Face::Front)).collect();
     // Ideal mass per metre of strip: ρ · w · h (thesis Eq. 16 with v·Δt the strip length).
-    let ideal_per_length = scene.material.density * scene.depth * scene.gap;
+    let ideal_per_length = scene.material.density * scene.depth * blade.gap;
     let mfr_of = |c: &[Crossing], a: u64, b: u64| -> f64 {
-        c.iter().map(|x| x.mass).sum::<f64>()
-            / (ideal_per_length * (scene.blade_rear_at(b) - scene.blade_rear_at(a)))
+        c.iter().map(|x| x.mass).sum::<f64>() / (ideal_per_length * (at(b) - at(a)))
     };
     let per = crate::scene::SNAPSHOTS_PER_SUB_WINDOW;
     let sub: Vec<f64> = rear
         .chunks(per)
         .zip(steps.chunks(per))
-        .map(|(c, s)| mfr_of(c, s[0], s[0] + per as u64 * scene.dump_every))
+        .map(|(c, s)| mfr_of(c, s[0], s[0] + per as u64 * dump_every))
         .collect();
     let half = rear.len() / 2;
     let steady_p = halves_p_value(&rear[..half], &rear[half..]);
@@ -89,11 +98,11 @@ pub fn compute(scene: &Scene, frames: &[Frame]) -> Result<Metrics, MetricsError>
         steady_p,
         mfr_windows: sub,
         mfr_particles: rear.iter().map(|c| c.count).sum(),
-        vx: vx_profile(scene, window.iter().copied()),
-        particles: window.last().map(|f| f.len()).unwrap_or(0),
-        layer: window.last().and_then(|f| {
-            crate::measure::layer::measure(scene, f, scene.blade_rear_at(t1), scene.blade_rear_at(t2))
-        }),
+        vx: vx_profile(scene, blade, window, frames_of_window.iter().copied()),
+        particles: frames_of_window.last().map(|f| f.len()).unwrap_or(0),
+        layer: frames_of_window
+            .last()
+            .and_then(|f| crate::measure::layer::measure(scene, blade.gap, f, at(t1), at(t2))),
     })
 }
 
@@ -111,10 +120,10 @@ struct Crossing {
     count: usize,
 }
 
-fn crossing(scene: &Scene, a: &Frame, b: &Frame, face: Face) -> Crossing {
+fn crossing(scene: &Scene, blade: &Blade, a: &Frame, b: &Frame, face: Face) -> Crossing {
     let plane = |step: u64| match face {
-        Face::Rear => scene.blade_rear_at(step),
-        Face::Front => scene.blade_front_at(step),
+        Face::Rear => blade.rear_at(scene.timestep, step),
+        Face::Front => blade.front_at(scene.timestep, step),
     };
     let (pa, pb) = (plane(a.step), plane(b.step));
     let before: HashMap<u64, usize> = a.id.iter().enumerate().map(|(i, &id)| (id, i)).collect();
@@ -125,11 +134,11 @@ fn crossing(scene: &Scene, a: &Frame, b: &Frame, face: Face) -> Crossing {
         };
         let was_ahead = a.x[i] >= pa;
         let is_ahead = b.x[j] >= pb;
-        if was_ahead && !is_ahead && b.z[j] < scene.gap {
+        if was_ahead && !is_ahead && b.z[j] < blade.gap {
             out.mass += b.mass[j];
             out.mass_sq += b.mass[j] * b.mass[j];
             out.count += 1;
-        } else if !was_ahead && is_ahead && a.z[i] < scene.gap {
+        } else if !was_ahead && is_ahead && a.z[i] < blade.gap {
             out.mass -= b.mass[j];
             out.mass_sq += b.mass[j] * b.mass[j];
             out.count += 1;
@@ -156,18 +165,23 @@ fn standard_normal_cdf(z: f64) -> f64 {
 }
 
 /// Mean v_x per layer, pooled over `frames`.
-pub(crate) fn vx_profile<'a>(scene: &Scene, frames: impl Iterator<Item = &'a Frame>) -> Vec<Option<f64>> {
+pub(crate) fn vx_profile<'a>(
+    scene: &Scene,
+    blade: &Blade,
+    window: &Window,
+    frames: impl Iterator<Item = &'a Frame>,
+) -> Vec<Option<f64>> {
     let mut sum = [0.0; VX_LAYERS];
     let mut count = [0usize; VX_LAYERS];
     for f in frames {
-        let x0 = scene.blade_front_at(f.step);
-        let x1 = x0 + scene.vx_length;
+        let x0 = blade.front_at(scene.timestep, f.step);
+        let x1 = x0 + window.vx_length;
         for i in 0..f.len() {
             if f.x[i] < x0 || f.x[i] > x1 {
                 continue;
             }
             for k in 0..VX_LAYERS {
-                if (f.z[i] - scene.layer_height(k + 1)).abs() <= scene.vx_band {
+                if (f.z[i] - window.layer_height(blade.gap, k + 1)).abs() <= window.vx_band {
                     sum[k] += f.vx[i];
                     count[k] += 1;
                 }

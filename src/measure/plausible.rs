@@ -51,10 +51,10 @@ pub struct SphereSpeeds {
 }
 
 impl SphereSpeeds {
-    /// The speeds a scene allows its spheres.
-    pub fn of(scene: &crate::scene::Scene) -> SphereSpeeds {
+    /// The speeds a scene with a blade of `blade_speed` allows its spheres.
+    pub fn of(scene: &crate::scene::Scene, blade_speed: f64) -> SphereSpeeds {
         SphereSpeeds {
-            blade: scene.blade_speed,
+            blade: blade_speed,
             fall_height: scene.z_hi - scene.z_lo,
             released: released_jam_speed(
                 scene.material.youngs_modulus,
@@ -243,14 +243,10 @@ pub fn check_frame(f: &Frame, speeds: &SphereSpeeds) -> Result<(), Implausible> 
 /// are kinematic, so a soft sphere caught between them is squeezed through however small the
 /// gap (seen at machine blade speeds, where no impact throws it out of its pocket first). Such a
 /// deposit is an artefact, not a flow.
-pub fn check_squeezed(scene: &crate::scene::Scene, mfr: f64) -> Result<(), Implausible> {
+pub fn check_squeezed(scene: &crate::scene::Scene, gap: f64, mfr: f64) -> Result<(), Implausible> {
     let top = scene.lowest_top();
-    if mfr > 0.0 && scene.gap < top {
-        return Err(Implausible::Squeezed {
-            mfr,
-            gap_d: scene.gap / scene.diameter,
-            top_d: top / scene.diameter,
-        });
+    if mfr > 0.0 && gap < top {
+        return Err(Implausible::Squeezed { mfr, gap_d: gap / scene.diameter, top_d: top / scene.diameter });
     }
     Ok(())
 }

@@ -34,6 +34,7 @@ use crate::measure::frame::Frame;
 use crate::measure::metrics::vx_profile;
 use crate::outcome::steady::SteadyState;
 use crate::outcome::VX_LAYERS;
+use crate::scene::blade::{Blade, Window};
 use crate::scene::Scene;
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
@@ -314,9 +315,16 @@ pub struct HeldBlocks {
     pub heap_particles: usize,
 }
 
-/// The steady-state answers of a run that holds a heap (`c`), from its log's blocks and its v_x
-/// snapshots.
-pub fn compute(scene: &Scene, c: &HeldBlocks, blocks: &[Block], stop: &str, frames: &[Frame]) -> Steady {
+/// The steady-state answers of a run that holds a heap (`c`) in front of `blade`, from its log's
+/// blocks and its v_x snapshots (in the layers of `vx_layers`).
+pub fn compute(
+    scene: &Scene,
+    (blade, vx_layers): (&Blade, &Window),
+    c: &HeldBlocks,
+    blocks: &[Block],
+    stop: &str,
+    frames: &[Frame],
+) -> Steady {
     let ideal = c.ideal_block_mass;
     let y = block_mfr(blocks, ideal);
     // The warm-up is the least transient (the deck's stop rule starts after it); MSER may
@@ -339,7 +347,7 @@ pub fn compute(scene: &Scene, c: &HeldBlocks, blocks: &[Block], stop: &str, fram
         block_mfr: y.clone(),
         transient_blocks: d,
         window_blocks: w.len(),
-        block_diameters: scene.blade_speed * scene.timestep * c.block_steps as f64 / scene.diameter,
+        block_diameters: blade.blade_speed * scene.timestep * c.block_steps as f64 / scene.diameter,
         batch_blocks,
         batch_acf1,
         block_acf1: acf1(w),
@@ -392,12 +400,12 @@ pub fn compute(scene: &Scene, c: &HeldBlocks, blocks: &[Block], stop: &str, fram
     let profiles: Vec<Vec<Option<f64>>> = frames
         .iter()
         .filter(|f| f.step >= first_step)
-        .map(|f| vx_profile(scene, std::iter::once(f)))
+        .map(|f| vx_profile(scene, blade, vx_layers, std::iter::once(f)))
         .collect();
     let (mut vx, mut vx_se) = (Vec::with_capacity(VX_LAYERS), Vec::with_capacity(VX_LAYERS));
     for k in 0..VX_LAYERS {
         // Lab frame: the blade moves at +v over a resting substrate.
-        let vals: Vec<f64> = profiles.iter().filter_map(|p| p[k]).map(|v| v + scene.blade_speed).collect();
+        let vals: Vec<f64> = profiles.iter().filter_map(|p| p[k]).map(|v| v + blade.blade_speed).collect();
         if vals.is_empty() {
             vx.push(None);
             vx_se.push(None);

@@ -67,22 +67,25 @@ impl Setup {
         let parameters = crate::point::resolve(sweep, &mid);
         let layout = crate::scenes::of(&sweep.file.scene).ok();
         let centre = crate::scenes::build(&parameters, &sweep.file.scene).ok().map(|sc| {
-            let (t1, t2) = sc.window_steps();
-            // A layout dosed pass by pass (layers) starts from no pile and measures no window
-            // of travel: its pile and window are 0.
-            let piled = sc.pile_n.iter().product::<usize>() > 0;
-            let if_piled = |v: f64| if piled { v } else { 0.0 };
+            // A layout that starts from no pile (a held heap, doses pass by pass) measures no
+            // window of travel from one: its pile and window are 0.
+            let pile = sc.pile().filter(|p| p.pile_n.iter().product::<usize>() > 0);
+            let travel = |b: &crate::scene::blade::Blade, w: &crate::scene::blade::Window| {
+                let (t1, t2) = w.steps();
+                b.rear_at(sc.timestep, t2) - b.rear_at(sc.timestep, t1)
+            };
+            let window_travel = sc.blade().zip(sc.window()).map_or(0.0, |(b, w)| travel(b, w));
             CentreScene {
                 parameters: sweep.swept.iter().map(|p| (p.name.clone(), parameters[&p.name])).collect(),
                 particles: sc.particles,
                 runs: layout.map_or_else(String::new, |l| l.what_runs(&sc)),
-                substrate_particles: sc.substrate_particles,
+                substrate_particles: sc.substrate().map_or(0, |s| s.substrate_particles),
                 domain_length_mm: sc.x_hi * 1e3,
                 domain_depth_mm: sc.depth * 1e3,
                 domain_height_mm: (sc.z_hi - sc.z_lo) * 1e3,
-                heap_length_mm: if_piled((sc.pile_x1 - sc.pile_x0) * 1e3),
-                heap_height_mm: if_piled(sc.pile_z1 * 1e3),
-                window_travel_mm: if_piled((sc.blade_rear_at(t2) - sc.blade_rear_at(t1)) * 1e3),
+                heap_length_mm: pile.map_or(0.0, |p| (p.pile_x1 - p.pile_x0) * 1e3),
+                heap_height_mm: pile.map_or(0.0, |p| p.pile_z1 * 1e3),
+                window_travel_mm: pile.map_or(0.0, |_| window_travel * 1e3),
                 timestep_s: sc.timestep,
                 rayleigh_time_s: sc.rayleigh_time,
                 held_heap: layout.and_then(|l| l.held_heap(&sc)),

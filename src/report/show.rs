@@ -115,7 +115,7 @@ fn layer_heights_mm(sweep: &Sweep, r: &RunResult) -> Vec<f64> {
     let mut settings = sweep.file.scene.clone();
     settings.force_bounds = true;
     match crate::scenes::build(&r.parameters, &settings) {
-        Ok(s) => (1..=r.vx.len()).map(|k| s.layer_height(k) * 1e3).collect(),
+        Ok(s) => (1..=r.vx.len()).map_while(|k| s.layer_height(k)).map(|z| z * 1e3).collect(),
         Err(_) => Vec::new(),
     }
 }

@@ -2,6 +2,7 @@
 
 use std::fmt::Write;
 
+use super::blade::Blade;
 use super::Scene;
 
 /// Version of the mesh generator; part of a run's identity (a change re-runs every point).
@@ -17,10 +18,10 @@ pub const MESH_VERSION: u32 = 3;
 /// (region_neighbor_list_I.h:165)" for some geometries when an element's bounding radius is
 /// large against the box's depth, or when two end faces face each other across the periodic
 /// boundary. The y ends are not needed: no particle can reach them.
-pub fn blade_stl(s: &Scene) -> String {
-    let (x0, x1) = (s.blade_x0, s.blade_x0 + s.blade_thickness);
-    let (y0, y1) = (s.blade_y_inset, s.depth - s.blade_y_inset);
-    let (z0, z1) = (s.gap, s.blade_top);
+pub fn blade_stl(s: &Scene, b: &Blade) -> String {
+    let (x0, x1) = (b.blade_x0, b.blade_x0 + b.blade_thickness);
+    let (y0, y1) = (b.blade_y_inset, s.depth - b.blade_y_inset);
+    let (z0, z1) = (b.gap, b.blade_top);
     box_stl("blade", [x0, y0, z0], [x1, y1, z1], false, s.mesh_cell)
 }
 

@@ -1,15 +1,18 @@
-//! The blade-spreading scene: from one design point to every number the deck needs.
+//! The scene: from one design point to every number the deck needs.
 //!
 //! The physics lives here, typed and unit-tested; the template only lays the numbers out. All
-//! lengths in this struct are metres, times seconds, moduli pascals (the catalogue's mm and MPa
-//! are converted once, in [`Base::new`]).
+//! lengths are metres, times seconds, moduli pascals (the catalogue's mm and MPa are converted
+//! once, in [`Base::new`]).
 //!
-//! The building blocks every layout shares: the parameter catalogue ([`params`]), the `[scene]`
-//! settings, the size distribution, the blade mesh, the pile file, the passage screen, the
-//! plausibility bounds, and [`Scene`], the numbers a deck is rendered from. Each layout derives
-//! its [`Scene`] from the common [`Base`] ([`crate::scenes`]).
+//! The building blocks the layouts share: the parameter catalogue ([`params`]), the `[scene]`
+//! settings, the size distribution, the groups of numbers some layouts have (the blade and its
+//! window, [`blade`]; the substrate, [`substrate`]; the dose's block, [`pile`]), the blade mesh,
+//! the pile file, the passage screen, the plausibility bounds, and [`Scene`], the numbers a deck
+//! is rendered from: what every layout has, and the layout's part of its own type ([`own`]).
+//! Each layout derives its [`Scene`] from the common [`Base`] ([`crate::scenes`]).
 
 pub mod bed;
+pub mod blade;
 pub mod cohesion;
 pub mod mesh;
 pub mod own;
@@ -20,6 +23,7 @@ pub mod plausible;
 pub mod pockets;
 pub mod psd;
 pub mod settings;
+pub mod substrate;
 
 use std::collections::BTreeMap;
 
@@ -110,7 +114,9 @@ pub struct PowderMaterial {
     pub cohesion_energy_density: f64,
 }
 
-/// Every number the deck and the metrics need for one point.
+/// Every number the deck and the metrics need for one point: what every layout has, and the
+/// layout's own part ([`own`]: its type, of the groups it shares with other layouts and the
+/// numbers only it has).
 #[derive(Debug, Clone, Serialize)]
 pub struct Scene {
     /// The powder's material and contact law; its fields are the deck's names (`density`, …).
@@ -118,28 +124,16 @@ pub struct Scene {
     pub material: PowderMaterial,
     /// The layout's name (see [`crate::scenes`]).
     pub layout: String,
-    /// The blade stands still (the substrate moves under it) instead of travelling.
-    pub blade_fixed: bool,
     // Particles.
     pub size_classes: Vec<psd::SizeClass>,
     /// The distribution in a few numbers (mean, D10/D50/D90 by volume, span, classes).
     pub sizes: SizeSummary,
     /// Seed of the pile's diameters and jitter.
     pub seed: u64,
+    /// The powder's particles: placed at the start, or the most the run inserts.
     pub particles: usize,
     /// Number-mean diameter: the unit of the scene's geometry, m.
     pub diameter: f64,
-    /// Diameter that sets the v_x layers: D for one size, D85 for a distribution (thesis §3.2).
-    pub profile_diameter: f64,
-    // Blade.
-    pub gap: f64,
-    pub blade_speed: f64,
-    pub blade_thickness: f64,
-    /// x of the blade's rear face at the start; the front face is at + thickness.
-    pub blade_x0: f64,
-    pub blade_top: f64,
-    /// Inset of the blade mesh from the periodic y faces (it must lie inside the box).
-    pub blade_y_inset: f64,
     // Domain.
     pub x_hi: f64,
     pub depth: f64,
@@ -147,60 +141,22 @@ pub struct Scene {
     /// Bottom of the box and height of the plate: 0 on a smooth plate, minus one substrate
     /// diameter under a rough substrate.
     pub z_lo: f64,
-    // The rough substrate: fixed spheres on a square lattice, tops at z = 0 (none: 0 spheres).
-    pub substrate_particles: usize,
-    pub substrate_diameter: f64,
-    pub substrate_spacing: f64,
-    pub substrate_n: [usize; 2],
-    /// A bed of the powder in place of the lattice (conveyor, `substrate = "powder"`).
-    #[serde(skip)]
-    pub substrate_bed: Option<bed::Bed>,
-    // The initial pile: a jittered simple-cubic block nx × ny × nz with this spacing, from x0.
-    pub pile_x0: f64,
-    pub pile_x1: f64,
-    pub pile_z1: f64,
-    pub pile_spacing: f64,
-    pub pile_n: [usize; 3],
     // Time.
     pub rayleigh_time: f64,
     pub timestep: f64,
     pub skin: f64,
-    /// Thesis layout: steps of the fixed-time settle. Gated: the settle runs at least this long
-    /// before the rest criterion is checked.
-    pub settle_steps: u64,
-    /// Gated layout: translational kinetic energy of the powder below which it is at rest, J
-    /// (0: fixed-time settle).
-    pub rest_ke: f64,
-    /// The rms speed that `rest_ke` stands for, m/s.
-    pub rest_speed: f64,
-    /// Gated layout: steps between rest checks, and the most checks before the run fails.
-    pub settle_check_steps: u64,
-    pub settle_max_checks: u64,
-    /// Steps from the blade's start (step 0 of the spread) to the window's start.
-    pub approach_steps: u64,
-    /// Steps over which the blade accelerates linearly from rest to full speed.
-    pub ramp_steps: u64,
-    /// Steps between snapshots; the window is SUB_WINDOWS × SNAPSHOTS_PER_SUB_WINDOW of them.
-    pub dump_every: u64,
-    /// Steps of the measurement window.
-    pub window_length_steps: u64,
-    /// Steps between the VTK files of the particles and the blade over the spread (0: none).
+    /// Steps between the VTK files of the run (0: none).
     pub vtk_every: u64,
-    /// Largest cell of the blade mesh, m.
+    /// Largest cell of the wall meshes, m.
     pub mesh_cell: f64,
     pub thermo_every: u64,
-    // Measurement.
-    /// Half-height of a v_x layer, m.
-    pub vx_band: f64,
-    /// Length of the v_x region in front of the blade (6 D, thesis Appendix A), m.
-    pub vx_length: f64,
     /// Kinetic energy above which the run is unstable, J.
     pub ke_limit: f64,
-    /// The layout's own numbers, of its own type (none for a layout that keeps all of its
-    /// numbers in the common fields): the template reads them as `scene.own.*`, and the layout
-    /// reads them back with [`Scene::own`].
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub own: Option<own::OwnData>,
+    /// The layout's part, of its own type: its fields beside the ones above in the deck's
+    /// context (see [`own`]); the layout reads it back with [`Scene::own`], the levels below
+    /// the layouts ask it for the groups they read ([`Scene::blade`], …).
+    #[serde(flatten)]
+    pub own: own::OwnData,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
@@ -405,42 +361,62 @@ impl Base {
 }
 
 impl Scene {
-    /// The layout's own numbers (`own`), if they are of the type `T` the layout stored there.
+    /// The layout's part, if it is of the type `T` the layout keeps there.
     pub fn own<T: std::any::Any>(&self) -> Option<&T> {
-        self.own.as_ref()?.get()
+        self.own.get()
     }
 
     /// The same, to change.
     pub fn own_mut<T: std::any::Any>(&mut self) -> Option<&mut T> {
-        self.own.as_mut()?.get_mut()
+        self.own.get_mut()
     }
 
-    /// Keep `data` as the layout's own numbers.
+    /// Keep `data` as the layout's part.
     pub fn set_own<T: own::LayoutData>(&mut self, data: T) {
-        self.own = Some(own::OwnData::new(data));
+        self.own = own::OwnData::new(data);
     }
 
-    /// The spread layer's thickness: the gap plus the pockets' open depth, m.
-    pub fn layer_thickness(&self) -> f64 {
-        self.gap + self.open_depth()
+    /// The blade, of a layout that moves one.
+    pub fn blade(&self) -> Option<&blade::Blade> {
+        self.own.data().blade()
+    }
+
+    /// The window its flow is measured over, of a layout that measures one.
+    pub fn window(&self) -> Option<&blade::Window> {
+        self.own.data().window()
+    }
+
+    /// The substrate, of a layout that spreads onto one.
+    pub fn substrate(&self) -> Option<&substrate::Substrate> {
+        self.own.data().substrate()
+    }
+
+    /// The block the dose starts as, of a layout whose dose starts as one.
+    pub fn pile(&self) -> Option<&pile::PileBlock> {
+        self.own.data().pile()
+    }
+
+    /// The steps a run takes after its settle, at most ([`own::LayoutData::steps`]).
+    pub fn run_steps(&self) -> u64 {
+        self.own.data().steps()
+    }
+
+    /// The spread layer's thickness under `blade`: the gap plus the pockets' open depth, m.
+    pub fn layer_thickness(&self, blade: &blade::Blade) -> f64 {
+        blade.gap + self.open_depth()
     }
 
     /// Open depth of the substrate's pockets below its tops that the powder's smallest sphere
     /// reaches, m ([`pockets`]); 0 on a smooth plate. Computed when a run is measured, not
     /// when a point is planned.
     pub fn open_depth(&self) -> f64 {
-        if self.substrate_particles == 0 {
-            return 0.0;
-        }
-        if let Some(bed) = &self.substrate_bed {
-            return bed.open_depth(self.min_diameter());
-        }
-        pockets::open_depth(self.substrate_spacing, self.substrate_diameter, self.min_diameter())
+        self.substrate().map_or(0.0, |s| s.open_depth(self.min_diameter()))
     }
 
-    /// The deposit's packing over the layer's thickness, for an MFR (mass over ρ·w·gap·v).
-    pub fn layer_packing(&self, mfr: f64) -> f64 {
-        mfr * self.gap / self.layer_thickness()
+    /// The deposit's packing over the layer's thickness under `blade`, for an MFR (mass over
+    /// ρ·w·gap·v).
+    pub fn layer_packing(&self, blade: &blade::Blade, mfr: f64) -> f64 {
+        mfr * blade.gap / self.layer_thickness(blade)
     }
 
     /// The sizes for result.json: `None` for one size.
@@ -448,48 +424,16 @@ impl Scene {
         (self.size_classes.len() > 1).then(|| self.sizes.clone())
     }
 
-    /// Timestep at which the blade starts moving: the spread's steps count from it (the deck
-    /// resets the step counter once the pile has settled).
-    pub fn blade_start_step(&self) -> u64 {
-        0
-    }
-
-    /// Timestep of the window's start (t1) and end (t2).
-    pub fn window_steps(&self) -> (u64, u64) {
-        let t1 = self.approach_steps;
-        (t1, t1 + self.window_length_steps)
-    }
-
-    /// Steps of the spread, from the blade's start to the window's end.
-    pub fn spread_steps(&self) -> u64 {
-        self.window_steps().1
-    }
-
     /// Atoms in the box: the powder and the substrate.
     pub fn atoms(&self) -> usize {
-        self.particles + self.substrate_particles
+        self.particles + self.substrate().map_or(0, |s| s.substrate_particles)
     }
 
-    /// x of the blade's rear face at timestep `step`: at rest until the blade starts, then a
-    /// linear velocity ramp over `ramp_steps` (travel v·t²/(2 t_r)), then full speed.
-    pub fn blade_rear_at(&self, step: u64) -> f64 {
-        if self.blade_fixed {
-            return self.blade_x0;
-        }
-        let k = step.saturating_sub(self.blade_start_step()) as f64;
-        let r = self.ramp_steps as f64;
-        let travel_steps = if k <= r { k * k / (2.0 * r) } else { k - 0.5 * r };
-        self.blade_x0 + self.blade_speed * self.timestep * travel_steps
-    }
-
-    /// x of the blade's front face at timestep `step`.
-    pub fn blade_front_at(&self, step: u64) -> f64 {
-        self.blade_rear_at(step) + self.blade_thickness
-    }
-
-    /// Centre height of v_x layer k = 1..12: z = gap + k·D/2 (thesis Appendix A).
-    pub fn layer_height(&self, k: usize) -> f64 {
-        self.gap + k as f64 * self.profile_diameter / 2.0
+    /// Centre height of v_x layer k = 1..12 (thesis Appendix A); `None` in a scene with no
+    /// blade's window to measure v_x in front of.
+    pub fn layer_height(&self, k: usize) -> Option<f64> {
+        let (blade, window) = self.blade().zip(self.window())?;
+        Some(window.layer_height(blade.gap, k))
     }
 }
 

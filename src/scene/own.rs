@@ -1,20 +1,54 @@
-//! A layout's own numbers in its [`Scene`](super::Scene): a type of the layout's (the
-//! conveyor's held heap, the layers' plan) beside the common fields, which the deck reads as
-//! `scene.own.*` and the layout reads back as its type ([`super::Scene::own`]). The scene knows
-//! no layout, so it holds the numbers behind a trait object: any `Clone + Serialize` type of the
-//! layout's is one, and a read back as another type is `None`, not a misparse.
+//! A layout's part of its [`Scene`](super::Scene): a type of the layout's (the moving blade's
+//! spread, the conveyor's held heap, the pour's column, the layers' plan) beside the common
+//! fields, built of the groups it shares with other layouts ([`Blade`], [`Window`],
+//! [`Substrate`], [`PileBlock`], [`super::blade::Settle`]) and the numbers only it has. The scene
+//! knows no layout, so it holds the part behind a trait object: the layout reads it back as its
+//! type ([`super::Scene::own`]; a read as another type is `None`, not a misparse), and the
+//! levels below the layouts ask it for the groups they read ([`LayoutData::blade`], …).
 //!
-//! Not a bag: what a layout keeps here is a struct the compiler checks; the deck's context is
-//! built from it by serde when the deck is rendered.
+//! Not a bag: the part is a struct the compiler checks; the deck's context is built from it by
+//! serde when the deck is rendered, its fields flattened beside the common ones (the groups'
+//! fields are `scene.gap`, `scene.substrate_particles`, …; a layout keeps the numbers only it
+//! has in a field serialised as `own`, the deck's `scene.own.*`). A key a template reads and the
+//! part lacks fails the render (Tera refuses an undefined variable), and the deck tests render
+//! every layout.
 
 use std::any::Any;
 use std::fmt;
 
 use serde::Serialize;
 
-/// What a layout's own numbers are: any of its types that clones, serialises and is shared
-/// between threads (a blanket impl: nothing to implement).
-pub trait LayoutData: Any + fmt::Debug + Send + Sync {
+use super::blade::{Blade, Window};
+use super::pile::PileBlock;
+use super::substrate::Substrate;
+
+/// A layout's part of its scene: its type says which of the shared groups it has (none by
+/// default) and how many steps its run takes.
+pub trait LayoutData: Any + fmt::Debug + Send + Sync + PartMechanics {
+    /// The steps a run takes after its settle, at most (the spread, the lift and the heap's
+    /// settle, every pass): what the plausibility bounds count the timestep's cost in.
+    fn steps(&self) -> u64;
+    /// The blade it moves (or holds still over a moving substrate).
+    fn blade(&self) -> Option<&Blade> {
+        None
+    }
+    /// The window of the blade's travel its flow is measured over.
+    fn window(&self) -> Option<&Window> {
+        None
+    }
+    /// The substrate it spreads onto.
+    fn substrate(&self) -> Option<&Substrate> {
+        None
+    }
+    /// The block of spheres its dose starts as.
+    fn pile(&self) -> Option<&PileBlock> {
+        None
+    }
+}
+
+/// What the scene does with any part: clone it, read it back as its type, serialise it (a
+/// blanket impl: nothing to implement).
+pub trait PartMechanics {
     fn clone_data(&self) -> OwnData;
     fn as_any(&self) -> &dyn Any;
     fn as_any_mut(&mut self) -> &mut dyn Any;
@@ -22,7 +56,7 @@ pub trait LayoutData: Any + fmt::Debug + Send + Sync {
     fn to_context(&self) -> serde_json::Result<serde_json::Value>;
 }
 
-impl<T: Any + fmt::Debug + Clone + Serialize + Send + Sync> LayoutData for T {
+impl<T: LayoutData + Clone + Serialize> PartMechanics for T {
     fn clone_data(&self) -> OwnData {
         OwnData(Box::new(self.clone()))
     }
@@ -54,6 +88,11 @@ impl OwnData {
     pub fn get_mut<T: Any>(&mut self) -> Option<&mut T> {
         self.0.as_any_mut().downcast_mut()
     }
+
+    /// The layout's type itself, for the groups it has.
+    pub fn data(&self) -> &dyn LayoutData {
+        &*self.0
+    }
 }
 
 impl Clone for OwnData {
@@ -77,8 +116,16 @@ mod tests {
         heap_particles: usize,
     }
 
+    impl LayoutData for Held {
+        fn steps(&self) -> u64 {
+            1
+        }
+    }
+
     #[test]
     fn a_layouts_numbers_read_back_as_their_type_serialise_as_their_fields_and_clone() {
+        let none = OwnData::new(Held { heap_particles: 0 });
+        assert!(none.data().blade().is_none() && none.data().substrate().is_none(), "no group by default");
         let mut own = OwnData::new(Held { heap_particles: 7 });
         assert_eq!(own.get::<Held>(), Some(&Held { heap_particles: 7 }));
         assert_eq!(own.get::<String>(), None, "another type is not a misparse");

@@ -38,14 +38,14 @@ impl Scene {
     /// through, or on the smooth plate. Metres.
     pub fn lowest_top(&self) -> f64 {
         let r = 0.5 * self.min_diameter();
-        if self.substrate_particles == 0 {
+        let Some(sub) = self.substrate().filter(|s| s.substrate_particles > 0) else {
             return 2.0 * r;
-        }
-        if let Some(bed) = &self.substrate_bed {
+        };
+        if let Some(bed) = &sub.substrate_bed {
             return bed.lowest_top(2.0 * r);
         }
-        let big_r = 0.5 * self.substrate_diameter;
-        let s = self.substrate_spacing;
+        let big_r = 0.5 * sub.substrate_diameter;
+        let s = sub.substrate_spacing;
         // Squared distance from the pocket's axis to each of the four centres, horizontally.
         let across2 = 0.5 * s * s;
         let on_plate = self.z_lo + r;
@@ -59,8 +59,10 @@ impl Scene {
 
     /// How far the blade's load can press the smallest resting particle down into its contacts:
     /// the Hertz overlap of a head-on elastic impact at the blade speed against the blade, plus
-    /// the same against its support (a substrate sphere, or the plate). Metres.
+    /// the same against its support (a substrate sphere, or the plate). Metres; 0 without a
+    /// blade.
     pub fn load_margin(&self) -> f64 {
+        let Some(blade) = self.blade() else { return 0.0 };
         let r = 0.5 * self.min_diameter();
         let m = self.material.density * std::f64::consts::PI * (2.0 * r).powi(3) / 6.0;
         // The blade, plate and substrate are of the particles' material (the deck's types 2, 3).
@@ -74,20 +76,20 @@ impl Scene {
             // Blade and substrate do not move under the impact.
             m_eff: m,
         };
-        let support = if self.substrate_particles > 0 {
-            let big_r = 0.5 * self.substrate_diameter;
+        let support = if let Some(sub) = self.substrate().filter(|s| s.substrate_particles > 0) {
+            let big_r = 0.5 * sub.substrate_diameter;
             r * big_r / (r + big_r)
         } else {
             r
         };
-        let v = self.blade_speed;
+        let v = blade.blade_speed;
         pair(r).hertz_max_overlap(v) + pair(support).hertz_max_overlap(v)
     }
 
     /// Whether nothing can pass under the blade's tip: the gap is below the lowest top of the
-    /// smallest particle less the load margin.
+    /// smallest particle less the load margin. Always false without a blade.
     pub fn nothing_passes(&self) -> bool {
-        self.gap < self.lowest_top() - self.load_margin()
+        self.blade().is_some_and(|b| b.gap < self.lowest_top() - self.load_margin())
     }
 
     /// The smallest sphere of the powder, m.

@@ -11,10 +11,23 @@ use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+use serde::Serialize;
+
 use super::Scene;
 
 /// Data file name in the run directory.
 pub const PILE_DATA: &str = "pile.data";
+
+/// The dose as it starts (the moving blade's): a jittered simple-cubic block nx × ny × nz of
+/// this spacing, from `pile_x0` on the plate.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PileBlock {
+    pub pile_x0: f64,
+    pub pile_x1: f64,
+    pub pile_z1: f64,
+    pub pile_spacing: f64,
+    pub pile_n: [usize; 3],
+}
 
 /// Number of particles of each class: floor of n·fraction, the remainder to the largest
 /// fractional parts.
@@ -41,7 +54,8 @@ pub struct Draw {
 }
 
 impl Draw {
-    pub fn of(s: &Scene) -> Draw {
+    /// The draw of `s`'s particles for cells of `spacing`.
+    pub fn of(s: &Scene, spacing: f64) -> Draw {
         let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
         let fractions: Vec<f64> = s.size_classes.iter().map(|c| c.fraction).collect();
         let mut diameters: Vec<f64> = class_counts(&fractions, s.particles)
@@ -51,7 +65,7 @@ impl Draw {
             .collect();
         diameters.shuffle(&mut rng);
         let d_max = s.size_classes.iter().map(|c| c.diameter).fold(0.0, f64::max);
-        Draw { rng, diameters, jitter: 0.45 * (s.pile_spacing - d_max) }
+        Draw { rng, diameters, jitter: 0.45 * (spacing - d_max) }
     }
 }
 
@@ -73,9 +87,6 @@ pub fn atom_line(out: &mut String, id: usize, kind: u8, diameter: f64, density: 
 /// with the simulation box. Atom type 1; type 2 is the walls'; type 3 the fixed spheres of a
 /// rough substrate, numbered after the pile.
 pub fn pile_data(s: &Scene) -> String {
-    let mut draw = Draw::of(s);
-    let [nx, ny, nz] = s.pile_n;
-
     let mut out = String::with_capacity(64 * s.particles + 256);
     let _ = write!(
         out,
@@ -88,32 +99,37 @@ pub fn pile_data(s: &Scene) -> String {
         s.z_hi
     );
     let mut id = 0;
-    for k in 0..nz {
-        for j in 0..ny {
-            for i in 0..nx {
-                let c = draw.jittered([
-                    s.pile_x0 + (i as f64 + 0.5) * s.pile_spacing,
-                    (j as f64 + 0.5) * s.pile_spacing,
-                    (k as f64 + 0.5) * s.pile_spacing,
-                ]);
-                atom_line(&mut out, id + 1, 1, draw.diameters[id], s.material.density, c);
-                id += 1;
+    if let Some(p) = s.pile() {
+        let mut draw = Draw::of(s, p.pile_spacing);
+        let [nx, ny, nz] = p.pile_n;
+        for k in 0..nz {
+            for j in 0..ny {
+                for i in 0..nx {
+                    let c = draw.jittered([
+                        p.pile_x0 + (i as f64 + 0.5) * p.pile_spacing,
+                        (j as f64 + 0.5) * p.pile_spacing,
+                        (k as f64 + 0.5) * p.pile_spacing,
+                    ]);
+                    atom_line(&mut out, id + 1, 1, draw.diameters[id], s.material.density, c);
+                    id += 1;
+                }
             }
         }
     }
-    if let Some(bed) = &s.substrate_bed {
+    let Some(sub) = s.substrate() else { return out };
+    if let Some(bed) = &sub.substrate_bed {
         for &[x, y, z, d] in &bed.spheres {
             id += 1;
             atom_line(&mut out, id, 3, d, s.material.density, [x, y, z]);
         }
     }
-    let [sx, sy] = s.substrate_n;
-    let h = s.substrate_spacing;
+    let [sx, sy] = sub.substrate_n;
+    let h = sub.substrate_spacing;
     for i in 0..sx {
         for j in 0..sy {
             id += 1;
-            let c = [(i as f64 + 0.5) * h, (j as f64 + 0.5) * h, -0.5 * s.substrate_diameter];
-            atom_line(&mut out, id, 3, s.substrate_diameter, s.material.density, c);
+            let c = [(i as f64 + 0.5) * h, (j as f64 + 0.5) * h, -0.5 * sub.substrate_diameter];
+            atom_line(&mut out, id, 3, sub.substrate_diameter, s.material.density, c);
         }
     }
     out

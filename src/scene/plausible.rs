@@ -164,13 +164,15 @@ pub fn check(
         return Err(OutOfBounds::LargeDiameter { name: d_name, value: d_value });
     }
     check_speed_and_density(values)?;
-    let gap = mm(scene.gap);
+    // A scene without a blade has no gap to close.
+    let blade_gap = scene.blade().map_or(f64::INFINITY, |b| b.gap);
+    let gap = mm(blade_gap);
     if gap < MIN_GAP_DIAMETERS * d {
         return Err(OutOfBounds::Gap { gap, d });
     }
     // A layout that holds its heap at a count instead of placing a dose: then the heap sets it.
     let (particles, heap) = match held_heap {
-        Some((n, height)) if n > scene.particles => (n, Some(mm(height - scene.gap))),
+        Some((n, height)) if n > scene.particles => (n, Some(mm(height - blade_gap))),
         _ => (scene.particles, None),
     };
     if particles > MAX_PARTICLES {
@@ -182,7 +184,7 @@ pub fn check(
             timestep: scene.timestep,
             fraction,
             rayleigh_time: scene.rayleigh_time,
-            steps: scene.spread_steps() as f64,
+            steps: scene.run_steps() as f64,
         });
     }
     Ok(())

@@ -13,6 +13,8 @@ pub mod moving_blade;
 pub mod pour;
 pub mod quantity;
 pub mod stand_in;
+#[cfg(test)]
+mod template_keys;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -232,9 +234,10 @@ pub trait Layout: Sync {
         None
     }
 
-    /// The deck's wall mesh (`blade.stl`): the blade, unless the layout moves another wall.
+    /// The deck's wall mesh (`blade.stl`): the scene's blade, unless the layout moves another
+    /// wall (a layout with neither overrides this).
     fn mesh(&self, scene: &Scene) -> String {
-        crate::scene::mesh::blade_stl(scene)
+        scene.blade().map_or_else(String::new, |b| crate::scene::mesh::blade_stl(scene, b))
     }
 
     /// A warm start of `to` (whose particle file is `to_pile`) from the state a finished point

@@ -16,8 +16,11 @@ use crate::outcome::layer::Layer;
 use crate::outcome::steady::SteadyState;
 use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT};
 use crate::scene::bed::Bed;
+use crate::scene::blade::{Blade, Window};
+use crate::scene::own::LayoutData;
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
+use crate::scene::substrate::Substrate;
 use crate::scene::{
     prime_seed, Base, Feed, FeedClass, Scene, GRAVITY, LAYER_FRACTION_MAX, MIN_INSERT_VOLUME, REPOSE_DEG,
 };
@@ -84,15 +87,55 @@ pub struct Held {
     pub extend: Option<extend::Continuation>,
 }
 
+/// The conveyor's part of the scene: the blade held still, its window, the substrate moving
+/// under it, and the held heap (`own`).
+#[derive(Debug, Clone, Serialize)]
+pub struct HeldRun {
+    #[serde(flatten)]
+    pub blade: Blade,
+    #[serde(flatten)]
+    pub window: Window,
+    #[serde(flatten)]
+    pub substrate: Substrate,
+    /// The deck's `scene.own.*`.
+    #[serde(rename = "own")]
+    pub held: Held,
+}
+
+impl LayoutData for HeldRun {
+    fn steps(&self) -> u64 {
+        self.window.spread_steps()
+    }
+    fn blade(&self) -> Option<&Blade> {
+        Some(&self.blade)
+    }
+    fn window(&self) -> Option<&Window> {
+        Some(&self.window)
+    }
+    fn substrate(&self) -> Option<&Substrate> {
+        Some(&self.substrate)
+    }
+}
+
+/// The part of a conveyor scene.
+pub fn part(scene: &Scene) -> &HeldRun {
+    scene.own().expect("a conveyor scene carries its held run")
+}
+
 /// The held heap's numbers of a conveyor scene.
 pub fn held(scene: &Scene) -> &Held {
-    scene.own().expect("a conveyor scene carries its held heap")
+    &part(scene).held
+}
+
+/// `scene` with its part changed by `change`.
+pub fn with_part(mut scene: Scene, change: impl FnOnce(&mut HeldRun)) -> Scene {
+    change(scene.own_mut().expect("a conveyor scene carries its held run"));
+    scene
 }
 
 /// `scene` with its held heap's numbers changed by `change`.
-pub fn with_held(mut scene: Scene, change: impl FnOnce(&mut Held)) -> Scene {
-    change(scene.own_mut().expect("a conveyor scene carries its held heap"));
-    scene
+pub fn with_held(scene: Scene, change: impl FnOnce(&mut Held)) -> Scene {
+    with_part(scene, |p| change(&mut p.held))
 }
 
 impl Layout for Conveyor {
@@ -170,7 +213,7 @@ impl Layout for Conveyor {
     }
 
     fn what_runs(&self, sc: &Scene) -> String {
-        format!("a heap held at {} particles, at most {} steps", held(sc).heap_particles, sc.spread_steps())
+        format!("a heap held at {} particles, at most {} steps", held(sc).heap_particles, sc.run_steps())
     }
 
     fn ignores(&self, _settings: &SceneSettings, name: &str) -> Option<&'static str> {
@@ -282,8 +325,8 @@ impl Layout for Conveyor {
     }
 
     fn held_heap(&self, sc: &Scene) -> Option<HeldHeap> {
-        let c = held(sc);
-        let block_mm = sc.blade_speed * sc.timestep * c.block_steps as f64 * 1e3;
+        let HeldRun { blade, held: c, .. } = part(sc);
+        let block_mm = blade.blade_speed * sc.timestep * c.block_steps as f64 * 1e3;
         Some(HeldHeap {
             heap_particles: c.heap_particles,
             heap_height_mm: c.heap_height * 1e3,
@@ -304,8 +347,9 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let rough = settings.substrate == "rough";
     let powder_bed = settings.substrate == "powder";
     let mut s = moving_blade::derive(base, settings, Dose::Free);
+    let moving_blade::Spread { blade: mut b, mut window, .. } = moving_blade::spread(&s).clone();
     let d = s.diameter;
-    let (gap, v, dt) = (s.gap, s.blade_speed, s.timestep);
+    let (gap, v, dt) = (b.gap, b.blade_speed, s.timestep);
     let heap_height = gap + heap_above;
     let heap_base = heap_height / REPOSE_DEG.to_radians().tan();
     // LIGGGHTS refuses to insert into a region under 1e-10 m³ (region.cpp, volume_mc, an
@@ -321,7 +365,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         (LAYER_FRACTION_MAX * 0.5 * heap_height * heap_base * s.depth / psd.mean_volume()).ceil() as usize;
     // Behind the blade: 10 D of deposit strip, then the delete region (6 D).
     let blade_x0 = 16.0 * d;
-    let front0 = blade_x0 + s.blade_thickness;
+    let front0 = blade_x0 + b.blade_thickness;
     let heap_x1 = front0 + heap_base + 3.0 * d;
     // The substrate's lattice fills the periodic length exactly.
     let n_y = ((s.depth / d).floor() as usize).max(1);
@@ -336,26 +380,30 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let mean_volume = psd.mean_volume();
     let mass = heap_particles as f64 * s.material.density * mean_volume;
     let Feed { classes: feed, volume_limit } = Feed::of(&psd, s.seed);
-    s.blade_fixed = true;
+    b.blade_fixed = true;
     s.particles = 0;
-    s.pile_n = [0, 0, 0];
-    s.blade_x0 = blade_x0;
-    s.blade_top = blade_top;
+    b.blade_x0 = blade_x0;
+    b.blade_top = blade_top;
     s.x_hi = x_hi;
     s.z_hi = blade_top + 2.0 * d + v * v / GRAVITY;
-    s.substrate_bed = powder_bed
+    let substrate_bed = powder_bed
         .then(|| Bed::deposit(&psd.classes, x_hi, s.depth, BED_THICKNESS * d, prime_seed(s.seed, 3)));
-    s.z_lo = match &s.substrate_bed {
+    s.z_lo = match &substrate_bed {
         Some(bed) => bed.floor,
         None if rough => -d,
         None => 0.0,
     };
-    s.substrate_n = if rough { [n_x, n_y] } else { [0, 0] };
-    s.substrate_spacing = if rough { spacing } else { 0.0 };
-    s.substrate_diameter = if rough || powder_bed { d } else { 0.0 };
-    s.substrate_particles =
-        s.substrate_bed.as_ref().map_or(s.substrate_n[0] * s.substrate_n[1], |bed| bed.spheres.len());
-    let conveyor = Held {
+    let substrate_n = if rough { [n_x, n_y] } else { [0, 0] };
+    let substrate = Substrate {
+        substrate_particles: substrate_bed
+            .as_ref()
+            .map_or(substrate_n[0] * substrate_n[1], |bed| bed.spheres.len()),
+        substrate_diameter: if rough || powder_bed { d } else { 0.0 },
+        substrate_spacing: if rough { spacing } else { 0.0 },
+        substrate_n,
+        substrate_bed,
+    };
+    let held = Held {
         heap_height,
         heap_particles,
         heap_x1,
@@ -382,13 +430,11 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         warm_warmup_blocks: blocks((settings.warm_warmup_s * v / d).max(settings.block_diameters)),
         extend: None,
     };
-    s.set_own(conveyor);
-    s.rest_ke = 0.0;
-    s.settle_steps = 0;
-    s.approach_steps = 0;
-    s.ramp_steps = 1;
-    s.dump_every = block_steps;
-    s.window_length_steps = max_blocks * block_steps;
+    b.ramp_steps = 1;
+    window.approach_steps = 0;
+    window.dump_every = block_steps;
+    window.window_length_steps = max_blocks * block_steps;
+    s.set_own(HeldRun { blade: b, window, substrate, held });
     s.thermo_every = block_steps.min(1000);
     let v_ref = v.max((2.0 * GRAVITY * blade_top).sqrt());
     s.ke_limit = 0.5 * mass * (10.0 * v_ref).powi(2);
@@ -398,8 +444,8 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
 /// The spread layer: coverage and roughness from the strip behind the blade at the end
 /// (`dump.strip`), uniformity from the mass each block of the steady window deposited.
 fn conveyor_layer(scene: &Scene, frame: &Frame, st: &SteadyState) -> Option<Layer> {
-    let c = held(scene);
-    let mut l = layer::measure(scene, frame, c.delete_x1, scene.blade_x0)?;
+    let HeldRun { blade, held: c, .. } = part(scene);
+    let mut l = layer::measure(scene, blade.gap, frame, c.delete_x1, blade.blade_x0)?;
     let particle_mass = |d: f64| scene.material.density * std::f64::consts::PI / 6.0 * d.powi(3);
     let weighted: f64 = c.feed.iter().map(|f| f.mass_fraction * particle_mass(f.diameter)).sum::<f64>()
         / c.feed.iter().map(|f| f.mass_fraction).sum::<f64>();
@@ -414,8 +460,9 @@ fn conveyor_layer(scene: &Scene, frame: &Frame, st: &SteadyState) -> Option<Laye
 /// An extended run (`run.earlier` not empty) is measured over every part's blocks and snapshots.
 fn measure(run: &Finished) -> Result<RunResult, Rejected> {
     let unparsable = |e: String| Rejected::new(FailureClass::Unparsable, e);
-    let (_, these) = moving_blade::read_frames(run, moving_blade::DUMP)?;
     let scene = run.scene;
+    let HeldRun { blade, window, held: c, .. } = part(scene);
+    let (_, these) = moving_blade::read_frames(run, blade, moving_blade::DUMP)?;
     let (mut blocks, _) = extend::earlier_blocks(run.earlier).map_err(|e| unparsable(e.to_string()))?;
     let mut frames = Vec::new();
     for dir in run.earlier {
@@ -432,14 +479,13 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
     let (more, stop) = steady::parse_blocks(&run.run.log).map_err(|e| unparsable(e.to_string()))?;
     blocks.extend(more);
     let (blocks, stop) = steady::series(blocks, stop).map_err(|e| unparsable(e.to_string()))?;
-    let c = held(scene);
     let blocks_of = steady::HeldBlocks {
         ideal_block_mass: c.ideal_block_mass,
         warmup_blocks: c.warmup_blocks,
         block_steps: c.block_steps,
         heap_particles: c.heap_particles,
     };
-    let st = steady::compute(scene, &blocks_of, &blocks, &stop, &frames);
+    let st = steady::compute(scene, (blade, window), &blocks_of, &blocks, &stop, &frames);
     // The steady window in quarters (the moving-blade scenes' sub-windows, for the same readers).
     let w = &st.state.block_mfr[st.state.transient_blocks..];
     let quarter = w.len().div_ceil(4).max(1);
@@ -465,9 +511,9 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         vx: st.vx,
         particles: c.heap_particles,
         layer,
-        layer_thickness: Some(scene.layer_thickness()),
-        layer_packing: Some(scene.layer_packing(st.mfr)),
-        layer_packing_se: Some(scene.layer_packing(st.mfr_se)),
+        layer_thickness: Some(scene.layer_thickness(blade)),
+        layer_packing: Some(scene.layer_packing(blade, st.mfr)),
+        layer_packing_se: Some(scene.layer_packing(blade, st.mfr_se)),
         layers: None,
         heap: None,
         settle_steps: 0,
@@ -476,7 +522,7 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
     if let Some(why) = st.unsteady {
         return Err(Rejected::measured(FailureClass::Unsteady, format!("MFR not steady: {why}"), result));
     }
-    moving_blade::check_result(scene, result)
+    moving_blade::check_result(scene, blade, result)
 }
 
 #[cfg(test)]
@@ -567,12 +613,13 @@ mod tests {
                 heap_mass: 0.0,
             })
             .collect();
-        let st = compute(&scene, &c, &blocks, "target", &[]);
+        let p = super::part(&scene);
+        let st = compute(&scene, (&p.blade, &p.window), &c, &blocks, "target", &[]);
         assert_eq!(st.mfr, 0.0);
         assert!(st.unsteady.as_deref().is_some_and(|w| w.contains("the flow stopped")), "{:?}", st.unsteady);
         // A point where nothing ever passes is a steady zero.
         let none: Vec<Block> = blocks.iter().map(|b| Block { gone: 0.0, ..*b }).collect();
-        let st = compute(&scene, &c, &none, "target", &[]);
+        let st = compute(&scene, (&p.blade, &p.window), &c, &none, "target", &[]);
         assert_eq!((st.mfr, st.unsteady), (0.0, None));
     }
 }

@@ -70,15 +70,16 @@ pub fn map(from: &Scene, state: &Path, to: &Scene, to_pile: &str, distance: f64)
     let snaps = read_dump(state, &STATE_COLUMNS)?;
     let snap = snaps.last().ok_or(ColdStart::EmptyDump)?;
     let col: Vec<_> = STATE_COLUMNS.iter().map(|c| snap.column(c).expect("required column")).collect();
-    let (sy, sv) = (to.depth / from.depth, to.blade_speed / from.blade_speed);
+    let (fb, tb) = (&super::part(from).blade, &super::part(to).blade);
+    let (sy, sv) = (to.depth / from.depth, tb.blade_speed / fb.blade_speed);
     let c = super::held(to);
-    let blade = ([to.blade_x0, to.blade_x0 + to.blade_thickness], [to.gap, to.blade_top]);
+    let blade = ([tb.blade_x0, tb.blade_x0 + tb.blade_thickness], [tb.gap, tb.blade_top]);
     let mut mapped: Vec<Sphere> = (0..snap.len())
         .map(|i| {
             let g = |k: usize| snap.get(i, col[k]);
             Sphere {
                 x: [
-                    to.blade_x0 + (g(1) - from.blade_x0) * ratio,
+                    tb.blade_x0 + (g(1) - fb.blade_x0) * ratio,
                     (g(2) * sy).rem_euclid(to.depth),
                     g(3) * ratio,
                 ],
@@ -88,7 +89,7 @@ pub fn map(from: &Scene, state: &Path, to: &Scene, to_pile: &str, distance: f64)
         })
         .filter(|p| {
             let [x, _, z] = p.x;
-            x >= to.blade_x0
+            x >= tb.blade_x0
                 && x + p.r <= c.heap_x1
                 && z - p.r >= to.z_lo
                 && z + p.r <= to.z_hi
@@ -111,7 +112,7 @@ pub fn map(from: &Scene, state: &Path, to: &Scene, to_pile: &str, distance: f64)
     }
     let mut warm = kept.spheres.split_off(first_warm);
     // A heap larger than this point holds: its top goes (the deck tops a smaller one up).
-    let front = to.blade_x0 + to.blade_thickness;
+    let front = tb.blade_x0 + tb.blade_thickness;
     let in_heap = |p: &Sphere| (front..=c.heap_x1).contains(&p.x[0]) && (0.0..=c.heap_z1).contains(&p.x[2]);
     // `warm` is sorted lowest first, so the heap's top is its last members.
     let excess = warm.iter().filter(|p| in_heap(p)).count().saturating_sub(c.heap_particles);
@@ -137,13 +138,13 @@ pub fn warm_started(to: &Scene, distance: f64) -> Scene {
     let share = (distance / FULL_WARMUP_DISTANCE).clamp(LEAST_WARMUP_SHARE, 1.0);
     let warmup_blocks = ((c.warmup_blocks as f64 * share).ceil() as u64)
         .clamp(c.warm_warmup_blocks.min(c.warmup_blocks), c.warmup_blocks);
-    let mut scene = super::with_held(to.clone(), |h| {
-        h.warm_start = true;
-        h.warmup_blocks = warmup_blocks;
-        h.max_blocks = warmup_blocks + window_blocks;
-    });
-    scene.window_length_steps = (warmup_blocks + window_blocks) * c.block_steps;
-    scene
+    let block_steps = c.block_steps;
+    super::with_part(to.clone(), |p| {
+        p.held.warm_start = true;
+        p.held.warmup_blocks = warmup_blocks;
+        p.held.max_blocks = warmup_blocks + window_blocks;
+        p.window.window_length_steps = (warmup_blocks + window_blocks) * block_steps;
+    })
 }
 
 /// The ratio of `to`'s sizes to `from`'s, the same for every class; an error for two powders of
@@ -295,7 +296,8 @@ mod tests {
             for i in 0..20 {
                 for j in 0..per_y {
                     n += 1;
-                    let x = s.blade_x0 + s.blade_thickness + (i as f64 + 0.5) * 1.01 * d;
+                    let b = &super::super::part(s).blade;
+                    let x = b.blade_x0 + b.blade_thickness + (i as f64 + 0.5) * 1.01 * d;
                     let z = 0.67 * d + k as f64 * 1.01 * d;
                     out += &format!(
                         "{n} {x} {} {z} -0.5 0 0.1 0 20 0 {} 1e-5\n",
@@ -343,7 +345,7 @@ mod tests {
             .collect();
         assert_eq!(atoms.len(), w.particles);
         // Ids follow the substrate's; sizes doubled; heights doubled; velocities × 1.5.
-        assert_eq!(atoms[0][0] as usize, to.substrate_particles + 1);
+        assert_eq!(atoms[0][0] as usize, to.substrate().unwrap().substrate_particles + 1);
         assert!(atoms.iter().all(|a| (a[2] - 2e-3).abs() < 1e-12));
         assert!(atoms.iter().all(|a| a[6] >= 0.67 * 2e-3 - 1e-9));
         let vel = w.data.lines().skip_while(|l| *l != "Velocities").nth(2).unwrap();
@@ -365,7 +367,8 @@ mod tests {
         for l in w.data.lines().skip_while(|l| *l != "Atoms").skip(2).take_while(|l| !l.is_empty()) {
             let a: Vec<f64> = l.split_whitespace().map(|t| t.parse().unwrap()).collect();
             let (x, z, r) = (a[4], a[6], 0.5 * a[2]);
-            let blade = ([to.blade_x0, to.blade_x0 + to.blade_thickness], [to.gap, to.blade_top]);
+            let b = &super::super::part(&to).blade;
+            let blade = ([b.blade_x0, b.blade_x0 + b.blade_thickness], [b.gap, b.blade_top]);
             assert!(box_distance(x, z, blade) >= r, "a sphere at x {x} z {z} overlaps the blade");
             assert!(x + r <= held(&to).heap_x1);
         }

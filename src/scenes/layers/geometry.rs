@@ -24,13 +24,14 @@ use crate::scene::Scene;
 const ARC_SEGMENTS: usize = 48;
 
 pub fn blade_stl(s: &Scene, plan: &Plan) -> String {
-    let (y0, y1) = (s.blade_y_inset, s.depth - s.blade_y_inset);
+    let blade = &super::part(s).blade;
+    let (y0, y1) = inset(s);
     if plan.blade_radius <= 0.0 {
         let x0 = plan.tip_x0;
         return box_stl(
             "blade",
             [x0, y0, 0.0],
-            [x0 + s.blade_thickness, y1, s.blade_top],
+            [x0 + blade.blade_thickness, y1, blade.blade_top],
             false,
             s.mesh_cell,
         );
@@ -51,7 +52,7 @@ pub fn blade_stl(s: &Scene, plan: &Plan) -> String {
         // The arc from angle −φ to +φ about the lowest line, φ = share × 90°, then vertical faces
         // from its ends up to the blade's top, and a lid.
         let phi = 0.5 * ROUND_ARC_SHARE * std::f64::consts::PI;
-        let top = s.blade_top.max(point(phi)[1] + s.diameter);
+        let top = blade.blade_top.max(point(phi)[1] + s.diameter);
         profile.push([point(-phi)[0], top]);
         for i in 0..=ARC_SEGMENTS {
             profile.push(point(-phi + 2.0 * phi * i as f64 / ARC_SEGMENTS as f64));
@@ -94,12 +95,12 @@ pub fn blade_stl(s: &Scene, plan: &Plan) -> String {
 }
 
 pub fn feed_stl(s: &Scene, plan: &Plan) -> String {
-    let (y0, y1) = (s.blade_y_inset, s.depth - s.blade_y_inset);
+    let (y0, y1) = inset(s);
     box_stl("feed", [plan.feed_x0, y0, -plan.block_depth], [plan.plate_x0, y1, 0.0], false, coarse(s))
 }
 
 pub fn wall_stl(s: &Scene, plan: &Plan) -> String {
-    let (y0, y1) = (s.blade_y_inset, s.depth - s.blade_y_inset);
+    let (y0, y1) = inset(s);
     box_stl(
         "wall",
         [plan.plate_x1, y0, -plan.block_depth],
@@ -114,7 +115,7 @@ pub fn wall_stl(s: &Scene, plan: &Plan) -> String {
 /// into the pit cannot roll under the plate. It never moves (the wall above it rises with the
 /// top surface, its bottom always below this one's top).
 pub fn pit_stl(s: &Scene, plan: &Plan) -> String {
-    let (y0, y1) = (s.blade_y_inset, s.depth - s.blade_y_inset);
+    let (y0, y1) = inset(s);
     box_stl(
         "pit",
         [plan.plate_x1, y0, s.z_lo + 0.1 * s.diameter],
@@ -125,8 +126,14 @@ pub fn pit_stl(s: &Scene, plan: &Plan) -> String {
 }
 
 pub fn plate_stl(s: &Scene, plan: &Plan) -> String {
-    let (y0, y1) = (s.blade_y_inset, s.depth - s.blade_y_inset);
+    let (y0, y1) = inset(s);
     box_stl("plate", [plan.plate_x0, y0, -s.diameter], [plan.plate_x1, y1, 0.0], false, coarse(s))
+}
+
+/// The meshes' span across the periodic depth: inset from its faces as the blade is.
+fn inset(s: &Scene) -> (f64, f64) {
+    let inset = super::part(s).blade.blade_y_inset;
+    (inset, s.depth - inset)
 }
 
 /// Cells of the still walls: a few diameters (a mesh's cost grows with its faces).

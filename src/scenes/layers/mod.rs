@@ -31,7 +31,7 @@ mod top_view;
 pub mod warm;
 
 use plan::{derive, with_plan};
-pub use plan::{plan_of, platform_gap, Pass, Plan, Resume};
+pub use plan::{part, plan_of, platform_gap, Pass, Passes, Plan, Resume};
 
 use std::path::Path;
 

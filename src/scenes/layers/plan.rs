@@ -9,6 +9,8 @@ use super::{
     FEED_OVER_PLATE, MAX_DOSE_SPEED, PIT_DIAMETERS, RAMP_DIAMETERS, ROUND_ARC_SHARE, SEARCH_MAX_DEPTH_LAYERS,
     SEARCH_MAX_GROWTH, SETTLE_CHECKS,
 };
+use crate::scene::blade::Blade;
+use crate::scene::own::LayoutData;
 use crate::scene::settings::SceneSettings;
 use crate::scene::{
     prime_seed, Base, Feed, FeedClass, Scene, GRAVITY, LAYER_FRACTION_MAX, MIN_INSERT_VOLUME,
@@ -202,16 +204,40 @@ pub fn platform_gap(blade_radius: f64, clearance: f64, d_max: f64) -> f64 {
     }
 }
 
+/// The layers layout's part of the scene: its blade and its plan (`own`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Passes {
+    #[serde(flatten)]
+    pub blade: Blade,
+    /// The deck's `scene.own.*`.
+    #[serde(rename = "own")]
+    pub plan: Plan,
+}
+
+impl LayoutData for Passes {
+    fn steps(&self) -> u64 {
+        self.plan.total_steps()
+    }
+    fn blade(&self) -> Option<&Blade> {
+        Some(&self.blade)
+    }
+}
+
+/// The part of a layers scene.
+pub fn part(scene: &Scene) -> &Passes {
+    scene.own().expect("a layers scene carries its passes")
+}
+
 /// `scene` carrying `plan`.
 pub(super) fn with_plan(scene: &Scene, plan: Plan) -> Scene {
     let mut s = scene.clone();
-    s.set_own(plan);
+    s.own_mut::<Passes>().expect("a layers scene carries its passes").plan = plan;
     s
 }
 
 /// The plan a scene of this layout carries.
 pub fn plan_of(scene: &Scene) -> Plan {
-    scene.own::<Plan>().cloned().expect("a layers scene carries its plan")
+    part(scene).plan.clone()
 }
 
 /// The scene of a layers point: the moving blade's common numbers, then the well, the dose and
@@ -220,6 +246,7 @@ pub(super) fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let t = base.layer_thickness;
     let clearance = settings.blade_clearance_mm * 1e-3;
     let mut s = moving_blade::derive(base.clone(), settings, Dose::Free);
+    let mut blade = moving_blade::spread(&s).blade.clone();
     let Base { psd, d, speed: v, timestep: dt, .. } = base;
     let fused = fused(settings);
     let layers = settings.layers.max(1);
@@ -384,25 +411,19 @@ pub(super) fn derive(base: Base, settings: &SceneSettings) -> Scene {
         * psd.mean_volume();
     // A turning roller's surface runs at |ratio| × v about its axis: what it throws may be that fast.
     let v_ref = v.max((1.0 + roller_speed_ratio.abs()) * v).max((2.0 * GRAVITY * z_top).sqrt());
-    s.gap = t + clearance;
+    blade.gap = t + clearance;
     s.particles = dose_particles * layers;
-    s.pile_n = [0, 0, 0];
-    s.rest_ke = 0.0;
-    s.blade_x0 = tip_x0;
-    s.blade_thickness = if radius > 0.0 { 0.0 } else { d };
-    s.blade_top = blade_height;
+    blade.blade_x0 = tip_x0;
+    blade.blade_thickness = if radius > 0.0 { 0.0 } else { d };
+    blade.blade_top = blade_height;
     s.x_hi = x_hi;
     // The feed platform's and the wall's faces reach block_depth under their top, which stands
     // lower than the plate's drops where the platform gap exceeds the clearance.
     s.z_lo = -(block_depth.max(pit_depth) + d + (platform_gap - clearance));
     s.z_hi = z_top + v * v / GRAVITY;
-    s.settle_steps = 0;
-    s.approach_steps = 0;
-    s.ramp_steps = ramp_steps;
-    s.window_length_steps = fall_steps + cycle * layers as u64 - wait_steps;
-    s.dump_every = 0;
+    blade.ramp_steps = ramp_steps;
     s.thermo_every = (cycle / 20).clamp(1, 1000);
     s.ke_limit = 0.5 * mass * (10.0 * v_ref).powi(2);
-    s.set_own(plan);
+    s.set_own(Passes { blade, plan });
     s
 }

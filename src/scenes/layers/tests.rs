@@ -43,7 +43,7 @@ fn the_platform_drops_by_the_layer_thickness_before_every_pass() {
     assert!(plan.tip_x0 + plan.travel > plan.plate_x1);
     // Every pass's top and the feed platform's faces stay inside the box.
     let last = plan.passes.last().unwrap();
-    assert!(last.tip + sc.blade_top < sc.z_hi);
+    assert!(last.tip + super::part(&sc).blade.blade_top < sc.z_hi);
     assert!(last.top - plan.block_depth > sc.z_lo && last.top - plan.block_depth < 0.0);
 }
 

@@ -18,9 +18,12 @@ use crate::measure::frame::{Frame, COLUMNS};
 use crate::measure::metrics;
 use crate::measure::plausible;
 use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT};
-use crate::scene::own::OwnData;
+use crate::scene::blade::{Blade, Settle, Window};
+use crate::scene::own::{LayoutData, OwnData};
+use crate::scene::pile::PileBlock;
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
+use crate::scene::substrate::Substrate;
 use crate::scene::{
     Base, Scene, GRAVITY, LAYER_FRACTION_MAX, REPOSE_DEG, SNAPSHOTS_PER_SUB_WINDOW, SUB_WINDOWS, THESIS_BAND,
     VTK_EVERY_S,
@@ -56,10 +59,45 @@ const TEMPLATE: BuiltinTemplate = BuiltinTemplate {
 /// The snapshots of the window, in the run directory.
 pub const DUMP: &str = "dump.spread";
 
-/// The moving-blade layouts' own numbers (`scene.own`): what only a blade crossing its dose
-/// runs.
+/// The moving-blade layouts' part of the scene: the blade, its window, the dose's block, the
+/// substrate and the settle, and what only a blade crossing its dose runs (`own`).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Spread {
+    #[serde(flatten)]
+    pub blade: Blade,
+    #[serde(flatten)]
+    pub window: Window,
+    #[serde(flatten)]
+    pub pile: PileBlock,
+    #[serde(flatten)]
+    pub substrate: Substrate,
+    #[serde(flatten)]
+    pub settle: Settle,
+    /// The deck's `scene.own.*`.
+    pub own: DoseRun,
+}
+
+impl LayoutData for Spread {
+    fn steps(&self) -> u64 {
+        self.window.spread_steps()
+    }
+    fn blade(&self) -> Option<&Blade> {
+        Some(&self.blade)
+    }
+    fn window(&self) -> Option<&Window> {
+        Some(&self.window)
+    }
+    fn substrate(&self) -> Option<&Substrate> {
+        Some(&self.substrate)
+    }
+    fn pile(&self) -> Option<&PileBlock> {
+        Some(&self.pile)
+    }
+}
+
+/// What only a blade crossing its dose runs.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct DoseRun {
     /// x of the gate closing the dose's region during the settle; 0: no gate.
     pub gate_x: f64,
     /// Steps after the window to the end of the domain (`run_to_end`; 0: stop at the window's
@@ -69,7 +107,7 @@ pub struct Spread {
     pub full_dump_every: u64,
 }
 
-/// The own numbers of a moving-blade scene.
+/// The part of a moving-blade scene.
 pub fn spread(scene: &Scene) -> &Spread {
     scene.own().expect("a moving-blade scene carries its spread")
 }
@@ -122,7 +160,7 @@ impl Layout for MovingBlade {
     }
 
     fn what_runs(&self, scene: &Scene) -> String {
-        format!("{} particles, settle + {} steps", scene.particles, scene.spread_steps())
+        format!("{} particles, settle + {} steps", scene.particles, scene.run_steps())
     }
 
     fn run_files(&self, _settings: &SceneSettings) -> Vec<String> {
@@ -302,72 +340,68 @@ pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
     Scene {
         material: base.material.clone(),
         layout: settings.layout.clone(),
-        blade_fixed: false,
         size_classes: psd.classes.clone(),
         sizes: psd.summary(),
         seed: settings.seed,
         particles,
         diameter: d,
-        profile_diameter,
-        gap,
-        blade_speed: speed,
-        blade_thickness,
-        blade_x0,
-        blade_top,
-        blade_y_inset: 1e-3 * d_min,
         x_hi,
         depth,
         z_hi,
         z_lo,
-        substrate_particles: substrate_n[0] * substrate_n[1],
-        substrate_diameter: if rough { d } else { 0.0 },
-        substrate_spacing,
-        substrate_n,
-        substrate_bed: None,
-        pile_x0,
-        pile_x1,
-        pile_z1,
-        pile_spacing: spacing,
-        pile_n: [nx, ny, nz],
         rayleigh_time,
         timestep,
         // A quarter of the smallest diameter (default): particles move far less than that
         // between list builds (`neigh_modify delay 0` rebuilds as soon as one has).
         skin: settings.skin_diameters * d_min,
-        settle_steps,
-        rest_ke,
-        rest_speed,
-        settle_check_steps,
-        settle_max_checks,
-        approach_steps,
-        ramp_steps,
-        dump_every,
-        window_length_steps,
         vtk_every,
         mesh_cell: depth / settings.mesh_cells_across as f64,
         // Frequent enough for the engine's watcher to stop an exploding run early.
         thermo_every: (total_steps / 40).clamp(1, 200),
-        vx_band,
-        vx_length: 6.0 * profile_diameter,
         ke_limit,
-        own: Some(OwnData::new(Spread {
-            gate_x: if gated { pile_x1 } else { 0.0 },
-            traverse_steps,
-            full_dump_every,
-        })),
+        own: OwnData::new(Spread {
+            blade: Blade {
+                gap,
+                blade_speed: speed,
+                blade_thickness,
+                blade_x0,
+                blade_top,
+                blade_y_inset: 1e-3 * d_min,
+                blade_fixed: false,
+                ramp_steps,
+            },
+            window: Window {
+                approach_steps,
+                window_length_steps,
+                dump_every,
+                profile_diameter,
+                vx_band,
+                vx_length: 6.0 * profile_diameter,
+            },
+            pile: PileBlock { pile_x0, pile_x1, pile_z1, pile_spacing: spacing, pile_n: [nx, ny, nz] },
+            substrate: Substrate {
+                substrate_particles: substrate_n[0] * substrate_n[1],
+                substrate_diameter: if rough { d } else { 0.0 },
+                substrate_spacing,
+                substrate_n,
+                substrate_bed: None,
+            },
+            settle: Settle { settle_steps, rest_ke, rest_speed, settle_check_steps, settle_max_checks },
+            own: DoseRun { gate_x: if gated { pile_x1 } else { 0.0 }, traverse_steps, full_dump_every },
+        }),
     }
 }
 
 /// The settle's end from the log, and the window's snapshots from `dump`, each checked for
 /// what the engine cannot have written. Shared by every blade layout.
-pub fn read_frames(run: &Finished, dump: &str) -> Result<(u64, Vec<Frame>), Rejected> {
+pub fn read_frames(run: &Finished, blade: &Blade, dump: &str) -> Result<(u64, Vec<Frame>), Rejected> {
     let settle_steps =
         crate::engine::settled_at(&run.run.log).map_err(|(class, reason)| Rejected::new(class, reason))?;
     let frames: Vec<Frame> = read_dump(run.run_dir.join(dump), &COLUMNS)
         .and_then(|snaps| snaps.iter().map(Frame::from_snapshot).collect())
         .map_err(|e| Rejected::new(FailureClass::Unparsable, e.to_string()))?;
     // What the engine wrote must be possible before the metrics read it.
-    let speeds = plausible::SphereSpeeds::of(run.scene);
+    let speeds = plausible::SphereSpeeds::of(run.scene, blade.blade_speed);
     if let Some(e) = frames.iter().find_map(|f| plausible::check_frame(f, &speeds).err()) {
         return Err(Rejected::new(FailureClass::Implausible, format!("{dump}: {e}")));
     }
@@ -377,11 +411,12 @@ pub fn read_frames(run: &Finished, dump: &str) -> Result<(u64, Vec<Frame>), Reje
 /// A moving-blade run's result: MFR from the flux counts over the window, steady when the
 /// window's halves agree within counting noise.
 pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
-    let (settle_steps, frames) = read_frames(run, DUMP)?;
     let scene = run.scene;
-    let m = metrics::compute(scene, &frames)
+    let Spread { blade, window, .. } = spread(scene);
+    let (settle_steps, frames) = read_frames(run, blade, DUMP)?;
+    let m = metrics::compute(scene, blade, window, &frames)
         .map_err(|e| Rejected::new(FailureClass::Unparsable, e.to_string()))?;
-    let steps = settle_steps + scene.spread_steps();
+    let steps = settle_steps + window.spread_steps();
     let result = RunResult {
         format: RESULT_FORMAT,
         hash: run.hash.to_string(),
@@ -398,8 +433,8 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         vx: m.vx,
         particles: m.particles,
         layer: m.layer,
-        layer_thickness: Some(scene.layer_thickness()),
-        layer_packing: Some(scene.layer_packing(m.mfr)),
+        layer_thickness: Some(scene.layer_thickness(blade)),
+        layer_packing: Some(scene.layer_packing(blade, m.mfr)),
         layer_packing_se: None,
         layers: None,
         heap: None,
@@ -415,13 +450,13 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         );
         return Err(Rejected::measured(FailureClass::Unsteady, reason, result));
     }
-    check_result(scene, result)
+    check_result(scene, blade, result)
 }
 
-/// The bounds every blade layout's result must meet: not squeezed through a gap it cannot pass
-/// (its numbers kept), and no impossible number.
-pub fn check_result(scene: &Scene, result: RunResult) -> Result<RunResult, Rejected> {
-    if let Err(e) = plausible::check_squeezed(scene, result.mfr) {
+/// The bounds every blade layout's result must meet: not squeezed through the gap of `blade` it
+/// cannot pass (its numbers kept), and no impossible number.
+pub fn check_result(scene: &Scene, blade: &Blade, result: RunResult) -> Result<RunResult, Rejected> {
+    if let Err(e) = plausible::check_squeezed(scene, blade.gap, result.mfr) {
         return Err(Rejected::measured(FailureClass::Implausible, e.to_string(), result));
     }
     if let Err(e) = plausible::check_result(&result) {
@@ -486,22 +521,25 @@ mod tests {
     fn the_window_is_after_the_pile_and_inside_the_box() {
         for (d, gap) in [(1.0, 1.0), (1.0, 5.0), (3.0, 1.0), (3.0, 5.0)] {
             let s = scene(&[("diameter", d), ("gap", gap), ("blade_speed", 1.6)]);
-            let (t1, t2) = s.window_steps();
+            let Spread { blade, window, pile, .. } = spread(&s);
+            let rear = |step| blade.rear_at(s.timestep, step);
+            let front = |step| blade.front_at(s.timestep, step);
+            let (t1, t2) = window.steps();
             // Window starts after the blade front has passed the insertion block's far end.
-            assert!(s.blade_front_at(t1) > s.pile_x1, "d={d} gap={gap}");
+            assert!(front(t1) > pile.pile_x1, "d={d} gap={gap}");
             // Window length is window_diameters·D (rounded up to whole snapshot intervals), at
             // full speed.
-            let len = s.blade_rear_at(t2) - s.blade_rear_at(t1);
+            let len = rear(t2) - rear(t1);
             let w = SceneSettings::gated().window_diameters * s.diameter;
             assert!(len >= w && len < w + s.diameter, "{len}");
             // The blade is at full speed when the window opens.
-            assert!(t1 >= s.blade_start_step() + s.ramp_steps);
+            assert!(t1 >= blade.start_step() + blade.ramp_steps);
             // The blade never leaves the box.
-            assert!(s.blade_front_at(s.spread_steps()) < s.x_hi);
-            assert!(s.blade_top < s.z_hi);
+            assert!(front(window.spread_steps()) < s.x_hi);
+            assert!(blade.blade_top < s.z_hi);
             // All step counts line up with the dump cadence.
-            assert_eq!(t1 % s.dump_every, 0);
-            assert_eq!(s.spread_steps() % s.dump_every, 0);
+            assert_eq!(t1 % window.dump_every, 0);
+            assert_eq!(window.spread_steps() % window.dump_every, 0);
         }
     }
 
@@ -516,9 +554,9 @@ mod tests {
     #[test]
     fn layers_are_centred_at_gap_plus_half_diameters() {
         let s = scene(&[("diameter", 2.0), ("gap", 3.0)]);
-        assert!((s.layer_height(1) - 4e-3).abs() < 1e-15);
-        assert!((s.layer_height(12) - 15e-3).abs() < 1e-15);
-        assert!((s.vx_band - 0.5e-3).abs() < 1e-15);
+        assert!((s.layer_height(1).unwrap() - 4e-3).abs() < 1e-15);
+        assert!((s.layer_height(12).unwrap() - 15e-3).abs() < 1e-15);
+        assert!((spread(&s).window.vx_band - 0.5e-3).abs() < 1e-15);
     }
 
     #[test]
@@ -527,15 +565,23 @@ mod tests {
         // dose's mass, n · ρ · π D³ / 6.
         let s = scene(&[("diameter", 2.0)]);
         let v = 0.01 * (9.81f64 * 0.002).sqrt();
-        assert!((s.rest_speed - v).abs() < 1e-12);
+        let settle = &spread(&s).settle;
+        assert!((settle.rest_speed - v).abs() < 1e-12);
         let mass = s.particles as f64 * 7980.0 * std::f64::consts::PI * 0.002f64.powi(3) / 6.0;
-        assert!((s.rest_ke / (0.5 * mass * v * v) - 1.0).abs() < 1e-9);
+        assert!((settle.rest_ke / (0.5 * mass * v * v) - 1.0).abs() < 1e-9);
         // The thesis layout has no rest criterion, gate or substrate.
         let values = [("diameter".to_string(), 2.0)].into_iter().collect();
         let thesis = SceneSettings { layout: "thesis".into(), ..SceneSettings::gated() };
         let t = crate::scenes::build(&values, &thesis).unwrap();
-        assert_eq!((t.rest_ke, spread(&t).gate_x, t.substrate_particles, t.z_lo), (0.0, 0.0, 0, 0.0));
-        assert!(spread(&s).gate_x > 0.0 && s.substrate_particles > 0 && s.z_lo == -s.diameter);
+        let t_spread = spread(&t);
+        assert_eq!(
+            (t_spread.settle.rest_ke, t_spread.own.gate_x, t_spread.substrate.substrate_particles, t.z_lo),
+            (0.0, 0.0, 0, 0.0)
+        );
+        let s_spread = spread(&s);
+        assert!(
+            s_spread.own.gate_x > 0.0 && s_spread.substrate.substrate_particles > 0 && s.z_lo == -s.diameter
+        );
     }
 
     #[test]
@@ -554,19 +600,21 @@ mod ramp_tests {
     #[test]
     fn blade_position_is_continuous_through_the_ramp_and_linear_after() {
         let s = crate::scenes::build(&BTreeMap::new(), &SceneSettings::gated()).unwrap();
-        let s0 = s.blade_start_step();
-        let r = s.ramp_steps;
-        assert_eq!(s.blade_rear_at(s0), s.blade_x0);
+        let blade = &spread(&s).blade;
+        let at = |step| blade.rear_at(s.timestep, step);
+        let s0 = blade.start_step();
+        let r = blade.ramp_steps;
+        assert_eq!(at(s0), blade.blade_x0);
         // During the ramp the travel is v·dt·k²/(2r): a quarter of full-speed travel at k = r/2.
-        let half = s.blade_rear_at(s0 + r / 2) - s.blade_x0;
+        let half = at(s0 + r / 2) - blade.blade_x0;
         let k = (r / 2) as f64;
-        assert!((half - s.blade_speed * s.timestep * k * k / (2.0 * r as f64)).abs() < 1e-15);
+        assert!((half - blade.blade_speed * s.timestep * k * k / (2.0 * r as f64)).abs() < 1e-15);
         // After it, exactly v·dt per step.
-        let a = s.blade_rear_at(s0 + r + 10);
-        let b = s.blade_rear_at(s0 + r + 11);
-        assert!((b - a - s.blade_speed * s.timestep).abs() < 1e-15);
+        let a = at(s0 + r + 10);
+        let b = at(s0 + r + 11);
+        assert!((b - a - blade.blade_speed * s.timestep).abs() < 1e-15);
         // The ramp's travel is RAMP_DIAMETERS·D to within a step.
-        let ramp_travel = s.blade_rear_at(s0 + r) - s.blade_x0;
-        assert!((ramp_travel - RAMP_DIAMETERS * s.diameter).abs() < s.blade_speed * s.timestep);
+        let ramp_travel = at(s0 + r) - blade.blade_x0;
+        assert!((ramp_travel - RAMP_DIAMETERS * s.diameter).abs() < blade.blade_speed * s.timestep);
     }
 }

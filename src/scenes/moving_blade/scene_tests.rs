@@ -28,7 +28,7 @@ mod pile {
         let s = crate::scenes::build(&BTreeMap::new(), &settings).unwrap();
         let a = atoms(&pile_data(&s));
         assert_eq!(a.len(), s.atoms());
-        assert!(s.substrate_particles > 0);
+        assert!(s.substrate().unwrap().substrate_particles > 0);
         for (n, p) in a.iter().enumerate() {
             assert_eq!(p[0] as usize, n + 1);
             let r = p[2] / 2.0;
@@ -37,7 +37,7 @@ mod pile {
                 assert_eq!(p[1], 1.0);
                 assert!(p[6] - r > 0.0 && p[6] + r < s.z_hi);
                 assert!(
-                    p[4] + r < crate::scenes::moving_blade::spread(&s).gate_x,
+                    p[4] + r < crate::scenes::moving_blade::spread(&s).own.gate_x,
                     "the dose lies behind the gate"
                 );
             } else {
@@ -89,8 +89,9 @@ mod passage {
     #[test]
     fn a_sphere_in_a_pocket_of_touching_spheres_stands_d_over_root_two() {
         // d = D = s: −D/2 + √(D² − D²/2) + D/2 = D/√2.
-        let mut s = scene(&[("diameter", 2.0)], &SceneSettings::default());
-        s.substrate_spacing = s.diameter;
+        let s = scene(&[("diameter", 2.0)], &SceneSettings::default());
+        let d = s.diameter;
+        let s = crate::scenes::conveyor::with_part(s, |p| p.substrate.substrate_spacing = d);
         assert!(close(s.lowest_top(), 2e-3 / 2f64.sqrt()), "{}", s.lowest_top());
     }
 
@@ -99,7 +100,7 @@ mod passage {
         // Six diameters of depth hold 6 lattice spacings of 1.05 D, so s = 1.05 D:
         // √(1 − 1.05²/2) D = √0.44875 D = 0.669888 D.
         let s = scene(&[("diameter", 3.0)], &SceneSettings::default());
-        assert!(close(s.substrate_spacing, 1.05 * 3e-3));
+        assert!(close(s.substrate().unwrap().substrate_spacing, 1.05 * 3e-3));
         assert!(close(s.lowest_top(), 0.44875f64.sqrt() * 3e-3), "{}", s.lowest_top());
     }
 
@@ -132,7 +133,7 @@ mod passage {
         // r = 0.2 mm reaches the plate at z_lo = −2 mm: its top is at −1.6 mm.
         let mut s = scene(&[("diameter", 2.0)], &SceneSettings::default());
         s.size_classes = vec![crate::scene::psd::SizeClass { diameter: 0.4e-3, fraction: 1.0 }];
-        assert!(close(s.substrate_spacing, 2.1e-3) && close(s.z_lo, -2e-3));
+        assert!(close(s.substrate().unwrap().substrate_spacing, 2.1e-3) && close(s.z_lo, -2e-3));
         assert!(close(s.lowest_top(), -1.6e-3), "{}", s.lowest_top());
         // One just too large to drop through (r = 0.6 mm) sits in the pocket:
         // −1 + √(1.6² − 2.1²/2) + 0.6 = −0.4 + √0.355 mm.
@@ -173,7 +174,7 @@ mod metrics {
     use std::collections::BTreeMap;
 
     use crate::measure::frame::Frame;
-    use crate::measure::metrics::{compute, MetricsError};
+    use crate::measure::metrics::{self, MetricsError};
     use crate::scene::settings::SceneSettings;
     use crate::scene::Scene;
 
@@ -186,14 +187,33 @@ mod metrics {
     }
 
     fn window_steps(s: &Scene) -> Vec<u64> {
-        let (t1, t2) = s.window_steps();
-        (t1..=t2).step_by(s.dump_every as usize).collect()
+        let w = s.window().unwrap();
+        let (t1, t2) = w.steps();
+        (t1..=t2).step_by(w.dump_every as usize).collect()
+    }
+
+    /// The blade's rear and front faces at `step`.
+    fn rear(s: &Scene, step: u64) -> f64 {
+        s.blade().unwrap().rear_at(s.timestep, step)
+    }
+
+    fn front(s: &Scene, step: u64) -> f64 {
+        s.blade().unwrap().front_at(s.timestep, step)
+    }
+
+    fn gap(s: &Scene) -> f64 {
+        s.blade().unwrap().gap
+    }
+
+    /// The metrics of `frames` of `s`.
+    fn compute(s: &Scene, frames: &[Frame]) -> Result<crate::measure::metrics::Metrics, MetricsError> {
+        metrics::compute(s, s.blade().unwrap(), s.window().unwrap(), frames)
     }
 
     /// Particles at rest at height `z`, `per_length` kg per metre of x, spread evenly over the
     /// whole travel of the blade, as seen at every snapshot of the window.
     fn resting_layer(s: &Scene, per_length: f64, m: f64, z: f64) -> Vec<Frame> {
-        let x_end = s.blade_front_at(s.spread_steps()) + s.diameter;
+        let x_end = front(s, s.window().unwrap().spread_steps()) + s.diameter;
         let n = (per_length * x_end / m).round() as usize;
         let one = |step| Frame {
             step,
@@ -212,8 +232,8 @@ mod metrics {
         // The blade sweeping over a resting layer sees exactly its mass pass under the tip:
         // MFR = λ / (ρ w h), on the rear and the front face alike.
         let s = scene();
-        let ideal = s.material.density * s.depth * s.gap;
-        let m = compute(&s, &resting_layer(&s, 0.5 * ideal, 1e-7, s.gap / 2.0)).unwrap();
+        let ideal = s.material.density * s.depth * gap(&s);
+        let m = compute(&s, &resting_layer(&s, 0.5 * ideal, 1e-7, gap(&s) / 2.0)).unwrap();
         assert!((m.mfr - 0.5).abs() < 0.01, "{}", m.mfr);
         assert!((m.mfr_flux - 0.5).abs() < 0.01, "{}", m.mfr_flux);
         assert!(m.steady);
@@ -226,8 +246,8 @@ mod metrics {
     fn particles_above_the_tip_do_not_count() {
         // The same layer, but every particle above the tip (thrown over the blade).
         let s = scene();
-        let ideal = s.material.density * s.depth * s.gap;
-        let m = compute(&s, &resting_layer(&s, 0.5 * ideal, 1e-7, s.gap * 1.01)).unwrap();
+        let ideal = s.material.density * s.depth * gap(&s);
+        let m = compute(&s, &resting_layer(&s, 0.5 * ideal, 1e-7, gap(&s) * 1.01)).unwrap();
         assert_eq!(m.mfr, 0.0);
         assert_eq!(m.mfr_flux, 0.0);
     }
@@ -247,12 +267,9 @@ mod metrics {
             mass: vec![1.0],
         };
         // Ahead of the rear face, then behind it, then ahead again: net zero.
-        let mut frames = vec![
-            frame(a, s.blade_rear_at(a) + 1e-4),
-            frame(b, s.blade_rear_at(b) - 1e-4),
-            frame(c, s.blade_rear_at(c) + 1e-4),
-        ];
-        frames.extend(steps[3..].iter().map(|&t| frame(t, s.blade_rear_at(t) + 1e-4)));
+        let mut frames =
+            vec![frame(a, rear(&s, a) + 1e-4), frame(b, rear(&s, b) - 1e-4), frame(c, rear(&s, c) + 1e-4)];
+        frames.extend(steps[3..].iter().map(|&t| frame(t, rear(&s, t) + 1e-4)));
         assert_eq!(compute(&s, &frames).unwrap().mfr, 0.0);
     }
 
@@ -261,18 +278,18 @@ mod metrics {
         let s = scene();
         let steps = window_steps(&s);
         let t1 = steps[0];
-        let x = s.blade_front_at(t1) + 2.0 * s.diameter;
+        let x = front(&s, t1) + 2.0 * s.diameter;
         // Two particles in layer 1 (v = 1 and 2), one in layer 3 (v = 0.5), one too far ahead.
         let f = Frame {
             step: t1,
             id: vec![1, 2, 3, 4],
-            x: vec![x, x, x, s.blade_front_at(t1) + 7.0 * s.diameter],
+            x: vec![x, x, x, front(&s, t1) + 7.0 * s.diameter],
             y: None,
             z: vec![
-                s.layer_height(1),
-                s.layer_height(1) + 0.9 * s.vx_band,
-                s.layer_height(3),
-                s.layer_height(1),
+                s.layer_height(1).unwrap(),
+                s.layer_height(1).unwrap() + 0.9 * s.window().unwrap().vx_band,
+                s.layer_height(3).unwrap(),
+                s.layer_height(1).unwrap(),
             ],
             vx: vec![1.0, 2.0, 0.5, 9.0],
             mass: vec![1.0; 4],
@@ -289,7 +306,7 @@ mod metrics {
     fn a_missing_snapshot_is_an_error() {
         let s = scene();
         let err = compute(&s, &[]).unwrap_err();
-        assert_eq!(err, MetricsError::MissingSnapshot(s.window_steps().0));
+        assert_eq!(err, MetricsError::MissingSnapshot(s.window().unwrap().steps().0));
     }
 }
 
@@ -297,9 +314,14 @@ mod layer {
     use std::collections::BTreeMap;
 
     use crate::measure::frame::Frame;
-    use crate::measure::layer::measure;
+    use crate::measure::layer;
     use crate::scene::settings::SceneSettings;
     use crate::scene::Scene;
+
+    /// The layer of `frame` under `s`'s blade.
+    fn measure(s: &Scene, frame: &Frame, x0: f64, x1: f64) -> Option<crate::outcome::layer::Layer> {
+        layer::measure(s, s.blade().unwrap().gap, frame, x0, x1)
+    }
 
     /// A scene whose depth is exactly 6 D, so a square lattice of pitch D tiles it.
     fn scene() -> Scene {
@@ -398,9 +420,10 @@ mod plausible {
         };
         // D 2 mm on the rough substrate: a sphere in a pocket stands 0.67 D = 1.34 mm tall.
         let closed = scene_at(1.2);
-        let err = check_squeezed(&closed, 0.39).unwrap_err().to_string();
+        let squeezed = |s: &crate::scene::Scene, mfr: f64| check_squeezed(s, s.blade().unwrap().gap, mfr);
+        let err = squeezed(&closed, 0.39).unwrap_err().to_string();
         assert!(err.contains("0.60 D") && err.contains("0.67 D"), "{err}");
-        assert!(check_squeezed(&closed, 0.0).is_ok());
-        assert!(check_squeezed(&scene_at(1.5), 0.05).is_ok());
+        assert!(squeezed(&closed, 0.0).is_ok());
+        assert!(squeezed(&scene_at(1.5), 0.05).is_ok());
     }
 }

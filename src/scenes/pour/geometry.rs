@@ -16,9 +16,10 @@ pub fn axis(s: &Scene) -> [f64; 2] {
     [0.5 * s.x_hi, 0.5 * s.depth]
 }
 
-/// The cylinder's inner radius (the pile block's half-width: the scene keeps it there).
+/// The cylinder's inner radius.
 pub fn cylinder_radius(s: &Scene) -> f64 {
-    0.5 * (s.pile_x1 - s.pile_x0)
+    let c = super::column(s);
+    0.5 * (c.cylinder_x1 - c.cylinder_x0)
 }
 
 /// The lattice sites of one layer of the column, relative to the axis: a square grid of
@@ -39,12 +40,14 @@ pub fn layer_sites(radius: f64, spacing: f64) -> Vec<[f64; 2]> {
 }
 
 /// The LIGGGHTS data file of the column (atom style granular: id type diameter density x y z):
-/// `pile_n[2]` layers of [`layer_sites`], the first `particles` sites from the bottom filled,
+/// the lattice's layers of [`layer_sites`], the first `particles` sites from the bottom filled,
 /// each sphere jittered by at most 0.45 of the clearance to its cell, the diameters assigned by
 /// the size classes' number fractions and shuffled (seeded, reproducible).
 pub fn column_data(s: &Scene) -> String {
-    let mut draw = Draw::of(s);
-    let sites = layer_sites(cylinder_radius(s), s.pile_spacing);
+    let column = super::column(s);
+    let spacing = column.lattice_spacing;
+    let mut draw = Draw::of(s, spacing);
+    let sites = layer_sites(cylinder_radius(s), spacing);
     let [cx, cy] = axis(s);
 
     let mut out = String::with_capacity(64 * s.particles + 256);
@@ -54,8 +57,8 @@ pub fn column_data(s: &Scene) -> String {
          0.0 {} xlo xhi\n0.0 {} ylo yhi\n{} {} zlo zhi\n\nAtoms\n\n",
         s.particles, s.x_hi, s.depth, s.z_lo, s.z_hi
     );
-    let positions = (0..s.pile_n[2])
-        .flat_map(|k| sites.iter().map(move |&[x, y]| [x, y, (k as f64 + 0.5) * s.pile_spacing]));
+    let positions = (0..column.lattice_layers)
+        .flat_map(|k| sites.iter().map(move |&[x, y]| [x, y, (k as f64 + 0.5) * spacing]));
     for (id, p) in positions.take(s.particles).enumerate() {
         let c = draw.jittered(p);
         atom_line(&mut out, id + 1, 1, draw.diameters[id], s.material.density, [cx + c[0], cy + c[1], c[2]]);
@@ -64,17 +67,18 @@ pub fn column_data(s: &Scene) -> String {
 }
 
 /// The cylinder as ASCII STL: an open tube of [`TUBE_SEGMENTS`] flat faces from the plate to
-/// `blade_top`, each face cut into rings no taller than its width (LIGGGHTS bins mesh elements
+/// the tube's height, each face cut into rings no taller than its width (LIGGGHTS bins mesh elements
 /// by their bounding radius), two triangles per cell. The faces lie at the cylinder's radius (the
 /// corners just outside it), where the smooth wall the column settled against stood.
 pub fn tube_stl(s: &Scene) -> String {
     let r = cylinder_radius(s) / (PI / TUBE_SEGMENTS as f64).cos();
     let [cx, cy] = axis(s);
     let width = 2.0 * r * (PI / TUBE_SEGMENTS as f64).sin();
-    let rings = (s.blade_top / width).ceil().max(1.0) as usize;
+    let height = super::column(s).tube_height;
+    let rings = (height / width).ceil().max(1.0) as usize;
     let at = |i: usize, j: usize| {
         let phi = 2.0 * PI * i as f64 / TUBE_SEGMENTS as f64;
-        [cx + r * phi.cos(), cy + r * phi.sin(), s.blade_top * j as f64 / rings as f64]
+        [cx + r * phi.cos(), cy + r * phi.sin(), height * j as f64 / rings as f64]
     };
     let mut out = String::from("solid cylinder\n");
     for i in 0..TUBE_SEGMENTS {

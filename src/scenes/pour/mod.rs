@@ -20,12 +20,9 @@
 //! faces (a 1,000-particle Ti-6Al-4V pour: 0.78 ms a step of the lift with the lattice's full
 //! height in faces, 0.49 ms with the short tube).
 //!
-//! The pour fills the common [`Scene`] as follows: `pile_x0..pile_x1` span the cylinder's
-//! diameter and `pile_n[2]` its lattice layers, `blade_top` is the tube's height and
-//! `blade_speed` its lift speed, `settle_steps` the column's settle, `approach_steps` the longest
-//! lift (a settled column as tall as the lattice), `window_length_steps` the least settle of the
-//! heap before the rest criterion is checked.
-//! There is no blade, so no gap: `gap` is infinite (nothing is ever "closed").
+//! The pour's part of its [`Scene`] is a [`Column`]: the cylinder, its lattice and its lift, and
+//! the settles ([`Settle`]). There is no blade, so no gap, window or substrate (nothing is ever
+//! "closed").
 
 pub mod geometry;
 pub mod heap;
@@ -33,6 +30,8 @@ pub mod stand_in;
 
 use crate::engine::dump::read_dump;
 use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT, VX_LAYERS};
+use crate::scene::blade::Settle;
+use crate::scene::own::{LayoutData, OwnData};
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
 use crate::scene::{Base, Scene, GRAVITY, LAYER_FRACTION_MAX};
@@ -43,6 +42,51 @@ use heap::CALIBRATION_TARGETS;
 
 /// The pour layout (registered in [`crate::scenes::LAYOUTS`]).
 pub struct Pour;
+
+/// The pour's part of the scene: the column in its cylinder, the lift and the settles. The deck
+/// reads the cylinder and the lift under the keys the blade layouts' decks use for their pile and
+/// blade (`scene.pile_x0`, `scene.blade_speed`, …), as it did when the common scene held them:
+/// its template, whose hash a sweep's identity records (a sweep whose template changed is not
+/// resumed), stays as it was.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Column {
+    /// The column's settle, and the heap's settle until it is at rest.
+    #[serde(flatten)]
+    pub settle: Settle,
+    /// The cylinder's inner wall spans x from `cylinder_x0` to `cylinder_x1` (its diameter).
+    #[serde(rename = "pile_x0")]
+    pub cylinder_x0: f64,
+    #[serde(rename = "pile_x1")]
+    pub cylinder_x1: f64,
+    /// Height of the lifted tube, m.
+    #[serde(rename = "blade_top")]
+    pub tube_height: f64,
+    /// Speed of its lift, m/s.
+    #[serde(rename = "blade_speed")]
+    pub lift_speed: f64,
+    /// Steps of the longest lift (a settled column as tall as the lattice).
+    #[serde(rename = "approach_steps")]
+    pub lift_steps: u64,
+    /// Steps of the heap's least settle before the rest criterion is checked.
+    #[serde(rename = "window_length_steps")]
+    pub heap_settle_steps: u64,
+    /// The column's lattice: its spacing and its layers, m.
+    #[serde(skip)]
+    pub lattice_spacing: f64,
+    #[serde(skip)]
+    pub lattice_layers: usize,
+}
+
+impl LayoutData for Column {
+    fn steps(&self) -> u64 {
+        self.lift_steps + self.heap_settle_steps
+    }
+}
+
+/// The part of a pour's scene.
+pub fn column(scene: &Scene) -> &Column {
+    scene.own().expect("a pour's scene carries its column")
+}
 
 /// Inner radius of the cylinder, in mean diameters: 12 D across.
 pub const CYLINDER_RADIUS_D: f64 = 6.0;
@@ -134,7 +178,7 @@ impl Layout for Pour {
             "{} particles poured from a {:.1} mm cylinder lifted at {:.3} m/s, settled until at rest",
             s.particles,
             2e3 * geometry::cylinder_radius(s),
-            s.blade_speed
+            column(s).lift_speed
         )
     }
 
@@ -256,45 +300,18 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     Scene {
         material: base.material.clone(),
         layout: settings.layout.clone(),
-        blade_fixed: false,
         size_classes: psd.classes.clone(),
         sizes: psd.summary(),
         seed: settings.seed,
         particles,
         diameter: d,
-        profile_diameter: d,
-        gap: f64::INFINITY,
-        blade_speed: speed,
-        blade_thickness: 0.0,
-        blade_x0: 0.0,
-        blade_top: tube_height,
-        blade_y_inset: 0.0,
         x_hi: width,
         depth: width,
         z_hi,
         z_lo: 0.0,
-        substrate_particles: 0,
-        substrate_diameter: 0.0,
-        substrate_spacing: 0.0,
-        substrate_n: [0, 0],
-        substrate_bed: None,
-        pile_x0: 0.5 * width - radius,
-        pile_x1: 0.5 * width + radius,
-        pile_z1: column,
-        pile_spacing: spacing,
-        pile_n: [0, 0, layers],
         rayleigh_time,
         timestep,
         skin: settings.skin_diameters * d_min,
-        settle_steps: steps(fall_time),
-        rest_ke: 0.5 * mass * rest_speed * rest_speed,
-        rest_speed,
-        settle_check_steps: check,
-        settle_max_checks: max_checks,
-        approach_steps: steps(longest_lift / speed),
-        ramp_steps: 1,
-        dump_every: 0,
-        window_length_steps: steps(settle_least),
         vtk_every: if settings.vtk {
             (crate::scene::VTK_EVERY_S / timestep).round().max(1.0) as u64
         } else {
@@ -302,10 +319,24 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         },
         mesh_cell: d,
         thermo_every: check.min(200),
-        vx_band: 0.0,
-        vx_length: 0.0,
         ke_limit: 0.5 * mass * (10.0 * v_ref).powi(2),
-        own: None,
+        own: OwnData::new(Column {
+            settle: Settle {
+                settle_steps: steps(fall_time),
+                rest_ke: 0.5 * mass * rest_speed * rest_speed,
+                rest_speed,
+                settle_check_steps: check,
+                settle_max_checks: max_checks,
+            },
+            cylinder_x0: 0.5 * width - radius,
+            cylinder_x1: 0.5 * width + radius,
+            tube_height,
+            lift_speed: speed,
+            lift_steps: steps(longest_lift / speed),
+            heap_settle_steps: steps(settle_least),
+            lattice_spacing: spacing,
+            lattice_layers: layers,
+        }),
     }
 }
 
@@ -402,13 +433,13 @@ mod tests {
         assert_eq!((full.particles, half.particles), (2000, 1000));
         // Every particle is on the lattice, in fewer layers.
         assert!(geometry::column_data(&half).contains("\n1000 atoms\n"));
-        assert!(half.pile_n[2] < full.pile_n[2]);
+        assert!(column(&half).lattice_layers < column(&full).lattice_layers);
         // A size distribution's lattice stands far above its settled column: there the tube is
         // 2 D above the loosest settled column, so half the solid is half its height (less its
         // 2 D), and half the faces the moving mesh costs. Equal spheres pack on the lattice
         // nearly as they settle, and the tube is the lattice's height.
         let (ti, ti_half) = (ti64(1.0), ti64(0.5));
-        let tube = |s: &Scene| s.blade_top - 2.0 * s.diameter;
+        let tube = |s: &Scene| column(s).tube_height - 2.0 * s.diameter;
         assert!((tube(&ti_half) / tube(&ti) - 0.5).abs() < 1e-9, "{} {}", tube(&ti_half), tube(&ti));
         let loosest = |s: &Scene| {
             let solid: f64 = s.size_classes.iter().map(|c| c.fraction * c.diameter.powi(3)).sum::<f64>()
@@ -418,18 +449,20 @@ mod tests {
             solid / (LOOSEST_PACKING * std::f64::consts::PI * geometry::cylinder_radius(s).powi(2))
         };
         assert!((tube(&ti) / loosest(&ti) - 1.0).abs() < 1e-9, "{} {}", tube(&ti), loosest(&ti));
-        assert!(ti.blade_top < ti.pile_n[2] as f64 * ti.pile_spacing / 3.0);
+        let lattice = |s: &Scene| column(s).lattice_layers as f64 * column(s).lattice_spacing;
+        assert!(column(&ti).tube_height < lattice(&ti) / 3.0);
         for s in [&full, &half] {
-            assert!((s.blade_top - (s.pile_n[2] as f64 * s.pile_spacing + s.diameter)).abs() < 1e-12);
+            assert!((column(s).tube_height - (lattice(s) + s.diameter)).abs() < 1e-12);
         }
         // The longest lift clears a settled column as tall as the lattice, inside the box.
         for s in [&full, &half, &ti, &ti_half] {
-            let longest = s.approach_steps as f64 * s.timestep * s.blade_speed;
-            assert!(longest >= s.pile_n[2] as f64 * s.pile_spacing + 2.0 * s.diameter);
-            assert!(s.blade_top + longest < s.z_hi);
+            let c = column(s);
+            let longest = c.lift_steps as f64 * s.timestep * c.lift_speed;
+            assert!(longest >= lattice(s) + 2.0 * s.diameter);
+            assert!(c.tube_height + longest < s.z_hi);
         }
         // The rest criterion is the same rms speed over the smaller mass.
-        assert!((half.rest_ke / full.rest_ke - 0.5).abs() < 1e-12);
+        assert!((column(&half).settle.rest_ke / column(&full).settle.rest_ke - 0.5).abs() < 1e-12);
     }
 
     #[test]
