@@ -218,7 +218,7 @@ fn a_layers_lattice_runs_every_point_to_its_steady_layer_and_answers_in_the_laye
             "the layers report lists {unread}"
         );
     }
-    for row in [r#"<th class="l">substrate</th>"#, "v_x band"] {
+    for row in [r#"<th class="l">substrate</th>"#, "v_x band", "v_x class", "at the window's end"] {
         assert!(!page.contains(row), "the layers report lists {row:?}");
     }
     // A loose bed is judged by its relative density (a fused one by its packing), in the answer
