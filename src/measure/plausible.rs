@@ -126,11 +126,32 @@ fn vx_limit(blade_speed: f64) -> f64 {
     VX_MAX_BLADE_SPEEDS * blade_speed.abs()
 }
 
+/// What a layout's result measures, for [`check_result`]: each layout says it of its own
+/// result ([`crate::scenes::Layout::check_result`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Measures {
+    /// Whether it holds a flow's answer (`mfr`): a pour's heap does not.
+    pub flow: bool,
+    /// Whether it holds the flux past the blade (`mfr_flux`) and the window's steadiness p-value
+    /// (`steady_p`): layer after layer has neither (its passes are its test).
+    pub flux: bool,
+    /// How many times the packing bound the answer and its windows may reach over
+    /// layer_thickness / gap: the deepest powder under the blade over the platform's drop, layer
+    /// after layer (a pass may deposit more than the drop); 1 for one layer.
+    pub depth: f64,
+}
+
+impl Measures {
+    /// A flow under a blade: MFR, its flux and its steadiness, over one layer.
+    pub const FLOW: Measures = Measures { flow: true, flux: true, depth: 1.0 };
+}
+
 /// Every number of a result finite and possible: the layer's packing at most [`PACKING_MAX`],
-/// 0 ≤ MFR ≤ [`PACKING_MAX`] × layer_thickness / gap (the flux and window MFRs, net counts,
-/// within ± that), each v_x within [`VX_MAX_BLADE_SPEEDS`] blade speeds,
-/// the p-value in [0, 1], counts and times consistent.
-pub fn check_result(r: &RunResult) -> Result<(), Implausible> {
+/// 0 ≤ MFR ≤ [`PACKING_MAX`] × layer_thickness / gap × `depth` (the flux and window MFRs, net
+/// counts, within ± that), each v_x within [`VX_MAX_BLADE_SPEEDS`] blade speeds,
+/// the p-value in [0, 1], counts and times consistent; of the flow, flux and depth `measures`
+/// says the result holds.
+pub fn check_result(r: &RunResult, measures: Measures) -> Result<(), Implausible> {
     let gap = r.parameters.get("gap").map(|g| g * 1e-3);
     let thicker = match (r.layer_thickness, gap) {
         (Some(t), Some(g)) if t.is_finite() && g > 0.0 && t >= g => t / g,
@@ -139,19 +160,10 @@ pub fn check_result(r: &RunResult) -> Result<(), Implausible> {
     if let Some(p) = r.layer_packing {
         check_within("layer_packing", p, PACKING_MAX)?;
     }
-    // Layer after layer, the answer and the windows are the passes' packing or relative density
-    // (deposit over the drop): at most the packing bound times the powder under the blade over
-    // the drop.
-    let deepest = r.layers.as_ref().map_or(1.0, |l| {
-        l.passes.iter().map(|p| p.effective_thickness_m / l.layer_thickness_m).fold(1.0, f64::max)
-    });
-    let mfr_max = PACKING_MAX * thicker * deepest;
+    let Measures { flow, flux, depth } = measures;
+    let mfr_max = PACKING_MAX * thicker * depth;
     let within = format!("within ±{}", crate::scene::plausible::round_to(mfr_max, 4));
-    // A pour's heap: nothing flows, so its flow's numbers are NaN (not measured); layer after
-    // layer measures no flux past the blade and no steadiness p-value (its passes are its test).
-    let flows = !(r.heap.is_some() && r.mfr.is_nan());
-    let flux = flows && r.layers.is_none();
-    if flows {
+    if flow {
         check_within("mfr", r.mfr, mfr_max)?;
     }
     if flux {
@@ -324,53 +336,26 @@ mod tests {
     }
 
     #[test]
-    fn a_layers_result_is_checked_on_what_it_measures_and_not_on_the_flux_it_does_not() {
-        use crate::outcome::layers::{LayerSeries, PassRecord};
-        let pass = |k: usize, relative_density: f64| PassRecord {
-            k,
-            search: false,
-            deposit_m: relative_density * 5e-5,
-            relative_density,
-            effective_thickness_m: 1.07e-4,
-            packing: relative_density * 5e-5 / 1.07e-4,
-            covered_fraction: 0.84,
-            roughness_d: 0.5,
-            bed_relative_density: None,
-            particles: 400,
-        };
-        let passes: Vec<PassRecord> =
-            [0.4, 1.14, 0.99, 1.03].iter().enumerate().map(|(i, &d)| pass(i + 1, d)).collect();
+    fn a_result_is_checked_on_what_it_measures_and_not_on_the_flux_it_does_not() {
         let r = |mfr: f64| RunResult {
             parameters: [("blade_speed".to_string(), 0.1)].into_iter().collect(),
             mfr,
             mfr_flux: f64::NAN,
             steady_p: f64::NAN,
-            mfr_windows: passes.iter().map(|p| p.relative_density).collect(),
-            layers: Some(Box::new(LayerSeries {
-                bed: "loose".into(),
-                layer_thickness_m: 5e-5,
-                passes: passes.clone(),
-                steady_from: 2,
-                steady: true,
-                packing: 0.46,
-                packing_se: 0.002,
-                relative_density: 1.0,
-                relative_density_se: 0.01,
-                effective_thickness_m: 1.07e-4,
-                effective_thickness_se_m: 7e-7,
-                covered_fraction: 0.84,
-                roughness_d: 0.5,
-                numerical_error: None,
-            })),
+            mfr_windows: vec![0.4, 1.14],
             ..RunResult::default()
         };
-        // A pass may deposit more than the drop at the packing bound: the powder under the
-        // blade is 2.1 drops deep.
-        assert!(check_result(&r(1.0)).is_ok(), "{:?}", check_result(&r(1.0)));
-        assert!(check_result(&r(f64::NAN)).is_err());
-        assert!(check_result(&r(0.74 * 2.2)).is_err(), "beyond the packing bound over the deepest pass");
+        let passes = Measures { flow: true, flux: false, depth: 2.14 };
+        // A pass may deposit more than the drop at the packing bound when the powder under the
+        // blade is 2.14 drops deep.
+        assert!(check_result(&r(1.0), passes).is_ok(), "{:?}", check_result(&r(1.0), passes));
+        assert!(check_result(&r(f64::NAN), passes).is_err());
+        assert!(check_result(&r(0.74 * 2.2), passes).is_err(), "beyond the packing bound over the depth");
+        // Nothing flows: its NaN answer is not checked.
+        let heap = Measures { flow: false, flux: false, depth: 1.0 };
+        assert!(check_result(&RunResult { mfr_windows: Vec::new(), ..r(f64::NAN) }, heap).is_ok());
         // A flow's result still needs its flux.
         let flow = RunResult { mfr: 0.3, mfr_flux: f64::NAN, ..RunResult::default() };
-        assert!(check_result(&flow).unwrap_err().to_string().contains("mfr_flux"));
+        assert!(check_result(&flow, Measures::FLOW).unwrap_err().to_string().contains("mfr_flux"));
     }
 }

@@ -132,7 +132,7 @@ impl Executor for StandIn {
                 return fail(job, run_dir, class, format!("{NAME}: {reason}"), measured);
             }
         };
-        if let Err(why) = crate::store::counts(&r) {
+        if let Err(why) = crate::store::counts(self.layout, &r) {
             let reason = format!(
                 "{NAME}: the {} layout's model made a result its checks refuse: {why}",
                 self.layout.name()

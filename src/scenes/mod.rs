@@ -377,6 +377,14 @@ pub trait Layout: Sync {
         Vec::new()
     }
 
+    /// Whether every number of a result of this layout is possible, as the stand-in makes it up
+    /// and as it is read back ([`crate::store::counts`]): by default a flow's,
+    /// [`plausible::check_result`](crate::measure::plausible::check_result) with
+    /// [`Measures::FLOW`](crate::measure::plausible::Measures::FLOW).
+    fn check_result(&self, r: &RunResult) -> Result<(), crate::measure::plausible::Implausible> {
+        crate::measure::plausible::check_result(r, crate::measure::plausible::Measures::FLOW)
+    }
+
     /// What the stand-in engine (`[run] engine = "stand-in"`) makes up for a point of this
     /// layout: the shape of its result from a closed form in the point's parameters, not its
     /// physics ([`stand_in`]), or why the point fails as a real run of it would. A result must

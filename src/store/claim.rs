@@ -13,6 +13,7 @@ use serde::{Deserialize, Serialize};
 use super::joblog::JOBLOG;
 use super::{io, DirLock, Store, StoreError, LOCK};
 use crate::outcome::{RunFailure, RunResult, RESULT_FORMAT, VX_LAYERS};
+use crate::scenes::Layout;
 use crate::sys::host::{process_start_ticks, unix_now};
 
 impl Store {
@@ -40,7 +41,7 @@ impl Store {
     /// The state of the run `hash`, read without taking its claim.
     pub fn state(&self, hash: &str) -> RunState {
         let dir = self.run_dir(hash);
-        if let Some(s) = finished_state(&dir) {
+        if let Some(s) = finished_state(&dir, self.layout()) {
             return s;
         }
         if let Some(c) = read_claim(&dir.join("claim")) {
@@ -58,7 +59,7 @@ impl Store {
 
     /// Whether the run `hash` has finished: its result or failure, if any.
     pub fn finished(&self, hash: &str) -> Option<RunState> {
-        finished_state(&self.run_dir(hash))
+        finished_state(&self.run_dir(hash), self.layout())
     }
 
     /// When the run's outcome (`result.json` or `failure.json`) was written, if it has one.
@@ -241,9 +242,10 @@ pub struct Claim {
     session: String,
 }
 
-/// Done, failed, or damaged (a result file that is there but cannot be read); `None` when the
-/// directory holds neither file.
-pub(super) fn finished_state(dir: &Path) -> Option<RunState> {
+/// Done, failed, or damaged (a result file that is there but cannot be read, or one that
+/// `layout`'s results would not count as, [`counts`]); `None` when the directory holds neither
+/// file.
+pub(super) fn finished_state(dir: &Path, layout: &dyn Layout) -> Option<RunState> {
     fn read<T: serde::de::DeserializeOwned>(path: &Path) -> Option<Result<T, RunDamage>> {
         let unreadable = |why: String| RunDamage::Unreadable { why };
         match crate::sys::read::read_capped(path, super::OUTCOME_CAP) {
@@ -260,7 +262,7 @@ pub(super) fn finished_state(dir: &Path) -> Option<RunState> {
         if r.hash != name {
             return Err(RunDamage::OtherRun { theirs: super::short(&r.hash).to_string(), ours: name });
         }
-        counts(r)
+        counts(layout, r)
     };
     match read::<RunResult>(&result).map(|r| r.and_then(|r| own(&r).map(|()| r))) {
         Some(Ok(r)) => return Some(RunState::Done(Box::new(r))),
@@ -280,11 +282,12 @@ pub(super) fn finished_state(dir: &Path) -> Option<RunState> {
     damaged
 }
 
-/// Whether a result counts as done when it is read back, whoever wrote it (its directory and
-/// point aside): [`well_formed`], and every number in it possible.
-pub fn counts(r: &RunResult) -> Result<(), RunDamage> {
+/// Whether a result of `layout` counts as done when it is read back, whoever wrote it (its
+/// directory and point aside): [`well_formed`], and every number in it possible
+/// ([`Layout::check_result`]).
+pub fn counts(layout: &dyn Layout, r: &RunResult) -> Result<(), RunDamage> {
     well_formed(r)?;
-    Ok(crate::measure::plausible::check_result(r)?)
+    Ok(layout.check_result(r)?)
 }
 
 /// What the types of a `result.json` cannot say: it is of this version's format, a done run is

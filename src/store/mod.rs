@@ -124,7 +124,21 @@ pub struct Store {
     me: ClaimInfo,
     /// Claim files held now, renewed by the heartbeat.
     held: Arc<Mutex<Vec<PathBuf>>>,
-    fixed: Arc<std::sync::OnceLock<Vec<(String, f64)>>>,
+    sweep_file: Arc<std::sync::OnceLock<SweepFile>>,
+}
+
+/// What a store reads of its directory's sweep file (`DIR/sweep.toml`), once.
+struct SweepFile {
+    /// The fixed parameters.
+    fixed: Vec<(String, f64)>,
+    /// The layout whose results the directory holds, which checks them as they are read back.
+    layout: &'static dyn crate::scenes::Layout,
+}
+
+impl std::fmt::Debug for SweepFile {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SweepFile").field("fixed", &self.fixed).field("layout", &self.layout.name()).finish()
+    }
 }
 
 impl Store {
@@ -148,27 +162,43 @@ impl Store {
                 renewed_at: None,
             },
             held: Arc::default(),
-            fixed: Arc::default(),
+            sweep_file: Arc::default(),
         }
     }
 
     /// The fixed parameters of the directory's sweep file (`DIR/sweep.toml`), read once; none
     /// when it cannot be read (the manifest check says why elsewhere).
     pub(crate) fn fixed(&self) -> &[(String, f64)] {
-        self.fixed.get_or_init(|| {
-            let path = self.dir.join("sweep.toml");
-            let Ok(text) = crate::sys::read::read_text_capped(&path, SWEEP_TOML_CAP) else {
-                return Vec::new();
+        &self.sweep_file().fixed
+    }
+
+    /// The layout of the directory's sweep file, whose checks its results pass when read back
+    /// ([`counts`]); the default layout's when the file cannot be read (the manifest check says
+    /// why elsewhere).
+    pub fn layout(&self) -> &'static dyn crate::scenes::Layout {
+        self.sweep_file().layout
+    }
+
+    fn sweep_file(&self) -> &SweepFile {
+        self.sweep_file.get_or_init(|| {
+            let default = crate::scene::settings::SceneSettings::default();
+            let unread = || SweepFile {
+                fixed: Vec::new(),
+                layout: crate::scenes::of(&default).expect("the default layout is registered"),
             };
-            let Ok(sweep) = crate::sweep::Sweep::parse(&text, &path) else { return Vec::new() };
-            sweep
+            let path = self.dir.join("sweep.toml");
+            let Ok(text) = crate::sys::read::read_text_capped(&path, SWEEP_TOML_CAP) else { return unread() };
+            let Ok(sweep) = crate::sweep::Sweep::parse(&text, &path) else { return unread() };
+            let fixed = sweep
                 .fixed
                 .iter()
                 .filter_map(|p| match p.kind {
                     crate::sweep::ParamKind::Fixed(v) => Some((p.name.clone(), v)),
                     _ => None,
                 })
-                .collect()
+                .collect();
+            let layout = crate::scenes::of(&sweep.file.scene).unwrap_or_else(|_| unread().layout);
+            SweepFile { fixed, layout }
         })
     }
 
@@ -204,7 +234,7 @@ impl Store {
     pub fn record(&self, hash: &str, outcome: &crate::outcome::RunOutcome) -> Result<(), StoreError> {
         use crate::outcome::RunOutcome;
         let dir = self.run_dir(hash);
-        let (name, written) = match (outcome, finished_state(&dir)) {
+        let (name, written) = match (outcome, finished_state(&dir, self.layout())) {
             (RunOutcome::Done(r), Some(RunState::Done(d))) if *d == *r => return Ok(()),
             (RunOutcome::Failed(f), Some(RunState::Failed(d))) if *d == *f => return Ok(()),
             (RunOutcome::Done(r), _) => {

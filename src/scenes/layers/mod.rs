@@ -299,6 +299,19 @@ impl Layout for Layers {
         stand_in::passes(point)
     }
 
+    fn check_result(&self, r: &RunResult) -> Result<(), crate::measure::plausible::Implausible> {
+        // The answer and its windows are the passes' packing or relative density (deposit over
+        // the drop): at most the packing bound times the powder under the blade over the drop.
+        // No flux past the blade and no steadiness p-value: the passes are the test.
+        let depth = r.layers.as_ref().map_or(1.0, |l| {
+            l.passes.iter().map(|p| p.effective_thickness_m / l.layer_thickness_m).fold(1.0, f64::max)
+        });
+        crate::measure::plausible::check_result(
+            r,
+            crate::measure::plausible::Measures { flow: true, flux: r.layers.is_none(), depth },
+        )
+    }
+
     fn what_runs(&self, s: &Scene) -> String {
         let plan = plan_of(s);
         format!(

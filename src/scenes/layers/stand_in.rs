@@ -201,7 +201,9 @@ mod tests {
 
     use super::*;
     use crate::scene::settings::SceneSettings;
+    use crate::scenes::layers::Layers;
     use crate::scenes::stand_in::Noise;
+    use crate::scenes::Layout;
 
     fn result(bed: &str, layers: usize, values: &[(&str, f64)], hash: &str) -> Result<RunResult, Rejected> {
         let settings =
@@ -224,12 +226,12 @@ mod tests {
             assert!(fused.steady && l.steady_from > 1, "{l:?}");
             assert!((l.relative_density - 1.0).abs() < 0.05, "{l:?}");
             assert_eq!(fused.mfr, l.packing);
-            crate::measure::plausible::check_result(&fused).unwrap();
+            Layers.check_result(&fused).unwrap();
             let loose = result("loose", 8, &values, hash).unwrap();
             let l = loose.layers.as_ref().unwrap();
             assert!(loose.steady && (l.relative_density - l.packing).abs() < 0.1 * l.packing, "{l:?}");
             assert_eq!(loose.mfr, l.relative_density);
-            crate::measure::plausible::check_result(&loose).unwrap();
+            Layers.check_result(&loose).unwrap();
         }
     }
 

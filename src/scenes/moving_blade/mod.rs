@@ -459,7 +459,7 @@ pub fn check_result(scene: &Scene, blade: &Blade, result: RunResult) -> Result<R
     if let Err(e) = plausible::check_squeezed(scene, blade.gap, result.mfr) {
         return Err(Rejected::measured(FailureClass::Implausible, e.to_string(), result));
     }
-    if let Err(e) = plausible::check_result(&result) {
+    if let Err(e) = plausible::check_result(&result, plausible::Measures::FLOW) {
         return Err(Rejected::new(FailureClass::Implausible, e.to_string()));
     }
     Ok(result)

@@ -234,6 +234,15 @@ impl Layout for Pour {
         geometry::column_data(scene)
     }
 
+    fn check_result(&self, r: &RunResult) -> Result<(), crate::measure::plausible::Implausible> {
+        // Nothing flows in a heap: its flow's numbers are NaN (not measured).
+        let flow = !(r.heap.is_some() && r.mfr.is_nan());
+        crate::measure::plausible::check_result(
+            r,
+            crate::measure::plausible::Measures { flow, flux: flow, depth: 1.0 },
+        )
+    }
+
     fn refuses_sweeps(&self) -> Option<&'static str> {
         Some(REFUSED)
     }
