@@ -93,7 +93,7 @@ pub struct Run {
 
 impl Run {
     pub fn mfr(&self) -> Option<f64> {
-        self.result.as_ref().map(|r| r.mfr)
+        self.result.as_ref().map(|r| r.answer.value)
     }
 }
 
@@ -555,7 +555,7 @@ mod tests {
         RunResult {
             format: 1,
             parameters: BTreeMap::from([("blade_speed".to_string(), 2.0)]),
-            mfr,
+            answer: crate::outcome::PointAnswer::mfr(mfr),
             mfr_flux: mfr,
             mfr_particles: 100,
             vx,

@@ -229,7 +229,7 @@ fn run_level(
                             RunOutcome::Done(r) => Run {
                                 seed,
                                 status: "ok".into(),
-                                mfr: Some(r.mfr),
+                                mfr: Some(r.answer.value),
                                 timestep,
                                 wall: r.wall_time,
                                 reason: String::new(),
@@ -240,7 +240,7 @@ fn run_level(
                                 Run {
                                     seed,
                                     status: "unsteady".into(),
-                                    mfr: f.measured.as_ref().map(|m| m.mfr),
+                                    mfr: f.measured.as_ref().map(|m| m.answer.value),
                                     timestep,
                                     wall: f.wall_time,
                                     reason: f.reason,

@@ -299,11 +299,13 @@ impl SeedRun<'_> {
     }
 }
 
-/// `sweep run --seeds N`: the point with N scene seeds, one after another; each seed's MFR, and
-/// their mean with the SE between seeds. A failed seed is named and left out of the mean.
+/// `sweep run --seeds N`: the point with N scene seeds, one after another; each seed's answer
+/// (MFR, or its layout's own quantity), and their mean with the SE between seeds. A failed seed
+/// is named and left out of the mean.
 fn run_seeds(a: &RunArgs, file_sweep: &Sweep, sweep: &Sweep, values: &[f64], n: u32) -> Result<(), Error> {
     use demsweep::run::pool::Executor;
     let base = sweep.file.scene.seed;
+    let kind = demsweep::report::answer_kind(&sweep.file.scene);
     let seeds: Vec<u64> = (0..n as u64).map(|k| base + k).collect();
     // Each seed from rest at the file's own precision, as `sweep run` runs one point: not the
     // sweep executor, which would warm-start a seed from another's state or settle a sweep's
@@ -343,8 +345,8 @@ fn run_seeds(a: &RunArgs, file_sweep: &Sweep, sweep: &Sweep, values: &[f64], n: 
         match run.execute(&dir, &cancel) {
             RunOutcome::Done(r) => {
                 if !a.json {
-                    let se = r.mfr_se.map_or(String::new(), |se| format!(" ± {se:.4} (SE)"));
-                    println!("seed {seed}: MFR {:.4}{se}", r.mfr);
+                    let se = r.answer.se.map_or(String::new(), |se| format!(" ± {se:.4} (SE)"));
+                    println!("seed {seed}: {} {:.4}{se}", kind.words(), r.answer.value);
                 }
                 done.push((*seed, r));
             }
@@ -356,7 +358,7 @@ fn run_seeds(a: &RunArgs, file_sweep: &Sweep, sweep: &Sweep, values: &[f64], n: 
     }
     let failed = seeds.len() - done.len();
     // Mean, SD (divisor k − 1) and the SE of the mean, over the seeds that finished: two at least.
-    let mfr: Vec<f64> = done.iter().map(|(_, r)| r.mfr).collect();
+    let mfr: Vec<f64> = done.iter().map(|(_, r)| r.answer.value).collect();
     let k = mfr.len() as f64;
     let between = (mfr.len() >= 2).then(|| {
         let mean = mfr.iter().sum::<f64>() / k;
@@ -365,18 +367,19 @@ fn run_seeds(a: &RunArgs, file_sweep: &Sweep, sweep: &Sweep, values: &[f64], n: 
     });
     if a.json {
         let runs: Vec<&demsweep::outcome::RunResult> = done.iter().map(|(_, r)| r).collect();
-        let summary = serde_json::json!({
-            "seeds": done.iter().map(|(s, _)| s).collect::<Vec<_>>(),
-            "mfr_mean": between.map(|b| b.0),
-            "mfr_sd_between_seeds": between.map(|b| b.1),
-            "mfr_se_between_seeds": between.map(|b| b.2),
-            "failed": failed,
-            "runs": runs,
-        });
+        // Named for the answer: `mfr_mean`, `relative_density_mean`, ….
+        let key = kind.key();
+        let mut summary = serde_json::Map::new();
+        summary.insert("seeds".into(), serde_json::json!(done.iter().map(|(s, _)| s).collect::<Vec<_>>()));
+        summary.insert(format!("{key}_mean"), serde_json::json!(between.map(|b| b.0)));
+        summary.insert(format!("{key}_sd_between_seeds"), serde_json::json!(between.map(|b| b.1)));
+        summary.insert(format!("{key}_se_between_seeds"), serde_json::json!(between.map(|b| b.2)));
+        summary.insert("failed".into(), serde_json::json!(failed));
+        summary.insert("runs".into(), serde_json::to_value(&runs).map_err(CliError::Json)?);
         println!("{}", serde_json::to_string_pretty(&summary).map_err(CliError::Json)?);
     } else if let Some((mean, sd, se)) = between {
         println!("{}", used_line(file_sweep, &a.set, &done[0].1));
-        let own: Vec<f64> = done.iter().filter_map(|(_, r)| r.mfr_se).collect();
+        let own: Vec<f64> = done.iter().filter_map(|(_, r)| r.answer.se).collect();
         let own_mean = own.iter().sum::<f64>() / own.len().max(1) as f64;
         let ratio = if own_mean > 0.0 {
             format!("; SD between seeds / their mean SE {:.2}", sd / own_mean)
@@ -384,8 +387,9 @@ fn run_seeds(a: &RunArgs, file_sweep: &Sweep, sweep: &Sweep, values: &[f64], n: 
             String::new()
         };
         println!(
-            "mean of {} seeds: MFR {mean:.4} ± {se:.4} (SE between seeds; SD {sd:.4}){ratio}",
-            done.len()
+            "mean of {} seeds: {} {mean:.4} ± {se:.4} (SE between seeds; SD {sd:.4}){ratio}",
+            done.len(),
+            kind.words()
         );
     }
     if between.is_none() {
@@ -482,10 +486,10 @@ fn print_result(r: &demsweep::outcome::RunResult, scene: &demsweep::scene::Scene
 
 /// MFR and the v_x profile of a spreading layout's result.
 fn print_flow(r: &demsweep::outcome::RunResult, scene: &demsweep::scene::Scene) {
-    let se = r.mfr_se.map_or(String::new(), |se| format!(" ± {se:.4} (SE)"));
+    let se = r.answer.se.map_or(String::new(), |se| format!(" ± {se:.4} (SE)"));
     println!(
         "MFR        {:.4}{se}  ({} particles; flux cross-check {:.4}, {})",
-        r.mfr,
+        r.answer.value,
         r.mfr_particles,
         r.mfr_flux,
         if r.steady { "steady" } else { "NOT steady" }

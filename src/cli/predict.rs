@@ -1,4 +1,5 @@
-//! `sweep predict`: MFR at a setting from a sweep's emulator.
+//! `sweep predict`: a sweep's answer (MFR, or its layout's own quantity) at a setting from its
+//! emulator.
 
 use std::path::PathBuf;
 
@@ -43,7 +44,8 @@ pub(super) fn predict(a: PredictArgs) -> Result<(), Error> {
         println!("{}", serde_json::to_string_pretty(&p).map_err(CliError::Json)?);
     } else {
         let setting: Vec<String> = p.parameters.iter().map(|(k, v)| format!("{k}={v}")).collect();
-        println!("MFR {:.4} ± {:.4} (predictive SE) at {}", p.mfr, p.se, setting.join(", "));
+        let name = p.answer.kind.words();
+        println!("{name} {:.4} ± {:.4} (predictive SE) at {}", p.answer.value, p.se, setting.join(", "));
         println!("emulator: {} points, leave-one-out RMSE {:.4}", p.points, p.loo_rmse);
     }
     Ok(())

@@ -164,7 +164,7 @@ pub fn check_result(r: &RunResult, measures: Measures) -> Result<(), Implausible
     let mfr_max = PACKING_MAX * thicker * depth;
     let within = format!("within ±{}", crate::scene::plausible::round_to(mfr_max, 4));
     if flow {
-        check_within("mfr", r.mfr, mfr_max)?;
+        check_within(r.answer.kind.key(), r.answer.value, mfr_max)?;
     }
     if flux {
         check_within("mfr_flux", r.mfr_flux.abs(), mfr_max)
@@ -193,8 +193,8 @@ pub fn check_result(r: &RunResult, measures: Measures) -> Result<(), Implausible
             return Err(bad(&format!("v_x of layer {}", k + 1), v, &limit));
         }
     }
-    if let Some(se) = r.mfr_se.filter(|se| !(se.is_finite() && *se >= 0.0)) {
-        return Err(bad("mfr_se", se, "a finite standard error ≥ 0"));
+    if let Some(se) = r.answer.se.filter(|se| !(se.is_finite() && *se >= 0.0)) {
+        return Err(bad(r.answer.kind.se_key(), se, "a finite standard error ≥ 0"));
     }
     // A held heap (steady_state) is topped up as it deposits, so its window can count more
     // particles than the heap holds at once; a pile of its own cannot.
@@ -266,6 +266,7 @@ pub fn check_squeezed(scene: &crate::scene::Scene, gap: f64, mfr: f64) -> Result
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::outcome::PointAnswer;
 
     fn frame(mass: f64, vx: f64) -> Frame {
         Frame {
@@ -339,7 +340,7 @@ mod tests {
     fn a_result_is_checked_on_what_it_measures_and_not_on_the_flux_it_does_not() {
         let r = |mfr: f64| RunResult {
             parameters: [("blade_speed".to_string(), 0.1)].into_iter().collect(),
-            mfr,
+            answer: PointAnswer::mfr(mfr),
             mfr_flux: f64::NAN,
             steady_p: f64::NAN,
             mfr_windows: vec![0.4, 1.14],
@@ -355,7 +356,7 @@ mod tests {
         let heap = Measures { flow: false, flux: false, depth: 1.0 };
         assert!(check_result(&RunResult { mfr_windows: Vec::new(), ..r(f64::NAN) }, heap).is_ok());
         // A flow's result still needs its flux.
-        let flow = RunResult { mfr: 0.3, mfr_flux: f64::NAN, ..RunResult::default() };
+        let flow = RunResult { answer: PointAnswer::mfr(0.3), mfr_flux: f64::NAN, ..RunResult::default() };
         assert!(check_result(&flow, Measures::FLOW).unwrap_err().to_string().contains("mfr_flux"));
     }
 }

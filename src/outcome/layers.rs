@@ -79,6 +79,27 @@ pub struct LayerSeries {
     pub numerical_error: Option<NumericalError>,
 }
 
+impl LayerSeries {
+    /// What the point answers with: the steady layer's relative density on a loose bed, its
+    /// packing on a fused one (whose relative density is the whole drop by construction).
+    pub fn answer_kind(&self) -> super::AnswerKind {
+        if self.bed == "fused" {
+            super::AnswerKind::SteadyPacking
+        } else {
+            super::AnswerKind::RelativeDensity
+        }
+    }
+
+    /// The steady layer's answer with its standard error.
+    pub fn answer(&self) -> super::PointAnswer {
+        let (value, se) = match self.answer_kind() {
+            super::AnswerKind::SteadyPacking => (self.packing, self.packing_se),
+            _ => (self.relative_density, self.relative_density_se),
+        };
+        super::PointAnswer { kind: self.answer_kind(), value, se: Some(se) }
+    }
+}
+
 /// The numerical error of a steady layer: each numerical choice's measured move
 /// (`crate::scenes::layers::numerics`) and their root sum of squares.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

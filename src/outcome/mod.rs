@@ -3,6 +3,7 @@
 //! These are the records the pool, the store and the reports exchange. A failure is never turned
 //! into a number: it carries its class (which decides the retry policy) and a one-line reason.
 
+pub mod answer;
 pub mod heap;
 pub mod layer;
 pub mod layers;
@@ -11,6 +12,8 @@ pub mod steady;
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
+
+pub use answer::{AnswerKind, PointAnswer};
 
 /// Version of `result.json` / `failure.json`.
 pub const RESULT_FORMAT: u32 = 1;
@@ -21,25 +24,29 @@ pub const RESULT_FILE: &str = "result.json";
 pub const VX_LAYERS: usize = 12;
 
 /// The result of a completed run: `result.json`.
+///
+/// Read through [`RunResult`]'s own `Deserialize`, which reads an older layers result's answer
+/// (written as `mfr`) as the steady layer's quantity it is.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(remote = "Self")]
 pub struct RunResult {
     pub format: u32,
     /// Content hash of the run (deck, mesh, engine identity).
     pub hash: String,
     /// Every scene parameter, swept and fixed, in the sweep file's units.
     pub parameters: BTreeMap<String, f64>,
-    /// Mass flow ratio from the deposited layer (docs/scene.md "Metrics", thesis Eq. 15–17),
-    /// dimensionless. NaN, and absent from the file, where the scene measures no flow (a pour).
-    #[serde(default = "not_measured", skip_serializing_if = "is_not_measured")]
-    pub mfr: f64,
+    /// The point's answer ([`answer`]), under its own keys: a flow's mass flow ratio from the
+    /// deposited layer (`mfr`, docs/scene.md "Metrics", thesis Eq. 15–17, dimensionless; its
+    /// standard error `mfr_se`, of the conveyor layout: batch means over the steady window), a
+    /// layers point's steady layer (`relative_density` or `steady_packing`). NaN, and absent from
+    /// the file, where the scene measures none (a pour).
+    #[serde(flatten)]
+    pub answer: PointAnswer,
     /// The same from the flux of particles past the blade's front face (cross-check).
     #[serde(default = "not_measured", skip_serializing_if = "is_not_measured")]
     pub mfr_flux: f64,
-    /// Particles counted in `mfr`: its counting noise is about 1/√n relative.
+    /// Particles counted in the answer: its counting noise is about 1/√n relative.
     pub mfr_particles: usize,
-    /// Standard error of `mfr` (conveyor layout: batch means over the steady window).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub mfr_se: Option<f64>,
     /// The steady-state measurement: block series, transient, batches, trend, heap, stop.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub steady_state: Option<Box<crate::outcome::steady::SteadyState>>,
@@ -107,6 +114,24 @@ pub struct RunResult {
     pub extensions: u32,
 }
 
+impl Serialize for RunResult {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        RunResult::serialize(self, s)
+    }
+}
+
+impl<'de> Deserialize<'de> for RunResult {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<RunResult, D::Error> {
+        let mut r = RunResult::deserialize(d)?;
+        // Before its answer had its own name, a layers result wrote it as `mfr` beside the
+        // steady layer it came from.
+        if let (AnswerKind::Mfr, Some(l)) = (r.answer.kind, &r.layers) {
+            r.answer = r.answer.as_kind(l.answer_kind());
+        }
+        Ok(r)
+    }
+}
+
 fn is_zero(n: &u32) -> bool {
     *n == 0
 }
@@ -124,16 +149,15 @@ pub struct WarmStart {
 
 impl Default for RunResult {
     /// A result of the current format that measured nothing: a base for the stand-in and test
-    /// engines to fill (`RunResult { mfr, ..RunResult::default() }`).
+    /// engines to fill (`RunResult { answer: PointAnswer::mfr(m), ..RunResult::default() }`).
     fn default() -> RunResult {
         RunResult {
             format: RESULT_FORMAT,
             hash: String::new(),
             parameters: BTreeMap::new(),
-            mfr: 0.0,
+            answer: PointAnswer::default(),
             mfr_flux: 0.0,
             mfr_particles: 0,
-            mfr_se: None,
             steady_state: None,
             mfr_windows: Vec::new(),
             steady: true,
@@ -293,4 +317,60 @@ pub enum RunOutcome {
     Failed(RunFailure),
     /// Stopped by Ctrl-C / SIGTERM; the run dir is incomplete and will be re-run on resume.
     Cancelled,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_older_layers_result_with_its_answer_as_mfr_reads_as_its_steady_layer() {
+        // As a layers point wrote it before its answer had its own name (abridged: no passes).
+        let old = |bed: &str, answer: f64| {
+            format!(
+                r#"{{"format": 1, "hash": "h", "parameters": {{"layer_thickness": 0.05}},
+                "mfr": {answer}, "mfr_particles": 1200, "mfr_se": 0.011,
+                "mfr_windows": [0.5, 0.57], "steady": true, "vx": [], "particles": 400,
+                "layers": {{"bed": "{bed}", "layer_thickness_m": 5e-5, "passes": [], "steady_from": 2,
+                  "steady": true, "packing": 0.52, "packing_se": 0.01, "relative_density": 0.57,
+                  "relative_density_se": 0.011, "effective_thickness_m": 1e-4,
+                  "effective_thickness_se_m": 1e-6, "covered_fraction": 0.9, "roughness_d": 0.4}},
+                "settle_steps": 0, "steps": 10, "simulated_time": 0.1, "wall_time": 1.0,
+                "engine_version": "x", "warnings": []}}"#
+            )
+        };
+        let loose: RunResult = serde_json::from_str(&old("loose", 0.57)).unwrap();
+        assert_eq!(
+            loose.answer,
+            PointAnswer { kind: AnswerKind::RelativeDensity, value: 0.57, se: Some(0.011) }
+        );
+        let fused: RunResult = serde_json::from_str(&old("fused", 0.52)).unwrap();
+        assert_eq!(fused.answer.kind, AnswerKind::SteadyPacking);
+        // Written again under its own name, and read back the same.
+        let json = serde_json::to_value(&loose).unwrap();
+        assert!(json.get("mfr").is_none() && json.get("mfr_se").is_none(), "{json}");
+        assert_eq!(
+            (json["relative_density"].as_f64(), json["relative_density_se"].as_f64()),
+            (Some(0.57), Some(0.011))
+        );
+        let again = serde_json::from_value::<RunResult>(json.clone()).unwrap();
+        assert_eq!(again.answer, loose.answer);
+        assert_eq!(serde_json::to_value(&again).unwrap(), json);
+        assert_eq!(serde_json::to_value(&fused).unwrap()["steady_packing"].as_f64(), Some(0.52));
+    }
+
+    #[test]
+    fn a_flow_keeps_mfr_and_a_pour_writes_no_answer() {
+        let flow = RunResult {
+            answer: PointAnswer { se: Some(0.004), ..PointAnswer::mfr(0.41) },
+            ..RunResult::default()
+        };
+        let json = serde_json::to_value(&flow).unwrap();
+        assert_eq!((json["mfr"].as_f64(), json["mfr_se"].as_f64()), (Some(0.41), Some(0.004)));
+        assert_eq!(serde_json::from_value::<RunResult>(json).unwrap(), flow);
+        let pour = RunResult { answer: PointAnswer::none(), ..RunResult::default() };
+        let json = serde_json::to_value(&pour).unwrap();
+        assert!(json.get("mfr").is_none() && json.get("mfr_se").is_none(), "{json}");
+        assert!(serde_json::from_value::<RunResult>(json).unwrap().answer.value.is_nan());
+    }
 }

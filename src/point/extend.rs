@@ -53,7 +53,7 @@ pub fn extend(
         Some(r) => r,
         None => return Extended::NotExtendable(format!("no readable {RESULT}: the point has not finished")),
     };
-    let Some(se) = before.mfr_se else {
+    let Some(se) = before.answer.se else {
         return Extended::NotExtendable("its result has no SE of MFR".into());
     };
     // A run whose deck stopped on a target at least as tight has met this one by the deck's

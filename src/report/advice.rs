@@ -47,13 +47,22 @@ pub struct ClassCheck {
 pub struct Recommended {
     pub index: usize,
     pub parameters: BTreeMap<String, f64>,
-    pub mfr: f64,
-    /// Counting noise of the MFR: MFR/√n over the n particles counted.
-    pub mfr_se: f64,
+    /// Its answer under its own keys (`mfr` and `mfr_se`, `relative_density` and
+    /// `relative_density_se`, …), with an SE always: where the result states none, the counting
+    /// noise, answer/√n over the n particles counted.
+    #[serde(flatten)]
+    pub answer: crate::outcome::PointAnswer,
     pub layer: Option<Layer>,
     /// What the layout adds after the answer (a layers point: the powder under the blade and
     /// the steady layer's passes).
     pub detail: Option<String>,
+}
+
+impl Recommended {
+    /// Its answer's standard error (always stated).
+    pub fn se(&self) -> f64 {
+        self.answer.se.unwrap_or(f64::NAN)
+    }
 }
 
 /// One of the thesis's conclusions against this sweep.
@@ -148,26 +157,30 @@ pub fn advise(
     let even = |r: &crate::outcome::RunResult| {
         r.layer.is_none_or(|l| l.layer_cv.is_nan() || l.layer_cv <= EVEN_FACTOR * l.layer_cv_noise)
     };
-    let mut ranked: Vec<&(&PointRow, &crate::outcome::RunResult, Quality)> =
-        done.iter().filter(|(_, r, _)| even(r) && r.mfr.is_finite() && r.mfr > 0.0).collect();
+    let mut ranked: Vec<&(&PointRow, &crate::outcome::RunResult, Quality)> = done
+        .iter()
+        .filter(|(_, r, _)| even(r) && r.answer.value.is_finite() && r.answer.value > 0.0)
+        .collect();
     // A process engineer wants the plate covered before a denser patchy layer.
     let whole = |r: &crate::outcome::RunResult| r.layer.is_some_and(|l| l.covered_fraction >= FULL_COVER);
-    ranked.sort_by(|a, b| whole(b.1).cmp(&whole(a.1)).then(b.1.mfr.total_cmp(&a.1.mfr)));
+    ranked.sort_by(|a, b| whole(b.1).cmp(&whole(a.1)).then(b.1.answer.value.total_cmp(&a.1.answer.value)));
     let recommended: Vec<Recommended> = ranked
         .iter()
         .take(LISTED)
         .map(|(p, r, _)| Recommended {
             index: p.index,
             parameters: parameters.iter().cloned().zip(p.values.iter().copied()).collect(),
-            mfr: r.mfr,
-            mfr_se: r.mfr_se.unwrap_or(r.mfr / (r.mfr_particles.max(1) as f64).sqrt()),
+            answer: crate::outcome::PointAnswer {
+                se: Some(r.answer.se.unwrap_or(r.answer.value / (r.mfr_particles.max(1) as f64).sqrt())),
+                ..r.answer
+            },
             layer: r.layer,
             detail: layout.and_then(|l| l.answer_detail(r)),
         })
         .collect();
     let best_is_distinct = (recommended.len() >= 2).then(|| {
         let (a, b) = (&recommended[0], &recommended[1]);
-        a.mfr - b.mfr > 2.0 * (a.mfr_se.powi(2) + b.mfr_se.powi(2)).sqrt()
+        a.answer.value - b.answer.value > 2.0 * (a.se().powi(2) + b.se().powi(2)).sqrt()
     });
     // The thesis's claims are of MFR under a blade: a layout that answers with another quantity
     // (a steady layer's packing) is not judged by them.
@@ -188,7 +201,7 @@ fn class_check(done: &[(&PointRow, &crate::outcome::RunResult, Quality)]) -> Cla
             ClassLayer {
                 class: q.as_str(),
                 points: members.len(),
-                mfr: mean(&members.iter().map(|d| d.1.mfr).collect::<Vec<_>>()),
+                mfr: mean(&members.iter().map(|d| d.1.answer.value).collect::<Vec<_>>()),
                 covered_fraction: mean(&layers.iter().map(|l| l.covered_fraction).collect::<Vec<_>>()),
                 cv_over_noise: mean(
                     &layers
@@ -496,8 +509,10 @@ mod tests {
                 numerical_error: None,
             };
             let result = crate::outcome::RunResult {
-                mfr: packing,
-                mfr_se: Some(0.002),
+                answer: crate::outcome::PointAnswer {
+                    se: Some(0.002),
+                    ..crate::outcome::PointAnswer::mfr(packing).as_kind(series.answer_kind())
+                },
                 layer: Some(Layer {
                     layer_cv: f64::NAN,
                     layer_cv_noise: f64::NAN,

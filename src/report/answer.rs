@@ -97,8 +97,8 @@ fn recommendation(a: &Analysis) -> (String, Option<String>) {
         setting(a, &|p| r.parameters.get(p).copied()),
         r.index,
         a.answer_name(),
-        r.mfr,
-        r.mfr_se,
+        r.answer.value,
+        r.se(),
         r.detail.as_ref().map_or(String::new(), |d| format!(", {d}")),
         covered.map_or(String::new(), |c| format!(", covered fraction {c:.2}"))
     );
@@ -112,7 +112,7 @@ fn recommendation(a: &Analysis) -> (String, Option<String>) {
         let layers: Vec<(&super::PointRow, f64, f64)> = a
             .points
             .iter()
-            .filter_map(|p| p.done().and_then(|(res, _)| res.layer.map(|l| (p, res.mfr, l.covered_fraction))))
+            .filter_map(|p| p.done().and_then(|(res, _)| res.layer.map(|l| (p, res.answer.value, l.covered_fraction))))
             .collect();
         let full: Vec<&(&super::PointRow, f64, f64)> = layers.iter().filter(|l| l.2 >= FULL_COVER).collect();
         let at = |p: &super::PointRow| {

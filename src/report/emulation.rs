@@ -11,6 +11,7 @@ use crate::analysis::convergence::{self, Change, Criteria, SpaceStats};
 use crate::analysis::emulator::{CrossValidation, EmulatedStatistics, Emulator};
 use crate::analysis::stats::STATISTICS;
 use crate::measure::quality::Quality;
+use crate::outcome::PointAnswer;
 use crate::sweep::Sweep;
 
 /// Most points the report's emulator conditions on (its factorisation costs N³/3; past this
@@ -27,8 +28,10 @@ pub const ZERO_SHARE: f64 = 0.01;
 pub struct Best {
     pub index: usize,
     pub parameters: BTreeMap<String, f64>,
-    /// The run's own MFR and the emulator's at the same point (the noise averaged out), with SE.
-    pub mfr: f64,
+    /// The run's own answer, under its own key (`mfr`, `relative_density`, …), and the
+    /// emulator's at the same point (the noise averaged out), with SE.
+    #[serde(flatten)]
+    pub answer: PointAnswer,
     pub emulator_mfr: f64,
     pub emulator_se: f64,
 }
@@ -156,7 +159,11 @@ pub fn analyse(
                     .map(|p| p.name.clone())
                     .zip(done[i].values.iter().copied())
                     .collect(),
-                mfr: done[i].mfr().unwrap_or(f64::NAN),
+                answer: PointAnswer {
+                    kind: super::answer_kind(&sweep.file.scene),
+                    value: done[i].mfr().unwrap_or(f64::NAN),
+                    se: None,
+                },
                 emulator_mfr: m,
                 emulator_se: s,
             })
@@ -185,8 +192,10 @@ pub fn analyse(
 #[derive(Debug, Clone, Serialize)]
 pub struct Prediction {
     pub parameters: BTreeMap<String, f64>,
-    /// The emulator's MFR (0 where its surface dips below zero) and its predictive SE.
-    pub mfr: f64,
+    /// The emulator's answer (0 where its surface dips below zero) under its own key (`mfr`,
+    /// `relative_density`, …), and its predictive SE (`se`).
+    #[serde(flatten)]
+    pub answer: PointAnswer,
     pub se: f64,
     /// Points the emulator was fitted to, and its leave-one-out RMSE.
     pub points: usize,
@@ -271,7 +280,7 @@ pub fn predict(dir: &std::path::Path, sets: &[String]) -> crate::error::Result<P
         .collect();
     Ok(Prediction {
         parameters: sweep.swept.iter().map(|p| p.name.clone()).zip(values).collect(),
-        mfr: m.max(0.0),
+        answer: PointAnswer { kind: super::answer_kind(&sweep.file.scene), value: m.max(0.0), se: None },
         se,
         points: f.x.len(),
         loo_rmse: cv.rmse,

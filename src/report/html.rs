@@ -385,7 +385,7 @@ fn points_rows(a: &Analysis, f: &Figure) -> Vec<Value> {
             Some(json!({
                 "index": i,
                 "values": p.values.iter().map(|v| fmt_short(*v)).collect::<Vec<_>>(),
-                "mfr": format!("{:.4}", r.mfr),
+                "mfr": format!("{:.4}", r.answer.value),
                 "quality": q.as_str(),
             }))
         })
@@ -418,8 +418,8 @@ fn advice_section(a: &Analysis) -> Value {
             json!({
                 "index": r.index,
                 "values": values(a, &r.parameters),
-                "mfr": format!("{:.4}", r.mfr),
-                "mfr_se": format!("{:.4}", r.mfr_se),
+                "mfr": format!("{:.4}", r.answer.value),
+                "mfr_se": format!("{:.4}", r.se()),
                 "covered": opt(l.map(|l| l.covered_fraction), 3),
                 "cv": opt(l.filter(|l| l.layer_cv_noise > 0.0).map(|l| l.layer_cv / l.layer_cv_noise), 2),
                 "roughness": opt(l.map(|l| l.roughness_d), 3),
@@ -492,7 +492,7 @@ fn emulator_section(a: &Analysis) -> Value {
                 .map(|b| {
                     json!({
                         "index": b.index,
-                        "mfr": format!("{:.4}", b.mfr),
+                        "mfr": format!("{:.4}", b.answer.value),
                         "emulator_mfr": format!("{:.4}", b.emulator_mfr),
                         "emulator_se": format!("{:.4}", b.emulator_se),
                     })

@@ -60,7 +60,8 @@ pub struct PointRow {
     /// The run's hash: its directory is `DIR/runs/<hash>`.
     pub hash: String,
     pub state: PointState,
-    /// The standard error of the point's MFR, where its result.json records one (`mfr_se`).
+    /// The standard error of the point's answer, where its result.json records one (`mfr_se`,
+    /// or the layout's own answer's: `relative_density_se`).
     pub mfr_se: Option<f64>,
 }
 
@@ -92,7 +93,7 @@ impl PointRow {
     /// that passes nothing is a real zero, thesis Fig. 4.19).
     pub fn mfr(&self) -> Option<f64> {
         match &self.state {
-            PointState::Done { result, .. } => Some(result.mfr).filter(|v| v.is_finite()),
+            PointState::Done { result, .. } => Some(result.answer.value).filter(|v| v.is_finite()),
             PointState::Screened => Some(0.0),
             _ => None,
         }
@@ -173,7 +174,9 @@ pub struct FailedPoint {
 pub struct BestPoint {
     pub index: usize,
     pub parameters: BTreeMap<String, f64>,
-    pub mfr: f64,
+    /// Its answer, under its own key (`mfr`, `relative_density`, …).
+    #[serde(flatten)]
+    pub answer: crate::outcome::PointAnswer,
     pub quality: Quality,
 }
 
@@ -226,14 +229,14 @@ pub struct Analysis {
 impl Analysis {
     /// What each point answers with, in words (`MFR` unless the layout says otherwise).
     pub fn answer_name(&self) -> &'static str {
-        answer_name(&self.setup.scene)
+        answer_kind(&self.setup.scene).words()
     }
 }
 
-/// What a point of a sweep with these scene settings answers with (`MFR` unless its layout says
+/// What a point of a sweep with these scene settings answers with (MFR unless its layout says
 /// otherwise).
-fn answer_name(scene: &crate::scene::settings::SceneSettings) -> &'static str {
-    crate::scenes::lookup(&scene.layout).map_or("MFR", |l| l.answer_name(scene))
+pub fn answer_kind(scene: &crate::scene::settings::SceneSettings) -> crate::outcome::AnswerKind {
+    crate::scenes::lookup(&scene.layout).map_or(crate::outcome::AnswerKind::Mfr, |l| l.answer(scene))
 }
 
 /// A sweep directory's manifest, sweep file and points (with their states and `mfr_se`), and
@@ -261,7 +264,10 @@ pub fn read_points(dir: &Path) -> Result<(Manifest, Sweep, Vec<PointRow>, Screen
             index: p.index,
             values: p.values.clone(),
             hash: p.hash.clone(),
-            mfr_se: matches!(s, PointStatus::Done(_)).then(|| mfr_se(dir, &p.hash)).flatten(),
+            mfr_se: match &s {
+                PointStatus::Done(r) => r.answer.se.filter(|se| se.is_finite() && *se >= 0.0),
+                _ => None,
+            },
             state: match s {
                 PointStatus::Done(r) => {
                     let quality = quality::of_result(&r);
@@ -301,14 +307,14 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
     }
     let mut ideal: Vec<&(&PointRow, &RunResult, Quality)> =
         done.iter().filter(|(_, _, q)| *q == Quality::Ideal).collect();
-    ideal.sort_by(|a, b| b.1.mfr.total_cmp(&a.1.mfr));
+    ideal.sort_by(|a, b| b.1.answer.value.total_cmp(&a.1.answer.value));
     let best_ideal = ideal
         .iter()
         .take(BEST)
         .map(|(p, r, q)| BestPoint {
             index: p.index,
             parameters: manifest.parameters.iter().cloned().zip(p.values.iter().copied()).collect(),
-            mfr: r.mfr,
+            answer: crate::outcome::PointAnswer { se: None, ..r.answer },
             quality: *q,
         })
         .collect();
@@ -328,8 +334,13 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
         .collect();
     let setup = Setup::of(&sweep, &manifest, dir, &done.iter().map(|(_, r, _)| *r).collect::<Vec<_>>());
     let layout = crate::scenes::lookup(&sweep.file.scene.layout);
-    let advice =
-        advice::advise(&manifest.parameters, &points, &sensitivity, layout, answer_name(&sweep.file.scene));
+    let advice = advice::advise(
+        &manifest.parameters,
+        &points,
+        &sensitivity,
+        layout,
+        answer_kind(&sweep.file.scene).words(),
+    );
     let engine = manifest
         .identity
         .get("engine")
@@ -368,15 +379,6 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
     a.answer = Some(answer::answer(&a));
     emulation::keep_fits(dir);
     Ok(a)
-}
-
-/// The `mfr_se` a run's result.json records, if it does (results written before the per-point
-/// standard error was measured have none). Read as plain JSON so that either form reads.
-fn mfr_se(dir: &Path, hash: &str) -> Option<f64> {
-    let path = dir.join("runs").join(hash).join("result.json");
-    let bytes = crate::sys::read::read_capped(&path, crate::store::OUTCOME_CAP).ok()?;
-    let v: serde_json::Value = serde_json::from_slice(&bytes).ok()?;
-    v.get("mfr_se")?.as_f64().filter(|s| s.is_finite() && *s >= 0.0)
 }
 
 /// Statistics, intervals and judgements of the complete spaces, in order, up to the first

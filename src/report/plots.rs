@@ -347,7 +347,7 @@ fn chosen_profiles(a: &Analysis, q: Quality) -> (usize, Vec<&PointRow>) {
     let mut pts: Vec<(&PointRow, f64)> = a
         .points
         .iter()
-        .filter_map(|p| p.done().filter(|(_, pq)| *pq == q).map(|(r, _)| (p, r.mfr)))
+        .filter_map(|p| p.done().filter(|(_, pq)| *pq == q).map(|(r, _)| (p, r.answer.value)))
         .collect();
     pts.sort_by(|x, y| y.1.total_cmp(&x.1));
     let chosen = if q == Quality::Ideal || pts.len() <= 4 {
@@ -375,7 +375,7 @@ pub(super) fn profiles(a: &Analysis) -> Res<Figure> {
                 .enumerate()
                 .filter_map(|(i, p)| {
                     let (r, _) = p.done()?;
-                    let mfr = r.mfr;
+                    let mfr = r.answer.value;
                     let v = r.parameters.get("blade_speed").copied().unwrap_or(1.0);
                     Some((format!("#{} MFR {:.3}", p.index, mfr), series_colour(i), r.vx.clone(), v))
                 })
@@ -447,7 +447,12 @@ pub(super) fn lattice_panels(a: &Analysis) -> Res<Vec<Figure>> {
                             let (r, q) = p.done()?;
                             let v = r.parameters.get("blade_speed").copied().unwrap_or(1.0);
                             Some((
-                                format!("{} {}: MFR {:.3}", fmt_short(levels[va][ia]), q.as_str(), r.mfr),
+                                format!(
+                                    "{} {}: MFR {:.3}",
+                                    fmt_short(levels[va][ia]),
+                                    q.as_str(),
+                                    r.answer.value
+                                ),
                                 series_colour(ia),
                                 r.vx.clone(),
                                 v,

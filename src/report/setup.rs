@@ -94,8 +94,9 @@ impl Setup {
         let id = |k: &str| manifest.identity.get(k).and_then(|v| v.as_str()).unwrap_or("").to_string();
         let precision = crate::run::precision::read(dir);
         let coarser = precision.as_ref().map_or(0, |p| {
-            let above =
-                |r: &&&RunResult| r.mfr_se_target.is_none() && r.mfr_se.is_some_and(|se| se > p.mfr_abs_se);
+            let above = |r: &&&RunResult| {
+                r.mfr_se_target.is_none() && r.answer.se.is_some_and(|se| se > p.mfr_abs_se)
+            };
             done.iter().filter(above).count()
         });
         Setup {

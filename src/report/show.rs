@@ -165,11 +165,11 @@ impl PointPage {
             let _ = writeln!(t, "  wall time        {:.1} s", r.wall_time);
         } else if let Some(r) = measured {
             let _ = writeln!(t, "\nresult:");
-            let se = r.mfr_se.map_or(String::new(), |se| format!(" ± {se:.4} (SE)"));
+            let se = r.answer.se.map_or(String::new(), |se| format!(" ± {se:.4} (SE)"));
             let _ = writeln!(
                 t,
                 "  MFR              {:.4}{se} (–), from {} particle crossings",
-                r.mfr, r.mfr_particles
+                r.answer.value, r.mfr_particles
             );
             let _ = writeln!(t, "  MFR (flux check) {:.4} (–)", r.mfr_flux);
             let w: Vec<String> = r.mfr_windows.iter().map(|v| format!("{v:.4}")).collect();

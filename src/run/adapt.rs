@@ -56,8 +56,8 @@ pub fn fit_data(
     let usable: Vec<(&PointRecord, f64, Option<f64>)> = points
         .iter()
         .filter_map(|(p, s)| match s {
-            PointStatus::Done(r) if r.mfr.is_finite() => {
-                Some((*p, r.mfr, r.mfr_se.filter(|v| v.is_finite())))
+            PointStatus::Done(r) if r.answer.value.is_finite() => {
+                Some((*p, r.answer.value, r.answer.se.filter(|v| v.is_finite())))
             }
             PointStatus::Screened => Some((*p, 0.0, None)),
             _ => None,

@@ -276,7 +276,7 @@ fn one(
             Some(format!("{of}: {still}: {}", f.reason))
         }
         Extended::Done { before, after } => {
-            let (a, b) = (before.mfr_se.unwrap_or(f64::NAN), after.mfr_se.unwrap_or(f64::NAN));
+            let (a, b) = (before.answer.se.unwrap_or(f64::NAN), after.answer.se.unwrap_or(f64::NAN));
             let cpu = after.cpu_time.unwrap_or(0.0) - before.cpu_time.unwrap_or(0.0);
             s.cpu_s += cpu;
             let at_cap = after.steady_state.as_ref().is_some_and(|st| st.stop == "cap");
@@ -286,8 +286,8 @@ fn one(
                 |r: &crate::outcome::RunResult| r.steady_state.as_ref().map_or(0, |st| st.block_mfr.len());
             Some(format!(
                 "{of}: MFR {:.4} ± {a:.4} → {:.4} ± {b:.4} ({} more blocks, {cpu:.1} CPU s{})",
-                before.mfr,
-                after.mfr,
+                before.answer.value,
+                after.answer.value,
                 blocks(&after) - blocks(&before),
                 if at_cap { "; at the window cap" } else { "" },
             ))
@@ -313,9 +313,9 @@ fn one(
 /// A pass-by-pass point's answer in its own terms: the layout's quantity with its SE, and its
 /// detail (where its steady layer starts, of how many passes).
 fn answer(ctx: &PointContext, r: &crate::outcome::RunResult) -> String {
-    let name = ctx.layout.answer_name(&ctx.sweep.file.scene);
+    let name = r.answer.kind.words();
     let detail = ctx.layout.answer_detail(r).map_or(String::new(), |d| format!("; {d}"));
-    format!("{name} {:.3} ± {:.3}{detail}", r.mfr, r.mfr_se.unwrap_or(f64::NAN))
+    format!("{name} {:.3} ± {:.3}{detail}", r.answer.value, r.answer.se.unwrap_or(f64::NAN))
 }
 
 #[cfg(test)]

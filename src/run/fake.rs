@@ -198,7 +198,7 @@ impl Executor for FakeExecutor {
                         .zip(names)
                         .map(|(v, n)| (n.to_string(), *v))
                         .collect::<BTreeMap<_, _>>(),
-                    mfr: (self.mfr)(&job.values),
+                    answer: crate::outcome::PointAnswer::mfr((self.mfr)(&job.values)),
                     mfr_flux: (self.mfr)(&job.values),
                     vx: vec![Some(0.5); VX_LAYERS],
                     particles: 1,

@@ -92,6 +92,6 @@ fn read_result(path: &Path) -> Option<RunResult> {
 
 fn point(sweep: &Sweep, r: &RunResult) -> Point {
     let values: Option<Vec<f64>> = sweep.swept.iter().map(|p| r.parameters.get(&p.name).copied()).collect();
-    let start = values.filter(|_| r.steady && r.mfr >= MIN_FLOW).map(|v| unit_point(sweep, &v));
-    Point { mfr: r.mfr, start, parameters: r.parameters.clone() }
+    let start = values.filter(|_| r.steady && r.answer.value >= MIN_FLOW).map(|v| unit_point(sweep, &v));
+    Point { mfr: r.answer.value, start, parameters: r.parameters.clone() }
 }

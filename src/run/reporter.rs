@@ -361,7 +361,7 @@ impl SpaceHook for Watch {
         let mfr: Vec<Option<f64>> = points
             .iter()
             .map(|(_, s)| match s {
-                PointStatus::Done(r) if r.mfr.is_finite() => Some(r.mfr),
+                PointStatus::Done(r) if r.answer.value.is_finite() => Some(r.answer.value),
                 // A closed gap passes nothing: a real zero, not a missing value.
                 PointStatus::Screened => Some(0.0),
                 _ => None,

@@ -163,8 +163,8 @@ impl Screen {
             .filter(|(p, _)| p.closed && !awaiting.contains(&p.index))
             .filter_map(|(p, s)| {
                 let outcome = match s {
-                    PointStatus::Done(r) if r.mfr > 0.0 => format!("MFR {:.4}", r.mfr),
-                    PointStatus::Done(r) if !r.mfr.is_finite() => format!("MFR {}", r.mfr),
+                    PointStatus::Done(r) if r.answer.value > 0.0 => format!("MFR {:.4}", r.answer.value),
+                    PointStatus::Done(r) if !r.answer.value.is_finite() => format!("MFR {}", r.answer.value),
                     PointStatus::Failed(f) => format!("failed ({})", f.class.as_str()),
                     _ => return None,
                 };
@@ -306,7 +306,7 @@ mod tests {
 
     fn done(mfr: f64) -> PointStatus {
         PointStatus::Done(Box::new(RunResult {
-            mfr,
+            answer: crate::outcome::PointAnswer::mfr(mfr),
             mfr_flux: mfr,
             wall_time: 1.0,
             engine_version: String::new(),

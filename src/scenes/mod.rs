@@ -20,7 +20,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use crate::engine::EngineRun;
-use crate::outcome::{FailureClass, RunResult};
+use crate::outcome::{AnswerKind, FailureClass, RunResult};
 use crate::scene::settings::SceneSettings;
 use crate::scene::{params, plausible, Base, Scene, SceneError};
 pub use conveyor::warm::Warm;
@@ -296,10 +296,16 @@ pub trait Layout: Sync {
         None
     }
 
-    /// The point's answer in words: what `mfr` in result.json holds for this layout, the number
-    /// a sweep's statistics, emulator and report read.
-    fn answer_name(&self, _settings: &SceneSettings) -> &'static str {
-        "MFR"
+    /// What a point of this layout under `settings` answers with: the number a sweep's
+    /// statistics, emulator, report and prediction read, named by its own key in result.json
+    /// (MFR unless the layout measures another quantity).
+    fn answer(&self, _settings: &SceneSettings) -> AnswerKind {
+        AnswerKind::Mfr
+    }
+
+    /// [`Layout::answer`] in words.
+    fn answer_name(&self, settings: &SceneSettings) -> &'static str {
+        self.answer(settings).words()
     }
 
     /// What the report's recommendation says of a done point after its answer, if anything.

@@ -1,8 +1,9 @@
 //! The quantities of a result that `sweep calibrate --target NAME=…` can fit a sweep to. Each
 //! layout names those its runs measure ([`super::Layout::calibration_targets`]): a flow under a
-//! blade its MFR ([`MFR`]), a pour its heap's angle and packing (`pour::CALIBRATION_TARGETS`).
+//! blade its MFR ([`MFR`]), a pour its heap's angle and packing (`pour::CALIBRATION_TARGETS`), the
+//! layers their steady layer's relative density and packing (`layers::CALIBRATION_TARGETS`).
 
-use crate::outcome::RunResult;
+use crate::outcome::{AnswerKind, RunResult};
 
 /// A measured value and the run's SE of it, where it gives one.
 pub type Measured = (f64, Option<f64>);
@@ -35,7 +36,10 @@ impl Quantity {
 pub const MFR: Quantity = Quantity {
     name: "mfr",
     unit: "-",
-    read: |r| r.mfr.is_finite().then_some((r.mfr, r.mfr_se)),
+    read: |r| {
+        (r.answer.kind == AnswerKind::Mfr && r.answer.value.is_finite())
+            .then_some((r.answer.value, r.answer.se))
+    },
     repeats: 1,
     possible: (0.0, 1.0),
     lo_possible: true,

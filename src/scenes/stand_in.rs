@@ -17,7 +17,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 use sha2::{Digest, Sha256};
 
-use crate::outcome::{RunResult, VX_LAYERS};
+use crate::outcome::{PointAnswer, RunResult, VX_LAYERS};
 use crate::scene::Scene;
 
 /// Gap/D below which nothing passes under the blade (the real scene: zero at gap = D, flow at 1.3 D).
@@ -159,10 +159,9 @@ pub fn flow(point: &mut StandInPoint) -> RunResult {
     };
     let (mfr, vx) = flow.model(&mut point.noise);
     RunResult {
-        mfr,
-        mfr_flux: mfr,
         // The model's own noise: what a seed-to-seed repeat would scatter by.
-        mfr_se: Some(flow.mean_mfr() * MFR_NOISE),
+        answer: PointAnswer { se: Some(flow.mean_mfr() * MFR_NOISE), ..PointAnswer::mfr(mfr) },
+        mfr_flux: mfr,
         mfr_windows: vec![mfr; 4],
         vx: vx.into_iter().map(Some).collect(),
         ..RunResult::default()

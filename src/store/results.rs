@@ -81,7 +81,7 @@ pub fn write_results(
                 row.extend([
                     "done".into(),
                     String::new(),
-                    r.mfr.to_string(),
+                    r.answer.value.to_string(),
                     r.mfr_flux.to_string(),
                     r.mfr_particles.to_string(),
                     r.steady.to_string(),
@@ -116,11 +116,11 @@ pub fn write_results(
         // without them).
         let (se, stop) = match s {
             PointStatus::Done(r) => (
-                r.mfr_se.map_or(String::new(), |v| v.to_string()),
+                r.answer.se.map_or(String::new(), |v| v.to_string()),
                 r.steady_state.as_ref().map_or(String::new(), |st| st.stop.clone()),
             ),
             PointStatus::Failed(f) => (
-                f.measured.as_ref().and_then(|r| r.mfr_se).map_or(String::new(), |v| v.to_string()),
+                f.measured.as_ref().and_then(|r| r.answer.se).map_or(String::new(), |v| v.to_string()),
                 String::new(),
             ),
             _ => (String::new(), String::new()),

@@ -65,7 +65,7 @@ impl SpaceHook for Seen {
             points
                 .iter()
                 .map(|(_, s)| match s {
-                    PointStatus::Done(r) => Some(r.mfr),
+                    PointStatus::Done(r) => Some(r.answer.value),
                     PointStatus::Screened => Some(0.0),
                     _ => None,
                 })

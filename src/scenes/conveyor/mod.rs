@@ -14,7 +14,7 @@ use crate::measure::frame::{Frame, COLUMNS};
 use crate::measure::{layer, steady};
 use crate::outcome::layer::Layer;
 use crate::outcome::steady::SteadyState;
-use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT};
+use crate::outcome::{FailureClass, PointAnswer, RunResult, RESULT_FORMAT};
 use crate::scene::bed::Bed;
 use crate::scene::blade::{Blade, Window};
 use crate::scene::own::LayoutData;
@@ -499,10 +499,9 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         format: RESULT_FORMAT,
         hash: run.hash.to_string(),
         parameters: run.parameters.clone(),
-        mfr: st.mfr,
+        answer: PointAnswer { se: Some(st.mfr_se), ..PointAnswer::mfr(st.mfr) },
         mfr_flux: st.mfr_deleted,
         mfr_particles: st.particles,
-        mfr_se: Some(st.mfr_se),
         steady_state: Some(Box::new(st.state)),
         vx_se: st.vx_se,
         mfr_windows,

@@ -359,8 +359,8 @@ pub fn unsteady_why(plan: &Plan, series: &LayerSeries) -> String {
     }
 }
 
-/// The run's result: every pass, the steady layer as the point's answer (MFR: its relative
-/// density on a loose bed, its packing on a fused one). A run not steady by its last pass fails
+/// The run's result: every pass, the steady layer as the point's answer (its relative density
+/// on a loose bed, its packing on a fused one: [`LayerSeries::answer`]). A run not steady by its last pass fails
 /// as `unsteady`, its numbers kept.
 pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
     let scene = run.scene;
@@ -387,20 +387,14 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         numerical_error: Some(super::numerics::of(scene, &plan)),
         ..steady_layer(&plan, passes(scene, &plan, &lines, &solids, &grains))
     };
-    let (answer, answer_se) = if plan.fused {
-        (series.packing, series.packing_se)
-    } else {
-        (series.relative_density, series.relative_density_se)
-    };
     let steps = lines.last().map_or(0, |l| l.step);
     let result = RunResult {
         format: RESULT_FORMAT,
         hash: run.hash.to_string(),
         parameters: run.parameters.clone(),
-        mfr: answer,
+        answer: series.answer(),
         mfr_flux: f64::NAN,
         mfr_particles: series.passes.iter().map(|p| p.particles).sum(),
-        mfr_se: Some(answer_se),
         mfr_windows: series
             .passes
             .iter()
@@ -447,6 +441,7 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
             result,
         ));
     }
+    let answer = result.answer.value;
     if !(answer.is_finite() && answer > 0.0 && answer < 0.75) {
         return Err(Rejected::measured(
             FailureClass::Implausible,

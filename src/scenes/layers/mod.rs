@@ -37,7 +37,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::outcome::RunResult;
+use crate::outcome::{AnswerKind, RunResult};
 use crate::scene::plausible::short;
 use crate::scene::settings::{SceneSettings, DEFAULT_SEARCH_PASSES};
 use crate::scene::{Base, Scene};
@@ -465,11 +465,12 @@ impl Layout for Layers {
         String::new()
     }
 
-    fn answer_name(&self, settings: &SceneSettings) -> &'static str {
+    fn answer(&self, settings: &SceneSettings) -> AnswerKind {
+        // A fused bed's relative density is the whole drop by construction.
         if fused(settings) {
-            "steady-layer packing"
+            AnswerKind::SteadyPacking
         } else {
-            "steady-layer relative density"
+            AnswerKind::RelativeDensity
         }
     }
 
@@ -488,6 +489,10 @@ impl Layout for Layers {
                 numerics::summary(e, l.effective_thickness_m)
             ))
         ))
+    }
+
+    fn calibration_targets(&self) -> &'static [crate::scenes::quantity::Quantity] {
+        CALIBRATION_TARGETS
     }
 
     fn result_columns(&self) -> &'static [&'static str] {
@@ -584,6 +589,29 @@ impl Layout for Layers {
         Some(lines)
     }
 }
+
+/// What a calibration can fit a layers sweep to: its steady layer's relative density and
+/// packing, with their SE over the steady passes, on either bed.
+pub const CALIBRATION_TARGETS: &[crate::scenes::quantity::Quantity] = &[
+    crate::scenes::quantity::Quantity {
+        name: "relative_density",
+        unit: "-",
+        read: |r| r.layers.as_ref().map(|l| (l.relative_density, Some(l.relative_density_se))),
+        repeats: 1,
+        // Deposit over the drop: about 1 on a fused bed, which keeps the whole drop; a pass may
+        // leave more than the drop, never twice it at the packing of spheres.
+        possible: (0.0, 2.0),
+        lo_possible: true,
+    },
+    crate::scenes::quantity::Quantity {
+        name: "steady_packing",
+        unit: "-",
+        read: |r| r.layers.as_ref().map(|l| (l.packing, Some(l.packing_se))),
+        repeats: 1,
+        possible: (0.0, crate::measure::plausible::PACKING_MAX),
+        lo_possible: true,
+    },
+];
 
 /// Laid passes a default search leaves after it: the steady layer's [`MIN_STEADY_PASSES`] and as
 /// many again for MSER to cut a transient from (with only three left, a point of eight passes

@@ -167,13 +167,10 @@ fn series_result(point: &StandInPoint, plan: &Plan, passes: Vec<PassRecord>, fir
         numerical_error: Some(super::numerics::of(point.scene, plan)),
     };
     let answer = |p: &PassRecord| if plan.fused { p.packing } else { p.relative_density };
-    let (mfr, mfr_se) =
-        if plan.fused { (packing, packing_se) } else { (relative_density, relative_density_se) };
     RunResult {
-        mfr,
+        answer: series.answer(),
         mfr_flux: f64::NAN,
         mfr_particles: series.passes.iter().map(|p| p.particles).sum(),
-        mfr_se: Some(mfr_se),
         mfr_windows: series.passes.iter().map(answer).collect(),
         steady,
         steady_p: f64::NAN,
@@ -225,12 +222,12 @@ mod tests {
             let l = fused.layers.as_ref().unwrap();
             assert!(fused.steady && l.steady_from > 1, "{l:?}");
             assert!((l.relative_density - 1.0).abs() < 0.05, "{l:?}");
-            assert_eq!(fused.mfr, l.packing);
+            assert_eq!(fused.answer.value, l.packing);
             Layers.check_result(&fused).unwrap();
             let loose = result("loose", 8, &values, hash).unwrap();
             let l = loose.layers.as_ref().unwrap();
             assert!(loose.steady && (l.relative_density - l.packing).abs() < 0.1 * l.packing, "{l:?}");
-            assert_eq!(loose.mfr, l.relative_density);
+            assert_eq!(loose.answer.value, l.relative_density);
             Layers.check_result(&loose).unwrap();
         }
     }

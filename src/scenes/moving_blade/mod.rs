@@ -17,7 +17,7 @@ use crate::engine::dump::read_dump;
 use crate::measure::frame::{Frame, COLUMNS};
 use crate::measure::metrics;
 use crate::measure::plausible;
-use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT};
+use crate::outcome::{FailureClass, PointAnswer, RunResult, RESULT_FORMAT};
 use crate::scene::blade::{Blade, Settle, Window};
 use crate::scene::own::{LayoutData, OwnData};
 use crate::scene::pile::PileBlock;
@@ -421,10 +421,9 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         format: RESULT_FORMAT,
         hash: run.hash.to_string(),
         parameters: run.parameters.clone(),
-        mfr: m.mfr,
+        answer: PointAnswer::mfr(m.mfr),
         mfr_flux: m.mfr_flux,
         mfr_particles: m.mfr_particles,
-        mfr_se: None,
         steady_state: None,
         vx_se: Vec::new(),
         mfr_windows: m.mfr_windows,
@@ -456,7 +455,7 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
 /// The bounds every blade layout's result must meet: not squeezed through the gap of `blade` it
 /// cannot pass (its numbers kept), and no impossible number.
 pub fn check_result(scene: &Scene, blade: &Blade, result: RunResult) -> Result<RunResult, Rejected> {
-    if let Err(e) = plausible::check_squeezed(scene, blade.gap, result.mfr) {
+    if let Err(e) = plausible::check_squeezed(scene, blade.gap, result.answer.value) {
         return Err(Rejected::measured(FailureClass::Implausible, e.to_string(), result));
     }
     if let Err(e) = plausible::check_result(&result, plausible::Measures::FLOW) {

@@ -29,7 +29,7 @@ pub mod heap;
 pub mod stand_in;
 
 use crate::engine::dump::read_dump;
-use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT, VX_LAYERS};
+use crate::outcome::{FailureClass, PointAnswer, RunResult, RESULT_FORMAT, VX_LAYERS};
 use crate::scene::blade::Settle;
 use crate::scene::own::{LayoutData, OwnData};
 use crate::scene::plausible::short;
@@ -236,7 +236,7 @@ impl Layout for Pour {
 
     fn check_result(&self, r: &RunResult) -> Result<(), crate::measure::plausible::Implausible> {
         // Nothing flows in a heap: its flow's numbers are NaN (not measured).
-        let flow = !(r.heap.is_some() && r.mfr.is_nan());
+        let flow = !(r.heap.is_some() && r.answer.value.is_nan());
         crate::measure::plausible::check_result(
             r,
             crate::measure::plausible::Measures { flow, flux: flow, depth: 1.0 },
@@ -386,10 +386,9 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         format: RESULT_FORMAT,
         hash: run.hash.to_string(),
         parameters: run.parameters.clone(),
-        mfr: f64::NAN,
+        answer: PointAnswer::none(),
         mfr_flux: f64::NAN,
         mfr_particles: 0,
-        mfr_se: None,
         steady_state: None,
         mfr_windows: Vec::new(),
         // The heap came to rest (a heap still moving fails as not-settled).

@@ -5,7 +5,7 @@
 
 use super::heap::SECTORS;
 use crate::outcome::heap::Heap;
-use crate::outcome::{RunResult, VX_LAYERS};
+use crate::outcome::{PointAnswer, RunResult, VX_LAYERS};
 use crate::scenes::stand_in::{Noise, StandInPoint};
 
 /// The pour's parameters the heap model reads (sweep units: mm, J/m²).
@@ -91,7 +91,7 @@ pub fn heap(point: &mut StandInPoint) -> RunResult {
         diameter: point.diameter_mm(),
     };
     RunResult {
-        mfr: f64::NAN,
+        answer: PointAnswer::none(),
         mfr_flux: f64::NAN,
         heap: Some(pour.model(point.scene.particles, &mut point.noise)),
         particles: point.scene.particles,
