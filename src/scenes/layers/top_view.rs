@@ -55,7 +55,7 @@ pub fn top_view(scene: &Scene, run_dir: &Path, k: usize) -> Result<TopView, Stri
                     x: g.x,
                     y: g.y.rem_euclid(scene.depth),
                     r: g.r,
-                    height: own.then(|| g.z + g.r - median),
+                    height: own.then_some(g.z + g.r - median),
                 },
             )
         })
