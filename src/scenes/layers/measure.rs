@@ -219,26 +219,38 @@ pub fn steady_layer(plan: &Plan, passes: Vec<PassRecord>) -> LayerSeries {
     let first = plan.search_passes.min(passes.len());
     let (answer_laid, depth_laid) = (&answer[first..], &depth[first..]);
     let cut = first + if plan.fused { mser(answer_laid).max(mser(depth_laid)) } else { mser(answer_laid) };
-    let kept = &passes[cut..];
     let (deposit_lag1, depth_lag1) = lag1(plan);
-    let pick = |f: &dyn Fn(&PassRecord) -> f64, lag1: f64| {
-        let (m, se) = mean_se(&kept.iter().map(f).collect::<Vec<f64>>());
-        (m, se * ar1_se_factor(kept.len(), lag1, false))
-    };
-    let (packing, packing_se) = pick(&|p| p.packing, deposit_lag1);
-    let (relative_density, relative_density_se) = pick(&|p| p.relative_density, deposit_lag1);
-    let (effective, effective_se) = pick(&|p| p.effective_thickness_m, depth_lag1);
     // A fused bed is steady once its depth has stopped growing too: its packing can settle
     // passes before the depth reaches the drop over it.
     let series = series_tested(plan);
     let flat = |y: &[f64], lag1: f64| trend_z(y).abs() <= trend_limit(y.len(), series, lag1);
-    let steady = kept.len() >= MIN_STEADY_PASSES
+    let steady = passes.len() - cut >= MIN_STEADY_PASSES
         && flat(&answer[cut..], deposit_lag1)
         && (!plan.fused || flat(&depth[cut..], depth_lag1));
+    series_from(plan, passes, cut + 1, steady, (deposit_lag1, depth_lag1))
+}
+
+/// The layer read from pass `from` (from 1) on: each measure's mean over those passes and its
+/// SE, widened for the lag-1 autocorrelations `(deposit, depth)` of its series (0: independent).
+pub fn series_from(
+    plan: &Plan,
+    passes: Vec<PassRecord>,
+    from: usize,
+    steady: bool,
+    lag1: (f64, f64),
+) -> LayerSeries {
+    let kept = &passes[from - 1..];
+    let pick = |f: &dyn Fn(&PassRecord) -> f64, lag1: f64| {
+        let (m, se) = mean_se(&kept.iter().map(f).collect::<Vec<f64>>());
+        (m, se * ar1_se_factor(kept.len(), lag1, false))
+    };
+    let (packing, packing_se) = pick(&|p| p.packing, lag1.0);
+    let (relative_density, relative_density_se) = pick(&|p| p.relative_density, lag1.0);
+    let (effective, effective_se) = pick(&|p| p.effective_thickness_m, lag1.1);
     LayerSeries {
         bed: if plan.fused { "fused" } else { "loose" }.into(),
         layer_thickness_m: plan.layer_thickness,
-        steady_from: cut + 1,
+        steady_from: from,
         steady,
         packing,
         packing_se,

@@ -127,17 +127,6 @@ pub fn passes(point: &mut StandInPoint) -> Result<RunResult, Rejected> {
     Err(Rejected::measured(FailureClass::Unsteady, why, r))
 }
 
-/// Mean and SE (SD / √n) of `y`.
-fn mean_se(y: impl Iterator<Item = f64>) -> (f64, f64) {
-    let y: Vec<f64> = y.collect();
-    let m = y.iter().sum::<f64>() / y.len() as f64;
-    if y.len() < 2 {
-        return (m, f64::NAN);
-    }
-    let var = y.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (y.len() - 1) as f64;
-    (m, (var / y.len() as f64).sqrt())
-}
-
 /// The steady layer from pass `first` on (steady if [`MIN_STEADY_PASSES`] passes are left), and
 /// the result.
 fn series_result(point: &StandInPoint, plan: &Plan, passes: Vec<PassRecord>, first: usize) -> RunResult {
@@ -145,26 +134,10 @@ fn series_result(point: &StandInPoint, plan: &Plan, passes: Vec<PassRecord>, fir
     let steady = n + 1 >= first + MIN_STEADY_PASSES;
     // An unsteady point's numbers over its last passes, for the record.
     let from = if steady { first } else { n.saturating_sub(MIN_STEADY_PASSES - 1).max(1) };
-    let kept = &passes[from - 1..];
-    let over = |f: fn(&PassRecord) -> f64| mean_se(kept.iter().map(f));
-    let (packing, packing_se) = over(|p| p.packing);
-    let (relative_density, relative_density_se) = over(|p| p.relative_density);
-    let (effective, effective_se) = over(|p| p.effective_thickness_m);
+    // The stand-in's passes are drawn independently.
     let series = LayerSeries {
-        bed: if plan.fused { "fused" } else { "loose" }.into(),
-        layer_thickness_m: plan.layer_thickness,
-        steady_from: from,
-        steady,
-        packing,
-        packing_se,
-        relative_density,
-        relative_density_se,
-        effective_thickness_m: effective,
-        effective_thickness_se_m: effective_se,
-        covered_fraction: over(|p| p.covered_fraction).0,
-        roughness_d: over(|p| p.roughness_d).0,
-        passes,
         numerical_error: Some(super::numerics::of(point.scene, plan)),
+        ..super::measure::series_from(plan, passes, from, steady, (0.0, 0.0))
     };
     let answer = |p: &PassRecord| if plan.fused { p.packing } else { p.relative_density };
     RunResult {
@@ -181,12 +154,12 @@ fn series_result(point: &StandInPoint, plan: &Plan, passes: Vec<PassRecord>, fir
             layer_cv_noise: f64::NAN,
             covered_fraction: series.covered_fraction,
             roughness_d: series.roughness_d,
-            height_d: effective / point.scene.diameter,
+            height_d: series.effective_thickness_m / point.scene.diameter,
             particles: series.passes.last().map_or(0, |p| p.particles),
         }),
-        layer_thickness: Some(effective),
-        layer_packing: Some(packing),
-        layer_packing_se: Some(packing_se),
+        layer_thickness: Some(series.effective_thickness_m),
+        layer_packing: Some(series.packing),
+        layer_packing_se: Some(series.packing_se),
         layers: Some(Box::new(series)),
         ..RunResult::default()
     }
