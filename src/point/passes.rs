@@ -43,6 +43,12 @@ pub fn pass_restart(k: usize) -> String {
     format!("restart.pass.{k}")
 }
 
+/// Whether `run_dir` holds a point that has finished a pass: it goes on from there, so its
+/// directory is not emptied before another attempt.
+pub fn has_passes(run_dir: &Path) -> bool {
+    run_dir.join(pass_record(1)).is_file()
+}
+
 /// Where a point run by the pass started from, when it started from a finished neighbour: kept
 /// in its run directory so that it resumes from the same whichever neighbours are done by then.
 pub const WARM_START: &str = "warm-start.json";
@@ -64,7 +70,7 @@ pub(super) fn warm_start(
     fresh: impl FnOnce() -> Started,
 ) -> Result<(Scene, Option<WarmStart>), String> {
     let file = run_dir.join(WARM_START);
-    if run_dir.join(pass_record(1)).is_file() {
+    if has_passes(run_dir) {
         return recorded_start(ctx, &p.scene, run_dir);
     }
     let _ = std::fs::remove_file(&file);

@@ -302,7 +302,11 @@ impl<E: Executor> Worker<'_, E> {
         let dir = self.store.run_dir(&hash);
         let mut attempt = 0;
         let outcome = loop {
-            self.store.clean_run_dir(&hash)?;
+            // A point run by the pass keeps its finished passes and goes on from the last; it
+            // removes what an interrupted pass left itself.
+            if !crate::point::passes::has_passes(&dir) {
+                self.store.clean_run_dir(&hash)?;
+            }
             let start = SystemTime::now();
             let t = Instant::now();
             let outcome = self.exec.execute(&job, &dir, self.cancel);

@@ -627,8 +627,16 @@ fn a_fused_bed_warm_started_from_its_neighbour_searches_from_its_depth_and_resum
     );
     let neighbour = cut.join("runs").join(cold_run.file_name().unwrap()).join("result.json");
     std::fs::remove_file(&neighbour).unwrap();
+    let records = |run: &Path| {
+        (1..=2)
+            .map(|k| std::fs::read_to_string(run.join(format!("pass.{k}.json"))).unwrap())
+            .collect::<Vec<_>>()
+    };
+    let before = records(&warm_cut);
     let out = support::sweep(&["resume", support::p(&cut), "--jobs", "1"]);
     assert!(out.status.code().is_some(), "{}", support::stderr(&out));
+    // The resume goes on from pass 2: passes 1 and 2 are not run again.
+    assert_eq!(records(&warm_cut), before, "a resumed sweep keeps a point's finished passes");
     let resumed =
         measured_runs(&cut).into_iter().find(|(run, _)| run.file_name() == warm_run.file_name()).unwrap().1;
     assert_eq!(resumed["warm_start"], w["warm_start"]);
