@@ -446,7 +446,14 @@ fn a_layers_point_stops_once_its_steady_layer_holds_and_at_its_most_passes_other
         let kept = ran + 1 - layers["steady_from"].as_u64().unwrap() as usize;
         assert!(kept >= 4 || ran == 9, "stopped at pass {ran} with {kept} steady passes");
     } else {
+        // Not steady: it ran its most passes, failed as unsteady (nothing else), and says why.
         assert_eq!(ran, 9, "a point not steady runs its most passes: {stderr}");
+        assert_eq!(r["class"], "unsteady", "{r}");
+        let why = r["reason"].as_str().unwrap();
+        assert!(
+            ["trends over passes", "fewer than", "falls behind"].iter().any(|s| why.contains(s)),
+            "an unsteady point says what is not steady: {why}"
+        );
     }
 }
 
