@@ -104,29 +104,35 @@ fn a_loose_bed_deep_under_the_top_is_held_still_and_every_particle_keeps_its_id(
         "a_loose_bed_deep_under_the_top_is_held_still_and_every_particle_keeps_its_id"
     );
     let (_tmp, dir) = support::cwd();
-    // 2 mm spheres in 3 mm layers: from pass 3 the bed 3 D (6 mm) under the top is held still.
-    let sweep = bed(&dir, "layers = 4\nfreeze_depth_diameters = 3");
+    // 2 mm spheres in 3 mm layers: from pass 3 the bed 3 D (6 mm) under the top is held still,
+    // and from the pass whose top is 10 mm up (the held skin two largest diameters deep) the bed
+    // under that is removed at the pass's end.
+    let sweep = bed(&dir, "layers = 6\nleast_layers = 6\nfreeze_depth_diameters = 3");
     let run = dir.join("run");
     let o =
         support::sweep(&["run", support::p(&sweep), "--set", "blade_speed=0.5", "--out", support::p(&run)]);
     // Four passes may or may not make a steady layer; every pass must have run.
     let err = support::stderr(&o);
     assert!(o.status.success() || err.contains("(unsteady)"), "{err}");
-    assert!(run.join("dump.layer.4").is_file(), "{err}");
-    // Where pass k's deck holds the bed still: under this height (m), if anywhere.
-    let cut = |k: usize| -> Option<f64> {
+    assert!(run.join("dump.layer.6").is_file(), "{err}");
+    // Where pass k's deck holds the bed still (`deep`) or removes it (`buried`): under this
+    // height (m), if anywhere.
+    let under = |k: usize, what: &str| -> Option<f64> {
         let deck = std::fs::read_to_string(run.join(format!("in.pass.{k}"))).unwrap();
-        let head = format!("region deep{k} block");
+        let head = format!("region {what}{k} block");
         let line = deck.lines().find(|l| l.starts_with(&head))?;
         Some(line.split_whitespace().nth(8).unwrap().parse().unwrap())
     };
+    let cut = |k: usize| under(k, "deep");
     assert_eq!(cut(2), None, "pass 2's top is under 6 mm: nothing held still");
     let mut held = 0;
-    for k in 3..=4 {
+    for k in 3..=6 {
         let z = cut(k).unwrap_or_else(|| panic!("pass {k} holds nothing still"));
         let (before, after) = (plate_dump(&run, k - 1), plate_dump(&run, k));
         let now: std::collections::HashMap<u64, [f64; 3]> = after.iter().copied().collect();
-        for (id, x) in before.iter().filter(|(_, x)| x[2] < z) {
+        // (What the pass before removed is checked below.)
+        let removed = under(k - 1, "buried").unwrap_or(f64::NEG_INFINITY);
+        for (id, x) in before.iter().filter(|(_, x)| x[2] < z && x[2] >= removed) {
             // The same particle, under the same id, exactly where it was.
             assert_eq!(now.get(id), Some(x), "pass {k}: particle {id} below {z} m moved or lost its id");
             held += 1;
@@ -135,7 +141,48 @@ fn a_loose_bed_deep_under_the_top_is_held_still_and_every_particle_keeps_its_id(
         let ids: std::collections::HashSet<u64> = before.iter().map(|p| p.0).collect();
         assert!(after.iter().any(|(id, _)| !ids.contains(id)), "pass {k}: no new particle");
     }
-    assert!(held > 20, "{held} particles held still over two passes");
+    assert!(held > 20, "{held} particles held still over four passes");
+
+    // The bed a pass removes is what its dump held under the cut, as its log says; nothing of the
+    // held skin above goes; and the measure counts it on the plate of every later pass.
+    let k = (1..6).find(|&k| under(k, "buried").is_some()).expect("a pass before the last removes the bed");
+    let z = under(k, "buried").unwrap();
+    let log = std::fs::read_to_string(run.join(format!("log.pass.{k}"))).unwrap();
+    let said: Vec<f64> = log
+        .lines()
+        .find_map(|l| l.strip_prefix(&format!("demsweep: buried {k} mass ")))
+        .expect("the pass says what it removed")
+        .split_whitespace()
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    let (before, after) = (plate_dump(&run, k), plate_dump(&run, k + 1));
+    let gone: Vec<u64> = before.iter().filter(|(_, x)| x[2] < z).map(|p| p.0).collect();
+    assert_eq!(said[1], gone.len() as f64, "pass {k} removed the {} particles under {z} m", gone.len());
+    assert!(!gone.is_empty());
+    let now: std::collections::HashMap<u64, [f64; 3]> = after.iter().copied().collect();
+    assert!(gone.iter().all(|id| !now.contains_key(id)), "removed particles are gone from pass {}", k + 1);
+    let skin = cut(k + 1).unwrap();
+    for (id, x) in before.iter().filter(|(_, x)| x[2] >= z && x[2] < skin) {
+        assert_eq!(now.get(id), Some(x), "the held skin's particle {id} stays");
+    }
+    // Equal spheres: the bed's relative density after a pass is its count over the first pass's,
+    // the removed ones counted.
+    let result: Value = serde_json::from_str(
+        &std::fs::read_to_string(run.join(if run.join("result.json").is_file() {
+            "result.json"
+        } else {
+            "failure.json"
+        }))
+        .unwrap(),
+    )
+    .unwrap();
+    let layers = if result["layers"].is_object() { &result["layers"] } else { &result["measured"]["layers"] };
+    let bed_rd = |j: usize| layers["passes"][j - 1]["bed_relative_density"].as_f64().unwrap();
+    let first = plate_dump(&run, 1).len() as f64;
+    let count = |j: usize| plate_dump(&run, j).len() as f64 + if j > k { gone.len() as f64 } else { 0.0 };
+    let ratio = bed_rd(k + 1) / bed_rd(k);
+    let counted = ((count(k + 1) - first) / k as f64) / ((count(k) - first) / (k - 1) as f64);
+    assert!((ratio - counted).abs() < 1e-9, "pass {}: {ratio} against {counted} counting the removed", k + 1);
 }
 
 #[test]

@@ -78,15 +78,27 @@ fn lines_after<'a>(log: &'a str, prefix: &'a str) -> impl Iterator<Item = Vec<&'
     log.lines().filter_map(move |l| Some(l.trim().strip_prefix(prefix)?.split_whitespace().collect()))
 }
 
-/// The pass lines of a log, in order.
+/// The pass lines of a log, in order: each pass's plate mass counts the held bed the passes
+/// before it removed (`demsweep: buried k mass M count N`).
 pub fn parse_log(log: &str) -> Vec<PassLine> {
+    let buried: Vec<(usize, f64)> = lines_after(log, "demsweep: buried ")
+        .filter_map(|f| {
+            if f.len() < 3 || f[1] != "mass" {
+                return None;
+            }
+            Some((f[0].parse().ok()?, f[2].parse().ok()?))
+        })
+        .collect();
     lines_after(log, "demsweep: layer ")
         .filter_map(|f| {
             // k step S plate M count N
             if f.len() < 5 || f[1] != "step" || f[3] != "plate" {
                 return None;
             }
-            Some(PassLine { k: f[0].parse().ok()?, step: f[2].parse().ok()?, plate_mass: f[4].parse().ok()? })
+            let k: usize = f[0].parse().ok()?;
+            let removed: f64 = buried.iter().filter(|(j, _)| *j < k).map(|(_, m)| m).sum();
+            let on_plate: f64 = f[4].parse().ok()?;
+            Some(PassLine { k, step: f[2].parse().ok()?, plate_mass: on_plate + removed })
         })
         .collect()
 }

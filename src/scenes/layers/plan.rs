@@ -136,6 +136,12 @@ pub struct Plan {
     /// searched against itself, m (0: none).
     #[serde(default)]
     pub freeze_depth: f64,
+    /// Loose bed held still: the bed deeper than this under a pass's top surface is removed at
+    /// the pass's end, its mass counted on the plate by the measure, m (0: none). It lies
+    /// [`BURY_SKIN_DIAMETERS`] largest diameters under the held bed's top, out of reach of every
+    /// particle that moves.
+    #[serde(default)]
+    pub bury_depth: f64,
     pub feed: Vec<FeedClass>,
     pub volume_limit: f64,
     pub distribution_seed: u64,
@@ -223,6 +229,11 @@ impl LayoutData for Passes {
     }
 }
 
+/// Largest diameters of held bed kept under the moving powder when the bed below is removed:
+/// a contact reaches at most one, and the second keeps a particle that settles into the held
+/// bed's top off the removed bed.
+pub const BURY_SKIN_DIAMETERS: f64 = 2.0;
+
 /// The part of a layers scene.
 pub fn part(scene: &Scene) -> &Passes {
     scene.own().expect("a layers scene carries its passes")
@@ -266,6 +277,7 @@ pub(super) fn derive(base: Base, settings: &SceneSettings) -> Scene {
         (0.0, d)
     };
     let d_max = psd.max_diameter();
+    let freeze_depth = if fused { 0.0 } else { settings.freeze_depth_diameters * d };
     let platform_gap = platform_gap(radius, clearance, d_max);
     let tip_x0 = 0.5 * d + behind + d;
     let front0 = tip_x0 + ahead;
@@ -399,7 +411,8 @@ pub(super) fn derive(base: Base, settings: &SceneSettings) -> Scene {
         resume: None,
         least_passes: least_passes(settings),
         first_floor: None,
-        freeze_depth: if fused { 0.0 } else { settings.freeze_depth_diameters * d },
+        freeze_depth,
+        bury_depth: if freeze_depth > 0.0 { freeze_depth + BURY_SKIN_DIAMETERS * d_max } else { 0.0 },
         passes,
         feed,
         volume_limit,

@@ -239,6 +239,17 @@ fn the_log_gives_each_pass_its_plate_mass() {
     assert_eq!(lines[1], PassLine { k: 2, step: 2400, plate_mass: 7.25e-7 });
 }
 
+#[test]
+fn the_held_bed_a_pass_removes_is_counted_on_the_plate_of_every_later_pass() {
+    let log = "demsweep: layer 1 step 100 plate 1.0e-06 count 10\n\
+               demsweep: buried 1 mass 2.5e-07 count 3\n\
+               demsweep: layer 2 step 200 plate 1.5e-06 count 14\n\
+               demsweep: buried 2 mass 1.0e-07 count 1\n\
+               demsweep: layer 3 step 300 plate 1.75e-06 count 18\n";
+    let mass: Vec<f64> = parse_log(log).iter().map(|l| l.plate_mass).collect();
+    assert_eq!(mass, [1.0e-6, 1.5e-6 + 2.5e-7, 1.75e-6 + 2.5e-7 + 1.0e-7]);
+}
+
 fn record(k: usize, y: f64) -> crate::outcome::layers::PassRecord {
     crate::outcome::layers::PassRecord {
         search: false,
@@ -559,6 +570,24 @@ fn a_loose_bed_is_held_still_below_its_freeze_depth_from_the_first_pass_whose_to
             None => assert!(cut <= 0.0, "pass {} holds nothing still", p.k),
         }
     }
+    // And removes what lies a held skin of two largest diameters deeper, once that is above the
+    // plate, at the pass's end.
+    let d_max = plan.feed.iter().map(|c| c.diameter).fold(0.0, f64::max);
+    assert!((plan.bury_depth - plan.freeze_depth - super::plan::BURY_SKIN_DIAMETERS * d_max).abs() < 1e-15);
+    let mut buried = 0;
+    for p in &plan.passes[..8] {
+        let cut = p.top - plan.bury_depth;
+        let line = format!("region buried{} block", p.k);
+        match deck.lines().find(|l| l.starts_with(&line)) {
+            Some(l) => {
+                let z: f64 = l.split_whitespace().nth(8).unwrap().parse().unwrap();
+                assert!(cut > 0.0 && (z - cut).abs() < 1e-15, "{l}");
+                buried += 1;
+            }
+            None => assert!(cut <= 0.0, "pass {} removes nothing", p.k),
+        }
+    }
+    assert!(buried > 0, "eight passes of 3 D holding 3 D deep remove the bed below");
     assert!(deck.contains("group powder subtract powder frozen"));
     assert!(deck.contains("variable platemass equal mass(all,plate)"));
     assert!(deck.contains("dump layer8 all custom"));
