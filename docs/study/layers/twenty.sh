@@ -5,7 +5,8 @@
 # point runs pass by pass in runs/twenty/<label>/: an interrupted study goes on from each point's
 # last pass (run it again), and the passes' records (pass.k.json: clocks) are copied to
 # record/twenty/<label>/ as they finish, the result to record/twenty-<label>.json at the end.
-# FREEZE=diameters holds the loose bed still that deep under the top surface (label -freezeN).
+# FREEZE=diameters holds the loose bed still that deep under the top surface (label -freezeN);
+# TAG=word adds -word to the label (a run of a changed deck beside a recorded one).
 #   nice bash docs/study/layers/twenty.sh [PS1|PS2|PS3]
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
@@ -26,6 +27,7 @@ while read -r label mu mur gamma; do
   [ -n "$want" ] && [ "$want" != "$label" ] && continue
   name=$label-plate$plate
   [ "$freeze" != 0 ] && name=$name-freeze$freeze
+  [ -n "${TAG:-}" ] && name=$name-$TAG
   [ -s "$out/twenty-$name.json" ] && { echo "$name: recorded"; continue; }
   ours=$(python3 -c "print(f'{4/3*$gamma:.4g}')")
   dir=runs/twenty/$name
