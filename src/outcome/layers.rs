@@ -39,6 +39,32 @@ pub struct PassRecord {
     pub bed_relative_density: Option<f64>,
     /// Particles on the plate after the pass that it brought.
     pub particles: usize,
+    /// What turning and pushing the roller took over the pass (a roller's pass only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub roller: Option<RollerLoad>,
+}
+
+/// What a roller took over a pass's move, per metre of its width (the scene is a periodic slice
+/// of it): means over the steps it moved, approach and run-out included.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RollerLoad {
+    /// The torque the motor applies about the axis in the counter-rotating sense, N·m per m
+    /// (negative: the powder turns it that way).
+    pub torque_nm_per_m: f64,
+    /// The power turning it takes: its torque times its rate of turn, W per m (0 when it does
+    /// not turn).
+    pub turning_power_w_per_m: f64,
+    /// The force pushing it along its travel takes, N per m, and that force times its speed, W
+    /// per m.
+    pub push_n_per_m: f64,
+    pub pushing_power_w_per_m: f64,
+}
+
+/// A roller's steady load: each measure's mean over the steady passes and its SE.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RollerSteady {
+    pub mean: RollerLoad,
+    pub se: RollerLoad,
 }
 
 /// Every pass and the steady layer: the answer of a layers run.
@@ -77,6 +103,9 @@ pub struct LayerSeries {
     /// it): `None` in a result written before it was stated.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub numerical_error: Option<NumericalError>,
+    /// A roller's load over the steady passes (a roller only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub roller: Option<RollerSteady>,
 }
 
 impl LayerSeries {
@@ -144,6 +173,7 @@ mod tests {
             roughness_d: f64::NAN,
             bed_relative_density: None,
             particles: 0,
+            roller: None,
         };
         let back: PassRecord = serde_json::from_str(&serde_json::to_string(&pass).unwrap()).unwrap();
         assert!(back.packing.is_nan() && back.roughness_d.is_nan());

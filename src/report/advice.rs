@@ -507,6 +507,7 @@ mod tests {
                 covered_fraction: covered,
                 roughness_d: 0.5,
                 numerical_error: None,
+                roller: None,
             };
             let result = crate::outcome::RunResult {
                 answer: crate::outcome::PointAnswer {

@@ -72,7 +72,9 @@ fn the_roller_travels_and_turns_as_a_cylinder_whose_surface_runs_at_its_speed_ra
     assert!(turning, "the deck turns no roller:\n{input}");
     cut += &format!(
         "run {}\ndump rstl all mesh/stl 1 roller*.stl blade1\n\
-         dump rvtk all mesh/vtk 1 roller*.vtk output face vel blade1\nrun 1\n",
+         dump rvtk all mesh/vtk 1 roller*.vtk output face vel blade1\nrun 1\n\
+         variable refx equal f_blade1[7]\nvariable refy equal f_blade1[8]\nvariable refz equal f_blade1[9]\n\
+         print \"reference point ${{refx}} ${{refy}} ${{refz}}\"\n",
         n - 1
     );
     std::fs::write(deck.join("in.cut"), cut).unwrap();
@@ -126,6 +128,20 @@ fn the_roller_travels_and_turns_as_a_cylinder_whose_surface_runs_at_its_speed_ra
             assert!((p[i] - want[i]).abs() < tol, "node {p0:?} is at {p:?}, the closed form at {want:?}");
         }
     }
+    // The torque the roller's mesh sums is about its reference point: carried with the axis by
+    // the travel, and on it, so the turn about the axis leaves it there.
+    let said = support::text(&out.stdout);
+    let reference: Vec<f64> = said
+        .lines()
+        .find_map(|l| l.strip_prefix("reference point "))
+        .unwrap_or_else(|| panic!("no reference point in\n{said}"))
+        .split_whitespace()
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let axis = [xc + travel, 0.0, zc];
+    for i in 0..3 {
+        assert!((reference[i] - axis[i]).abs() < 1e-9, "reference point {reference:?}, the axis at {axis:?}");
+    }
     // More than a radius of travel and half a turn: an error in either is far outside `tol`.
     assert!(
         travel > r && phi.abs() > std::f64::consts::PI,
@@ -177,6 +193,20 @@ fn a_short_roller_run_spreads_layers_and_ends_with_a_steady_layer() {
     }
     let packing = layers["relative_density"].as_f64().unwrap();
     assert!(packing > 0.0 && packing < 0.75 && layers["steady"] == true, "{r}");
+    // Its load: turning against the powder (counter-rotating) and pushing through it both take
+    // power in every pass; the steady load is the steady passes' mean.
+    let load =
+        |p: &serde_json::Value, key: &str| p["roller"][key].as_f64().unwrap_or_else(|| panic!("{key}: {p}"));
+    for p in passes {
+        for key in ["turning_power_w_per_m", "push_n_per_m", "pushing_power_w_per_m", "torque_nm_per_m"] {
+            assert!(load(p, key) > 0.0, "pass {}: {key} {}", p["k"], load(p, key));
+        }
+    }
+    let from = layers["steady_from"].as_u64().unwrap() as usize;
+    let kept: Vec<f64> = passes[from - 1..].iter().map(|p| load(p, "turning_power_w_per_m")).collect();
+    let mean = kept.iter().sum::<f64>() / kept.len() as f64;
+    let steady = layers["roller"]["mean"]["turning_power_w_per_m"].as_f64().unwrap();
+    assert!((steady - mean).abs() <= 1e-12 * mean, "{steady} against the steady passes' {mean}");
 }
 
 /// `sweep render` of `sweep` at `set` into `dir/d`: exit 2 and one stderr line holding every

@@ -44,7 +44,7 @@ use super::{
 };
 use crate::engine::dump::read_dump;
 use crate::measure::steady::{ar1_se_factor, mser, student_quantile, trend_z};
-use crate::outcome::layers::{LayerSeries, PassRecord};
+use crate::outcome::layers::{LayerSeries, PassRecord, RollerLoad, RollerSteady};
 use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT, VX_LAYERS};
 use crate::scene::Scene;
 use crate::scenes::{Finished, Rejected};
@@ -111,6 +111,27 @@ pub fn parse_solids(log: &str) -> Vec<(usize, f64)> {
                 return None;
             }
             Some((f[0].parse().ok()?, f[2].parse().ok()?))
+        })
+        .collect()
+}
+
+/// A roller's load in each pass of a log (`demsweep: roller k torque T turning P push F pushing
+/// Q`, the deck's means over the roller's move for the whole slice), per metre of its width
+/// `depth`, by pass.
+pub fn parse_roller(log: &str, depth: f64) -> Vec<(usize, RollerLoad)> {
+    lines_after(log, "demsweep: roller ")
+        .filter_map(|f| {
+            if f.len() < 9 || f[1] != "torque" || f[3] != "turning" || f[5] != "push" || f[7] != "pushing" {
+                return None;
+            }
+            let per_m = |s: &str| s.parse::<f64>().ok().map(|v| v / depth);
+            let load = RollerLoad {
+                torque_nm_per_m: per_m(f[2])?,
+                turning_power_w_per_m: per_m(f[4])?,
+                push_n_per_m: per_m(f[6])?,
+                pushing_power_w_per_m: per_m(f[8])?,
+            };
+            Some((f[0].parse().ok()?, load))
         })
         .collect()
 }
@@ -214,6 +235,7 @@ pub fn passes(
             bed_relative_density: (!plan.fused && k > 1)
                 .then(|| (volume - volume_after_first) / ((k - 1) as f64 * plan.layer_thickness)),
             particles: gs.iter().filter(|g| new(g)).count(),
+            roller: None,
         });
         mass_before = line.plate_mass;
         if plan.fused {
@@ -272,9 +294,32 @@ pub fn series_from(
         effective_thickness_se_m: effective_se,
         covered_fraction: pick(&|p| p.covered_fraction, 0.0).0,
         roughness_d: pick(&|p| p.roughness_d, 0.0).0,
+        roller: roller_steady(kept),
         passes,
         numerical_error: None,
     }
+}
+
+/// A roller's load over `kept` passes, when every one of them has it: each measure's mean and SE.
+fn roller_steady(kept: &[PassRecord]) -> Option<RollerSteady> {
+    let loads: Vec<RollerLoad> = kept.iter().map(|p| p.roller).collect::<Option<_>>()?;
+    if loads.is_empty() {
+        return None;
+    }
+    let of = |f: fn(&RollerLoad) -> f64| mean_se(&loads.iter().map(f).collect::<Vec<f64>>());
+    let (torque, turning, push, pushing) = (
+        of(|l| l.torque_nm_per_m),
+        of(|l| l.turning_power_w_per_m),
+        of(|l| l.push_n_per_m),
+        of(|l| l.pushing_power_w_per_m),
+    );
+    let load = |pick: fn((f64, f64)) -> f64| RollerLoad {
+        torque_nm_per_m: pick(torque),
+        turning_power_w_per_m: pick(turning),
+        push_n_per_m: pick(push),
+        pushing_power_w_per_m: pick(pushing),
+    };
+    Some(RollerSteady { mean: load(|v| v.0), se: load(|v| v.1) })
 }
 
 /// The |t| of a least-squares slope over `passes` passes beyond which one of `series` series
@@ -407,9 +452,15 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         .collect::<Result<_, _>>()
         .map_err(|e| Rejected::new(FailureClass::Unparsable, e))?;
     let solids = parse_solids(&run.run.log);
+    let mut records = passes(scene, &plan, &lines, &solids, &grains);
+    for (k, load) in parse_roller(&run.run.log, scene.depth) {
+        if let Some(p) = records.get_mut(k.wrapping_sub(1)) {
+            p.roller = Some(load);
+        }
+    }
     let series = LayerSeries {
         numerical_error: Some(super::numerics::of(scene, &plan)),
-        ..steady_layer(&plan, passes(scene, &plan, &lines, &solids, &grains))
+        ..steady_layer(&plan, records)
     };
     let steps = lines.last().map_or(0, |l| l.step);
     let result = RunResult {

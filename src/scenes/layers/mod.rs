@@ -43,15 +43,16 @@ use crate::scene::settings::{SceneSettings, DEFAULT_SEARCH_PASSES};
 use crate::scene::{Base, Scene};
 use crate::scenes::{BadSetting, BuiltinTemplate, ByPass, Finished, Layout, Rejected, SetupRows};
 
-/// A layers point's steady layer in results.csv: relative density and packing with their SE,
-/// the powder under the blade (µm), cover, roughness (in D), the first steady pass and the
-/// passes run, and the numerical error beside the SE (packing, µm of depth, cover).
 /// The least depth under the top surface a loose bed may be held still from, in diameters: the
 /// blade's tip stands about a layer under the top and moves the bed a few diameters below it.
 const MIN_FREEZE_DEPTH_DIAMETERS: f64 = 3.0;
 const MAX_FREEZE_DEPTH_DIAMETERS: f64 = 1000.0;
 
-const RESULT_COLUMNS: [&str; 13] = [
+/// A layers point's steady layer in results.csv: relative density and packing with their SE,
+/// the powder under the blade (µm), cover, roughness (in D), the first steady pass and the
+/// passes run, the numerical error beside the SE (packing, µm of depth, cover), and a roller's
+/// torque and turning power per metre of its width.
+const RESULT_COLUMNS: [&str; 15] = [
     "relative_density",
     "relative_density_se",
     "steady_packing",
@@ -65,6 +66,8 @@ const RESULT_COLUMNS: [&str; 13] = [
     "numerical_error_packing",
     "numerical_error_depth_um",
     "numerical_error_cover",
+    "roller_torque_nm_per_m",
+    "roller_turning_power_w_per_m",
 ];
 
 /// Dose of one pass on a loose bed over what the plate's layer can hold at
@@ -517,6 +520,8 @@ impl Layout for Layers {
             e.map(|e| e.packing),
             e.map(|e| um(e.depth_fraction * l.effective_thickness_m)),
             e.map(|e| e.covered_fraction),
+            l.roller.map(|r| r.mean.torque_nm_per_m),
+            l.roller.map(|r| r.mean.turning_power_w_per_m),
         ];
         values.iter().map(|v| v.filter(|v| v.is_finite()).map_or(String::new(), |v| v.to_string())).collect()
     }
@@ -555,6 +560,17 @@ impl Layout for Layers {
             l.covered_fraction,
             l.roughness_d
         ));
+        if let Some(r) = &l.roller {
+            lines.push(format!(
+                "roller load      torque {:.3e} ± {:.1e} N·m, turning {:.3e} ± {:.1e} W, pushing {:.3e} ± {:.1e} W a metre of its width",
+                r.mean.torque_nm_per_m,
+                r.se.torque_nm_per_m,
+                r.mean.turning_power_w_per_m,
+                r.se.turning_power_w_per_m,
+                r.mean.pushing_power_w_per_m,
+                r.se.pushing_power_w_per_m
+            ));
+        }
         if let Some(e) = &l.numerical_error {
             lines.push(format!(
                 "numerical error  {} (beside the SE, not in it)",

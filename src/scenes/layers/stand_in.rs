@@ -109,6 +109,8 @@ pub fn passes(point: &mut StandInPoint) -> Result<RunResult, Rejected> {
             bed_relative_density: (!plan.fused && k > 1)
                 .then(|| laid_after_first / ((k - 1) as f64 * plan.layer_thickness)),
             particles: ((deposit * plan.plate_area / mean_volume).round() as usize).min(dose),
+            // The stand-in models no roller's load.
+            roller: None,
         });
         depths.push(noiseless);
         depth = next_depth(&plan, k, depth, packing, p);

@@ -240,6 +240,24 @@ fn the_log_gives_each_pass_its_plate_mass() {
 }
 
 #[test]
+fn a_roller_s_load_is_read_per_metre_of_its_width_and_a_torn_line_is_not() {
+    let log = "demsweep: roller 1 torque 2e-05 turning 0.004 push 0.01 pushing 0.001\n\
+               demsweep: roller 2 torque 4e-05 turning 0.008\n";
+    let loads = super::measure::parse_roller(log, 0.002);
+    assert_eq!(loads.len(), 1);
+    let (k, l) = loads[0];
+    assert_eq!(k, 1);
+    for (got, want) in [
+        (l.torque_nm_per_m, 0.01),
+        (l.turning_power_w_per_m, 2.0),
+        (l.push_n_per_m, 5.0),
+        (l.pushing_power_w_per_m, 0.5),
+    ] {
+        assert!((got - want).abs() < 1e-12 * want, "{got} against {want}");
+    }
+}
+
+#[test]
 fn the_held_bed_a_pass_removes_is_counted_on_the_plate_of_every_later_pass() {
     let log = "demsweep: layer 1 step 100 plate 1.0e-06 count 10\n\
                demsweep: buried 1 mass 2.5e-07 count 3\n\
@@ -262,6 +280,7 @@ fn record(k: usize, y: f64) -> crate::outcome::layers::PassRecord {
         roughness_d: 0.3,
         bed_relative_density: None,
         particles: 100,
+        roller: None,
     }
 }
 
