@@ -6,6 +6,9 @@
 # pass's record are copied to record/machine-lattice/ as they land, so a session that stops
 # keeps what ran.
 #   nice bash docs/study/layers/machine-lattice.sh
+# It started on the templates of 37635eeb; a later template's text (417cb600 and c3221895 changed
+# only the held loose bed's and the roller's branches, not these decks) makes `resume` refuse, so
+# resume with a binary built from 37635eeb: SWEEP=path/to/that/sweep.
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 sweep=${SWEEP:-target/release/sweep}

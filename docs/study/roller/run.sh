@@ -10,13 +10,14 @@
 # under $RUNS). Run from the repository's root with target/release/sweep built (or SWEEP=path):
 #   nice -n 10 bash docs/study/roller/run.sh [label]
 # Each case leaves record/<label>.json (`sweep run --json`: the passes, the steady layer, the
-# CPU) and record/<label>.err (its stderr). Two runners may share the list (`run.sh` twice, or
+# CPU) and record/<label>.err (its stderr); OUT=dir records elsewhere (a rerun on a changed deck
+# beside the first records: OUT=docs/study/roller/record/load for the roller's load). Two runners may share the list (`run.sh` twice, or
 # three, or `run.sh --reverse`): a case is taken by making $RUNS/<label>.lock, and a lock
 # left by a runner that was stopped is removed by hand before running that case again.
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
-out=docs/study/roller/record
-runs=${RUNS:-/tmp/roller-study}
+out=${OUT:-docs/study/roller/record}
+runs=${RUNS:-/tmp/roller-study$( [ -n "${OUT:-}" ] && echo "-$(basename "$OUT")")}
 mkdir -p "$out" "$runs"
 cases="roller-0 roller 0 1 4
 roller-2 roller 2 1 4
