@@ -131,7 +131,7 @@ pub(super) fn resume(
     };
     let mut watch = CalibrationWatch::new(&sweep, settings, seed);
     let exec = driver::executor(&sweep)?;
-    let summary = driver::run(dir, &exec, opts, &mut watch, &CancelToken::new())?;
+    let summary = demsweep::run::batches::run(dir, &exec, opts, &mut watch, &CancelToken::new())?;
     finish(&summary)
 }
 

@@ -364,7 +364,7 @@ pub(super) fn resume(a: ResumeArgs) -> Result<(), Error> {
     let (manifest, _) = demsweep::store::Store::read_manifest(&a.dir)?;
     let summary = if let DesignRecord::Adapt { .. } = manifest.design {
         let mut watch = AdaptWatch::new(&a.dir, &sweep, criteria);
-        driver::adapt::run(&a.dir, &exec, &opts, &mut watch, &cancel)?
+        driver::batches::run(&a.dir, &exec, &opts, &mut watch, &cancel)?
     } else {
         let lattice = matches!(manifest.design, DesignRecord::Lattice { .. });
         let mut watch = Watch::new(criteria.for_design(lattice));

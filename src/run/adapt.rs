@@ -32,7 +32,7 @@ use crate::analysis::convergence::{judge, Criteria, SpaceStats};
 use crate::analysis::emulator::{self, Emulator};
 use crate::analysis::stats::{Interval, Moments};
 use crate::error::Result;
-use crate::run::batches::{self, Planned, Sequential};
+use crate::run::batches::{self, PlanFrom, Planned, Sequential};
 use crate::run::pool::{Executor, Flow};
 use crate::run::SpaceHook;
 use crate::store::{DesignRecord, PointRecord, PointStatus, SpaceRecord, Store};
@@ -236,7 +236,7 @@ impl SpaceHook for AdaptWatch {
 }
 
 /// `sweep adapt SWEEP`: create the directory with the first batch (or check an existing one
-/// and take its batches as they are), then run it as [`run`] does.
+/// and take its batches as they are), then run it batch by batch ([`batches::run`]).
 pub fn start<E: Executor>(
     sweep: &Sweep,
     design: DesignRecord,
@@ -247,19 +247,7 @@ pub fn start<E: Executor>(
     cancel: &CancelToken,
 ) -> Result<Summary> {
     super::create(sweep, design, out, exec, opts.progress, cancel)?;
-    run(out, exec, opts, watch, cancel)
-}
-
-/// Run an adaptive sweep directory until the rule holds, `max` points have run, or it is
-/// interrupted: batch by batch, planning each from the results before it.
-pub fn run<E: Executor>(
-    dir: &Path,
-    exec: &E,
-    opts: &RunOptions,
-    watch: &mut AdaptWatch,
-    cancel: &CancelToken,
-) -> Result<Summary> {
-    batches::run(dir, exec, opts, watch, cancel)
+    batches::run(out, exec, opts, watch, cancel)
 }
 
 impl Sequential for AdaptWatch {
@@ -270,8 +258,80 @@ impl Sequential for AdaptWatch {
     fn converged(&self) -> bool {
         self.converged_at.is_some()
     }
-    fn plan_next<E: Executor>(&self, dir: &Path, exec: &E, ran: usize) -> Result<bool> {
-        plan_next(dir, exec, self, ran)
+    /// Planned from the last emulator: the candidates that most reduce the statistics'
+    /// posterior variance.
+    fn plan_next<E: Executor>(&self, exec: &E, from: &PlanFrom) -> Result<bool> {
+        let PlanFrom { dir, manifest, sweep, last } = *from;
+        let DesignRecord::Adapt { batch, max, seed, .. } = manifest.design else {
+            return Err(RunError::Dir { path: dir.to_path_buf(), why: "not an adaptive sweep".into() }.into());
+        };
+        let Some((label, em, (x, y, se))) = self.last.as_ref().filter(|(l, ..)| l == last) else {
+            return Ok(false);
+        };
+        // Judged from the cache: fitted now (the same inputs, so the same emulator).
+        let fitted;
+        let em = match em {
+            Some(em) => Some(em),
+            None => {
+                fitted = Emulator::fit_censored(x, y, se);
+                fitted.as_ref()
+            }
+        };
+        let size = batch.min(max.saturating_sub(manifest.points.len()));
+        if size == 0 {
+            return Ok(false);
+        }
+        let k = manifest.spaces.len() - 1;
+        let cands =
+            untaken(criterion::batch_candidates(sweep.dim(), k, seed, em, x), sweep, &manifest.points);
+        let (chosen, j_before) = match em.and_then(|em| {
+            let noise = criterion::RunNoise::of(em, se, &[]);
+            let refs = criterion::reference(sweep.dim(), seed);
+            criterion::next_batch(
+                em,
+                &noise,
+                &cands,
+                &refs,
+                x,
+                size,
+                criterion::Split::of(size, criterion::EXPLORE),
+            )
+        }) {
+            Some(c) => c,
+            // No emulator yet (too few done points, or MFR the same everywhere): the candidates in
+            // their quasi-random order, which fill the space.
+            None => (
+                cands[..size.min(cands.len())]
+                    .iter()
+                    .map(|u| Choice {
+                        point: u.clone(),
+                        mfr: f64::NAN,
+                        se: f64::NAN,
+                        gain: 0.0,
+                        se_scale: 1.0,
+                    })
+                    .collect(),
+                f64::NAN,
+            ),
+        };
+        let planned: Vec<Planned<Choice>> = chosen
+            .iter()
+            .map(|c| Planned {
+                values: crate::sweep::space::scale_point(sweep, &c.point),
+                seed: None,
+                note: c,
+            })
+            .collect();
+        let screen = sweep.file.run.screen;
+        batches::append(
+            dir,
+            exec,
+            manifest,
+            &planned,
+            "adapt",
+            |job| screen && exec.closed(job),
+            |rows| write_batches(dir, sweep, label, k + 1, j_before, rows),
+        )
     }
 }
 
@@ -286,7 +346,7 @@ pub enum Standing {
     Open,
 }
 
-/// Judge the finished batches of the adaptive sweep in `dir` as [`run`] does, without running
+/// Judge the finished batches of the adaptive sweep in `dir` as [`batches::run`] does, without running
 /// anything: the step of a cluster chain between two arrays, where the runs are the array
 /// tasks' ([`crate::run::cluster`]). `watch` then holds the last batch's emulator for
 /// [`plan_after`].
@@ -294,15 +354,8 @@ pub fn standing(dir: &Path, watch: &mut AdaptWatch) -> Result<Standing> {
     let (manifest, toml) = Store::read_manifest(dir)?;
     let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
     let (status, _, _) = crate::run::screen::Screen::of(&sweep).statuses(&Store::open(dir), &manifest);
-    for space in &manifest.spaces {
-        if space.points.iter().any(|&i| !status[i].is_finished()) {
-            break;
-        }
-        let rows: Vec<(&PointRecord, &PointStatus)> =
-            space.points.iter().map(|&i| (&manifest.points[i], &status[i])).collect();
-        if watch.space_complete(space, &rows) == Flow::Drain {
-            return Ok(Standing::Converged { label: space.label.clone(), points: rows.len() });
-        }
+    if let Some(space) = batches::judge_finished(&manifest, &status, watch) {
+        return Ok(Standing::Converged { label: space.label.clone(), points: space.points.len() });
     }
     match status.iter().filter(|s| !s.is_finished()).count() {
         0 => Ok(Standing::Open),
@@ -310,83 +363,11 @@ pub fn standing(dir: &Path, watch: &mut AdaptWatch) -> Result<Standing> {
     }
 }
 
-/// After [`standing`] said [`Standing::Open`]: append the next batch to the manifest, as [`run`]
+/// After [`standing`] said [`Standing::Open`]: append the next batch to the manifest, as [`batches::run`]
 /// would. `false` when `max` points are planned already.
 pub fn plan_after<E: Executor>(dir: &Path, exec: &E, watch: &AdaptWatch) -> Result<bool> {
-    let (manifest, _) = Store::read_manifest(dir)?;
-    plan_next(dir, exec, watch, manifest.points.len())
-}
-
-/// Append the next batch to the manifest, planned from `watch`'s last emulator (`ran`: the
-/// points of the manifest just run). `true` when there are new points to run, planned here or
-/// by another process meanwhile; `false` when `max` is reached or the last space was not
-/// judged (unfinished).
-fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &AdaptWatch, ran: usize) -> Result<bool> {
-    let (manifest, toml) = Store::read_manifest(dir)?;
-    if manifest.points.len() > ran {
-        return Ok(true);
-    }
-    let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
-    let DesignRecord::Adapt { batch, max, seed, .. } = manifest.design else {
-        return Err(RunError::Dir { path: dir.to_path_buf(), why: "not an adaptive sweep".into() }.into());
-    };
-    let Some(last) = manifest.spaces.last() else { return Ok(false) };
-    let Some((label, em, (x, y, se))) = watch.last.as_ref().filter(|(l, ..)| *l == last.label) else {
-        return Ok(false);
-    };
-    // Judged from the cache: fitted now (the same inputs, so the same emulator).
-    let fitted;
-    let em = match em {
-        Some(em) => Some(em),
-        None => {
-            fitted = Emulator::fit_censored(x, y, se);
-            fitted.as_ref()
-        }
-    };
-    let size = batch.min(max.saturating_sub(manifest.points.len()));
-    if size == 0 {
-        return Ok(false);
-    }
-    let k = manifest.spaces.len() - 1;
-    let cands = untaken(criterion::batch_candidates(sweep.dim(), k, seed, em, x), &sweep, &manifest.points);
-    let (chosen, j_before) = match em.and_then(|em| {
-        let noise = criterion::RunNoise::of(em, se, &[]);
-        let refs = criterion::reference(sweep.dim(), seed);
-        criterion::next_batch(
-            em,
-            &noise,
-            &cands,
-            &refs,
-            x,
-            size,
-            criterion::Split::of(size, criterion::EXPLORE),
-        )
-    }) {
-        Some(c) => c,
-        // No emulator yet (too few done points, or MFR the same everywhere): the candidates in
-        // their quasi-random order, which fill the space.
-        None => (
-            cands[..size.min(cands.len())]
-                .iter()
-                .map(|u| Choice { point: u.clone(), mfr: f64::NAN, se: f64::NAN, gain: 0.0, se_scale: 1.0 })
-                .collect(),
-            f64::NAN,
-        ),
-    };
-    let planned: Vec<Planned<Choice>> = chosen
-        .iter()
-        .map(|c| Planned { values: crate::sweep::space::scale_point(&sweep, &c.point), seed: None, note: c })
-        .collect();
-    let screen = sweep.file.run.screen;
-    batches::append(
-        dir,
-        exec,
-        &manifest,
-        &planned,
-        "adapt",
-        |job| screen && exec.closed(job),
-        |rows| write_batches(dir, &sweep, label, k + 1, j_before, rows),
-    )
+    // Every point of the manifest counts as run.
+    batches::plan_next(dir, exec, watch, usize::MAX)
 }
 
 /// `cands` without the points the design holds already ([`batches::taken`]) and without

@@ -13,13 +13,15 @@ use std::path::Path;
 use super::{RunOptions, Summary};
 use crate::error::{Error, Result};
 use crate::run::pool::Executor;
+use crate::run::pool::Flow;
 use crate::run::SpaceHook;
-use crate::store::{Manifest, PointRecord, SpaceRecord, Store};
+use crate::store::{Manifest, PointRecord, PointStatus, SpaceRecord, Store};
+use crate::sweep::Sweep;
 use crate::sys::process::CancelToken;
 
 /// The unit-cube coordinates of a design's points (run, failed or screened alike): what its next
 /// batch must not plan again, since a setting run again is the same deck.
-pub fn taken(sweep: &crate::sweep::Sweep, points: &[PointRecord]) -> Vec<Vec<f64>> {
+pub fn taken(sweep: &Sweep, points: &[PointRecord]) -> Vec<Vec<f64>> {
     points.iter().map(|p| crate::sweep::space::unit_point(sweep, &p.values)).collect()
 }
 
@@ -30,9 +32,33 @@ pub trait Sequential: SpaceHook {
     fn take_lines(&mut self) -> Vec<String>;
     /// Whether the design's rule has held.
     fn converged(&self) -> bool;
-    /// Append the next batch to the manifest of `dir` (`ran`: the points of the manifest just
-    /// run). `true` when there are new points to run, planned here or by another process.
-    fn plan_next<E: Executor>(&self, dir: &Path, exec: &E, ran: usize) -> Result<bool>;
+    /// Plan the next batch `from` the directory as it stands and append it ([`append`]). `true`
+    /// when there are new points to run, planned here or by another process; `false` when the
+    /// design's `max` is reached or the last space was not judged (unfinished).
+    fn plan_next<E: Executor>(&self, exec: &E, from: &PlanFrom) -> Result<bool>;
+}
+
+/// What a sequential design plans its next batch from.
+pub struct PlanFrom<'a> {
+    pub dir: &'a Path,
+    /// The directory's manifest, every point of it run.
+    pub manifest: &'a Manifest,
+    pub sweep: &'a Sweep,
+    /// The label of the manifest's last space: the batch the design must have judged.
+    pub last: &'a str,
+}
+
+/// Append the next batch of the design in `dir`, planned by `watch` (`ran`: the points of the
+/// manifest just run; a manifest that has grown past them holds a batch another process
+/// planned). `true` when there are new points to run.
+pub fn plan_next<E: Executor, W: Sequential>(dir: &Path, exec: &E, watch: &W, ran: usize) -> Result<bool> {
+    let (manifest, toml) = Store::read_manifest(dir)?;
+    if manifest.points.len() > ran {
+        return Ok(true);
+    }
+    let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
+    let Some(last) = manifest.spaces.last() else { return Ok(false) };
+    watch.plan_next(exec, &PlanFrom { dir, manifest: &manifest, sweep: &sweep, last: &last.label })
 }
 
 /// Run the sequential design in `dir` until its rule holds, `max` points have run, a point is
@@ -67,11 +93,31 @@ pub fn run<E: Executor, W: Sequential>(
         s.ran = ran;
         s.reused = reused_first;
         let stop = s.interrupted || s.stopped_after.is_some() || s.pending > 0 || watch.converged();
-        if stop || !watch.plan_next(dir, exec, s.points)? {
+        if stop || !plan_next(dir, exec, watch, s.points)? {
             return Ok(s);
         }
         before = Some(s);
     }
+}
+
+/// Judge the spaces of `manifest` whose points have all finished (`status`), in order, as a run
+/// does, until one has not or the design's rule holds: the space it held at, if it did.
+pub fn judge_finished<'m, W: SpaceHook>(
+    manifest: &'m Manifest,
+    status: &[PointStatus],
+    watch: &mut W,
+) -> Option<&'m SpaceRecord> {
+    for space in &manifest.spaces {
+        if space.points.iter().any(|&i| !status[i].is_finished()) {
+            break;
+        }
+        let rows: Vec<(&PointRecord, &PointStatus)> =
+            space.points.iter().map(|&i| (&manifest.points[i], &status[i])).collect();
+        if watch.space_complete(space, &rows) == Flow::Drain {
+            return Some(space);
+        }
+    }
+    None
 }
 
 /// One planned point: its parameter values and what the design says of it.

@@ -20,7 +20,7 @@ use crate::analysis::adapt::new_run_noise;
 use crate::analysis::calibration::{self as cal, Emulated, Pick, Posterior, Scatter, Target};
 use crate::analysis::emulator::Emulator;
 use crate::error::Result;
-use crate::run::batches::{self, Planned, Sequential};
+use crate::run::batches::{self, PlanFrom, Planned, Sequential};
 use crate::run::pool::{Executor, Flow};
 use crate::run::{PointExecutor, SpaceHook, SweepExecutor};
 use crate::scenes::quantity::{Measured, Quantity};
@@ -385,7 +385,7 @@ impl SpaceHook for CalibrationWatch {
 }
 
 /// `sweep calibrate SWEEP`: create the directory with its first batch and its settings (or
-/// check an existing one), then run it as [`run`] does.
+/// check an existing one), then run it batch by batch ([`batches::run`]).
 #[allow(clippy::too_many_arguments)]
 pub fn start<E: Executor>(
     sweep: &Sweep,
@@ -413,7 +413,7 @@ pub fn start<E: Executor>(
     let text = serde_json::to_string_pretty(settings).expect("settings serialise");
     crate::sys::atomic::write(&out.join(SETTINGS), text.as_bytes())
         .map_err(|e| RunError::Write { path: out.join(SETTINGS), source: e })?;
-    run(out, exec, opts, watch, cancel)
+    batches::run(out, exec, opts, watch, cancel)
 }
 
 /// What a calibration's batches are labelled: `calibrate 44`, the space of its first 44 points.
@@ -434,18 +434,6 @@ fn name_first_batch(out: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Run a calibration directory until its credible region stops shrinking, `max` points have
-/// run, or it is interrupted: batch by batch, planning each from the results before it.
-pub fn run<E: Executor>(
-    dir: &Path,
-    exec: &E,
-    opts: &RunOptions,
-    watch: &mut CalibrationWatch,
-    cancel: &CancelToken,
-) -> Result<Summary> {
-    batches::run(dir, exec, opts, watch, cancel)
-}
-
 impl Sequential for CalibrationWatch {
     fn take_lines(&mut self) -> Vec<String> {
         std::mem::take(&mut self.lines)
@@ -453,64 +441,56 @@ impl Sequential for CalibrationWatch {
     fn converged(&self) -> bool {
         self.converged_at.is_some()
     }
-    fn plan_next<E: Executor>(&self, dir: &Path, exec: &E, ran: usize) -> Result<bool> {
-        plan_next(dir, exec, self, ran)
-    }
-}
-
-/// Append the next batch to the manifest, planned from `watch`'s last batch. `true` when there
-/// are new points to run (planned here or by another process meanwhile).
-fn plan_next<E: Executor>(dir: &Path, exec: &E, watch: &CalibrationWatch, ran: usize) -> Result<bool> {
-    let (manifest, toml) = Store::read_manifest(dir)?;
-    if manifest.points.len() > ran {
-        return Ok(true);
-    }
-    let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
-    let DesignRecord::Adapt { batch, max, seed, repeats, .. } = manifest.design else {
-        return Err(RunError::Dir { path: dir.to_path_buf(), why: "not a calibration".into() }.into());
-    };
-    let Some(last) = manifest.spaces.last() else { return Ok(false) };
-    let Some((label, ems, d)) = watch.last.as_ref().filter(|(l, ..)| *l == last.label) else {
-        return Ok(false);
-    };
-    // Settings: each runs `repeats` times, and `max` counts runs.
-    let size = batch.min(max.saturating_sub(manifest.points.len()) / repeats.max(1));
-    if size == 0 {
-        return Ok(false);
-    }
-    let k = manifest.spaces.len() - 1;
-    let post = watch.batches.last().and_then(|b| b.posterior.as_ref());
-    let cands = cal::candidates(sweep.dim(), k, seed, post);
-    let existing = batches::taken(&sweep, &manifest.points);
-    let picks: Vec<Pick> = match ems {
-        Some(ems) => {
-            let outs = Emulated::pair(&watch.settings.targets, ems);
-            let noise: Vec<f64> = ems.iter().zip(d).map(|(em, (_, _, se))| new_run_noise(em, se)).collect();
-            cal::next_batch(&outs, &noise, &cands, &existing, size)
+    /// Planned from the last batch's emulators: the settings that most reduce the variance of
+    /// the posterior's density, each run `repeats` times.
+    fn plan_next<E: Executor>(&self, exec: &E, from: &PlanFrom) -> Result<bool> {
+        let PlanFrom { dir, manifest, sweep, last } = *from;
+        let DesignRecord::Adapt { batch, max, seed, repeats, .. } = manifest.design else {
+            return Err(RunError::Dir { path: dir.to_path_buf(), why: "not a calibration".into() }.into());
+        };
+        let Some((label, ems, d)) = self.last.as_ref().filter(|(l, ..)| l == last) else {
+            return Ok(false);
+        };
+        // Settings: each runs `repeats` times, and `max` counts runs.
+        let size = batch.min(max.saturating_sub(manifest.points.len()) / repeats.max(1));
+        if size == 0 {
+            return Ok(false);
         }
-        // No emulator yet: the candidates in their quasi-random order, which fill the space.
-        None => cands[..size.min(cands.len())]
+        let k = manifest.spaces.len() - 1;
+        let post = self.batches.last().and_then(|b| b.posterior.as_ref());
+        let cands = cal::candidates(sweep.dim(), k, seed, post);
+        let existing = batches::taken(sweep, &manifest.points);
+        let picks: Vec<Pick> = match ems {
+            Some(ems) => {
+                let outs = Emulated::pair(&self.settings.targets, ems);
+                let noise: Vec<f64> =
+                    ems.iter().zip(d).map(|(em, (_, _, se))| new_run_noise(em, se)).collect();
+                cal::next_batch(&outs, &noise, &cands, &existing, size)
+            }
+            // No emulator yet: the candidates in their quasi-random order, which fill the space.
+            None => cands[..size.min(cands.len())]
+                .iter()
+                .map(|u| Pick { point: u.clone(), why: "coverage", log_var: f64::NAN })
+                .collect(),
+        };
+        let seeds = crate::run::plan::repeat_seeds(sweep, repeats);
+        let planned: Vec<Planned<Pick>> = picks
             .iter()
-            .map(|u| Pick { point: u.clone(), why: "coverage", log_var: f64::NAN })
-            .collect(),
-    };
-    let seeds = crate::run::plan::repeat_seeds(&sweep, repeats);
-    let planned: Vec<Planned<Pick>> = picks
-        .iter()
-        .flat_map(|c| {
-            let values = crate::sweep::space::scale_point(&sweep, &c.point);
-            seeds.iter().map(move |&seed| Planned { values: values.clone(), seed, note: c })
-        })
-        .collect();
-    batches::append(
-        dir,
-        exec,
-        &manifest,
-        &planned,
-        BATCH,
-        |_| false,
-        |rows| write_batches(dir, &sweep, label, k + 1, rows),
-    )
+            .flat_map(|c| {
+                let values = crate::sweep::space::scale_point(sweep, &c.point);
+                seeds.iter().map(move |&seed| Planned { values: values.clone(), seed, note: c })
+            })
+            .collect();
+        batches::append(
+            dir,
+            exec,
+            manifest,
+            &planned,
+            BATCH,
+            |_| false,
+            |rows| write_batches(dir, sweep, label, k + 1, rows),
+        )
+    }
 }
 
 /// Append the rows of one batch to [`BATCHES`] (written whole, under the directory's lock).
@@ -541,15 +521,6 @@ fn write_batches(dir: &Path, sweep: &Sweep, from: &str, batch: usize, rows: &[(u
 pub fn judge_dir(dir: &Path, watch: &mut CalibrationWatch) -> Result<(Manifest, Vec<PointStatus>)> {
     let (manifest, _) = Store::read_manifest(dir)?;
     let (status, _, _) = crate::run::screen::Screen::of(&watch.sweep).statuses(&Store::open(dir), &manifest);
-    for space in &manifest.spaces {
-        if space.points.iter().any(|&i| !status[i].is_finished()) {
-            break;
-        }
-        let rows: Vec<(&PointRecord, &PointStatus)> =
-            space.points.iter().map(|&i| (&manifest.points[i], &status[i])).collect();
-        if watch.space_complete(space, &rows) == Flow::Drain {
-            break;
-        }
-    }
+    batches::judge_finished(&manifest, &status, watch);
     Ok((manifest, status))
 }

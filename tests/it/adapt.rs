@@ -10,6 +10,7 @@ use std::time::Duration;
 
 use demsweep::analysis::convergence::Criteria;
 use demsweep::run::adapt::{self, AdaptWatch};
+use demsweep::run::batches;
 use demsweep::run::fake::{fake_mfr, Behaviour, FakeExecutor};
 use demsweep::store::{self, DesignRecord, Store};
 use demsweep::sweep::{ConvergenceSettings, Scrambling, Sweep};
@@ -137,7 +138,7 @@ fn an_interrupted_adapt_resumes_to_the_uninterrupted_design_running_nothing_twic
 
     let exec2 = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
     let mut watch = AdaptWatch::new(&out, &s, never());
-    let sum2 = adapt::run(&out, &exec2, &common::quiet(2), &mut watch, &CancelToken::new()).unwrap();
+    let sum2 = batches::run(&out, &exec2, &common::quiet(2), &mut watch, &CancelToken::new()).unwrap();
     assert_eq!((sum2.done, sum2.exit_code()), (24, 0), "{sum2:?}");
     for h in before.keys() {
         assert!(!exec2.attempts().contains_key(h), "finished run {h} ran again");
@@ -214,7 +215,7 @@ fn a_converged_adapt_stops_where_the_report_says_and_a_resume_runs_nothing() {
     }
     let exec2 = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
     let mut watch = AdaptWatch::new(&out, &s, criteria);
-    let again = adapt::run(&out, &exec2, &common::quiet(2), &mut watch, &CancelToken::new()).unwrap();
+    let again = batches::run(&out, &exec2, &common::quiet(2), &mut watch, &CancelToken::new()).unwrap();
     assert_eq!(again.ran, 0);
     assert!(exec2.attempts().is_empty());
     assert_eq!(manifest(&out).points.len(), sum.points);

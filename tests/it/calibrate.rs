@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use demsweep::analysis::calibration::Target;
+use demsweep::run::batches;
 use demsweep::run::calibrate::{self, CalibrationWatch, Settings};
 use demsweep::run::fake::{Behaviour, FakeExecutor};
 use demsweep::scenes::pour::stand_in::PourPoint;
@@ -494,7 +495,7 @@ fn an_interrupted_calibration_resumes_to_the_uninterrupted_one_running_nothing_t
     let exec2 = FakeExecutor::new(move |_, _| Behaviour::Succeed(ms)).with_mfr(fake_mfr);
     let s = common::fake_sweep(tmp.path(), "");
     let mut watch = CalibrationWatch::new(&s, settings(), 7);
-    let sum2 = calibrate::run(&out, &exec2, &common::quiet(2), &mut watch, &CancelToken::new()).unwrap();
+    let sum2 = batches::run(&out, &exec2, &common::quiet(2), &mut watch, &CancelToken::new()).unwrap();
     assert_eq!((sum2.done, sum2.exit_code()), (planned, 0), "{sum2:?}");
     for h in &before {
         assert!(!exec2.attempts().contains_key(h), "finished run {h} ran again");
