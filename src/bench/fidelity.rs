@@ -243,6 +243,23 @@ pub struct Summary {
     pub failed: usize,
 }
 
+impl Summary {
+    /// The speedups (2 decimals) and the errors (4), in the order of the tables (`fidelity-
+    /// summary.csv`, the terminal's), `absent` for one there is none of.
+    pub fn measure_cells(&self, absent: &str) -> [String; 7] {
+        [
+            (self.speedup_vs_thesis, 2),
+            (self.speedup_vs_reference, 2),
+            (self.worst_error, 4),
+            (self.mean_abs_error, 4),
+            (self.mean_error_se, 4),
+            (self.mean_vx_error, 4),
+            (self.worst_vx_error, 4),
+        ]
+        .map(|(v, digits)| super::opt_or(v, digits, absent))
+    }
+}
+
 fn mean(v: &[f64]) -> Option<f64> {
     (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
 }
@@ -447,19 +464,14 @@ pub fn summary_csv(summaries: &[Summary], variants: &[Variant]) -> String {
         &[],
     );
     let rows = summaries.iter().map(|m| {
-        vec![
+        let mut row = vec![
             variants[m.variant].name.to_string(),
             format!("{:.2}", m.cpu_per_point),
             format!("{:.2}", m.wall_per_point),
-            opt(m.speedup_vs_thesis, 2),
-            opt(m.speedup_vs_reference, 2),
-            opt(m.worst_error, 4),
-            opt(m.mean_abs_error, 4),
-            opt(m.mean_error_se, 4),
-            opt(m.mean_vx_error, 4),
-            opt(m.worst_vx_error, 4),
-            m.failed.to_string(),
-        ]
+        ];
+        row.extend(m.measure_cells(""));
+        row.push(m.failed.to_string());
+        row
     });
     super::csv_text(head, rows)
 }
@@ -526,23 +538,12 @@ pub fn write(
     names: &[&str],
     title: &str,
 ) -> Result<Vec<PathBuf>> {
-    let out = &plan.out;
-    let plot_err = |e: Box<dyn std::error::Error>| BenchError::Plot { bench: "fidelity", why: e.to_string() };
-    let svg = plot_svg(summaries, variants, title).map_err(plot_err)?;
-    let png = crate::report::to_png(&svg).map_err(plot_err)?;
-    let files = [
-        (out.join("fidelity-runs.csv"), runs_csv(runs, variants, &plan.points, names).into_bytes()),
-        (out.join("fidelity.csv"), cells_csv(cells, variants, &plan.points, names).into_bytes()),
-        (out.join("fidelity-summary.csv"), summary_csv(summaries, variants).into_bytes()),
-        (out.join("fidelity.svg"), svg.into_bytes()),
-        (out.join("fidelity.png"), png),
+    let tables = vec![
+        ("fidelity-runs.csv", runs_csv(runs, variants, &plan.points, names)),
+        ("fidelity.csv", cells_csv(cells, variants, &plan.points, names)),
+        ("fidelity-summary.csv", summary_csv(summaries, variants)),
     ];
-    let mut paths = Vec::new();
-    for (p, bytes) in files {
-        crate::sys::atomic::write(&p, &bytes)
-            .map_err(|source| BenchError::Write { path: p.clone(), source })?;
-        paths.push(p);
-    }
+    let paths = super::write_outputs(&plan.out, "fidelity", tables, || plot_svg(summaries, variants, title))?;
     Ok(paths)
 }
 

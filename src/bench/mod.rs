@@ -60,6 +60,30 @@ impl From<BenchError> for crate::Error {
     }
 }
 
+/// Write a bench's `tables` (file name, text) and its figure, drawn by `plot`, as
+/// `{bench}.svg` and `{bench}.png`, into `out`, each file atomically: their paths, in that order.
+/// Nothing is written when the figure cannot be drawn.
+pub fn write_outputs(
+    out: &std::path::Path,
+    bench: &'static str,
+    tables: Vec<(&str, String)>,
+    plot: impl FnOnce() -> Result<String, Box<dyn std::error::Error>>,
+) -> Result<Vec<std::path::PathBuf>, BenchError> {
+    let plot_err = |e: Box<dyn std::error::Error>| BenchError::Plot { bench, why: e.to_string() };
+    let svg = plot().map_err(plot_err)?;
+    let png = crate::report::to_png(&svg).map_err(plot_err)?;
+    let figures = [(format!("{bench}.svg"), svg.into_bytes()), (format!("{bench}.png"), png)];
+    let files = tables.into_iter().map(|(name, text)| (name.to_string(), text.into_bytes())).chain(figures);
+    let mut paths = Vec::new();
+    for (name, bytes) in files {
+        let p = out.join(name);
+        crate::sys::atomic::write(&p, &bytes)
+            .map_err(|source| BenchError::Write { path: p.clone(), source })?;
+        paths.push(p);
+    }
+    Ok(paths)
+}
+
 /// The CSV text of a header and rows.
 pub fn csv_text(head: Vec<String>, rows: impl IntoIterator<Item = Vec<String>>) -> String {
     let mut w = csv::Writer::from_writer(Vec::new());

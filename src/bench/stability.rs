@@ -495,22 +495,8 @@ pub fn plot_svg(results: &[LevelResult], title: &str) -> Res<String> {
 
 /// Write stability.csv, stability-runs.csv, stability.svg and stability.png in `out`.
 pub fn write(out: &Path, results: &[LevelResult], title: &str) -> Result<Vec<PathBuf>> {
-    let plot_err =
-        |e: Box<dyn std::error::Error>| BenchError::Plot { bench: "stability", why: e.to_string() };
-    let svg = plot_svg(results, title).map_err(plot_err)?;
-    let png = crate::report::to_png(&svg).map_err(plot_err)?;
-    let files = [
-        (out.join("stability.csv"), levels_csv(results).into_bytes()),
-        (out.join("stability-runs.csv"), runs_csv(results).into_bytes()),
-        (out.join("stability.svg"), svg.into_bytes()),
-        (out.join("stability.png"), png),
-    ];
-    let mut paths = Vec::new();
-    for (p, bytes) in files {
-        crate::sys::atomic::write(&p, &bytes)
-            .map_err(|source| BenchError::Write { path: p.clone(), source })?;
-        paths.push(p);
-    }
+    let tables = vec![("stability.csv", levels_csv(results)), ("stability-runs.csv", runs_csv(results))];
+    let paths = super::write_outputs(out, "stability", tables, || plot_svg(results, title))?;
     Ok(paths)
 }
 

@@ -102,6 +102,31 @@ pub struct LadderRow {
     pub error: String,
 }
 
+impl LadderRow {
+    /// The row of case `case` at `steps_per_contact`, its timestep `dt_s` (`dt_over_rayleigh`
+    /// Rayleigh times), before either side has run: nothing measured, no error.
+    fn new(case: &str, steps_per_contact: f64, dt_s: f64, dt_over_rayleigh: f64) -> LadderRow {
+        LadderRow {
+            case: case.to_string(),
+            steps_per_contact,
+            dt_s,
+            dt_over_rayleigh,
+            solver_restitution_n: None,
+            liggghts_restitution_n: None,
+            solver_contact_time_s: None,
+            liggghts_contact_time_s: None,
+            solver_restitution_t: None,
+            liggghts_restitution_t: None,
+            solver_omega_out: None,
+            liggghts_omega_out: None,
+            engine_diff: None,
+            solver_closed_form_error: None,
+            liggghts_closed_form_error: None,
+            error: String::new(),
+        }
+    }
+}
+
 /// Runs every case at every `ladder` entry through the solver and `engine`. The cases of one
 /// level run at once (a LIGGGHTS start is mostly waiting), levels one after another.
 pub fn run(
@@ -131,24 +156,7 @@ fn row(name: &str, case: &Case, closed: ClosedForm, n: f64, engine: &Path) -> La
     let case = Case { dt: Some(dt), ..*case };
     let rayleigh =
         crate::scene::rayleigh_time(case.radius, case.density, case.material.youngs, case.material.poisson);
-    let mut r = LadderRow {
-        case: name.to_string(),
-        steps_per_contact: n,
-        dt_s: dt,
-        dt_over_rayleigh: dt / rayleigh,
-        solver_restitution_n: None,
-        liggghts_restitution_n: None,
-        solver_contact_time_s: None,
-        liggghts_contact_time_s: None,
-        solver_restitution_t: None,
-        liggghts_restitution_t: None,
-        solver_omega_out: None,
-        liggghts_omega_out: None,
-        engine_diff: None,
-        solver_closed_form_error: None,
-        liggghts_closed_form_error: None,
-        error: String::new(),
-    };
+    let mut r = LadderRow::new(name, n, dt, dt / rayleigh);
     let solver = crate::contact::run(&case);
     if let Ok(o) = &solver {
         r.solver_restitution_n = Some(o.restitution_n);
@@ -273,22 +281,12 @@ mod tests {
 
     fn ladder_row(case: &str, n: f64, diff: Option<f64>, cf: Option<f64>) -> LadderRow {
         LadderRow {
-            case: case.into(),
-            steps_per_contact: n,
-            dt_s: 1e-6,
-            dt_over_rayleigh: 0.1,
             solver_restitution_n: Some(0.5),
             liggghts_restitution_n: diff.map(|_| 0.5),
-            solver_contact_time_s: None,
-            liggghts_contact_time_s: None,
-            solver_restitution_t: None,
-            liggghts_restitution_t: None,
-            solver_omega_out: None,
-            liggghts_omega_out: None,
             engine_diff: diff,
             solver_closed_form_error: cf,
             liggghts_closed_form_error: cf,
-            error: String::new(),
+            ..LadderRow::new(case, n, 1e-6, 0.1)
         }
     }
 
