@@ -148,18 +148,7 @@ fn finish(s: &Summary) -> Result<(), Error> {
             println!("{line}");
         }
     }
-    if s.interrupted {
-        eprintln!(
-            "interrupted: {} of {} points finished; continue with `sweep resume {dir}`",
-            s.done + s.failed,
-            s.points
-        );
-    } else if s.failed > 0 {
-        eprintln!(
-            "{} of {} runs failed (left out of the posterior); reasons: `sweep status {dir}`; re-run them: `sweep resume {dir} --retry-failed`",
-            s.failed, s.points
-        );
-    }
+    super::say_unfinished(s, &dir, "", " (left out of the posterior)");
     s.ended()
 }
 

@@ -327,3 +327,21 @@ fn jobs(flag: Option<usize>) -> Result<usize, Error> {
         None => Ok(default_jobs()),
     }
 }
+
+/// Say on stderr how a sweep directory's run was left, if not whole: interrupted (how many
+/// points finished, and how to continue, then `interrupted_aside`) or with failed runs (where
+/// their reasons are and how to run them again; `failed_aside` says what became of them).
+fn say_unfinished(s: &demsweep::run::Summary, dir: &str, interrupted_aside: &str, failed_aside: &str) {
+    if s.interrupted {
+        eprintln!(
+            "interrupted: {} of {} points finished; continue with `sweep resume {dir}`{interrupted_aside}",
+            s.done + s.failed,
+            s.points
+        );
+    } else if s.failed > 0 {
+        eprintln!(
+            "{} of {} runs failed{failed_aside}; reasons: `sweep status {dir}`; re-run them: `sweep resume {dir} --retry-failed`",
+            s.failed, s.points
+        );
+    }
+}

@@ -1,7 +1,7 @@
 //! `sweep lattice`, `lds`, `resume`, `status` and `report`: a sweep directory from start to
 //! report.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use super::error::{flag, CliError};
 use super::{check_timestep, run_options, ConvergenceArgs, PoolArgs};
@@ -17,6 +17,10 @@ use demsweep::sweep::Sweep;
 use demsweep::sys::process::CancelToken;
 
 #[derive(Args)]
+#[command(mut_arg("out", |a| a.help(
+    "Sweep directory (default: runs/<sweep name>). An existing one is continued, or extended with \
+     more levels"
+)))]
 pub(super) struct LatticeArgs {
     /// The sweep file (TOML): parameters, design, convergence rule, scene.
     sweep: PathBuf,
@@ -24,23 +28,12 @@ pub(super) struct LatticeArgs {
     /// A point shared by two levels runs once.
     #[arg(long, value_delimiter = ',')]
     levels: Option<Vec<usize>>,
-    /// Sweep directory (default: runs/<sweep name>). An existing one is continued, or extended
-    /// with more levels.
-    #[arg(long)]
-    out: Option<PathBuf>,
     #[command(flatten)]
-    convergence: ConvergenceArgs,
-    #[command(flatten)]
-    pool: PoolArgs,
-    /// Write the sweep directory (manifest.json, sweep.toml, results.csv with every point
-    /// pending) and run nothing: for `sweep submit` on a cluster, or `sweep resume` later.
-    #[arg(long)]
-    plan: bool,
-    #[arg(long, help = super::point::FORCE_HELP)]
-    force: bool,
+    run: DesignRunArgs,
 }
 
 #[derive(Args)]
+#[command(mut_arg("out", |a| a.help("Sweep directory (default: runs/<sweep name>)")))]
 pub(super) struct LdsArgs {
     /// The sweep file (TOML): parameters, design, convergence rule, scene.
     sweep: PathBuf,
@@ -51,22 +44,16 @@ pub(super) struct LdsArgs {
     /// existing directory extends it, reusing its points.
     #[arg(long)]
     max: Option<usize>,
-    /// Sweep directory (default: runs/<sweep name>).
-    #[arg(long)]
-    out: Option<PathBuf>,
     #[command(flatten)]
-    convergence: ConvergenceArgs,
-    #[command(flatten)]
-    pool: PoolArgs,
-    /// Write the sweep directory (manifest.json, sweep.toml, results.csv with every point
-    /// pending) and run nothing: for `sweep submit` on a cluster, or `sweep resume` later.
-    #[arg(long)]
-    plan: bool,
-    #[arg(long, help = super::point::FORCE_HELP)]
-    force: bool,
+    run: DesignRunArgs,
 }
 
 #[derive(Args)]
+#[command(mut_arg("plan", |a| a.help(
+    "Write the sweep directory with its first batch (manifest.json, sweep.toml, results.csv with \
+     every point pending) and run nothing: for `sweep submit` on a cluster, which plans each later \
+     batch between the arrays, or `sweep resume` later"
+)))]
 pub(super) struct AdaptArgs {
     /// The sweep file (TOML): parameters, design, convergence rule, scene.
     sweep: PathBuf,
@@ -81,6 +68,16 @@ pub(super) struct AdaptArgs {
     /// extends it and judges again past its old extent.
     #[arg(long)]
     max: Option<usize>,
+    #[command(flatten)]
+    run: DesignRunArgs,
+}
+
+// What `sweep lattice`, `lds` and `adapt` take after their design's own numbers: where the
+// sweep directory is, the rule's overrides, the pool, and whether to write it only. (A `//`
+// comment: a doc comment here would become each command's about.) `--out` and `--plan` say
+// what they do in every command; a command whose design does more says it in its own help.
+#[derive(Args)]
+pub(super) struct DesignRunArgs {
     /// Sweep directory (default: runs/<sweep name>). An existing one is continued.
     #[arg(long)]
     out: Option<PathBuf>,
@@ -88,13 +85,23 @@ pub(super) struct AdaptArgs {
     convergence: ConvergenceArgs,
     #[command(flatten)]
     pool: PoolArgs,
-    /// Write the sweep directory with its first batch (manifest.json, sweep.toml, results.csv
-    /// with every point pending) and run nothing: for `sweep submit` on a cluster, which plans
-    /// each later batch between the arrays, or `sweep resume` later.
+    /// Write the sweep directory (manifest.json, sweep.toml, results.csv with every point
+    /// pending) and run nothing: for `sweep submit` on a cluster, or `sweep resume` later.
     #[arg(long)]
     plan: bool,
     #[arg(long, help = super::point::FORCE_HELP)]
     force: bool,
+}
+
+impl DesignRunArgs {
+    /// The sweep file `path` with the timestep checked (or forced) and the rule's overrides
+    /// applied.
+    fn load(&self, path: &Path) -> Result<Sweep, Error> {
+        let mut sweep = Sweep::load(path)?;
+        check_timestep(&mut sweep, self.force)?;
+        self.convergence.overrides().apply(&mut sweep.file.convergence)?;
+        Ok(sweep)
+    }
 }
 
 #[derive(Args)]
@@ -179,9 +186,7 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Error> {
 }
 
 pub(super) fn lattice(a: LatticeArgs) -> Result<(), Error> {
-    let mut sweep = Sweep::load(&a.sweep)?;
-    check_timestep(&mut sweep, a.force)?;
-    a.convergence.overrides().apply(&mut sweep.file.convergence)?;
+    let sweep = a.run.load(&a.sweep)?;
     let levels = match a.levels {
         Some(levels) => {
             check_levels(sweep.dim(), &levels, "--levels")?;
@@ -193,7 +198,7 @@ pub(super) fn lattice(a: LatticeArgs) -> Result<(), Error> {
             levels
         }
     };
-    start(sweep, DesignRecord::Lattice { levels }, a.out, &a.pool, a.plan)
+    start(sweep, DesignRecord::Lattice { levels }, a.run)
 }
 
 /// Lattice levels: at least one, each at least 2 and at most [`driver::MAX_POINTS`] points,
@@ -217,9 +222,7 @@ pub(super) fn check_levels(dim: usize, levels: &[usize], source: &str) -> Result
 }
 
 pub(super) fn lds(a: LdsArgs) -> Result<(), Error> {
-    let mut sweep = Sweep::load(&a.sweep)?;
-    check_timestep(&mut sweep, a.force)?;
-    a.convergence.overrides().apply(&mut sweep.file.convergence)?;
+    let sweep = a.run.load(&a.sweep)?;
     let l = &sweep.file.design.lds;
     let file = a.sweep.display();
     let (step, step_src) = match a.step {
@@ -243,14 +246,12 @@ pub(super) fn lds(a: LdsArgs) -> Result<(), Error> {
         ));
     }
     let design = DesignRecord::Lds { step, max, scrambling: l.scrambling, seed: l.seed };
-    start(sweep, design, a.out, &a.pool, a.plan)
+    start(sweep, design, a.run)
 }
 
 pub(super) fn adapt(a: AdaptArgs) -> Result<(), Error> {
-    let mut sweep = Sweep::load(&a.sweep)?;
-    check_timestep(&mut sweep, a.force)?;
-    a.convergence.overrides().apply(&mut sweep.file.convergence)?;
-    let opts = run_options(&a.pool, false, false)?;
+    let mut sweep = a.run.load(&a.sweep)?;
+    let opts = run_options(&a.run.pool, false, false)?;
     let ad = &sweep.file.design.adapt;
     let file = a.sweep.display();
     // Where a number came from: the flag, the file, or the default the file left in place.
@@ -267,7 +268,7 @@ pub(super) fn adapt(a: AdaptArgs) -> Result<(), Error> {
         (first, first_src)
     };
     let (max, max_src) = source("--max", "max", a.max, ad.max, default.max);
-    let out = a.out.unwrap_or_else(|| driver::default_out(&sweep));
+    let out = a.run.out.unwrap_or_else(|| driver::default_out(&sweep));
     // The batch size is part of the design: an existing directory keeps its own unless told.
     let existing = demsweep::store::Store::read_manifest(&out).ok().and_then(|(m, _)| match m.design {
         DesignRecord::Adapt { batch, .. } => Some(batch),
@@ -293,10 +294,8 @@ pub(super) fn adapt(a: AdaptArgs) -> Result<(), Error> {
         ));
     }
     let design = DesignRecord::Adapt { first, batch, max, seed: ad.seed, repeats: 1 };
-    driver::check_out_dir(&out)?;
-    sweep.file.convergence.min_points = driver::judge_from(&out, &sweep, &design)?;
-    demsweep::sys::process::install_interrupt_handler();
-    if a.plan {
+    prepare_dir(&mut sweep, &design, &out)?;
+    if a.run.plan {
         return plan(&sweep, design, &out, &opts);
     }
     let mut watch = AdaptWatch::new(&out, &sweep, Criteria::from_settings(&sweep.file.convergence));
@@ -306,20 +305,11 @@ pub(super) fn adapt(a: AdaptArgs) -> Result<(), Error> {
     finish(&summary, &sweep, opts.progress)
 }
 
-pub(super) fn start(
-    mut sweep: Sweep,
-    design: DesignRecord,
-    out: Option<PathBuf>,
-    p: &PoolArgs,
-    plan_only: bool,
-) -> Result<(), Error> {
-    let opts = run_options(p, false, false)?;
-    let out = out.unwrap_or_else(|| driver::default_out(&sweep));
-    // Every input is checked before LIGGGHTS is looked at.
-    driver::check_out_dir(&out)?;
-    sweep.file.convergence.min_points = driver::judge_from(&out, &sweep, &design)?;
-    demsweep::sys::process::install_interrupt_handler();
-    if plan_only {
+fn start(mut sweep: Sweep, design: DesignRecord, a: DesignRunArgs) -> Result<(), Error> {
+    let opts = run_options(&a.pool, false, false)?;
+    let out = a.out.unwrap_or_else(|| driver::default_out(&sweep));
+    prepare_dir(&mut sweep, &design, &out)?;
+    if a.plan {
         return plan(&sweep, design, &out, &opts);
     }
     let lattice = matches!(design, DesignRecord::Lattice { .. });
@@ -328,6 +318,15 @@ pub(super) fn start(
     let exec = driver::SweepExecutor::for_sweep(&sweep)?;
     let summary = driver::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?;
     finish(&summary, &sweep, opts.progress)
+}
+
+/// Check the directory `out` and judge the design from where it stands (every input is checked
+/// before LIGGGHTS is looked at), then take Ctrl-C from here on.
+fn prepare_dir(sweep: &mut Sweep, design: &DesignRecord, out: &Path) -> Result<(), Error> {
+    driver::check_out_dir(out)?;
+    sweep.file.convergence.min_points = driver::judge_from(out, sweep, design)?;
+    demsweep::sys::process::install_interrupt_handler();
+    Ok(())
 }
 
 /// `--plan`: the directory written, nothing run; say what to do with it.
@@ -498,15 +497,7 @@ pub(super) fn finish_runs(s: &Summary) -> Result<(), Error> {
             if s.screen.verdict == demsweep::run::screen::Verdict::Refuted { "warning: " } else { "" };
         eprintln!("{warning}{line}");
     }
-    if s.interrupted {
-        eprintln!(
-            "interrupted: {} of {} points finished; continue with `sweep resume {dir}` (`sweep report {dir}` reports what is done)",
-            s.done + s.failed,
-            s.points
-        );
-    } else if s.failed > 0 {
-        eprintln!("{} of {} runs failed; reasons: `sweep status {dir}`; re-run them: `sweep resume {dir} --retry-failed`", s.failed, s.points);
-    }
+    super::say_unfinished(s, &dir, &format!(" (`sweep report {dir}` reports what is done)"), "");
     if let Some(space) = &s.stopped_after {
         eprintln!("the rule held after {space}: no new runs started");
     }
