@@ -9,6 +9,23 @@
 
 use serde::Serialize;
 
+use super::substrate::Substrate;
+
+/// A blade spreading over its substrate: the blade, the window of its travel its flow is
+/// measured over, and the substrate under it (the moving-blade layouts' and the conveyor's, whose
+/// blade stands still over a moving substrate: [`super::own::LayoutData::spreader`]). The
+/// layout's type flattens it, so its fields keep their keys (`scene.gap`,
+/// `scene.window_length_steps`, `scene.substrate_particles`, …).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Spreader {
+    #[serde(flatten)]
+    pub blade: Blade,
+    #[serde(flatten)]
+    pub window: Window,
+    #[serde(flatten)]
+    pub substrate: Substrate,
+}
+
 /// A blade: where it stands, how fast it travels and how it starts.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Blade {

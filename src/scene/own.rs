@@ -18,7 +18,7 @@ use std::fmt;
 
 use serde::Serialize;
 
-use super::blade::{Blade, Window};
+use super::blade::{Blade, Spreader, Window};
 use super::pile::PileBlock;
 use super::substrate::Substrate;
 
@@ -28,17 +28,22 @@ pub trait LayoutData: Any + fmt::Debug + Send + Sync + PartMechanics {
     /// The steps a run takes after its settle, at most (the spread, the lift and the heap's
     /// settle, every pass): what the plausibility bounds count the timestep's cost in.
     fn steps(&self) -> u64;
+    /// Its blade, the window and the substrate, for a layout that has all three; one that has
+    /// only some gives each by its own method below.
+    fn spreader(&self) -> Option<&Spreader> {
+        None
+    }
     /// The blade it moves (or holds still over a moving substrate).
     fn blade(&self) -> Option<&Blade> {
-        None
+        self.spreader().map(|s| &s.blade)
     }
     /// The window of the blade's travel its flow is measured over.
     fn window(&self) -> Option<&Window> {
-        None
+        self.spreader().map(|s| &s.window)
     }
     /// The substrate it spreads onto.
     fn substrate(&self) -> Option<&Substrate> {
-        None
+        self.spreader().map(|s| &s.substrate)
     }
     /// The block of spheres its dose starts as.
     fn pile(&self) -> Option<&PileBlock> {

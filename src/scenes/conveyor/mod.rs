@@ -16,7 +16,7 @@ use crate::outcome::layer::Layer;
 use crate::outcome::steady::SteadyState;
 use crate::outcome::{FailureClass, PointAnswer, RunResult, RESULT_FORMAT};
 use crate::scene::bed::Bed;
-use crate::scene::blade::{Blade, Window};
+use crate::scene::blade::Spreader;
 use crate::scene::own::LayoutData;
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
@@ -92,11 +92,7 @@ pub struct Held {
 #[derive(Debug, Clone, Serialize)]
 pub struct HeldRun {
     #[serde(flatten)]
-    pub blade: Blade,
-    #[serde(flatten)]
-    pub window: Window,
-    #[serde(flatten)]
-    pub substrate: Substrate,
+    pub spreader: Spreader,
     /// The deck's `scene.own.*`.
     #[serde(rename = "own")]
     pub held: Held,
@@ -104,16 +100,10 @@ pub struct HeldRun {
 
 impl LayoutData for HeldRun {
     fn steps(&self) -> u64 {
-        self.window.spread_steps()
+        self.spreader.window.spread_steps()
     }
-    fn blade(&self) -> Option<&Blade> {
-        Some(&self.blade)
-    }
-    fn window(&self) -> Option<&Window> {
-        Some(&self.window)
-    }
-    fn substrate(&self) -> Option<&Substrate> {
-        Some(&self.substrate)
+    fn spreader(&self) -> Option<&Spreader> {
+        Some(&self.spreader)
     }
 }
 
@@ -325,7 +315,7 @@ impl Layout for Conveyor {
     }
 
     fn held_heap(&self, sc: &Scene) -> Option<HeldHeap> {
-        let HeldRun { blade, held: c, .. } = part(sc);
+        let HeldRun { spreader: Spreader { blade, .. }, held: c } = part(sc);
         let block_mm = blade.blade_speed * sc.timestep * c.block_steps as f64 * 1e3;
         Some(HeldHeap {
             heap_particles: c.heap_particles,
@@ -347,7 +337,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let rough = settings.substrate == "rough";
     let powder_bed = settings.substrate == "powder";
     let mut s = moving_blade::derive(base, settings, Dose::Free);
-    let moving_blade::Spread { blade: mut b, mut window, .. } = moving_blade::spread(&s).clone();
+    let Spreader { blade: mut b, mut window, .. } = moving_blade::spread(&s).spreader.clone();
     let d = s.diameter;
     let (gap, v, dt) = (b.gap, b.blade_speed, s.timestep);
     let heap_height = gap + heap_above;
@@ -434,7 +424,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     window.approach_steps = 0;
     window.dump_every = block_steps;
     window.window_length_steps = max_blocks * block_steps;
-    s.set_own(HeldRun { blade: b, window, substrate, held });
+    s.set_own(HeldRun { spreader: Spreader { blade: b, window, substrate }, held });
     s.thermo_every = block_steps.min(1000);
     let v_ref = v.max((2.0 * GRAVITY * blade_top).sqrt());
     s.ke_limit = 0.5 * mass * (10.0 * v_ref).powi(2);
@@ -444,7 +434,7 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
 /// The spread layer: coverage and roughness from the strip behind the blade at the end
 /// (`dump.strip`), uniformity from the mass each block of the steady window deposited.
 fn conveyor_layer(scene: &Scene, frame: &Frame, st: &SteadyState) -> Option<Layer> {
-    let HeldRun { blade, held: c, .. } = part(scene);
+    let HeldRun { spreader: Spreader { blade, .. }, held: c } = part(scene);
     let mut l = layer::measure(scene, blade.gap, frame, c.delete_x1, blade.blade_x0)?;
     let particle_mass = |d: f64| scene.material.density * std::f64::consts::PI / 6.0 * d.powi(3);
     let weighted: f64 = c.feed.iter().map(|f| f.mass_fraction * particle_mass(f.diameter)).sum::<f64>()
@@ -461,7 +451,7 @@ fn conveyor_layer(scene: &Scene, frame: &Frame, st: &SteadyState) -> Option<Laye
 fn measure(run: &Finished) -> Result<RunResult, Rejected> {
     let unparsable = |e: String| Rejected::new(FailureClass::Unparsable, e);
     let scene = run.scene;
-    let HeldRun { blade, window, held: c, .. } = part(scene);
+    let HeldRun { spreader: Spreader { blade, window, .. }, held: c } = part(scene);
     let (_, these) = moving_blade::read_frames(run, blade, moving_blade::DUMP)?;
     let (mut blocks, _) = extend::earlier_blocks(run.earlier).map_err(|e| unparsable(e.to_string()))?;
     let mut frames = Vec::new();
@@ -613,12 +603,12 @@ mod tests {
             })
             .collect();
         let p = super::part(&scene);
-        let st = compute(&scene, (&p.blade, &p.window), &c, &blocks, "target", &[]);
+        let st = compute(&scene, (&p.spreader.blade, &p.spreader.window), &c, &blocks, "target", &[]);
         assert_eq!(st.mfr, 0.0);
         assert!(st.unsteady.as_deref().is_some_and(|w| w.contains("the flow stopped")), "{:?}", st.unsteady);
         // A point where nothing ever passes is a steady zero.
         let none: Vec<Block> = blocks.iter().map(|b| Block { gone: 0.0, ..*b }).collect();
-        let st = compute(&scene, (&p.blade, &p.window), &c, &none, "target", &[]);
+        let st = compute(&scene, (&p.spreader.blade, &p.spreader.window), &c, &none, "target", &[]);
         assert_eq!((st.mfr, st.unsteady), (0.0, None));
     }
 }

@@ -70,7 +70,7 @@ pub fn map(from: &Scene, state: &Path, to: &Scene, to_pile: &str, distance: f64)
     let snaps = read_dump(state, &STATE_COLUMNS)?;
     let snap = snaps.last().ok_or(ColdStart::EmptyDump)?;
     let col: Vec<_> = STATE_COLUMNS.iter().map(|c| snap.column(c).expect("required column")).collect();
-    let (fb, tb) = (&super::part(from).blade, &super::part(to).blade);
+    let (fb, tb) = (&super::part(from).spreader.blade, &super::part(to).spreader.blade);
     let (sy, sv) = (to.depth / from.depth, tb.blade_speed / fb.blade_speed);
     let c = super::held(to);
     let blade = ([tb.blade_x0, tb.blade_x0 + tb.blade_thickness], [tb.gap, tb.blade_top]);
@@ -143,7 +143,7 @@ pub fn warm_started(to: &Scene, distance: f64) -> Scene {
         p.held.warm_start = true;
         p.held.warmup_blocks = warmup_blocks;
         p.held.max_blocks = warmup_blocks + window_blocks;
-        p.window.window_length_steps = (warmup_blocks + window_blocks) * block_steps;
+        p.spreader.window.window_length_steps = (warmup_blocks + window_blocks) * block_steps;
     })
 }
 
@@ -296,7 +296,7 @@ mod tests {
             for i in 0..20 {
                 for j in 0..per_y {
                     n += 1;
-                    let b = &super::super::part(s).blade;
+                    let b = &super::super::part(s).spreader.blade;
                     let x = b.blade_x0 + b.blade_thickness + (i as f64 + 0.5) * 1.01 * d;
                     let z = 0.67 * d + k as f64 * 1.01 * d;
                     out += &format!(
@@ -367,7 +367,7 @@ mod tests {
         for l in w.data.lines().skip_while(|l| *l != "Atoms").skip(2).take_while(|l| !l.is_empty()) {
             let a: Vec<f64> = l.split_whitespace().map(|t| t.parse().unwrap()).collect();
             let (x, z, r) = (a[4], a[6], 0.5 * a[2]);
-            let b = &super::super::part(&to).blade;
+            let b = &super::super::part(&to).spreader.blade;
             let blade = ([b.blade_x0, b.blade_x0 + b.blade_thickness], [b.gap, b.blade_top]);
             assert!(box_distance(x, z, blade) >= r, "a sphere at x {x} z {z} overlaps the blade");
             assert!(x + r <= held(&to).heap_x1);

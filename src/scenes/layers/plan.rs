@@ -257,7 +257,7 @@ pub(super) fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let t = base.layer_thickness;
     let clearance = settings.blade_clearance_mm * 1e-3;
     let mut s = moving_blade::derive(base.clone(), settings, Dose::Free);
-    let mut blade = moving_blade::spread(&s).blade.clone();
+    let mut blade = moving_blade::spread(&s).spreader.blade.clone();
     let Base { psd, d, speed: v, timestep: dt, .. } = base;
     let fused = fused(settings);
     let layers = settings.layers.max(1);

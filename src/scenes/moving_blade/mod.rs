@@ -18,7 +18,7 @@ use crate::measure::frame::{Frame, COLUMNS};
 use crate::measure::metrics;
 use crate::measure::plausible;
 use crate::outcome::{FailureClass, PointAnswer, RunResult, RESULT_FORMAT};
-use crate::scene::blade::{Blade, Settle, Window};
+use crate::scene::blade::{Blade, Settle, Spreader, Window};
 use crate::scene::own::{LayoutData, OwnData};
 use crate::scene::pile::PileBlock;
 use crate::scene::plausible::short;
@@ -59,18 +59,14 @@ const TEMPLATE: BuiltinTemplate = BuiltinTemplate {
 /// The snapshots of the window, in the run directory.
 pub const DUMP: &str = "dump.spread";
 
-/// The moving-blade layouts' part of the scene: the blade, its window, the dose's block, the
-/// substrate and the settle, and what only a blade crossing its dose runs (`own`).
+/// The moving-blade layouts' part of the scene: the blade over its substrate with its window,
+/// the dose's block and the settle, and what only a blade crossing its dose runs (`own`).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Spread {
     #[serde(flatten)]
-    pub blade: Blade,
-    #[serde(flatten)]
-    pub window: Window,
+    pub spreader: Spreader,
     #[serde(flatten)]
     pub pile: PileBlock,
-    #[serde(flatten)]
-    pub substrate: Substrate,
     #[serde(flatten)]
     pub settle: Settle,
     /// The deck's `scene.own.*`.
@@ -79,16 +75,10 @@ pub struct Spread {
 
 impl LayoutData for Spread {
     fn steps(&self) -> u64 {
-        self.window.spread_steps()
+        self.spreader.window.spread_steps()
     }
-    fn blade(&self) -> Option<&Blade> {
-        Some(&self.blade)
-    }
-    fn window(&self) -> Option<&Window> {
-        Some(&self.window)
-    }
-    fn substrate(&self) -> Option<&Substrate> {
-        Some(&self.substrate)
+    fn spreader(&self) -> Option<&Spreader> {
+        Some(&self.spreader)
     }
     fn pile(&self) -> Option<&PileBlock> {
         Some(&self.pile)
@@ -360,32 +350,34 @@ pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
         thermo_every: (total_steps / 40).clamp(1, 200),
         ke_limit,
         own: OwnData::new(Spread {
-            blade: Blade {
-                gap,
-                blade_speed: speed,
-                blade_thickness,
-                blade_x0,
-                blade_top,
-                blade_y_inset: 1e-3 * d_min,
-                blade_fixed: false,
-                ramp_steps,
-            },
-            window: Window {
-                approach_steps,
-                window_length_steps,
-                dump_every,
-                profile_diameter,
-                vx_band,
-                vx_length: 6.0 * profile_diameter,
+            spreader: Spreader {
+                blade: Blade {
+                    gap,
+                    blade_speed: speed,
+                    blade_thickness,
+                    blade_x0,
+                    blade_top,
+                    blade_y_inset: 1e-3 * d_min,
+                    blade_fixed: false,
+                    ramp_steps,
+                },
+                window: Window {
+                    approach_steps,
+                    window_length_steps,
+                    dump_every,
+                    profile_diameter,
+                    vx_band,
+                    vx_length: 6.0 * profile_diameter,
+                },
+                substrate: Substrate {
+                    substrate_particles: substrate_n[0] * substrate_n[1],
+                    substrate_diameter: if rough { d } else { 0.0 },
+                    substrate_spacing,
+                    substrate_n,
+                    substrate_bed: None,
+                },
             },
             pile: PileBlock { pile_x0, pile_x1, pile_z1, pile_spacing: spacing, pile_n: [nx, ny, nz] },
-            substrate: Substrate {
-                substrate_particles: substrate_n[0] * substrate_n[1],
-                substrate_diameter: if rough { d } else { 0.0 },
-                substrate_spacing,
-                substrate_n,
-                substrate_bed: None,
-            },
             settle: Settle { settle_steps, rest_ke, rest_speed, settle_check_steps, settle_max_checks },
             own: DoseRun { gate_x: if gated { pile_x1 } else { 0.0 }, traverse_steps, full_dump_every },
         }),
@@ -412,7 +404,7 @@ pub fn read_frames(run: &Finished, blade: &Blade, dump: &str) -> Result<(u64, Ve
 /// window's halves agree within counting noise.
 pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
     let scene = run.scene;
-    let Spread { blade, window, .. } = spread(scene);
+    let Spreader { blade, window, .. } = &spread(scene).spreader;
     let (settle_steps, frames) = read_frames(run, blade, DUMP)?;
     let m = metrics::compute(scene, blade, window, &frames)
         .map_err(|e| Rejected::new(FailureClass::Unparsable, e.to_string()))?;
@@ -520,7 +512,7 @@ mod tests {
     fn the_window_is_after_the_pile_and_inside_the_box() {
         for (d, gap) in [(1.0, 1.0), (1.0, 5.0), (3.0, 1.0), (3.0, 5.0)] {
             let s = scene(&[("diameter", d), ("gap", gap), ("blade_speed", 1.6)]);
-            let Spread { blade, window, pile, .. } = spread(&s);
+            let Spread { spreader: Spreader { blade, window, .. }, pile, .. } = spread(&s);
             let rear = |step| blade.rear_at(s.timestep, step);
             let front = |step| blade.front_at(s.timestep, step);
             let (t1, t2) = window.steps();
@@ -555,7 +547,7 @@ mod tests {
         let s = scene(&[("diameter", 2.0), ("gap", 3.0)]);
         assert!((s.layer_height(1).unwrap() - 4e-3).abs() < 1e-15);
         assert!((s.layer_height(12).unwrap() - 15e-3).abs() < 1e-15);
-        assert!((spread(&s).window.vx_band - 0.5e-3).abs() < 1e-15);
+        assert!((spread(&s).spreader.window.vx_band - 0.5e-3).abs() < 1e-15);
     }
 
     #[test]
@@ -574,12 +566,19 @@ mod tests {
         let t = crate::scenes::build(&values, &thesis).unwrap();
         let t_spread = spread(&t);
         assert_eq!(
-            (t_spread.settle.rest_ke, t_spread.own.gate_x, t_spread.substrate.substrate_particles, t.z_lo),
+            (
+                t_spread.settle.rest_ke,
+                t_spread.own.gate_x,
+                t_spread.spreader.substrate.substrate_particles,
+                t.z_lo
+            ),
             (0.0, 0.0, 0, 0.0)
         );
         let s_spread = spread(&s);
         assert!(
-            s_spread.own.gate_x > 0.0 && s_spread.substrate.substrate_particles > 0 && s.z_lo == -s.diameter
+            s_spread.own.gate_x > 0.0
+                && s_spread.spreader.substrate.substrate_particles > 0
+                && s.z_lo == -s.diameter
         );
     }
 
@@ -599,7 +598,7 @@ mod ramp_tests {
     #[test]
     fn blade_position_is_continuous_through_the_ramp_and_linear_after() {
         let s = crate::scenes::build(&BTreeMap::new(), &SceneSettings::gated()).unwrap();
-        let blade = &spread(&s).blade;
+        let blade = &spread(&s).spreader.blade;
         let at = |step| blade.rear_at(s.timestep, step);
         let s0 = blade.start_step();
         let r = blade.ramp_steps;

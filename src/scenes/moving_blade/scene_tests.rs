@@ -91,7 +91,7 @@ mod passage {
         // d = D = s: −D/2 + √(D² − D²/2) + D/2 = D/√2.
         let s = scene(&[("diameter", 2.0)], &SceneSettings::default());
         let d = s.diameter;
-        let s = crate::scenes::conveyor::with_part(s, |p| p.substrate.substrate_spacing = d);
+        let s = crate::scenes::conveyor::with_part(s, |p| p.spreader.substrate.substrate_spacing = d);
         assert!(close(s.lowest_top(), 2e-3 / 2f64.sqrt()), "{}", s.lowest_top());
     }
 
