@@ -360,7 +360,54 @@ impl Base {
     }
 }
 
+/// What a layout decides of its scene: the powder's count, the box, the meshes' cell, the
+/// cadence of the log and the unstable bound, and its own part. The rest of a scene is the
+/// point's and the settings' alike for every layout ([`Scene::new`]).
+pub struct LayoutScene {
+    pub particles: usize,
+    pub x_hi: f64,
+    pub depth: f64,
+    pub z_hi: f64,
+    pub z_lo: f64,
+    pub mesh_cell: f64,
+    pub thermo_every: u64,
+    pub ke_limit: f64,
+    pub own: own::OwnData,
+}
+
 impl Scene {
+    /// The scene of the point `base` under `settings`, laid out as the layout says (`laid`):
+    /// the material, the sizes, the seed, the time, the neighbour skin (a share of the smallest
+    /// diameter) and the VTK interval ([`VTK_EVERY_S`], when asked for) are the same for every
+    /// layout.
+    pub fn new(base: &Base, settings: &SceneSettings, laid: LayoutScene) -> Scene {
+        let LayoutScene { particles, x_hi, depth, z_hi, z_lo, mesh_cell, thermo_every, ke_limit, own } = laid;
+        let timestep = base.timestep;
+        Scene {
+            material: base.material.clone(),
+            layout: settings.layout.clone(),
+            size_classes: base.psd.classes.clone(),
+            sizes: base.psd.summary(),
+            seed: settings.seed,
+            particles,
+            diameter: base.d,
+            x_hi,
+            depth,
+            z_hi,
+            z_lo,
+            rayleigh_time: base.rayleigh_time,
+            timestep,
+            // A quarter of the smallest diameter (default): particles move far less than that
+            // between list builds (`neigh_modify delay 0` rebuilds as soon as one has).
+            skin: settings.skin_diameters * base.d_min,
+            vtk_every: if settings.vtk { (VTK_EVERY_S / timestep).round().max(1.0) as u64 } else { 0 },
+            mesh_cell,
+            thermo_every,
+            ke_limit,
+            own,
+        }
+    }
+
     /// The layout's part, if it is of the type `T` the layout keeps there.
     pub fn own<T: std::any::Any>(&self) -> Option<&T> {
         self.own.get()

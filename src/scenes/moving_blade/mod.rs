@@ -25,8 +25,8 @@ use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
 use crate::scene::substrate::Substrate;
 use crate::scene::{
-    Base, Scene, GRAVITY, LAYER_FRACTION_MAX, REPOSE_DEG, SNAPSHOTS_PER_SUB_WINDOW, SUB_WINDOWS, THESIS_BAND,
-    VTK_EVERY_S,
+    Base, LayoutScene, Scene, GRAVITY, LAYER_FRACTION_MAX, REPOSE_DEG, SNAPSHOTS_PER_SUB_WINDOW, SUB_WINDOWS,
+    THESIS_BAND,
 };
 use crate::scenes::{BadSetting, BuiltinTemplate, Finished, Layout, Rejected, SetupRows};
 
@@ -194,7 +194,7 @@ pub enum Dose {
 
 /// The scene of a moving-blade point: the pile, the blade's travel, the window, the timing.
 pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
-    let Base { psd, d, d_min, gap, speed, rayleigh_time, timestep, .. } = base.clone();
+    let Base { psd, d, d_min, gap, speed, timestep, .. } = base.clone();
     let density = base.material.density;
     // Geometry in units of the mean diameter, so the particle count barely changes with D.
     // The dose starts as a jittered simple-cubic block (an exact, reproducible count; no
@@ -312,7 +312,6 @@ pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
     };
 
     // ParaView files every 0.02 s of the spread (the thesis's output cadence, Appendix A).
-    let vtk_every = if settings.vtk { (VTK_EVERY_S / timestep).round().max(1.0) as u64 } else { 0 };
 
     let profile_diameter = if psd.is_mono() { d } else { psd.quantile(0.85) };
     let vx_band =
@@ -327,24 +326,12 @@ pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
     let rest_speed = settings.rest_speed * (GRAVITY * d).sqrt();
     let rest_ke = if gated { 0.5 * mass * rest_speed * rest_speed } else { 0.0 };
 
-    Scene {
-        material: base.material.clone(),
-        layout: settings.layout.clone(),
-        size_classes: psd.classes.clone(),
-        sizes: psd.summary(),
-        seed: settings.seed,
+    let laid = LayoutScene {
         particles,
-        diameter: d,
         x_hi,
         depth,
         z_hi,
         z_lo,
-        rayleigh_time,
-        timestep,
-        // A quarter of the smallest diameter (default): particles move far less than that
-        // between list builds (`neigh_modify delay 0` rebuilds as soon as one has).
-        skin: settings.skin_diameters * d_min,
-        vtk_every,
         mesh_cell: depth / settings.mesh_cells_across as f64,
         // Frequent enough for the engine's watcher to stop an exploding run early.
         thermo_every: (total_steps / 40).clamp(1, 200),
@@ -381,7 +368,8 @@ pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
             settle: Settle { settle_steps, rest_ke, rest_speed, settle_check_steps, settle_max_checks },
             own: DoseRun { gate_x: if gated { pile_x1 } else { 0.0 }, traverse_steps, full_dump_every },
         }),
-    }
+    };
+    Scene::new(&base, settings, laid)
 }
 
 /// The settle's end from the log, and the window's snapshots from `dump`, each checked for

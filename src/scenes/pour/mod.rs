@@ -34,7 +34,7 @@ use crate::scene::blade::Settle;
 use crate::scene::own::{LayoutData, OwnData};
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
-use crate::scene::{Base, Scene, GRAVITY, LAYER_FRACTION_MAX};
+use crate::scene::{Base, LayoutScene, Scene, GRAVITY, LAYER_FRACTION_MAX};
 use crate::scenes::quantity::Quantity;
 use crate::scenes::stand_in::StandInPoint;
 use crate::scenes::{BadSetting, BuiltinTemplate, Finished, Layout, Rejected, SetupRows};
@@ -275,7 +275,7 @@ pub fn column_particles(supply_factor: f64) -> usize {
 
 /// The pour's scene from the point's common part.
 fn derive(base: Base, settings: &SceneSettings) -> Scene {
-    let Base { psd, d, d_min, rayleigh_time, timestep, .. } = base.clone();
+    let Base { psd, d, timestep, .. } = base.clone();
     let density = base.material.density;
     let particles = column_particles(settings.supply_factor);
     let spacing = LATTICE_CLEARANCE * psd.max_diameter();
@@ -306,26 +306,12 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let max_checks =
         ((settings.settle_max_s - settle_least).max(0.0) / SETTLE_CHECK_S).ceil().max(1.0) as u64;
     let v_ref = (2.0 * GRAVITY * z_hi).sqrt();
-    Scene {
-        material: base.material.clone(),
-        layout: settings.layout.clone(),
-        size_classes: psd.classes.clone(),
-        sizes: psd.summary(),
-        seed: settings.seed,
+    let laid = LayoutScene {
         particles,
-        diameter: d,
         x_hi: width,
         depth: width,
         z_hi,
         z_lo: 0.0,
-        rayleigh_time,
-        timestep,
-        skin: settings.skin_diameters * d_min,
-        vtk_every: if settings.vtk {
-            (crate::scene::VTK_EVERY_S / timestep).round().max(1.0) as u64
-        } else {
-            0
-        },
         mesh_cell: d,
         thermo_every: check.min(200),
         ke_limit: 0.5 * mass * (10.0 * v_ref).powi(2),
@@ -346,7 +332,8 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
             lattice_spacing: spacing,
             lattice_layers: layers,
         }),
-    }
+    };
+    Scene::new(&base, settings, laid)
 }
 
 /// The heap at rest from `dump.heap`: its angle, SE and packing. Nothing flows in a pour, so
