@@ -8,6 +8,7 @@
 
 pub mod conveyor;
 pub mod figures;
+mod keys;
 pub mod layers;
 pub mod moving_blade;
 pub mod pour;
@@ -24,6 +25,7 @@ use crate::outcome::{AnswerKind, FailureClass, RunResult};
 use crate::scene::settings::SceneSettings;
 use crate::scene::{params, plausible, Base, Scene, SceneError};
 pub use conveyor::warm::Warm;
+pub use keys::{readers, reads, unread, UnreadSetting};
 
 /// Why a point starts cold instead of from a finished neighbour's state ([`Layout::warm_start`]).
 #[derive(Debug, thiserror::Error)]
@@ -65,13 +67,20 @@ pub fn names() -> Vec<&'static str> {
 /// Why a one-layer layout (moving blade, conveyor) ignores `layer_thickness` ([`Layout::ignores`]).
 pub const ONE_LAYER: &str = "spreads one layer at `gap`; only the layers layout drops a platform";
 
-/// Why the parameter or `[scene]` key `name` plays no part in a point of `settings`, if it plays
-/// none: the layout does not read it, or the size distribution takes its sizes elsewhere.
+/// Why the parameter or `[scene]` key `name` (`scene.…`) plays no part in a point of
+/// `settings`, if it plays none: the layout does not read it, or the size distribution takes its
+/// sizes elsewhere.
 pub fn ignored(settings: &SceneSettings, name: &str) -> Option<String> {
     if let Some(why) = settings.size_distribution.ignores(name) {
         return Some(why.to_string());
     }
     let layout = lookup(&settings.layout)?;
+    if let Some(key) = name.strip_prefix("scene.") {
+        return (!reads(settings, key)).then(|| {
+            let readers = keys::the_layouts(&readers(key));
+            format!("the {} layout does not read it; it is read only by {readers}", layout.name())
+        });
+    }
     layout.ignores(settings, name).map(|why| format!("the {} layout {why}", layout.name()))
 }
 
@@ -207,6 +216,11 @@ pub trait Layout: Sync {
     /// Refuse the `[scene]` settings this layout cannot run with.
     fn check_settings(&self, settings: &SceneSettings) -> Result<(), BadSetting>;
 
+    /// The `[scene]` keys this layout reads of those some layout does not ([`unread`]): a key
+    /// no layout lists is read by every layout; one that others list and this one does not is
+    /// refused in its sweep files.
+    fn own_settings(&self) -> &'static [&'static str];
+
     /// Every number the deck and the measurement need, from the point's common part.
     fn derive(&self, base: Base, settings: &SceneSettings) -> Scene;
 
@@ -222,9 +236,9 @@ pub trait Layout: Sync {
     /// The report's setup rows of this layout's own settings.
     fn setup_rows(&self, settings: &SceneSettings) -> SetupRows;
 
-    /// Why a catalogue parameter, or a `[scene]` key named `scene.…`, plays no part in this
-    /// layout's scene, if it plays none: a sweep of such a parameter is refused, and the report
-    /// leaves it out of the setup every point shares.
+    /// Why a catalogue parameter plays no part in this layout's scene, if it plays none: a
+    /// sweep of such a parameter is refused, and the report leaves it out of the setup every
+    /// point shares. (Which `[scene]` keys it reads is [`Layout::own_settings`].)
     fn ignores(&self, _settings: &SceneSettings, _name: &str) -> Option<&'static str> {
         None
     }

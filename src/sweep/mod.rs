@@ -72,9 +72,12 @@ impl Sweep {
             why: e.to_string(),
         })?;
         include(&mut file, path)?;
-        // A target the user wrote is the one the points run to.
+        // A target the user wrote is the one the points run to (where a layout runs to one).
         let target_written = written.iter().any(|k| k == "mfr_rel_se" || k == "mfr_abs_se");
-        if target_written && !written.iter().any(|k| k == "precision") {
+        if target_written
+            && !written.iter().any(|k| k == "precision")
+            && crate::scenes::reads(&file.scene, "precision")
+        {
             file.scene.precision = "fixed".into();
         }
         let (swept, fixed) = validate(&file, path)?;
@@ -273,13 +276,20 @@ mod preset_tests {
 
     #[test]
     fn the_resolved_settings_read_back_to_themselves() {
-        // DIR/sweep.toml holds every key: a resume must see the same knobs.
-        let text = "name = \"t\"\n[parameters]\ngap = { lo = 1.0, hi = 2.0 }\n[scene]\nfidelity = \"thesis\"\nwindow_diameters = 30\n";
-        let first = Sweep::parse(text, Path::new("t.toml")).unwrap();
-        let body = toml::to_string(&first.file).unwrap();
-        let again = Sweep::parse(&body, Path::new("sweep.toml")).unwrap();
-        assert_eq!(again.file.scene, first.file.scene);
-        assert_eq!(again.file.scene.window_diameters, 30.0);
+        // DIR/sweep.toml holds every key, those its layout does not read at its preset's values:
+        // a resume must see the same knobs, and refuse none.
+        let cases = crate::scenes::names().into_iter().flat_map(|l| FIDELITIES.map(|f| (l, f, "")));
+        for (layout, fidelity, knob) in cases.chain([("gated", "thesis", "window_diameters = 30\n")]) {
+            let text = format!(
+                "name = \"t\"\n[parameters]\nfriction = {{ lo = 0.1, hi = 0.3 }}\n[scene]\n\
+                 layout = \"{layout}\"\nfidelity = \"{fidelity}\"\n{knob}"
+            );
+            let first = Sweep::parse(&text, Path::new("t.toml")).unwrap();
+            let body = toml::to_string(&first.file).unwrap();
+            let again = Sweep::parse(&body, Path::new("sweep.toml")).unwrap();
+            assert_eq!(again.file.scene, first.file.scene, "{layout}, {fidelity}");
+            assert!(knob.is_empty() || again.file.scene.window_diameters == 30.0);
+        }
     }
 
     #[test]

@@ -266,6 +266,10 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<Params, SweepErr
             format!("\"{}\": expected one of {}", s.layout, quoted(&crate::scenes::names())),
         ));
     };
+    // Before the layout's own checks: a key it does not read is not its to judge.
+    if let Some(u) = crate::scenes::unread(s) {
+        return Err(bad(&format!("scene.{}", u.key), u.to_string()));
+    }
     if let Err(e) = layout.check_settings(s) {
         return Err(bad(e.key, e.why));
     }

@@ -160,6 +160,8 @@ fn bad_bench_input_is_one_line_and_writes_nothing() {
         vec!["--variant", "nocolon"],
         vec!["--variant", "x:supply_factor=2"],
         vec!["--variant", "x:rayleigh_fraction=0.9"],
+        // A knob of the conveyor's on this gated sweep: refused, not compared as a variant.
+        vec!["--variant", "x:block_diameters=7"],
     ] {
         let r = support::sweep_bin()
             .args(["bench", "fidelity", file.to_str().unwrap(), "--out", out.to_str().unwrap()])

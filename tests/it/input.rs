@@ -560,11 +560,73 @@ fn a_classes_table_that_misses_its_total_repeats_a_size_or_holds_dust_is_refused
 }
 
 #[test]
-fn a_pour_on_a_bed_of_powder_is_refused_as_the_other_moving_blade_layouts_refuse_it() {
+fn a_scene_key_only_other_layouts_read_is_refused_naming_them_and_nothing_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |layout: &str, key: &str| {
+        let scene = format!("[scene]\nlayout = \"{layout}\"\n{key}\n");
+        std::fs::write(dir.path().join("x.toml"), format!("{BASE}{scene}")).unwrap();
+    };
+    let tail = "(remove the key, or change the layout)";
+    for (layout, key, why) in [
+        ("conveyor", "bed = \"fused\"", "scene.bed: \"fused\" is read only by the layers layout"),
+        ("layers", "block_diameters = 7", "scene.block_diameters: 7.0 is read only by the conveyor layout"),
+        ("layers", "warmup_s = 0.1", "scene.warmup_s: 0.1 is read only by the conveyor layout"),
+        (
+            "pour",
+            "window_diameters = 60",
+            "scene.window_diameters: 60.0 is read only by the gated and thesis layouts",
+        ),
+        (
+            "gated",
+            "warm_start = true",
+            "scene.warm_start: true is read only by the conveyor and layers layouts",
+        ),
+    ] {
+        write(layout, key);
+        for args in [&["render", "x.toml", "--out", "o"][..], &["lds", "x.toml", "--out", "o", "--plan"]] {
+            let out = support::sweep_bin()
+                .current_dir(dir.path())
+                .args(args)
+                .stdin(Stdio::null())
+                .output()
+                .unwrap();
+            assert_eq!(out.status.code(), Some(2), "{layout} {key} {args:?}: {}", stderr(&out));
+            assert_eq!(
+                stderr(&out),
+                format!("error: x.toml: {why}; this sweep's layout is {layout} {tail}\n")
+            );
+            assert!(!dir.path().join("o").exists(), "{layout} {key} {args:?} wrote its --out");
+        }
+    }
+    // At its default (a resolved DIR/sweep.toml writes every key), or where the layout reads it,
+    // the key is taken.
+    for (layout, key) in
+        [("conveyor", "bed = \"loose\""), ("layers", "bed = \"fused\""), ("conveyor", "block_diameters = 7")]
+    {
+        write(layout, key);
+        let out = points(&dir.path().join("x.toml"), &["--lds", "2"]);
+        assert!(out.status.success(), "{layout} {key}: {}", stderr(&out));
+    }
+    // A misspelt key is still serde's, with its line and what was meant.
+    rejects(
+        &format!("{BASE}[scene]\nlayout = \"conveyor\"\nbedd = \"fused\"\n"),
+        &["--lds", "2"],
+        &["bad-sweep.toml:6", "scene.bedd", "unknown field `bedd`", "did you mean `bed`?"],
+    );
+}
+
+#[test]
+fn a_pour_on_a_bed_of_powder_is_refused_naming_the_layouts_that_read_a_substrate() {
     rejects(
         &format!("{BASE}[scene]\nlayout = \"pour\"\nsubstrate = \"powder\"\n"),
         &["--lds", "2"],
-        &["bad-sweep.toml", "scene.substrate", "\"powder\"", "the pour's heap stands on the plate"],
+        &[
+            "bad-sweep.toml",
+            "scene.substrate",
+            "\"powder\"",
+            "the gated and conveyor layouts",
+            "layout is pour",
+        ],
     );
 }
 

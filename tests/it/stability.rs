@@ -130,7 +130,7 @@ fn the_default_timestep_has_a_margin_of_1_5_below_the_edge_at_the_harshest_corne
         "the measured safe bound {MAX_RAYLEIGH_FRACTION} is less than 1.5 × the default {default}"
     );
     let tmp = tempfile::tempdir().unwrap();
-    let file = thesis_space(tmp.path(), "window_diameters = 20\nwindow_start_diameters = 15");
+    let file = thesis_space(tmp.path(), "");
     let out = tmp.path().join("bench");
     let fractions = format!("{margin}");
     let r = sweep(&[

@@ -189,6 +189,26 @@ impl Layout for Conveyor {
         derive(base, settings)
     }
 
+    fn own_settings(&self) -> &'static [&'static str] {
+        // A held heap of `heap_height`, not a supply, measured block by block to a precision.
+        &[
+            "substrate",
+            "block_diameters",
+            "warmup_s",
+            "window_cap_diameters",
+            "mfr_rel_se",
+            "mfr_abs_se",
+            "min_window_blocks",
+            "warm_start",
+            "warm_warmup_s",
+            "precision",
+            "vx_band_diameters",
+            "thesis_band",
+            "mesh_cells_across",
+            "depth_diameters",
+        ]
+    }
+
     fn atoms_kept(&self, _scene: &Scene) -> Option<u64> {
         // The feed inserts and the delete region removes atoms by design.
         None

@@ -289,6 +289,26 @@ impl Layout for Layers {
         derive(base, settings)
     }
 
+    fn own_settings(&self) -> &'static [&'static str] {
+        // It spreads onto its own bed of the powder and measures the layers it leaves, not the
+        // speed in front of the blade.
+        &[
+            "supply_factor",
+            "layers",
+            "bed",
+            "search_passes",
+            "least_layers",
+            "blade_profile",
+            "blade_radius_mm",
+            "blade_clearance_mm",
+            "plate_diameters",
+            "freeze_depth_diameters",
+            "warm_start",
+            "mesh_cells_across",
+            "depth_diameters",
+        ]
+    }
+
     fn atoms_kept(&self, _scene: &Scene) -> Option<u64> {
         // Doses are inserted and what lies off the plate deleted, pass by pass.
         None
@@ -333,8 +353,6 @@ impl Layout for Layers {
             ),
             "gap" => Some("sets its blade layer_thickness (and scene.blade_clearance_mm) above the bed"),
             "heap_height" => Some("doses each pass by scene.supply_factor; only the conveyor layout holds a heap of a set height"),
-            "scene.substrate" => Some("spreads onto its own bed of the powder (scene.bed)"),
-            "scene.vx_band_diameters" => Some("measures the layers it leaves, not the speed in front of the blade"),
             _ => None,
         }
     }

@@ -137,6 +137,37 @@ impl Layout for MovingBlade {
         derive(base, settings, self.0)
     }
 
+    fn own_settings(&self) -> &'static [&'static str] {
+        match self.0 {
+            Dose::Gated => &[
+                "substrate",
+                "supply_factor",
+                "settle_max_s",
+                "settle_min_falls",
+                "rest_speed",
+                "window_start_diameters",
+                "window_diameters",
+                "full_dump_every_s",
+                "run_to_end",
+                "vx_band_diameters",
+                "thesis_band",
+                "mesh_cells_across",
+                "depth_diameters",
+            ],
+            // The thesis's pile settles for a fixed time on the smooth plate.
+            Dose::Free => &[
+                "supply_factor",
+                "window_diameters",
+                "full_dump_every_s",
+                "run_to_end",
+                "vx_band_diameters",
+                "thesis_band",
+                "mesh_cells_across",
+                "depth_diameters",
+            ],
+        }
+    }
+
     fn atoms_kept(&self, scene: &Scene) -> Option<u64> {
         Some(scene.atoms() as u64)
     }
@@ -164,7 +195,6 @@ impl Layout for MovingBlade {
                 Some("pushes the heap its pile leaves; only the conveyor layout holds one of a set height")
             }
             "layer_thickness" => Some(super::ONE_LAYER),
-            "scene.substrate" if self.0 == Dose::Free => Some("spreads on the thesis's smooth plate"),
             _ => None,
         }
     }
@@ -267,8 +297,12 @@ pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
     let round_up = |t: f64| ((t / timestep).ceil() as u64).div_ceil(dump_every) * dump_every;
     let settle_steps = (settle_time / timestep).ceil() as u64;
     let settle_check_steps = (SETTLE_CHECK_S / timestep).ceil() as u64;
-    let settle_max_checks =
-        ((settings.settle_max_s - settle_time).max(0.0) / SETTLE_CHECK_S).ceil().max(1.0) as u64;
+    // The free pile has no rest criterion: no checks, whatever `settle_max_s` says.
+    let settle_max_checks = if gated {
+        ((settings.settle_max_s - settle_time).max(0.0) / SETTLE_CHECK_S).ceil().max(1.0) as u64
+    } else {
+        0
+    };
     let approach_steps = round_up(approach_time);
     let ramp_steps = ((ramp_time / timestep).ceil() as u64).max(1);
     let window_length_steps = (SUB_WINDOWS * SNAPSHOTS_PER_SUB_WINDOW) as u64 * dump_every;
@@ -323,7 +357,7 @@ pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
     let ke_limit = 0.5 * mass * (10.0 * v_ref).powi(2);
     // At rest: rms speed below a small fraction of √(g·D), the speed a sphere gains
     // falling through one diameter.
-    let rest_speed = settings.rest_speed * (GRAVITY * d).sqrt();
+    let rest_speed = if gated { settings.rest_speed * (GRAVITY * d).sqrt() } else { 0.0 };
     let rest_ke = if gated { 0.5 * mass * rest_speed * rest_speed } else { 0.0 };
 
     let laid = LayoutScene {
@@ -556,11 +590,13 @@ mod tests {
         assert_eq!(
             (
                 t_spread.settle.rest_ke,
+                t_spread.settle.rest_speed,
+                t_spread.settle.settle_max_checks,
                 t_spread.own.gate_x,
                 t_spread.spreader.substrate.substrate_particles,
                 t.z_lo
             ),
-            (0.0, 0.0, 0, 0.0)
+            (0.0, 0.0, 0, 0.0, 0, 0.0)
         );
         let s_spread = spread(&s);
         assert!(

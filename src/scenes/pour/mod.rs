@@ -133,13 +133,6 @@ impl Layout for Pour {
     }
 
     fn check_settings(&self, s: &SceneSettings) -> Result<(), BadSetting> {
-        if s.substrate == "powder" {
-            return Err(BadSetting {
-                key: "scene.substrate",
-                why: "\"powder\": the pour's heap stands on the plate; a bed of the powder is the conveyor layout's"
-                    .into(),
-            });
-        }
         for (key, v) in [("scene.rest_speed", s.rest_speed), ("scene.settle_max_s", s.settle_max_s)] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(BadSetting { key, why: format!("{v}: expected a positive number") });
@@ -164,6 +157,12 @@ impl Layout for Pour {
         derive(base, settings)
     }
 
+    fn own_settings(&self) -> &'static [&'static str] {
+        // Its heap stands on the smooth plate in a box of its own: no substrate, blade mesh or
+        // domain depth of a spread.
+        &["supply_factor", "rest_speed", "settle_max_s"]
+    }
+
     fn atoms_kept(&self, scene: &Scene) -> Option<u64> {
         // A closed box: nothing leaves.
         Some(scene.particles as u64)
@@ -184,11 +183,10 @@ impl Layout for Pour {
 
     fn ignores(&self, _settings: &SceneSettings, name: &str) -> Option<&'static str> {
         match name {
-            "gap" | "heap_height" | "layer_thickness" | "roller_speed_ratio" | "scene.vx_band_diameters" => {
+            "gap" | "heap_height" | "layer_thickness" | "roller_speed_ratio" => {
                 Some("pours a heap on the plate: it has no blade")
             }
             "blade_speed" => Some("lifts its cylinder at a fixed speed in √(g·D)"),
-            "scene.substrate" => Some("pours its heap on the smooth plate"),
             _ => None,
         }
     }
