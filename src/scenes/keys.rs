@@ -147,7 +147,7 @@ mod tests {
         for layout in LAYOUTS {
             for key in layout.own_settings() {
                 assert!(
-                    CHANGED.iter().any(|(k, _)| k == key),
+                    CHANGED.iter().any(|(k, _)| *k == key),
                     "{}: {key} has no changed value here",
                     layout.name()
                 );

@@ -219,7 +219,7 @@ pub trait Layout: Sync {
     /// The `[scene]` keys this layout reads of those some layout does not ([`unread`]): a key
     /// no layout lists is read by every layout; one that others list and this one does not is
     /// refused in its sweep files.
-    fn own_settings(&self) -> &'static [&'static str];
+    fn own_settings(&self) -> Vec<&'static str>;
 
     /// Every number the deck and the measurement need, from the point's common part.
     fn derive(&self, base: Base, settings: &SceneSettings) -> Scene;

@@ -189,23 +189,26 @@ impl Layout for Conveyor {
         derive(base, settings)
     }
 
-    fn own_settings(&self) -> &'static [&'static str] {
-        // A held heap of `heap_height`, not a supply, measured block by block to a precision.
-        &[
+    fn own_settings(&self) -> Vec<&'static str> {
+        vec![
+            // Its substrate, the v_x profile in front of its blade, the blade's mesh and depth.
             "substrate",
-            "block_diameters",
-            "warmup_s",
-            "window_cap_diameters",
-            "mfr_rel_se",
-            "mfr_abs_se",
-            "min_window_blocks",
-            "warm_start",
-            "warm_warmup_s",
-            "precision",
             "vx_band_diameters",
             "thesis_band",
             "mesh_cells_across",
             "depth_diameters",
+            // A held heap of `heap_height` (not a supply), its deposit series measured block by
+            // block to a precision, ...
+            "block_diameters",
+            "min_window_blocks",
+            "warmup_s",
+            "window_cap_diameters",
+            "mfr_rel_se",
+            "mfr_abs_se",
+            "precision",
+            // ... and a warm start from a neighbour's steady heap.
+            "warm_start",
+            "warm_warmup_s",
         ]
     }
 

@@ -289,10 +289,10 @@ impl Layout for Layers {
         derive(base, settings)
     }
 
-    fn own_settings(&self) -> &'static [&'static str] {
+    fn own_settings(&self) -> Vec<&'static str> {
         // It spreads onto its own bed of the powder and measures the layers it leaves, not the
         // speed in front of the blade.
-        &[
+        vec![
             "supply_factor",
             "layers",
             "bed",

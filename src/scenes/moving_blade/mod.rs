@@ -102,6 +102,25 @@ pub fn spread(scene: &Scene) -> &Spread {
     scene.own().expect("a moving-blade scene carries its spread")
 }
 
+/// The `[scene]` keys both moving-blade layouts read of those some layout does not
+/// ([`Layout::own_settings`]): the heap, the window and what the run dumps, the v_x profile, the
+/// blade's mesh and the domain's depth.
+const SPREAD_SETTINGS: &[&str] = &[
+    "supply_factor",
+    "window_diameters",
+    "full_dump_every_s",
+    "run_to_end",
+    "vx_band_diameters",
+    "thesis_band",
+    "mesh_cells_across",
+    "depth_diameters",
+];
+
+/// ... and those the gated layout reads besides: its substrate, and its dose's settle to rest
+/// behind the gate (the thesis's pile settles for a fixed time on the smooth plate).
+const GATED_SETTINGS: &[&str] =
+    &["substrate", "settle_max_s", "settle_min_falls", "rest_speed", "window_start_diameters"];
+
 /// A moving-blade layout: the dose it starts from (registered in [`crate::scenes::LAYOUTS`]).
 pub struct MovingBlade(pub Dose);
 
@@ -137,35 +156,9 @@ impl Layout for MovingBlade {
         derive(base, settings, self.0)
     }
 
-    fn own_settings(&self) -> &'static [&'static str] {
-        match self.0 {
-            Dose::Gated => &[
-                "substrate",
-                "supply_factor",
-                "settle_max_s",
-                "settle_min_falls",
-                "rest_speed",
-                "window_start_diameters",
-                "window_diameters",
-                "full_dump_every_s",
-                "run_to_end",
-                "vx_band_diameters",
-                "thesis_band",
-                "mesh_cells_across",
-                "depth_diameters",
-            ],
-            // The thesis's pile settles for a fixed time on the smooth plate.
-            Dose::Free => &[
-                "supply_factor",
-                "window_diameters",
-                "full_dump_every_s",
-                "run_to_end",
-                "vx_band_diameters",
-                "thesis_band",
-                "mesh_cells_across",
-                "depth_diameters",
-            ],
-        }
+    fn own_settings(&self) -> Vec<&'static str> {
+        let gate: &[&str] = if self.0 == Dose::Gated { GATED_SETTINGS } else { &[] };
+        [SPREAD_SETTINGS, gate].concat()
     }
 
     fn atoms_kept(&self, scene: &Scene) -> Option<u64> {

@@ -157,10 +157,10 @@ impl Layout for Pour {
         derive(base, settings)
     }
 
-    fn own_settings(&self) -> &'static [&'static str] {
+    fn own_settings(&self) -> Vec<&'static str> {
         // Its heap stands on the smooth plate in a box of its own: no substrate, blade mesh or
         // domain depth of a spread.
-        &["supply_factor", "rest_speed", "settle_max_s"]
+        vec!["supply_factor", "rest_speed", "settle_max_s"]
     }
 
     fn atoms_kept(&self, scene: &Scene) -> Option<u64> {
