@@ -17,16 +17,7 @@ type Edits = &'static [(&'static str, &'static str)];
 /// The sweep files rendered: (case, shipped file, the edits turning it into the case).
 const CASES: &[(&str, &str, Edits)] = &[
     ("quick", "sweeps/quick.toml", &[]),
-    (
-        "quick-gated",
-        "sweeps/quick.toml",
-        // Without the conveyor's own settings, which the gated layout refuses.
-        &[
-            ("layout = \"conveyor\"", "layout = \"gated\""),
-            ("warm_start = true", "# warm_start = true"),
-            ("precision = \"fixed\"", "# precision = \"fixed\""),
-        ],
-    ),
+    ("quick-gated", "sweeps/quick.toml", support::QUICK_AS_GATED),
     ("quick-powder-bed", "sweeps/quick.toml", &[("substrate = \"rough\"", "substrate = \"powder\"")]),
     ("thesis-scene", "sweeps/thesis-scene.toml", &[]),
     ("thesis-lds", "sweeps/thesis-lds.toml", &[]),

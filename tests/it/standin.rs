@@ -41,11 +41,7 @@ fn a_stand_in_sweep_of_every_layout_finishes_and_a_resume_runs_nothing() {
             shipped(&dir, "sweeps/ti64-machine.toml", &[("lo = 0.02, hi = 0.2", "lo = 0.05, hi = 0.2")]),
             vec!["lds"],
         ),
-        (
-            "gated",
-            shipped(&dir, "sweeps/quick.toml", &[("layout = \"conveyor\"", "layout = \"gated\"")]),
-            vec!["lds"],
-        ),
+        ("gated", shipped(&dir, "sweeps/quick.toml", QUICK_AS_GATED), vec!["lds"]),
         (
             "layers, fused",
             shipped(&dir, "sweeps/ti64-layers.toml", &[("lattice_levels = [2, 3]", "lattice_levels = [2]")]),

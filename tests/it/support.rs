@@ -183,6 +183,15 @@ pub fn quick_reference() -> &'static Path {
     DIR.get_or_init(|| local_lds(&quick_scene("reference", SHORT_FROM_REST), QUICK_REFERENCE_POINTS))
 }
 
+/// The edits (from, to) that turn `sweeps/quick.toml` into a gated sweep: its layout, and the
+/// conveyor's own settings it writes (a warm start, a fixed precision) left out, as the gated
+/// layout refuses them.
+pub const QUICK_AS_GATED: &[(&str, &str)] = &[
+    ("layout = \"conveyor\"", "layout = \"gated\""),
+    ("warm_start = true", "# warm_start = true"),
+    ("precision = \"fixed\"", "# precision = \"fixed\""),
+];
+
 /// Points in [`quick_reference`].
 pub const QUICK_REFERENCE_POINTS: usize = 3;
 /// The `[scene]` table of a sweep whose every point starts from rest and runs short: a 0.05 s

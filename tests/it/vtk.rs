@@ -128,8 +128,10 @@ fn run_with_vtk_writes_particle_and_blade_files_paraview_reads() {
     let quick = tmp.path().join("quick-gated.toml");
     let text =
         std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps/quick.toml")).unwrap();
-    let gated = text.replacen("layout = \"conveyor\"", "layout = \"gated\"", 1);
-    assert_ne!(gated, text, "sweeps/quick.toml names its layout");
+    let gated = support::QUICK_AS_GATED.iter().fold(text, |t, (from, to)| {
+        assert!(t.contains(from), "sweeps/quick.toml has no {from:?}");
+        t.replacen(from, to, 1)
+    });
     std::fs::write(&quick, gated).unwrap();
     let o = run_vtk(&quick, &out);
     // The deck's own atom count: the data file it reads ("N atoms"), powder and substrate.
