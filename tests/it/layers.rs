@@ -167,16 +167,7 @@ fn a_loose_bed_deep_under_the_top_is_held_still_and_every_particle_keeps_its_id(
     }
     // Equal spheres: the bed's relative density after a pass is its count over the first pass's,
     // the removed ones counted.
-    let result: Value = serde_json::from_str(
-        &std::fs::read_to_string(run.join(if run.join("result.json").is_file() {
-            "result.json"
-        } else {
-            "failure.json"
-        }))
-        .unwrap(),
-    )
-    .unwrap();
-    let layers = if result["layers"].is_object() { &result["layers"] } else { &result["measured"]["layers"] };
+    let layers = measured(&run)["layers"].clone();
     let bed_rd = |j: usize| layers["passes"][j - 1]["bed_relative_density"].as_f64().unwrap();
     let first = plate_dump(&run, 1).len() as f64;
     let count = |j: usize| plate_dump(&run, j).len() as f64 + if j > k { gone.len() as f64 } else { 0.0 };
