@@ -36,7 +36,10 @@ write_conf() {
     mkdir -p "$DIR/state" "$DIR/spool" "$DIR/log" "$DIR/munge"
     local mem
     mem=$(awk '/MemTotal/ { print int($2 / 1024 / 2) }' /proc/meminfo)
-    cat >"$CONF" <<EOF
+    # Written beside and moved in (only if it changed): `up` runs again while jobs submit, and a
+    # file truncated under a reading sbatch is "empty" to it.
+    local tmp=$CONF.$$
+    cat >"$tmp" <<EOF
 # Written by scripts/slurm_local.sh: one node, root runs everything, no cgroups.
 ClusterName=demsweep-local
 SlurmctldHost=$HOST(127.0.0.1)
@@ -72,6 +75,7 @@ SchedulerParameters=sched_interval=2
 NodeName=$HOST NodeAddr=127.0.0.1 CPUs=$CPUS RealMemory=$mem State=UNKNOWN
 PartitionName=debug Nodes=$HOST Default=YES MaxTime=INFINITE State=UP
 EOF
+    if cmp -s "$tmp" "$CONF"; then rm -f "$tmp"; else mv -f "$tmp" "$CONF"; fi
 }
 
 up() {
