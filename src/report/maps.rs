@@ -161,7 +161,8 @@ fn pair_map(
     };
     let title = format!("{} over {pi} × {pj}", spec.label);
     let caption = format!(
-        "{title} ({how}); grey: every point MFR = 0 (nothing passed); dots: points; red ×: failed runs"
+        "{title} ({how}); grey: every point's {} = 0 (nothing passed); dots: points; red ×: failed runs",
+        a.answer_name()
     );
     super::plots::figure(name, caption, (640, 470), |root| {
         let root = root.titled(&title, (FONT, TITLE_FONT))?;

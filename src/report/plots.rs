@@ -255,10 +255,16 @@ pub(super) fn scatter(a: &Analysis) -> Res<Figure> {
         .collect();
     let (mlo, mhi) = range(done.iter().map(|p| p.1));
     let name = a.answer_name();
-    let caption = format!(
-        "{name} against each parameter; colour: spreading quality (green ideal, orange inefficient, red \
-         unstable, grey unknown or screened)"
-    );
+    // Coloured by v_x class only where points have one (a layers sweep measures no v_x).
+    let classed = done.iter().any(|p| p.2 != Quality::Unknown);
+    let caption = if classed {
+        format!(
+            "{name} against each parameter; colour: spreading quality (green ideal, orange inefficient, red \
+             unstable, grey unknown or screened)"
+        )
+    } else {
+        format!("{name} against each parameter")
+    };
     let radius = if done.len() > 2000 { 2 } else { 3 };
     let classes = [Quality::Ideal, Quality::Inefficient, Quality::Unstable, Quality::Unknown];
     figure("scatter".into(), caption, (480 * cols as u32, 330 * rows as u32 + 70), |root| {
@@ -266,7 +272,7 @@ pub(super) fn scatter(a: &Analysis) -> Res<Figure> {
         let h = root.dim_in_pixel().1;
         let (grid, legend) = root.split_vertically(h - 36);
         let style = (FONT, AXIS_FONT).into_font().color(&BLACK);
-        for (n, q) in classes.iter().enumerate() {
+        for (n, q) in classes.iter().enumerate().filter(|_| classed) {
             let x = 20 + 180 * n as i32;
             legend.draw(&Circle::new((x + 6, 12), 5, quality_colour(*q).filled()))?;
             legend.draw(&Text::new(q.as_str(), (x + 16, 2), style.clone()))?;

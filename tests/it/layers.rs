@@ -265,7 +265,15 @@ fn a_layers_lattice_runs_every_point_to_its_steady_layer_and_answers_in_the_laye
     assert!(recommended.contains("steady-layer relative density"), "{recommended}");
     assert!(recommended.contains("µm of powder under the blade"), "{recommended}");
     assert!(page.contains("steady-layer relative density distribution"), "no distribution of the measure");
-    for mfr in ["MFR distribution", "Emulator of MFR", "statistic of MFR", "<th>MFR"] {
+    for mfr in [
+        "MFR distribution",
+        "Emulator of MFR",
+        "statistic of MFR",
+        "<th>MFR",
+        "MFR = 0",
+        "green ideal",
+        "CV / noise",
+    ] {
         assert!(!page.contains(mfr), "the layers report says {mfr:?}");
     }
     // Each point pass by pass and its last layer from above, both points drawn; no v_x panels,
