@@ -7,8 +7,10 @@
 # keeps what ran.
 #   nice bash docs/study/layers/machine-lattice.sh
 # It started on the templates of 37635eeb; a later template's text (417cb600 and c3221895 changed
-# only the held loose bed's and the roller's branches, not these decks) makes `resume` refuse, so
-# resume with a binary built from 37635eeb: SWEEP=path/to/that/sweep.
+# only the held loose bed's and the roller's branches) makes `resume` refuse. These decks render
+# byte-identical on today's templates (the manifest's nine hashes unchanged under `--force`,
+# checked on a copy), so FORCE=1 resumes with today's binary and re-runs nothing finished; or
+# SWEEP=path to a binary built from 37635eeb.
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 sweep=${SWEEP:-target/release/sweep}
@@ -27,7 +29,7 @@ copy() {
 copier=$!
 trap 'kill $copier 2>/dev/null || true; copy' EXIT
 if [ -f "$dir/manifest.json" ]; then
-  "$sweep" resume "$dir" --jobs "$jobs" || true
+  "$sweep" resume "$dir" --jobs "$jobs" ${FORCE:+--force} || true
 else
   "$sweep" lattice sweeps/ti64-layers.toml --levels 3 --jobs "$jobs" --out "$dir" || true
 fi
