@@ -26,7 +26,7 @@ pub fn draw_all(a: &Analysis) -> Res<Vec<Figure>> {
     let label = format!("{} (–)", a.answer_name());
     out.extend(maps::pair_maps(
         a,
-        &maps::MapSpec { stem: "mfr", label: &label, value: &mfr, cells: maps::CellValue::Points },
+        &maps::MapSpec { stem: a.answer_key(), label: &label, value: &mfr, cells: maps::CellValue::Points },
     )?);
     let covered = |p: &PointRow| p.done().and_then(|(r, _)| r.layer.map(|l| l.covered_fraction));
     out.extend(maps::pair_maps(

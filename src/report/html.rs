@@ -366,7 +366,7 @@ fn measured_sections(a: &Analysis, figures: &[Figure]) -> Value {
             "statistics": figures_named(figures, |n| n == "statistics"),
             "histograms": figures_named(figures, |n| n.starts_with("histogram-")),
             "scatter": figures_named(figures, |n| n == "scatter"),
-            "maps": figures_named(figures, |n| n.starts_with("map-mfr-")),
+            "maps": figures_named(figures, |n| n.starts_with(&format!("map-{}-", a.answer_key()))),
             "covered": figures_named(figures, |n| n.starts_with("map-covered-")),
             "profiles": profiles,
             "lattice": figures_named(figures, |n| n.starts_with("lattice-")),

@@ -231,6 +231,11 @@ impl Analysis {
     pub fn answer_name(&self) -> &'static str {
         answer_kind(&self.setup.scene).words()
     }
+
+    /// Its key (`mfr`, `steady_packing`, …), as its map files are named.
+    pub fn answer_key(&self) -> &'static str {
+        answer_kind(&self.setup.scene).key()
+    }
 }
 
 /// What a point of a sweep with these scene settings answers with (MFR unless its layout says

@@ -264,23 +264,17 @@ fn a_layers_lattice_runs_every_point_to_its_steady_layer_and_answers_in_the_laye
     // measures.
     assert!(recommended.contains("steady-layer relative density"), "{recommended}");
     assert!(recommended.contains("µm of powder under the blade"), "{recommended}");
-    assert!(page.contains("steady-layer relative density distribution"), "no distribution of the measure");
-    for mfr in [
-        "MFR distribution",
-        "Emulator of MFR",
-        "statistic of MFR",
-        "<th>MFR",
-        "MFR = 0",
-        "green ideal",
-        "CV / noise",
-    ] {
-        assert!(!page.contains(mfr), "the layers report says {mfr:?}");
+    let says = |s: &str| page.contains(s);
+    assert!(says("steady-layer relative density distribution"), "no distribution of the measure");
+    let mfr = ["MFR distribution", "Emulator of MFR", "statistic of MFR", "<th>MFR", "MFR = 0"];
+    for said in mfr.iter().chain(&["green ideal", "CV / noise"]) {
+        assert!(!says(said), "the layers report says {said:?}");
     }
     // Each point pass by pass and its last layer from above, both points drawn; no v_x panels,
     // which a layers run does not measure.
     let report = dir.join("s/report");
-    assert!(report.join("passes.png").exists() && report.join("top-view.png").exists());
-    assert!(!report.join("profiles.png").exists(), "empty v_x profiles drawn");
+    let drawn = |f: &str| report.join(f).exists();
+    assert!(drawn("passes.png") && drawn("top-view.png") && !drawn("profiles.png"), "no empty v_x panels");
     assert!(page.contains("seen from above") && !page.contains("not drawn:"), "the top view");
     // The thesis's claims are of MFR: a layers sweep is not judged by them.
     assert!(!page.contains("The thesis's conclusions"), "thesis conclusions on a layers report");
