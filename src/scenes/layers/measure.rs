@@ -81,14 +81,7 @@ fn lines_after<'a>(log: &'a str, prefix: &'a str) -> impl Iterator<Item = Vec<&'
 /// The pass lines of a log, in order: each pass's plate mass counts the held bed the passes
 /// before it removed (`demsweep: buried k mass M count N`).
 pub fn parse_log(log: &str) -> Vec<PassLine> {
-    let buried: Vec<(usize, f64)> = lines_after(log, "demsweep: buried ")
-        .filter_map(|f| {
-            if f.len() < 3 || f[1] != "mass" {
-                return None;
-            }
-            Some((f[0].parse().ok()?, f[2].parse().ok()?))
-        })
-        .collect();
+    let buried = by_pass(log, "buried", "mass");
     lines_after(log, "demsweep: layer ")
         .filter_map(|f| {
             // k step S plate M count N
@@ -105,9 +98,14 @@ pub fn parse_log(log: &str) -> Vec<PassLine> {
 
 /// The solid's top after each pass of a fused bed's log (`demsweep: solid k top Z`), by pass.
 pub fn parse_solids(log: &str) -> Vec<(usize, f64)> {
-    lines_after(log, "demsweep: solid ")
+    by_pass(log, "solid", "top")
+}
+
+/// The number after `key` on each `demsweep: WHAT k key V …` line of a log, by pass.
+fn by_pass(log: &str, what: &str, key: &str) -> Vec<(usize, f64)> {
+    lines_after(log, &format!("demsweep: {what} "))
         .filter_map(|f| {
-            if f.len() < 3 || f[1] != "top" {
+            if f.len() < 3 || f[1] != key {
                 return None;
             }
             Some((f[0].parse().ok()?, f[2].parse().ok()?))
@@ -454,7 +452,7 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
     let solids = parse_solids(&run.run.log);
     let mut records = passes(scene, &plan, &lines, &solids, &grains);
     for (k, load) in parse_roller(&run.run.log, scene.depth) {
-        if let Some(p) = records.get_mut(k.wrapping_sub(1)) {
+        if let Some(p) = k.checked_sub(1).and_then(|i| records.get_mut(i)) {
             p.roller = Some(load);
         }
     }
