@@ -19,8 +19,11 @@ PS2 0.20 0.20 2.5e-4
 PS3 0.40 0.36 8.0e-5"
 want=${1:-}
 toml=$(mktemp --suffix=.toml)
+# A point's timeout bounds all its passes' wall time together, across resumes: 21 passes beside
+# other work take far longer than the file's single point.
 sed -e "s/^layers = [0-9]*$/layers = 21\nleast_layers = 21/" -e "s/^plate_diameters = .*$/plate_diameters = $plate/" \
-  sweeps/layers-gaboriault.toml > "$toml"
+  -e "s/^timeout_s = .*$/timeout_s = 400000/" sweeps/layers-gaboriault.toml > "$toml"
+grep -q "^timeout_s = 400000$" "$toml"
 grep -q "^least_layers = 21$" "$toml"
 [ "$freeze" != 0 ] && sed -i "s/^least_layers = 21$/least_layers = 21\nfreeze_depth_diameters = $freeze/" "$toml"
 while read -r label mu mur gamma; do
