@@ -58,6 +58,11 @@ pub struct RollerLoad {
     /// per m.
     pub push_n_per_m: f64,
     pub pushing_power_w_per_m: f64,
+    /// The powder it sent over its top in the pass — thrown higher than its highest line or
+    /// carried over it, out of the gap it spreads through — kg per m (docs/layers.md "The
+    /// roller"): `None` in a result written before it was measured.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ejected_kg_per_m: Option<f64>,
 }
 
 /// A roller's steady load: each measure's mean over the steady passes and its SE.

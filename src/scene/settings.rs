@@ -130,6 +130,10 @@ pub struct SceneSettings {
     /// dose is fed at and the platform drops from), mm; 0: the blade grazes it.
     #[serde(skip_serializing_if = "is_zero")]
     pub blade_clearance_mm: f64,
+    /// Layers layout, a roller: segments of its circle's mesh (a numerical knob: the roller's
+    /// resolution; the round blade's angle a segment by default).
+    #[serde(skip_serializing_if = "is_default_roller_segments")]
+    pub roller_segments: usize,
     /// Layers layout: length of the build plate along the travel, in diameters.
     #[serde(skip_serializing_if = "is_default_plate")]
     pub plate_diameters: f64,
@@ -170,11 +174,12 @@ pub const FIDELITIES: [&str; 3] = ["fast", "reference", "thesis"];
 
 /// The numerical knobs a preset sets (field names of [`SceneSettings`]); everything else in
 /// `[scene]` says what the point is and is the same in every preset.
-pub const KNOBS: [&str; 20] = [
+pub const KNOBS: [&str; 21] = [
     "rayleigh_fraction",
     "timestep_s",
     "stiffness_factor",
     "mesh_cells_across",
+    "roller_segments",
     "depth_diameters",
     "window_diameters",
     "rest_speed",
@@ -394,6 +399,7 @@ impl Default for SceneSettings {
             least_layers: None,
             blade_profile: "flat".into(),
             blade_radius_mm: DEFAULT_BLADE_RADIUS_MM,
+            roller_segments: DEFAULT_ROLLER_SEGMENTS,
             blade_clearance_mm: 0.0,
             plate_diameters: DEFAULT_PLATE_DIAMETERS,
             freeze_depth_diameters: 0.0,
@@ -417,6 +423,9 @@ pub const DEFAULT_LAYERS: usize = 10;
 pub const DEFAULT_SEARCH_PASSES: usize = 6;
 /// Layers layout: a round blade's radius by default, mm (Gaboriault et al. 2025's blade).
 pub const DEFAULT_BLADE_RADIUS_MM: f64 = 2.5;
+/// Segments of a roller's whole circle: the round blade's angle a segment (its 48 over 0.75 of a
+/// half circle); docs/study/roller.md "The roller's numerics" halves and doubles it.
+pub const DEFAULT_ROLLER_SEGMENTS: usize = 128;
 /// Layers layout: the build plate's length by default, in diameters.
 pub const DEFAULT_PLATE_DIAMETERS: f64 = 40.0;
 
@@ -434,6 +443,9 @@ fn is_default_blade_radius(r: &f64) -> bool {
 }
 fn is_zero(v: &f64) -> bool {
     *v == 0.0
+}
+fn is_default_roller_segments(n: &usize) -> bool {
+    *n == DEFAULT_ROLLER_SEGMENTS
 }
 fn is_default_plate(v: &f64) -> bool {
     *v == DEFAULT_PLATE_DIAMETERS

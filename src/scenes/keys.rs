@@ -112,6 +112,7 @@ mod tests {
         ("least_layers", "8"),
         ("blade_profile", "\"round\""),
         ("blade_radius_mm", "3.0"),
+        ("roller_segments", "64"),
         ("blade_clearance_mm", "0.1"),
         ("plate_diameters", "50.0"),
         ("freeze_depth_diameters", "5.0"),

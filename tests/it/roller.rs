@@ -207,6 +207,112 @@ fn a_short_roller_run_spreads_layers_and_ends_with_a_steady_layer() {
     let mean = kept.iter().sum::<f64>() / kept.len() as f64;
     let steady = layers["roller"]["mean"]["turning_power_w_per_m"].as_f64().unwrap();
     assert!((steady - mean).abs() <= 1e-12 * mean, "{steady} against the steady passes' {mean}");
+    // The powder it sent over its top: measured in every pass (none of it is negative), the
+    // steady figure the steady passes' mean.
+    let kept: Vec<f64> = passes[from - 1..].iter().map(|p| p["roller"]["ejected_kg_per_m"].as_f64().unwrap()).collect();
+    assert!(passes.iter().all(|p| p["roller"]["ejected_kg_per_m"].as_f64().is_some_and(|e| e >= 0.0)), "{r}");
+    let mean = kept.iter().sum::<f64>() / kept.len() as f64;
+    let steady = layers["roller"]["mean"]["ejected_kg_per_m"].as_f64().unwrap();
+    assert!((steady - mean).abs() <= 1e-12 * mean.max(1e-30), "{steady} against the steady passes' {mean}");
+    assert!(layers["roller"]["se"]["ejected_kg_per_m"].as_f64().is_some(), "{r}");
+}
+
+/// The `demsweep: ejected k mass M count N` lines of a log, by pass.
+fn ejected_lines(log: &str) -> Vec<(usize, f64, usize)> {
+    log.lines()
+        .filter_map(|l| {
+            let f: Vec<&str> = l.trim().strip_prefix("demsweep: ejected ")?.split_whitespace().collect();
+            Some((f[0].parse().ok()?, f[2].parse().ok()?, f.get(4)?.parse::<f64>().ok()? as usize))
+        })
+        .collect()
+}
+
+#[test]
+fn the_powder_sent_over_the_roller_is_the_mass_whose_centres_cross_its_top_line_going_up() {
+    support::require_liggghts!(
+        "the_powder_sent_over_the_roller_is_the_mass_whose_centres_cross_its_top_line_going_up"
+    );
+    let (_tmp, dir) = support::cwd();
+    // Fast enough to throw: its surface runs at 2 m/s about its axis (a throw of 0.2 m, far over
+    // its 10 mm height).
+    let sweep = roller(&dir, "roller_speed_ratio = 4", "layers = 2");
+    let deck = dir.join("deck");
+    support::ok(
+        &dir,
+        &["render", support::p(&sweep), "--set", "blade_speed=0.5", "--out", support::p(&deck)],
+    );
+    let input = std::fs::read_to_string(deck.join("in.liggghts")).unwrap();
+    // Independently of the deck's count: every particle within 1 mm under the plane or above it,
+    // every step, with its mass, over the span the deck counts in (from its count's fix to its
+    // line in the log).
+    let mut cut = String::new();
+    let mut planes = Vec::new();
+    for line in input.lines() {
+        cut += line;
+        cut.push('\n');
+        if let Some(k) = line.strip_prefix("fix ejected").and_then(|r| r.split_whitespace().next()) {
+            let z = after(&input, &format!("fix over{k} "), "move 0 0 ");
+            planes.push(z);
+            cut += &format!(
+                "region band{k} block INF INF INF INF {} INF units box\n\
+                 dump band{k} all custom 1 band{k}.dump id z mass\n\
+                 dump_modify band{k} region band{k} format \"%d %.17g %.17g\"\n",
+                z - 1e-3
+            );
+        }
+        if let Some(k) = line.strip_prefix("print \"demsweep: ejected ").and_then(|r| r.split_whitespace().next()) {
+            cut += &format!("undump band{k}\n");
+        }
+    }
+    assert_eq!(planes.len(), 2, "the deck counts in {} passes:\n{input}", planes.len());
+    std::fs::write(deck.join("in.cut"), cut).unwrap();
+    let out = Command::new("liggghts")
+        .args(["-in", "in.cut", "-log", "log.cut"])
+        .current_dir(&deck)
+        .output()
+        .unwrap();
+    let log = std::fs::read_to_string(deck.join("log.cut")).unwrap_or_default();
+    assert!(out.status.success(), "LIGGGHTS failed: {}", support::text(&out.stdout));
+    let counted = ejected_lines(&log);
+    assert_eq!(counted.len(), 2, "{log}");
+    let mut thrown = 0;
+    for ((k, mass, count), z) in counted.into_iter().zip(&planes) {
+        // A particle crosses once it has been seen at or under the plane and then over it; each
+        // counts once in the pass.
+        let dump = std::fs::read_to_string(deck.join(format!("band{k}.dump"))).unwrap();
+        let (mut under, mut crossed) = (std::collections::HashSet::new(), std::collections::HashMap::new());
+        let mut atoms = false;
+        for line in dump.lines() {
+            if line.starts_with("ITEM:") {
+                atoms = line.starts_with("ITEM: ATOMS");
+                continue;
+            }
+            if !atoms {
+                continue;
+            }
+            let f: Vec<f64> = line.split_whitespace().map(|x| x.parse().unwrap()).collect();
+            let (id, zi, m) = (f[0] as u64, f[1], f[2]);
+            if zi <= *z {
+                under.insert(id);
+            } else if under.contains(&id) {
+                crossed.entry(id).or_insert(m);
+            }
+        }
+        let truth: f64 = crossed.values().sum();
+        assert_eq!(count, crossed.len(), "pass {k}: the deck counted {count}, the positions show {}", crossed.len());
+        assert!((mass - truth).abs() <= 1e-9 * truth.max(1e-30), "pass {k}: {mass} kg against {truth} kg");
+        eprintln!("pass {k}: {count} particles, {mass:.4e} kg over the roller (the positions: {}, {truth:.4e} kg)", crossed.len());
+        thrown += count;
+    }
+    assert!(thrown > 0, "nothing went over the roller: a test of nothing\n{log}");
+
+    // The result reads the same lines, per metre of the slice's width (the box's y extent).
+    let domain: Vec<&str> = input.lines().find(|l| l.starts_with("region domain")).unwrap().split_whitespace().collect();
+    let depth: f64 = domain[6].parse::<f64>().unwrap() - domain[5].parse::<f64>().unwrap();
+    let read = demsweep::scenes::layers::measure::parse_ejected(&log, depth);
+    for ((k, per_m), (j, mass, _)) in read.iter().zip(ejected_lines(&log)) {
+        assert!(*k == j && (per_m * depth - mass).abs() <= 1e-12 * mass.max(1e-30), "pass {k}: {per_m} kg/m");
+    }
 }
 
 /// `sweep render` of `sweep` at `set` into `dir/d`: exit 2 and one stderr line holding every
@@ -286,6 +392,16 @@ fn a_roller_s_bad_radius_or_ratio_and_a_ratio_without_a_roller_are_refused_in_on
         "gap=3",
         &["parameters.roller_speed_ratio", "the conveyor layout has no roller"],
     );
+    // The roller's mesh: a count of segments out of range, or one for a blade.
+    let sweep = with(&dir, swept, "5", "roller");
+    for n in ["8", "5000"] {
+        let toml = std::fs::read_to_string(&sweep).unwrap().replace("[scene]\n", &format!("[scene]\nroller_segments = {n}\n"));
+        let file = support::write_file(&dir.join("segments.toml"), &toml);
+        refused(&dir, &file, "blade_speed=0.5", &["scene.roller_segments", &format!("{n}: "), "from 16 to 4096"]);
+    }
+    let toml = std::fs::read_to_string(with(&dir, "", "5", "round")).unwrap().replace("[scene]\n", "[scene]\nroller_segments = 64\n");
+    let file = support::write_file(&dir.join("segments.toml"), &toml);
+    refused(&dir, &file, "blade_speed=0.5", &["scene.roller_segments", "64: ", "blade_profile = \"roller\""]);
     // A ratio of 0 set on a blade is the default, not a roller's: nothing to refuse.
     let sweep = with(&dir, "roller_speed_ratio = 0", "2.5", "round");
     support::ok(&dir, &["render", support::p(&sweep), "--set", "blade_speed=0.5", "--out", "d0"]);

@@ -8,7 +8,10 @@
 //! - `feed.stl`: the feed platform, top at z = 0, from the box's back to the plate;
 //! - `wall.stl`: the wall after the plate, one diameter thick, top at z = 0;
 //! - `plate.stl`: the build plate, top at z = 0;
-//! - `pit.stl`: the pit's wall under the plate's end (still).
+//! - `pit.stl`: the pit's wall under the plate's end (still);
+//! - `over.stl` (a roller's only): a plane over the whole scene at z = 0, raised each pass to the
+//!   roller's top line, through which the deck counts the powder sent over the roller — not a
+//!   wall: nothing touches it.
 //!
 //! Every mesh spans the periodic depth inset from its faces (a mesh must lie inside the box) and
 //! has no faces normal to y (LIGGGHTS 3.8's mesh build fails on faces that face each other across
@@ -16,9 +19,30 @@
 
 use std::fmt::Write;
 
-use super::{Plan, ROLLER_SEGMENTS, ROUND_ARC_SHARE};
+use super::{Plan, ROUND_ARC_SHARE};
 use crate::scene::mesh::box_stl;
+use crate::scene::settings::{SceneSettings, DEFAULT_ROLLER_SEGMENTS};
 use crate::scene::Scene;
+use crate::scenes::BadSetting;
+
+/// The range of `scene.roller_segments`: from a polygon whose flats a particle feels to one whose
+/// mesh is still built in seconds.
+pub const ROLLER_SEGMENTS: (usize, usize) = (16, 4096);
+
+/// `scene.roller_segments`: within [`ROLLER_SEGMENTS`], and set only for a roller.
+pub fn check(s: &SceneSettings) -> Result<(), BadSetting> {
+    let n = s.roller_segments;
+    let (least, most) = ROLLER_SEGMENTS;
+    if n != DEFAULT_ROLLER_SEGMENTS && s.blade_profile != "roller" {
+        let why = format!("{n}: only a roller's circle is cut in segments; expected it only with blade_profile = \"roller\"");
+        return Err(BadSetting { key: "scene.roller_segments", why });
+    }
+    if !(least..=most).contains(&n) {
+        let why = format!("{n}: expected a whole number of segments from {least} to {most}");
+        return Err(BadSetting { key: "scene.roller_segments", why });
+    }
+    Ok(())
+}
 
 /// Segments of a round blade's arc.
 const ARC_SEGMENTS: usize = 48;
@@ -44,8 +68,9 @@ pub fn blade_stl(s: &Scene, plan: &Plan) -> String {
     if plan.roller {
         // The whole circle, from its top down the back, under it and up the front.
         let pi = std::f64::consts::PI;
-        for i in 0..ROLLER_SEGMENTS {
-            profile.push(point(-pi + 2.0 * pi * i as f64 / ROLLER_SEGMENTS as f64));
+        let n = plan.roller_segments;
+        for i in 0..n {
+            profile.push(point(-pi + 2.0 * pi * i as f64 / n as f64));
         }
         profile.push(profile[0]);
     } else {
@@ -123,6 +148,28 @@ pub fn pit_stl(s: &Scene, plan: &Plan) -> String {
         false,
         coarse(s),
     )
+}
+
+/// The plane the deck counts the powder sent over a roller through: over the whole box along the
+/// travel (inset by half a diameter: a mesh must lie inside it), at z = 0, facing up.
+pub fn over_stl(s: &Scene, plan: &Plan) -> String {
+    let (y0, y1) = inset(s);
+    let (x0, x1) = (plan.feed_x0, s.x_hi - 0.5 * s.diameter);
+    let h = coarse(s);
+    let (nx, ny) = (((x1 - x0) / h).ceil().max(1.0) as usize, ((y1 - y0) / h).ceil().max(1.0) as usize);
+    let mut out = String::from("solid over\n");
+    for i in 0..nx {
+        let (xa, xb) = (x0 + (x1 - x0) * i as f64 / nx as f64, x0 + (x1 - x0) * (i + 1) as f64 / nx as f64);
+        for j in 0..ny {
+            let (ya, yb) = (y0 + (y1 - y0) * j as f64 / ny as f64, y0 + (y1 - y0) * (j + 1) as f64 / ny as f64);
+            let (p00, p10, p11, p01) = ([xa, ya, 0.0], [xb, ya, 0.0], [xb, yb, 0.0], [xa, yb, 0.0]);
+            for tri in [[p00, p10, p11], [p00, p11, p01]] {
+                facet(&mut out, [0.0, 0.0, 1.0], tri);
+            }
+        }
+    }
+    out.push_str("endsolid over\n");
+    out
 }
 
 pub fn plate_stl(s: &Scene, plan: &Plan) -> String {

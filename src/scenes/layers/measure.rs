@@ -128,10 +128,37 @@ pub fn parse_roller(log: &str, depth: f64) -> Vec<(usize, RollerLoad)> {
                 turning_power_w_per_m: per_m(f[4])?,
                 push_n_per_m: per_m(f[6])?,
                 pushing_power_w_per_m: per_m(f[8])?,
+                ejected_kg_per_m: None,
             };
             Some((f[0].parse().ok()?, load))
         })
         .collect()
+}
+
+/// The powder a roller sent over its top in each pass of a log (`demsweep: ejected k mass M
+/// count N`: the mass that crossed, going up, the plane through its highest line, for the whole
+/// slice), per metre of its width `depth`, by pass.
+pub fn parse_ejected(log: &str, depth: f64) -> Vec<(usize, f64)> {
+    by_pass(log, "ejected", "mass").into_iter().map(|(k, m)| (k, m / depth)).collect()
+}
+
+/// A roller's steady load and the powder it sent over its top, as the terminal prints them.
+pub fn roller_lines(r: &RollerSteady) -> Vec<String> {
+    let mut lines = vec![format!(
+        "roller load      torque {:.3e} ± {:.1e} N·m, turning {:.3e} ± {:.1e} W, pushing {:.3e} ± {:.1e} W a metre of its width",
+        r.mean.torque_nm_per_m,
+        r.se.torque_nm_per_m,
+        r.mean.turning_power_w_per_m,
+        r.se.turning_power_w_per_m,
+        r.mean.pushing_power_w_per_m,
+        r.se.pushing_power_w_per_m
+    )];
+    if let (Some(m), Some(se)) = (r.mean.ejected_kg_per_m, r.se.ejected_kg_per_m) {
+        lines.push(format!(
+            "ejected          {m:.3e} ± {se:.1e} kg a pass a metre of its width, over the roller's top"
+        ));
+    }
+    lines
 }
 
 /// The top surface over the plate's inner part: per grid cell the top of the highest sphere over
@@ -311,11 +338,18 @@ fn roller_steady(kept: &[PassRecord]) -> Option<RollerSteady> {
         of(|l| l.push_n_per_m),
         of(|l| l.pushing_power_w_per_m),
     );
+    // Measured in every kept pass, or not at all (a result from before it was).
+    let ejected = loads
+        .iter()
+        .map(|l| l.ejected_kg_per_m)
+        .collect::<Option<Vec<f64>>>()
+        .map(|e| mean_se(&e));
     let load = |pick: fn((f64, f64)) -> f64| RollerLoad {
         torque_nm_per_m: pick(torque),
         turning_power_w_per_m: pick(turning),
         push_n_per_m: pick(push),
         pushing_power_w_per_m: pick(pushing),
+        ejected_kg_per_m: ejected.map(pick),
     };
     Some(RollerSteady { mean: load(|v| v.0), se: load(|v| v.1) })
 }
@@ -454,6 +488,11 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
     for (k, load) in parse_roller(&run.run.log, scene.depth) {
         if let Some(p) = k.checked_sub(1).and_then(|i| records.get_mut(i)) {
             p.roller = Some(load);
+        }
+    }
+    for (k, ejected) in parse_ejected(&run.run.log, scene.depth) {
+        if let Some(load) = k.checked_sub(1).and_then(|i| records.get_mut(i)).and_then(|p| p.roller.as_mut()) {
+            load.ejected_kg_per_m = Some(ejected);
         }
     }
     let series = LayerSeries {

@@ -51,8 +51,9 @@ const MAX_FREEZE_DEPTH_DIAMETERS: f64 = 1000.0;
 /// A layers point's steady layer in results.csv: relative density and packing with their SE,
 /// the powder under the blade (µm), cover, roughness (in D), the first steady pass and the
 /// passes run, the numerical error beside the SE (packing, µm of depth, cover), and a roller's
-/// torque and turning power per metre of its width.
-const RESULT_COLUMNS: [&str; 15] = [
+/// torque and turning power per metre of its width and the powder it sends over its top a pass
+/// (kg per metre of its width) with its SE.
+const RESULT_COLUMNS: [&str; 17] = [
     "relative_density",
     "relative_density_se",
     "steady_packing",
@@ -68,6 +69,8 @@ const RESULT_COLUMNS: [&str; 15] = [
     "numerical_error_cover",
     "roller_torque_nm_per_m",
     "roller_turning_power_w_per_m",
+    "ejected_kg_per_m",
+    "ejected_kg_per_m_se",
 ];
 
 /// Dose of one pass on a loose bed over what the plate's layer can hold at
@@ -133,9 +136,6 @@ pub const MAX_LAYERS: usize = 100;
 pub const SEARCH_MAX_DEPTH_LAYERS: f64 = 20.0;
 /// Most a search pass may multiply the depth by (a pass that deposited almost nothing).
 pub const SEARCH_MAX_GROWTH: f64 = 3.0;
-/// Segments of a roller's whole circle: the round blade's angle a segment (a roller turns, so
-/// all of it is meshed; the round blade meshes [`ROUND_ARC_SHARE`] of a half circle in 48).
-pub const ROLLER_SEGMENTS: usize = 128;
 /// Share of a round blade's half circle that is meshed, centred on its lowest line (Gaboriault
 /// et al.'s case generator meshes 0.75 of it; above it the blade's faces are vertical).
 pub const ROUND_ARC_SHARE: f64 = 0.75;
@@ -249,6 +249,7 @@ impl Layout for Layers {
                 return Err(BadSetting { key, why: format!("{v}: expected a number {lower} to {most}") });
             }
         }
+        geometry::check(s)?;
         if s.blade_profile == "flat" && s.blade_radius_mm != crate::scene::settings::DEFAULT_BLADE_RADIUS_MM {
             return Err(BadSetting {
                 key: "scene.blade_radius_mm",
@@ -300,6 +301,7 @@ impl Layout for Layers {
             "least_layers",
             "blade_profile",
             "blade_radius_mm",
+            "roller_segments",
             "blade_clearance_mm",
             "plate_diameters",
             "freeze_depth_diameters",
@@ -403,6 +405,9 @@ impl Layout for Layers {
             ("plate.stl", geometry::plate_stl(scene, &plan)),
             ("pit.stl", geometry::pit_stl(scene, &plan)),
         ]
+        .into_iter()
+        .chain(plan.roller.then(|| ("over.stl", geometry::over_stl(scene, &plan))))
+        .collect()
     }
 
     fn run_files(&self, s: &SceneSettings) -> Vec<String> {
@@ -540,6 +545,8 @@ impl Layout for Layers {
             e.map(|e| e.covered_fraction),
             l.roller.map(|r| r.mean.torque_nm_per_m),
             l.roller.map(|r| r.mean.turning_power_w_per_m),
+            l.roller.and_then(|r| r.mean.ejected_kg_per_m),
+            l.roller.and_then(|r| r.se.ejected_kg_per_m),
         ];
         values.iter().map(|v| v.filter(|v| v.is_finite()).map_or(String::new(), |v| v.to_string())).collect()
     }
@@ -578,17 +585,7 @@ impl Layout for Layers {
             l.covered_fraction,
             l.roughness_d
         ));
-        if let Some(r) = &l.roller {
-            lines.push(format!(
-                "roller load      torque {:.3e} ± {:.1e} N·m, turning {:.3e} ± {:.1e} W, pushing {:.3e} ± {:.1e} W a metre of its width",
-                r.mean.torque_nm_per_m,
-                r.se.torque_nm_per_m,
-                r.mean.turning_power_w_per_m,
-                r.se.turning_power_w_per_m,
-                r.mean.pushing_power_w_per_m,
-                r.se.pushing_power_w_per_m
-            ));
-        }
+        lines.extend(l.roller.iter().flat_map(measure::roller_lines));
         if let Some(e) = &l.numerical_error {
             lines.push(format!(
                 "numerical error  {} (beside the SE, not in it)",

@@ -17,6 +17,10 @@ use crate::scene::{
 };
 use crate::scenes::moving_blade::{self, Dose};
 
+fn default_roller_segments() -> usize {
+    crate::scene::settings::DEFAULT_ROLLER_SEGMENTS
+}
+
 /// One pass of the blade, as the deck runs it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Pass {
@@ -72,6 +76,9 @@ pub struct Plan {
     pub roller_speed_ratio: f64,
     #[serde(default)]
     pub roller_spin: f64,
+    /// Segments of the roller's circle (`scene.roller_segments`).
+    #[serde(default = "default_roller_segments")]
+    pub roller_segments: usize,
     /// x of the blade's lowest line at the start (flat: its rear face), and its travel in a pass.
     pub tip_x0: f64,
     pub travel: f64,
@@ -385,6 +392,7 @@ pub(super) fn derive(base: Base, settings: &SceneSettings) -> Scene {
         roller,
         roller_speed_ratio,
         roller_spin: if roller { -roller_speed_ratio / radius } else { 0.0 },
+        roller_segments: settings.roller_segments,
         tip_x0,
         travel,
         dose_x0,

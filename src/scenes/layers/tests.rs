@@ -258,6 +258,16 @@ fn a_roller_s_load_is_read_per_metre_of_its_width_and_a_torn_line_is_not() {
 }
 
 #[test]
+fn the_powder_sent_over_a_roller_is_read_per_metre_and_an_old_result_reads_without_it() {
+    let log = "demsweep: ejected 1 mass 3e-09 count 12\ndemsweep: ejected 2 mass\ndemsweep: ejected 3 mass 0 count 0\n";
+    assert_eq!(super::measure::parse_ejected(log, 0.002), vec![(1, 1.5e-6), (3, 0.0)]);
+    let old = r#"{"torque_nm_per_m": 1e-6, "turning_power_w_per_m": 1e-4, "push_n_per_m": 1e-3, "pushing_power_w_per_m": 1e-4}"#;
+    let load: crate::outcome::layers::RollerLoad = serde_json::from_str(old).unwrap();
+    assert_eq!(load.ejected_kg_per_m, None);
+    assert!(!serde_json::to_string(&load).unwrap().contains("ejected"));
+}
+
+#[test]
 fn the_held_bed_a_pass_removes_is_counted_on_the_plate_of_every_later_pass() {
     let log = "demsweep: layer 1 step 100 plate 1.0e-06 count 10\n\
                demsweep: buried 1 mass 2.5e-07 count 3\n\
@@ -637,7 +647,16 @@ fn the_roller_is_a_whole_circle_about_its_axis_turning_at_minus_its_ratio_over_i
     let r = plan.blade_radius;
     assert!(plan.tip_x0 + plan.travel - r > plan.plate_x1, "the roller is taken away over the plate");
     assert!(plan.tip_x0 + plan.travel + r < sc.x_hi, "the roller leaves the box");
-    // Every vertex on the circle of radius r about (tip_x0, r), all the way round.
+    // Every vertex on the circle of radius r about (tip_x0, r), all the way round; the corners
+    // of scene.roller_segments' polygon (128 by default).
+    let corners = |sc: &Scene| {
+        let stl = Layers.mesh(sc);
+        let v: std::collections::HashSet<String> =
+            stl.lines().filter_map(|l| l.trim().strip_prefix("vertex")).map(|l| l.split_whitespace().step_by(2).collect()).collect();
+        v.len()
+    };
+    let fine = crate::scenes::build(&v, &SceneSettings { roller_segments: 256, ..s.clone() }).unwrap();
+    assert_eq!((corners(&sc), corners(&fine)), (128, 256));
     let angles: Vec<f64> = Layers
         .mesh(&sc)
         .lines()
@@ -649,8 +668,9 @@ fn the_roller_is_a_whole_circle_about_its_axis_turning_at_minus_its_ratio_over_i
             z.atan2(x)
         })
         .collect();
-    let step = 2.0 * std::f64::consts::PI / ROLLER_SEGMENTS as f64;
-    for k in 0..ROLLER_SEGMENTS {
+    let n = crate::scene::settings::DEFAULT_ROLLER_SEGMENTS;
+    let step = 2.0 * std::f64::consts::PI / n as f64;
+    for k in 0..n {
         let a = -std::f64::consts::PI + k as f64 * step;
         assert!(angles.iter().any(|b| (b - a)
             .rem_euclid(2.0 * std::f64::consts::PI)
