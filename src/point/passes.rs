@@ -182,6 +182,10 @@ pub fn execute(
     let limits = LogLimits { ke_limit: scene.ke_limit, atoms: ctx.layout.atoms_kept(scene) };
     let spent = |done: &[PassRecord]| done.iter().map(|r| r.wall_time).sum::<f64>();
     let mut k = done.len();
+    // The timeout bounds this attempt's passes: a point resumed after an interruption (a lost
+    // node, a new Slurm job, a stopped session) gets the whole of it again, as a fresh job gets
+    // its walltime; the passes it already has are not run again.
+    let resumed_from = done.len();
     loop {
         // Measured from the least on: after each pass, and at once when a point goes on from
         // passes that already reach it (a run cut off before its result was written, more
@@ -240,7 +244,7 @@ pub fn execute(
             let why = format!("cannot write {} in {}: {e}", pass_input(k), run_dir.display());
             return fail(FailureClass::CouldNotStart, why, String::new(), spent(&done));
         }
-        let left = ctx.timeout.saturating_sub(Duration::from_secs_f64(spent(&done)));
+        let left = ctx.timeout.saturating_sub(Duration::from_secs_f64(spent(&done[resumed_from..])));
         let run = ctx.engine.run(run_dir, &pass_input(k), &limits, left, cancel);
         match run.status {
             RunStatus::Cancelled => return RunOutcome::Cancelled,
