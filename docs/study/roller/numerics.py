@@ -1,0 +1,82 @@
+#!/usr/bin/env python3
+"""The roller's numerics table (docs/study/roller.md "The roller's numerics") from the records
+numerics.sh leaves: for each case, the mean of passes --from on (2 by default, to the last, 3) of
+each pass's relative density, packing, cover, roughness, the roller's torque and turning power,
+and the powder it ejected (over its top), with SE = SD/sqrt(n); then each variant against the
+defaults at its ratio: the difference and how many combined SEs it is.
+
+    python3 docs/study/roller/numerics.py [RECORD_DIR] [--from 2]
+"""
+import argparse
+import json
+import math
+import statistics
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+ORDER = ["r2", "r2-s64", "r2-s256", "r2-dt2", "r4", "r4-s64", "r4-s256", "r4-dt2"]
+WHAT = {"": "defaults (128 segments, 0.33 Rayleigh)", "-s64": "64 segments", "-s256": "256 segments",
+        "-dt2": "timestep halved (0.165 Rayleigh)"}
+MEASURES = [
+    ("relative density", lambda p: p["relative_density"], ".3f"),
+    ("packing", lambda p: p["packing"], ".3f"),
+    ("cover", lambda p: p["covered_fraction"], ".2f"),
+    ("roughness D", lambda p: p["roughness_d"], ".1f"),
+    ("torque µN·m/m", lambda p: p["roller"]["torque_nm_per_m"] * 1e6, ".2f"),
+    ("turning mW/m", lambda p: p["roller"]["turning_power_w_per_m"] * 1e3, ".3f"),
+    ("ejected mg/m", lambda p: p["roller"].get("ejected_kg_per_m", float("nan")) * 1e6, ".2f"),
+]
+
+
+def mean_se(values):
+    values = [v for v in values if not math.isnan(v)]
+    if not values:
+        return float("nan"), float("nan")
+    m = statistics.fmean(values)
+    return m, (statistics.stdev(values) / math.sqrt(len(values)) if len(values) > 1 else float("nan"))
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("record", nargs="?", default=str(HERE / "record" / "numerics"))
+    ap.add_argument("--from", dest="first", type=int, default=2)
+    args = ap.parse_args()
+    record = Path(args.record)
+    rows = {}
+    for label in ORDER:
+        f = record / f"{label}.json"
+        if not f.exists():
+            continue
+        rec = json.loads(f.read_text())
+        r = rec.get("measured") or rec
+        passes = (r.get("layers") or {}).get("passes") or []
+        late = [p for p in passes if p["k"] >= args.first]
+        if not late:
+            print(f"{label}: no passes measured ({rec.get('class')}: {rec.get('reason')})")
+            continue
+        rows[label] = ([mean_se([m(p) for p in late]) for _, m, _ in MEASURES], r.get("cpu_time", float("nan")),
+                       f"{late[0]['k']}–{late[-1]['k']}")
+    head = "| ratio | case | passes | " + " | ".join(n for n, _, _ in MEASURES) + " | CPU s |"
+    print(head + "\n|" + "---|" * (head.count("|") - 1))
+    for label, (cells, cpu, span) in rows.items():
+        ratio, _, variant = label[1:].partition("-")
+        text = " | ".join(f"{m:{fmt}} ± {se:{fmt}}" for (m, se), (_, _, fmt) in zip(cells, MEASURES))
+        print(f"| {ratio} | {WHAT['-' + variant if variant else '']} | {span} | {text} | {cpu:.0f} |")
+    print()
+    print("| ratio | against the defaults | " + " | ".join(n for n, _, _ in MEASURES) + " |")
+    print("|" + "---|" * (len(MEASURES) + 2))
+    for label, (cells, _, _) in rows.items():
+        ratio, _, variant = label[1:].partition("-")
+        base = rows.get(f"r{ratio}")
+        if not variant or not base:
+            continue
+        diffs = []
+        for (m, se), (mb, seb), (_, _, fmt) in zip(cells, base[0], MEASURES):
+            comb = math.hypot(se, seb)
+            z = (m - mb) / comb if comb > 0 else float("nan")
+            diffs.append(f"{m - mb:+{fmt}} ({z:+.1f} SE)")
+        print(f"| {ratio} | {WHAT['-' + variant]} | " + " | ".join(diffs) + " |")
+
+
+if __name__ == "__main__":
+    main()
