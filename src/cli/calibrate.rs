@@ -8,7 +8,7 @@ use clap::Args;
 use demsweep::analysis::calibration::Target;
 use demsweep::error::Error;
 use demsweep::run::calibrate::{self as driver, CalibrationWatch, Settings};
-use demsweep::run::Summary;
+use demsweep::run::{Summary, SweepDir};
 use demsweep::store::DesignRecord;
 use demsweep::sweep::Sweep;
 use demsweep::sys::process::CancelToken;
@@ -109,7 +109,8 @@ pub(super) fn calibrate(a: CalibrateArgs) -> Result<(), Error> {
     let mut watch = CalibrationWatch::new(&sweep, settings.clone(), ad.seed);
     let cancel = CancelToken::new();
     let exec = driver::executor(&sweep)?;
-    let summary = driver::start(&sweep, design, &settings, &out, &exec, &opts, &mut watch, &cancel)?;
+    let summary =
+        driver::start(SweepDir::new(&sweep, design, &out), &settings, &exec, &opts, &mut watch, &cancel)?;
     finish(&summary)
 }
 

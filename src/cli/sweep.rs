@@ -11,7 +11,7 @@ use demsweep::analysis::stats::Bootstrap;
 use demsweep::error::Error;
 use demsweep::run::adapt::AdaptWatch;
 use demsweep::run::progress::ProgressMode;
-use demsweep::run::{self as driver, Summary, Watch};
+use demsweep::run::{self as driver, Summary, SweepDir, Watch};
 use demsweep::store::DesignRecord;
 use demsweep::sweep::Sweep;
 use demsweep::sys::process::CancelToken;
@@ -301,7 +301,8 @@ pub(super) fn adapt(a: AdaptArgs) -> Result<(), Error> {
     let mut watch = AdaptWatch::new(&out, &sweep, Criteria::from_settings(&sweep.file.convergence));
     let cancel = CancelToken::new();
     let exec = driver::SweepExecutor::for_sweep(&sweep)?;
-    let summary = driver::adapt::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?;
+    let summary =
+        driver::adapt::start(SweepDir::new(&sweep, design, &out), &exec, &opts, &mut watch, &cancel)?;
     finish(&summary, &sweep, opts.progress)
 }
 
@@ -316,7 +317,7 @@ fn start(mut sweep: Sweep, design: DesignRecord, a: DesignRunArgs) -> Result<(),
     let mut watch = Watch::new(Criteria::from_settings(&sweep.file.convergence).for_design(lattice));
     let cancel = CancelToken::new();
     let exec = driver::SweepExecutor::for_sweep(&sweep)?;
-    let summary = driver::start(&sweep, design, &out, &exec, &opts, &mut watch, &cancel)?;
+    let summary = driver::start(SweepDir::new(&sweep, design, &out), &exec, &opts, &mut watch, &cancel)?;
     finish(&summary, &sweep, opts.progress)
 }
 
@@ -338,7 +339,8 @@ fn plan(
 ) -> Result<(), Error> {
     let cancel = CancelToken::new();
     let exec = driver::SweepExecutor::for_sweep(sweep)?;
-    let (points, unfinished) = driver::plan_dir(sweep, design, out, &exec, opts.progress, &cancel)?;
+    let (points, unfinished) =
+        driver::plan_dir(SweepDir::new(sweep, design, out), &exec, opts.progress, &cancel)?;
     let dir = demsweep::sys::shell::quote_path(out).into_owned();
     eprintln!("planned {points} points in {dir}, {unfinished} to run; nothing run");
     eprintln!(

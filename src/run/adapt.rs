@@ -26,7 +26,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
-use super::{RunError, RunOptions, Summary};
+use super::{RunError, RunOptions, Summary, SweepDir};
 use crate::analysis::adapt::{self as criterion, Choice};
 use crate::analysis::convergence::{judge, Criteria, SpaceStats};
 use crate::analysis::emulator::{self, Emulator};
@@ -35,7 +35,7 @@ use crate::error::Result;
 use crate::run::batches::{self, PlanFrom, Planned, Sequential};
 use crate::run::pool::{Executor, Flow};
 use crate::run::SpaceHook;
-use crate::store::{DesignRecord, PointRecord, PointStatus, SpaceRecord, Store};
+use crate::store::{PointRecord, PointStatus, SpaceRecord, Store};
 use crate::sweep::Sweep;
 use crate::sys::process::CancelToken;
 
@@ -238,19 +238,19 @@ impl SpaceHook for AdaptWatch {
 /// `sweep adapt SWEEP`: create the directory with the first batch (or check an existing one
 /// and take its batches as they are), then run it batch by batch ([`batches::run`]).
 pub fn start<E: Executor>(
-    sweep: &Sweep,
-    design: DesignRecord,
-    out: &Path,
+    dir: SweepDir,
     exec: &E,
     opts: &RunOptions,
     watch: &mut AdaptWatch,
     cancel: &CancelToken,
 ) -> Result<Summary> {
-    super::create(sweep, design, out, exec, opts.progress, cancel)?;
+    let out = dir.out;
+    super::create(dir, exec, opts.progress, cancel)?;
     batches::run(out, exec, opts, watch, cancel)
 }
 
 impl Sequential for AdaptWatch {
+    const DESIGN: &'static str = "an adaptive sweep";
     /// Each batch's statistics with their intervals and what the rule made of them.
     fn take_lines(&mut self) -> Vec<String> {
         std::mem::take(&mut self.lines)
@@ -261,10 +261,7 @@ impl Sequential for AdaptWatch {
     /// Planned from the last emulator: the candidates that most reduce the statistics'
     /// posterior variance.
     fn plan_next<E: Executor>(&self, exec: &E, from: &PlanFrom) -> Result<bool> {
-        let PlanFrom { dir, manifest, sweep, last } = *from;
-        let DesignRecord::Adapt { batch, max, seed, .. } = manifest.design else {
-            return Err(RunError::Dir { path: dir.to_path_buf(), why: "not an adaptive sweep".into() }.into());
-        };
+        let PlanFrom { dir, manifest, sweep, last, size, seed, .. } = *from;
         let Some((label, em, (x, y, se))) = self.last.as_ref().filter(|(l, ..)| l == last) else {
             return Ok(false);
         };
@@ -277,10 +274,6 @@ impl Sequential for AdaptWatch {
                 fitted.as_ref()
             }
         };
-        let size = batch.min(max.saturating_sub(manifest.points.len()));
-        if size == 0 {
-            return Ok(false);
-        }
         let k = manifest.spaces.len() - 1;
         let cands =
             untaken(criterion::batch_candidates(sweep.dim(), k, seed, em, x), sweep, &manifest.points);

@@ -14,8 +14,9 @@ use super::{RunOptions, Summary};
 use crate::error::{Error, Result};
 use crate::run::pool::Executor;
 use crate::run::pool::Flow;
+use crate::run::RunError;
 use crate::run::SpaceHook;
-use crate::store::{Manifest, PointRecord, PointStatus, SpaceRecord, Store};
+use crate::store::{DesignRecord, Manifest, PointRecord, PointStatus, SpaceRecord, Store};
 use crate::sweep::Sweep;
 use crate::sys::process::CancelToken;
 
@@ -28,6 +29,8 @@ pub fn taken(sweep: &Sweep, points: &[PointRecord]) -> Vec<Vec<f64>> {
 /// What a sequential design adds to a space hook: what it says of its batches, whether its rule
 /// has held, and its next batch.
 pub trait Sequential: SpaceHook {
+    /// The design, as a directory that is not one of it is told (`not an adaptive sweep`).
+    const DESIGN: &'static str;
     /// The lines said about the batches judged since the last call.
     fn take_lines(&mut self) -> Vec<String>;
     /// Whether the design's rule has held.
@@ -46,6 +49,13 @@ pub struct PlanFrom<'a> {
     pub sweep: &'a Sweep,
     /// The label of the manifest's last space: the batch the design must have judged.
     pub last: &'a str,
+    /// Settings in the next batch: the design's `batch`, or as many as its `max` (which counts
+    /// runs, `repeats` of each setting) leaves room for; never 0.
+    pub size: usize,
+    /// The design's seed.
+    pub seed: u64,
+    /// Runs of each setting.
+    pub repeats: usize,
 }
 
 /// Append the next batch of the design in `dir`, planned by `watch` (`ran`: the points of the
@@ -58,7 +68,15 @@ pub fn plan_next<E: Executor, W: Sequential>(dir: &Path, exec: &E, watch: &W, ra
     }
     let sweep = Sweep::parse(&toml, &dir.join("sweep.toml"))?;
     let Some(last) = manifest.spaces.last() else { return Ok(false) };
-    watch.plan_next(exec, &PlanFrom { dir, manifest: &manifest, sweep: &sweep, last: &last.label })
+    let DesignRecord::Adapt { batch, max, seed, repeats, .. } = manifest.design else {
+        return Err(RunError::Dir { path: dir.to_path_buf(), why: format!("not {}", W::DESIGN) }.into());
+    };
+    let size = batch.min(max.saturating_sub(manifest.points.len()) / repeats.max(1));
+    if size == 0 {
+        return Ok(false);
+    }
+    let from = PlanFrom { dir, manifest: &manifest, sweep: &sweep, last: &last.label, size, seed, repeats };
+    watch.plan_next(exec, &from)
 }
 
 /// Run the sequential design in `dir` until its rule holds, `max` points have run, a point is

@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use super::{RunError, RunOptions, Summary};
+use super::{RunError, RunOptions, Summary, SweepDir};
 use crate::analysis::adapt::new_run_noise;
 use crate::analysis::calibration::{self as cal, Emulated, Pick, Posterior, Scatter, Target};
 use crate::analysis::emulator::Emulator;
@@ -24,7 +24,7 @@ use crate::run::batches::{self, PlanFrom, Planned, Sequential};
 use crate::run::pool::{Executor, Flow};
 use crate::run::{PointExecutor, SpaceHook, SweepExecutor};
 use crate::scenes::quantity::{Measured, Quantity};
-use crate::store::{DesignRecord, Manifest, PointRecord, PointStatus, SpaceRecord, Store};
+use crate::store::{Manifest, PointRecord, PointStatus, SpaceRecord, Store};
 use crate::sweep::Sweep;
 use crate::sys::process::CancelToken;
 
@@ -386,17 +386,15 @@ impl SpaceHook for CalibrationWatch {
 
 /// `sweep calibrate SWEEP`: create the directory with its first batch and its settings (or
 /// check an existing one), then run it batch by batch ([`batches::run`]).
-#[allow(clippy::too_many_arguments)]
 pub fn start<E: Executor>(
-    sweep: &Sweep,
-    design: DesignRecord,
+    dir: SweepDir,
     settings: &Settings,
-    out: &Path,
     exec: &E,
     opts: &RunOptions,
     watch: &mut CalibrationWatch,
     cancel: &CancelToken,
 ) -> Result<Summary> {
+    let out = dir.out;
     if let Some(old) = self::settings(out).filter(|old| old != settings) {
         let why = format!(
             "holds a calibration against {}",
@@ -408,7 +406,7 @@ pub fn start<E: Executor>(
         );
         return Err(RunError::OutDir { dir: out.to_path_buf(), why }.into());
     }
-    super::create(sweep, design, out, exec, opts.progress, cancel)?;
+    super::create(dir, exec, opts.progress, cancel)?;
     name_first_batch(out)?;
     let text = serde_json::to_string_pretty(settings).expect("settings serialise");
     crate::sys::atomic::write(&out.join(SETTINGS), text.as_bytes())
@@ -435,6 +433,7 @@ fn name_first_batch(out: &Path) -> Result<()> {
 }
 
 impl Sequential for CalibrationWatch {
+    const DESIGN: &'static str = "a calibration";
     fn take_lines(&mut self) -> Vec<String> {
         std::mem::take(&mut self.lines)
     }
@@ -444,18 +443,10 @@ impl Sequential for CalibrationWatch {
     /// Planned from the last batch's emulators: the settings that most reduce the variance of
     /// the posterior's density, each run `repeats` times.
     fn plan_next<E: Executor>(&self, exec: &E, from: &PlanFrom) -> Result<bool> {
-        let PlanFrom { dir, manifest, sweep, last } = *from;
-        let DesignRecord::Adapt { batch, max, seed, repeats, .. } = manifest.design else {
-            return Err(RunError::Dir { path: dir.to_path_buf(), why: "not a calibration".into() }.into());
-        };
+        let PlanFrom { dir, manifest, sweep, last, size, seed, repeats } = *from;
         let Some((label, ems, d)) = self.last.as_ref().filter(|(l, ..)| l == last) else {
             return Ok(false);
         };
-        // Settings: each runs `repeats` times, and `max` counts runs.
-        let size = batch.min(max.saturating_sub(manifest.points.len()) / repeats.max(1));
-        if size == 0 {
-            return Ok(false);
-        }
         let k = manifest.spaces.len() - 1;
         let post = self.batches.last().and_then(|b| b.posterior.as_ref());
         let cands = cal::candidates(sweep.dim(), k, seed, post);

@@ -119,32 +119,44 @@ impl Summary {
     }
 }
 
-/// `sweep lattice` / `sweep lds`: create (or extend) the sweep directory `out` and run it.
+/// The sweep directory a driver creates, or checks and extends: the sweep, the design its points
+/// come from, and where it is.
+pub struct SweepDir<'a> {
+    pub sweep: &'a Sweep,
+    pub design: DesignRecord,
+    pub out: &'a Path,
+}
+
+impl<'a> SweepDir<'a> {
+    pub fn new(sweep: &'a Sweep, design: DesignRecord, out: &'a Path) -> SweepDir<'a> {
+        SweepDir { sweep, design, out }
+    }
+}
+
+/// `sweep lattice` / `sweep lds`: create (or extend) the sweep directory `dir.out` and run it.
 pub fn start<E: Executor>(
-    sweep: &Sweep,
-    design: DesignRecord,
-    out: &Path,
+    dir: SweepDir,
     exec: &E,
     opts: &RunOptions,
     hook: &mut dyn SpaceHook,
     cancel: &CancelToken,
 ) -> Result<Summary> {
-    let (store, manifest, jobs) = create(sweep, design, out, exec, opts.progress, cancel)?;
+    let sweep = dir.sweep;
+    let (store, manifest, jobs) = create(dir, exec, opts.progress, cancel)?;
     execute(&store, &manifest, exec, jobs, sweep, opts, None, hook, cancel)
 }
 
-/// `sweep lattice|lds --plan`: create (or extend) the sweep directory `out` — manifest,
+/// `sweep lattice|lds --plan`: create (or extend) the sweep directory `dir.out` — manifest,
 /// sweep.toml, results.csv with every unfinished point pending — and run nothing. Returns the
 /// number of points and how many of them are unfinished.
 pub fn plan_dir<E: Executor>(
-    sweep: &Sweep,
-    design: DesignRecord,
-    out: &Path,
+    dir: SweepDir,
     exec: &E,
     progress: ProgressMode,
     cancel: &CancelToken,
 ) -> Result<(usize, usize)> {
-    let (store, manifest, _) = create(sweep, design, out, exec, progress, cancel)?;
+    let out = dir.out;
+    let (store, manifest, _) = create(dir, exec, progress, cancel)?;
     rewrite_results(out)?;
     let unfinished = manifest.points.iter().filter(|p| store.finished(&p.hash).is_none()).count();
     Ok((manifest.points.len(), unfinished))
@@ -152,13 +164,12 @@ pub fn plan_dir<E: Executor>(
 
 /// Plan the design and write (or check and extend) the directory's manifest, under its lock.
 fn create<E: Executor>(
-    sweep: &Sweep,
-    design: DesignRecord,
-    out: &Path,
+    dir: SweepDir,
     exec: &E,
     progress: ProgressMode,
     cancel: &CancelToken,
 ) -> Result<(Store, Manifest, Vec<E::Job>)> {
+    let SweepDir { sweep, design, out } = dir;
     check_out_dir(out)?;
     if !Store::manifest_path(out).exists() {
         // Another `sweep` may write the manifest while we look: only a stranger with no

@@ -10,8 +10,8 @@ use std::time::Duration;
 
 use demsweep::analysis::convergence::Criteria;
 use demsweep::run::adapt::{self, AdaptWatch};
-use demsweep::run::batches;
 use demsweep::run::fake::{fake_mfr, Behaviour, FakeExecutor};
+use demsweep::run::{batches, SweepDir};
 use demsweep::store::{self, DesignRecord, Store};
 use demsweep::sweep::{ConvergenceSettings, Scrambling, Sweep};
 use demsweep::sys::process::CancelToken;
@@ -62,7 +62,7 @@ fn run_adapt(
     c: Criteria,
 ) -> demsweep::run::Summary {
     let mut watch = AdaptWatch::new(out, s, c);
-    adapt::start(s, d, out, exec, &common::quiet(2), &mut watch, &CancelToken::new()).unwrap()
+    adapt::start(SweepDir::new(s, d, out), exec, &common::quiet(2), &mut watch, &CancelToken::new()).unwrap()
 }
 
 #[test]
@@ -129,8 +129,14 @@ fn an_interrupted_adapt_resumes_to_the_uninterrupted_design_running_nothing_twic
         c2.cancel();
     });
     let mut watch = AdaptWatch::new(&out, &s, never());
-    let sum =
-        adapt::start(&s, design(8, 4, 24), &out, &exec, &common::quiet(2), &mut watch, &cancel).unwrap();
+    let sum = adapt::start(
+        SweepDir::new(&s, design(8, 4, 24), &out),
+        &exec,
+        &common::quiet(2),
+        &mut watch,
+        &cancel,
+    )
+    .unwrap();
     t.join().unwrap();
     assert!(sum.interrupted && sum.exit_code() == 130, "{sum:?}");
     let before = done_attempts(&out);

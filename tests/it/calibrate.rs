@@ -10,9 +10,9 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use demsweep::analysis::calibration::Target;
-use demsweep::run::batches;
 use demsweep::run::calibrate::{self, CalibrationWatch, Settings};
 use demsweep::run::fake::{Behaviour, FakeExecutor};
+use demsweep::run::{batches, SweepDir};
 use demsweep::scenes::pour::stand_in::PourPoint;
 use demsweep::store::{self, DesignRecord, Store};
 use demsweep::sys::process::CancelToken;
@@ -433,7 +433,8 @@ fn run_fake(dir: &Path, out: &Path, exec: &FakeExecutor, cancel: &CancelToken) -
     let settings = settings();
     let mut watch = CalibrationWatch::new(&s, settings.clone(), 7);
     let design = DesignRecord::Adapt { first: 10, batch: 4, max: 30, seed: 7, repeats: 1 };
-    calibrate::start(&s, design, &settings, out, exec, &common::quiet(2), &mut watch, cancel).unwrap()
+    calibrate::start(SweepDir::new(&s, design, out), &settings, exec, &common::quiet(2), &mut watch, cancel)
+        .unwrap()
 }
 
 fn settings() -> Settings {

@@ -35,9 +35,7 @@ fn two_sweeps_started_at_once_on_one_new_directory_share_the_work() {
                 .iter()
                 .map(|e| {
                     let (s, out) = (&s, &out);
-                    scope.spawn(move || {
-                        run::start(s, lds(6, 3), out, e, &support::quiet(1), &mut RunAll, &CancelToken::new())
-                    })
+                    scope.spawn(move || support::run_all(s, lds(6, 3), out, e, 1))
                 })
                 .collect();
             handles.into_iter().map(|h| h.join().unwrap()).collect()
@@ -61,7 +59,7 @@ fn joblog_seq_is_unique_when_two_resumes_share_a_directory() {
     let out = tmp.path().join("out");
     // A directory with its manifest and nothing run (a copy made elsewhere, a killed start).
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    run::start(&s, lds(12, 12), &out, &exec, &support::quiet(1), &mut RunAll, &CancelToken::new()).unwrap();
+    support::run_all(&s, lds(12, 12), &out, &exec, 1).unwrap();
     std::fs::remove_dir_all(out.join("runs")).unwrap();
     std::fs::write(out.join("joblog.tsv"), format!("{}\n", store::JOBLOG_HEADER)).unwrap();
     let execs = [
@@ -89,8 +87,7 @@ fn two_resumes_on_one_directory_never_run_a_point_twice() {
     // A directory with its manifest and nothing run: copied from a finished one.
     let reference = tmp.path().join("reference");
     let first = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    run::start(&s, lds(10, 10), &reference, &first, &support::quiet(2), &mut RunAll, &CancelToken::new())
-        .unwrap();
+    support::run_all(&s, lds(10, 10), &reference, &first, 2).unwrap();
     std::fs::create_dir(&out).unwrap();
     for f in ["sweep.toml", "manifest.json"] {
         std::fs::copy(reference.join(f), out.join(f)).unwrap();

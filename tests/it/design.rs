@@ -80,10 +80,9 @@ fn a_larger_max_extends_an_lds_directory_reusing_its_prefix() {
     let s = support::fake_sweep(tmp.path(), "");
     let out = tmp.path().join("out");
     let e1 = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    run::start(&s, lds(4, 4), &out, &e1, &support::quiet(2), &mut RunAll, &CancelToken::new()).unwrap();
+    support::run_all(&s, lds(4, 4), &out, &e1, 2).unwrap();
     let e2 = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    let sum =
-        run::start(&s, lds(8, 4), &out, &e2, &support::quiet(2), &mut RunAll, &CancelToken::new()).unwrap();
+    let sum = support::run_all(&s, lds(8, 4), &out, &e2, 2).unwrap();
     assert_eq!((sum.done, sum.reused, sum.ran), (8, 4, 4));
     assert!(e2.attempts().keys().all(|h| !e1.attempts().contains_key(h)));
     let (manifest, toml) = store::Store::read_manifest(&out).unwrap();
@@ -98,16 +97,14 @@ fn a_design_that_does_not_extend_the_directory_is_refused_and_nothing_changes() 
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
     let three = DesignRecord::Lattice { levels: vec![3] };
-    run::start(&s, three, &out, &exec, &support::quiet(2), &mut RunAll, &CancelToken::new()).unwrap();
+    support::run_all(&s, three, &out, &exec, 2).unwrap();
     let before = std::fs::read(out.join("manifest.json")).unwrap();
     // Levels 2,3 put the 2x2 corners first: the old 3x3 points are not its prefix.
     let two_three = DesignRecord::Lattice { levels: vec![2, 3] };
-    let err = run::start(&s, two_three, &out, &exec, &support::quiet(2), &mut RunAll, &CancelToken::new())
-        .unwrap_err();
+    let err = support::run_all(&s, two_three, &out, &exec, 2).unwrap_err();
     assert_eq!(err.code(), 2, "{err}");
     assert!(err.to_string().contains("not the first points"), "{err}");
-    let err = run::start(&s, lds(9, 9), &out, &exec, &support::quiet(2), &mut RunAll, &CancelToken::new())
-        .unwrap_err();
+    let err = support::run_all(&s, lds(9, 9), &out, &exec, 2).unwrap_err();
     assert!(err.to_string().contains("holds a lattice sweep"), "{err}");
     assert_eq!(std::fs::read(out.join("manifest.json")).unwrap(), before);
     assert_eq!(exec.attempts().len(), 9);
@@ -120,8 +117,7 @@ fn a_point_shared_by_two_lattice_levels_runs_once() {
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
     let design = DesignRecord::Lattice { levels: vec![2, 3] };
-    let sum =
-        run::start(&s, design, &out, &exec, &support::quiet(2), &mut RunAll, &CancelToken::new()).unwrap();
+    let sum = support::run_all(&s, design, &out, &exec, 2).unwrap();
     // The 2×2 corners are among the 3×3 points.
     assert_eq!((sum.points, sum.done), (9, 9));
     assert_eq!(exec.attempts().len(), 9);
@@ -139,16 +135,14 @@ fn bad_designs_are_refused_before_anything_is_written() {
     for design in
         [DesignRecord::Lattice { levels: vec![1] }, DesignRecord::Lattice { levels: vec![1001] }, lds(0, 4)]
     {
-        let err = run::start(&s, design, &out, &exec, &support::quiet(1), &mut RunAll, &CancelToken::new())
-            .unwrap_err();
+        let err = support::run_all(&s, design, &out, &exec, 1).unwrap_err();
         assert_eq!(err.code(), 2, "{err}");
         assert!(!out.exists());
     }
     // A directory that is not a sweep directory.
     std::fs::create_dir(&out).unwrap();
     std::fs::write(out.join("notes.txt"), "mine").unwrap();
-    let err = run::start(&s, lds(2, 2), &out, &exec, &support::quiet(1), &mut RunAll, &CancelToken::new())
-        .unwrap_err();
+    let err = support::run_all(&s, lds(2, 2), &out, &exec, 1).unwrap_err();
     assert_eq!(err.code(), 2);
     assert_eq!(std::fs::read_dir(&out).unwrap().count(), 1);
     let err = run::resume(&out, &exec, &support::quiet(1), &mut RunAll, &CancelToken::new()).unwrap_err();

@@ -208,7 +208,7 @@ fn a_changed_engine_is_refused_unless_forced_and_nothing_changes_on_disk() {
     let s = support::fake_sweep(tmp.path(), "");
     let out = tmp.path().join("out");
     let v1 = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    run::start(&s, lds(3, 3), &out, &v1, &support::quiet(1), &mut RunAll, &CancelToken::new()).unwrap();
+    support::run_all(&s, lds(3, 3), &out, &v1, 1).unwrap();
     let manifest_before = std::fs::read(out.join("manifest.json")).unwrap();
     let mut v2 = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
     v2.identity = "fake-2".into();

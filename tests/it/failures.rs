@@ -42,8 +42,7 @@ fn transient_failures_are_retried_and_physics_failures_are_not() {
             Behaviour::Succeed(MS)
         }
     });
-    let sum = run::start(&s, lds(16, 16), &out, &exec, &support::quiet(2), &mut RunAll, &CancelToken::new())
-        .unwrap();
+    let sum = support::run_all(&s, lds(16, 16), &out, &exec, 2).unwrap();
     let (manifest, _) = store::Store::read_manifest(&out).unwrap();
     let attempts = exec.attempts();
     let rows = results(&out);
@@ -85,8 +84,7 @@ fn a_hanging_job_is_killed_at_its_timeout_and_the_sweep_goes_on() {
     // once too short). The hanging points run at once on the two slots: the test waits one
     // timeout.
     exec.timeout = 10_000 * MS;
-    let sum =
-        run::start(&s, lds(8, 8), &out, &exec, &support::quiet(2), &mut RunAll, &CancelToken::new()).unwrap();
+    let sum = support::run_all(&s, lds(8, 8), &out, &exec, 2).unwrap();
     let (manifest, _) = store::Store::read_manifest(&out).unwrap();
     let rows = results(&out);
     let mut hung = 0;
@@ -120,9 +118,7 @@ fn failed_runs_are_rerun_only_with_retry_failed() {
     let s = support::fake_sweep(tmp.path(), "");
     let out = tmp.path().join("out");
     let fail_all = FakeExecutor::new(|_, _| Behaviour::Fail(MS, FailureClass::EngineError));
-    let sum =
-        run::start(&s, lds(3, 3), &out, &fail_all, &support::quiet(1), &mut RunAll, &CancelToken::new())
-            .unwrap();
+    let sum = support::run_all(&s, lds(3, 3), &out, &fail_all, 1).unwrap();
     assert_eq!((sum.failed, sum.exit_code()), (3, 1));
 
     let ok = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));

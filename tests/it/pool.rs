@@ -8,7 +8,7 @@ use std::sync::atomic::Ordering;
 
 use demsweep::run::fake::{fake_mfr, Behaviour, FakeExecutor};
 use demsweep::run::pool::Flow;
-use demsweep::run::{self, RunAll, SpaceHook};
+use demsweep::run::{self, RunAll, SpaceHook, SweepDir};
 use demsweep::store::{self, PointRecord, PointStatus, SpaceRecord};
 use demsweep::sys::process::CancelToken;
 
@@ -20,8 +20,7 @@ fn every_point_runs_once_with_its_result_in_results_csv() {
     let s = support::fake_sweep(tmp.path(), "");
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(100 * MS));
-    let sum =
-        run::start(&s, lds(8, 4), &out, &exec, &support::quiet(3), &mut RunAll, &CancelToken::new()).unwrap();
+    let sum = support::run_all(&s, lds(8, 4), &out, &exec, 3).unwrap();
     assert_eq!((sum.done, sum.failed, sum.pending, sum.exit_code()), (8, 0, 0, 0));
     assert_eq!(exec.peak.load(Ordering::SeqCst), 3, "three slots were all used");
     let (manifest, _) = store::Store::read_manifest(&out).unwrap();
@@ -68,7 +67,7 @@ fn a_free_slot_takes_the_next_job_while_a_long_one_runs() {
         );
         Behaviour::Succeed(MS)
     });
-    run::start(&s, lds(8, 8), &out, &exec, &support::quiet(2), &mut RunAll, &CancelToken::new()).unwrap();
+    support::run_all(&s, lds(8, 8), &out, &exec, 2).unwrap();
     let log = store::read_joblog(&out).unwrap();
     assert_eq!(log.len(), 8);
     assert!(log.iter().all(|l| l.status == "done"), "{log:?}");
@@ -83,7 +82,9 @@ fn status_counts_runs_claimed_by_a_live_sweep_as_running() {
     let exec = FakeExecutor::new(|_, _| Behaviour::Hang);
     let cancel = CancelToken::new();
     std::thread::scope(|sc| {
-        let h = sc.spawn(|| run::start(&s, lds(4, 4), &out, &exec, &support::quiet(2), &mut RunAll, &cancel));
+        let h = sc.spawn(|| {
+            run::start(SweepDir::new(&s, lds(4, 4), &out), &exec, &support::quiet(2), &mut RunAll, &cancel)
+        });
         // The runs hang: two running is the event waited on, the deadline only a guard.
         let mut seen = None;
         support::wait_until("two runs seen running", support::GUARD, || {
@@ -107,7 +108,9 @@ fn an_interrupt_while_planning_writes_nothing() {
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
     let cancel = CancelToken::new();
     cancel.cancel();
-    let err = run::start(&s, lds(10, 10), &out, &exec, &support::quiet(1), &mut RunAll, &cancel).unwrap_err();
+    let err =
+        run::start(SweepDir::new(&s, lds(10, 10), &out), &exec, &support::quiet(1), &mut RunAll, &cancel)
+            .unwrap_err();
     assert_eq!(err.code(), 130);
     assert!(!out.exists());
 }
@@ -130,8 +133,14 @@ fn the_space_hook_sees_each_completed_space_and_can_stop_the_sweep() {
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(20 * MS));
     let mut hook = StopAfterFirst(vec![]);
-    let sum =
-        run::start(&s, lds(40, 4), &out, &exec, &support::quiet(1), &mut hook, &CancelToken::new()).unwrap();
+    let sum = run::start(
+        SweepDir::new(&s, lds(40, 4), &out),
+        &exec,
+        &support::quiet(1),
+        &mut hook,
+        &CancelToken::new(),
+    )
+    .unwrap();
     assert_eq!(hook.0, vec![("lds 4".to_string(), 4, 4)]);
     assert_eq!(sum.stopped_after.as_deref(), Some("lds 4"));
     assert!(sum.done < 40 && sum.done >= 4, "{sum:?}");

@@ -346,7 +346,7 @@ fn quick_sweep_on_liggghts_ends_with_a_report() {
 fn failed_runs_are_excluded_and_counted() {
     use demsweep::outcome::FailureClass;
     use demsweep::run::fake::{fake_mfr, Behaviour, FakeExecutor};
-    use demsweep::run::{self, RunOptions};
+    use demsweep::run::{self, RunOptions, SweepDir};
     let tmp = tempfile::tempdir().unwrap();
     let text = r#"name = "fails"
 [parameters]
@@ -371,7 +371,7 @@ blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
     };
     let design = demsweep::store::DesignRecord::Lattice { levels: vec![3, 5] };
     let mut hook = run::RunAll;
-    run::start(&sweep, design, &out, &exec, &opts, &mut hook, &Default::default()).unwrap();
+    run::start(SweepDir::new(&sweep, design, &out), &exec, &opts, &mut hook, &Default::default()).unwrap();
     let criteria = demsweep::analysis::convergence::Criteria::from_settings(&sweep.file.convergence);
     let a = demsweep::report::analyse(&out, &criteria, &Default::default()).unwrap();
     // Lattice 3: 3 of 9 points at gap 2; lattice 5: 5 of 25; they share the 3 points of the
@@ -410,7 +410,7 @@ blade_speed = { lo = 1.2, hi = 1.6, unit = "m/s" }
         scrambling: demsweep::sweep::Scrambling::None,
         seed: 0,
     };
-    run::start(&sweep, design, &out, &exec, &opts, &mut hook, &Default::default()).unwrap();
+    run::start(SweepDir::new(&sweep, design, &out), &exec, &opts, &mut hook, &Default::default()).unwrap();
     let a = demsweep::report::analyse(&out, &criteria, &Default::default()).unwrap();
     assert_eq!((a.counts.failed, a.counts.done), (4, 0));
     assert_eq!(a.verdict.status, "not-converged");
@@ -476,7 +476,7 @@ fn predict_recovers_the_stand_in_between_its_points_and_refuses_bad_input() {
 fn report_sections_for_failed_and_screened_sweeps_and_a_points_page() {
     use demsweep::outcome::FailureClass;
     use demsweep::run::fake::{Behaviour, FakeExecutor};
-    use demsweep::run::{self, RunOptions};
+    use demsweep::run::{self, RunOptions, SweepDir};
     use std::time::Duration;
     let tmp = tempfile::tempdir().unwrap();
     let text = "name = \"sections\"\n[parameters]\ngap = { lo = 2.0, hi = 4.0, unit = \"mm\" }\n\
@@ -492,7 +492,8 @@ fn report_sections_for_failed_and_screened_sweeps_and_a_points_page() {
     let build = |name: &str, exec: &FakeExecutor| -> (PathBuf, String) {
         let out = tmp.path().join(name);
         let design = demsweep::store::DesignRecord::Lattice { levels: vec![3] };
-        run::start(&sw, design, &out, exec, &opts, &mut run::RunAll, &Default::default()).unwrap();
+        run::start(SweepDir::new(&sw, design, &out), exec, &opts, &mut run::RunAll, &Default::default())
+            .unwrap();
         let a = demsweep::report::analyse(&out, &criteria, &Default::default()).unwrap();
         demsweep::report::write(&a).unwrap();
         demsweep::run::rewrite_results(&out).unwrap();

@@ -10,7 +10,7 @@ use std::process::{Child, Stdio};
 use std::time::Duration;
 
 use demsweep::run::fake::{Behaviour, FakeExecutor};
-use demsweep::run::{self, RunAll};
+use demsweep::run::{self, RunAll, SweepDir};
 use demsweep::store;
 use demsweep::sys::process::CancelToken;
 
@@ -149,8 +149,7 @@ fn an_interrupted_sweep_resumes_without_rerunning_finished_points() {
     // The reference: one uninterrupted run.
     let reference = tmp.path().join("reference");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(50 * MS));
-    run::start(&s, design.clone(), &reference, &exec, &support::quiet(2), &mut RunAll, &CancelToken::new())
-        .unwrap();
+    support::run_all(&s, design.clone(), &reference, &exec, 2).unwrap();
 
     let out = tmp.path().join("out");
     // Interrupted as the fifth run starts (three have finished by then with two at a time): an
@@ -163,7 +162,8 @@ fn an_interrupted_sweep_resumes_without_rerunning_finished_points() {
         }
         Behaviour::Succeed(200 * MS)
     });
-    let sum = run::start(&s, design, &out, &exec, &support::quiet(2), &mut RunAll, &cancel).unwrap();
+    let sum =
+        run::start(SweepDir::new(&s, design, &out), &exec, &support::quiet(2), &mut RunAll, &cancel).unwrap();
     assert!(sum.interrupted);
     assert_eq!(sum.exit_code(), 130);
     assert!(sum.done > 0 && sum.done < 12, "{sum:?}");

@@ -14,7 +14,7 @@ use demsweep::analysis::stats::Bootstrap;
 use demsweep::run::fake::{fake_mfr, Behaviour, FakeExecutor};
 use demsweep::run::pool::Flow;
 use demsweep::run::screen::Verdict;
-use demsweep::run::{self, SpaceHook};
+use demsweep::run::{self, SpaceHook, SweepDir};
 use demsweep::store::{
     self, DesignRecord, Manifest, PointRecord, PointStatus, SpaceRecord, Store, MANIFEST_FORMAT,
 };
@@ -82,8 +82,14 @@ fn a_verified_screen_skips_the_closed_points_and_counts_them_as_zero() {
     let out = tmp.path().join("out");
     let exec = screened_exec();
     let mut seen = Seen::default();
-    let sum =
-        run::start(&s, lattice3(), &out, &exec, &support::quiet(2), &mut seen, &CancelToken::new()).unwrap();
+    let sum = run::start(
+        SweepDir::new(&s, lattice3(), &out),
+        &exec,
+        &support::quiet(2),
+        &mut seen,
+        &CancelToken::new(),
+    )
+    .unwrap();
     assert_eq!((sum.done, sum.screened, sum.failed, sum.pending, sum.exit_code()), (7, 2, 0, 0, 0));
     assert_eq!(sum.screen.verdict, Verdict::Verified);
     assert_eq!((sum.screen.closed, sum.screen.sample, sum.screen.ran, sum.screen.skipped), (3, 1, 1, 2));
@@ -143,8 +149,14 @@ fn a_verification_run_with_mfr_above_zero_refutes_the_screen_and_every_closed_po
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(20 * MS)).with_closed(closed);
     let mut seen = Seen::default();
-    let sum =
-        run::start(&s, lattice3(), &out, &exec, &support::quiet(2), &mut seen, &CancelToken::new()).unwrap();
+    let sum = run::start(
+        SweepDir::new(&s, lattice3(), &out),
+        &exec,
+        &support::quiet(2),
+        &mut seen,
+        &CancelToken::new(),
+    )
+    .unwrap();
     assert_eq!((sum.done, sum.screened, sum.pending), (9, 0, 0));
     assert_eq!(sum.screen.verdict, Verdict::Refuted);
     assert_eq!((sum.screen.closed, sum.screen.ran, sum.screen.skipped), (3, 3, 0));

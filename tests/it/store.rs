@@ -27,7 +27,7 @@ fn an_inconsistent_or_truncated_manifest_is_refused_naming_the_field() {
     let s = support::fake_sweep(tmp.path(), "");
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
-    run::start(&s, lds(4, 2), &out, &exec, &support::quiet(1), &mut RunAll, &CancelToken::new()).unwrap();
+    support::run_all(&s, lds(4, 2), &out, &exec, 1).unwrap();
     let path = out.join("manifest.json");
     let good = std::fs::read_to_string(&path).unwrap();
     let edit = |f: &dyn Fn(&mut serde_json::Value)| {
@@ -321,8 +321,7 @@ fn a_full_disk_stops_the_sweep_says_where_and_resume_finishes_it() {
     // Each run leaves 40 kB of "log": about five fit.
     let mut exec = FakeExecutor::new(|_, _| Behaviour::Succeed(MS));
     exec.output_bytes = 40_000;
-    let err = run::start(&s, lds(12, 12), &out, &exec, &support::quiet(1), &mut RunAll, &CancelToken::new())
-        .unwrap_err();
+    let err = support::run_all(&s, lds(12, 12), &out, &exec, 1).unwrap_err();
     let msg = err.to_string();
     assert_ne!(err.code(), 0);
     assert!(msg.contains(&format!("no space left on tmpfs ({})", fs.display())), "{msg}");

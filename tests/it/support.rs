@@ -344,6 +344,20 @@ pub fn quiet(jobs: usize) -> demsweep::run::RunOptions {
     }
 }
 
+/// `run::start` of `design` in `out` with `jobs` slots, quietly, every space run to its end
+/// (`RunAll`) and nothing cancelling it.
+pub fn run_all<E: demsweep::run::pool::Executor>(
+    sweep: &demsweep::sweep::Sweep,
+    design: DesignRecord,
+    out: &Path,
+    exec: &E,
+    jobs: usize,
+) -> demsweep::error::Result<demsweep::run::Summary> {
+    let dir = demsweep::run::SweepDir::new(sweep, design, out);
+    let cancel = demsweep::sys::process::CancelToken::new();
+    demsweep::run::start(dir, exec, &quiet(jobs), &mut demsweep::run::RunAll, &cancel)
+}
+
 // ---- reading a sweep directory ----
 
 /// results.csv as (hash, status, failure, mfr) per point index.
@@ -437,8 +451,7 @@ pub fn fake_finished(root: &Path) -> (PathBuf, demsweep::store::Manifest) {
     let s = fake_sweep(root, "");
     let out = root.join("out");
     let exec = demsweep::run::fake::FakeExecutor::new(|_, _| demsweep::run::fake::Behaviour::Succeed(MS));
-    let cancel = demsweep::sys::process::CancelToken::new();
-    demsweep::run::start(&s, lds(3, 3), &out, &exec, &quiet(1), &mut demsweep::run::RunAll, &cancel).unwrap();
+    run_all(&s, lds(3, 3), &out, &exec, 1).unwrap();
     let (manifest, _) = store::Store::read_manifest(&out).unwrap();
     (out, manifest)
 }
