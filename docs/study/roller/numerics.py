@@ -10,6 +10,8 @@ defaults at its ratio: the difference and how many combined SEs it is.
 import argparse
 import json
 import math
+import os
+import re
 import statistics
 from pathlib import Path
 
@@ -42,6 +44,24 @@ def main():
     ap.add_argument("--from", dest="first", type=int, default=2)
     args = ap.parse_args()
     record = Path(args.record)
+    # The particles each pass sent over the roller, from the run directories' logs while they are
+    # at hand ($RUNS), kept in ejected.tsv so that the count can be read from the records alone.
+    runs = Path(os.environ.get("RUNS", "/tmp/roller-numerics"))
+    tsv = record / "ejected.tsv"
+    counts = {}
+    if tsv.exists():
+        for line in tsv.read_text().splitlines()[1:]:
+            label, k, n, m = line.split("\t")
+            counts[(label, int(k))] = (int(n), float(m))
+    for label in ORDER:
+        for log in sorted((runs / label).glob("log.pass.*")) if (runs / label).is_dir() else []:
+            for k, m, n in re.findall(r"^demsweep: ejected (\d+) mass (\S+) count (\S+)", log.read_text(), re.M):
+                counts[(label, int(k))] = (int(float(n)), float(m))
+    if counts:
+        with open(tsv, "w") as f:
+            f.write("label\tpass\tparticles\tmass_kg\n")
+            for (label, k), (n, m) in sorted(counts.items()):
+                f.write(f"{label}\t{k}\t{n}\t{m}\n")
     rows = {}
     for label in ORDER:
         f = record / f"{label}.json"
@@ -56,12 +76,15 @@ def main():
             continue
         rows[label] = ([mean_se([m(p) for p in late]) for _, m, _ in MEASURES], r.get("cpu_time", float("nan")),
                        f"{late[0]['k']}–{late[-1]['k']}")
-    head = "| ratio | case | passes | " + " | ".join(n for n, _, _ in MEASURES) + " | CPU s |"
+    head = "| ratio | case | passes | " + " | ".join(n for n, _, _ in MEASURES) + " | ejected particles | CPU s |"
     print(head + "\n|" + "---|" * (head.count("|") - 1))
     for label, (cells, cpu, span) in rows.items():
         ratio, _, variant = label[1:].partition("-")
         text = " | ".join(f"{m:{fmt}} ± {se:{fmt}}" for (m, se), (_, _, fmt) in zip(cells, MEASURES))
-        print(f"| {ratio} | {WHAT['-' + variant if variant else '']} | {span} | {text} | {cpu:.0f} |")
+        first, last = (int(x) for x in span.split("–"))
+        n = [counts[(label, k)][0] for k in range(first, last + 1) if (label, k) in counts]
+        ejected = "/".join(str(x) for x in n) if n else "-"
+        print(f"| {ratio} | {WHAT['-' + variant if variant else '']} | {span} | {text} | {ejected} | {cpu:.0f} |")
     print()
     print("| ratio | against the defaults | " + " | ".join(n for n, _, _ in MEASURES) + " |")
     print("|" + "---|" * (len(MEASURES) + 2))
