@@ -24,14 +24,18 @@ def deck_numbers(run):
 
 def passes(run):
     area, rho, _ = deck_numbers(run)
-    out, before = [], 0.0
+    out, before, buried = [], 0.0, 0.0
     k = 1
     while (run / f"pass.{k}.json").exists():
         log = (run / f"log.pass.{k}").read_text(errors="replace") if (run / f"log.pass.{k}").exists() else ""
         m = re.search(rf"demsweep: layer {k} step \S+ plate (\S+) count (\S+)", log)
         if not m:
             break
-        mass = float(m.group(1))
+        # A shed bed (bury) removed its deep part after earlier passes' layers were counted: it
+        # is still on the plate.
+        mass = float(m.group(1)) + buried
+        b = re.search(rf"demsweep: buried {k} mass (\S+)", log)
+        buried += float(b.group(1)) if b else 0.0
         cpu = json.loads((run / f"pass.{k}.json").read_text())["cpu_time"]
         out.append((k, cpu, (mass - before) / (rho * area)))
         before = mass
