@@ -3,7 +3,8 @@
 numerics.sh leaves: for each case, the mean of passes --from on (2 by default, to the last, 3) of
 each pass's relative density, packing, cover, roughness, the roller's torque and turning power,
 and the powder it ejected (over its top), with SE = SD/sqrt(n); then each variant against the
-defaults at its ratio: the difference and how many combined SEs it is.
+defaults at its ratio (seed 1): the difference and how many combined SEs it is — and the defaults
+at seed 2 against seed 1, how far two realisations of the same numerics differ.
 
     python3 docs/study/roller/numerics.py [RECORD_DIR] [--from 2]
 """
@@ -16,9 +17,9 @@ import statistics
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-ORDER = ["r2", "r2-s64", "r2-s256", "r2-dt2", "r4", "r4-s64", "r4-s256", "r4-dt2"]
+ORDER = ["r2", "r2-seed2", "r2-s64", "r2-s256", "r2-dt2", "r4", "r4-seed2", "r4-s64", "r4-s256", "r4-dt2"]
 WHAT = {"": "defaults (128 segments, 0.33 Rayleigh)", "-s64": "64 segments", "-s256": "256 segments",
-        "-dt2": "timestep halved (0.165 Rayleigh)"}
+        "-dt2": "timestep halved (0.165 Rayleigh)", "-seed2": "defaults, seed 2"}
 MEASURES = [
     ("relative density", lambda p: p["relative_density"], ".3f"),
     ("packing", lambda p: p["packing"], ".3f"),
