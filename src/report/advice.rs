@@ -140,7 +140,8 @@ pub fn advise(
             "a whole layer before a higher MFR: the points whose layer covers at least {full} of the plate first, then \
              the rest, each by highest MFR (the layer's packing over the gap), among the points whose layer is even \
              along the travel (CV of the deposited mass along the travel within {EVEN_FACTOR}× its counting noise); \
-             points without layer measures are ranked by MFR alone. Uncertainty: the MFR's standard error where the \
+             points without layer measures are ranked by MFR alone; of the points within twice their combined \
+             standard error of the best, the fastest blade first. Uncertainty: the MFR's standard error where the \
              run measured one (batch means over the steady window), else its counting noise, MFR/√n over the n \
              particles counted",
             full = show(FULL_COVER)
@@ -148,8 +149,9 @@ pub fn advise(
     } else {
         format!(
             "a whole layer before a higher {answer_name}: the points whose own pass covers at least {full} of the \
-             plate first, then the rest, each by highest {answer_name}. Uncertainty: its standard error over the \
-             steady passes",
+             plate first, then the rest, each by highest {answer_name}; of the points within twice their combined \
+             standard error of the best, the fastest blade first. Uncertainty: its standard error over the steady \
+             passes",
             full = show(FULL_COVER)
         )
     };
@@ -161,19 +163,40 @@ pub fn advise(
         .iter()
         .filter(|(_, r, _)| even(r) && r.answer.value.is_finite() && r.answer.value > 0.0)
         .collect();
+    // Its standard error where the run measured one, else its counting noise.
+    let se = |r: &crate::outcome::RunResult| {
+        r.answer.se.unwrap_or(r.answer.value / (r.mfr_particles.max(1) as f64).sqrt())
+    };
     // A process engineer wants the plate covered before a denser patchy layer.
     let whole = |r: &crate::outcome::RunResult| r.layer.is_some_and(|l| l.covered_fraction >= FULL_COVER);
     ranked.sort_by(|a, b| whole(b.1).cmp(&whole(a.1)).then(b.1.answer.value.total_cmp(&a.1.answer.value)));
+    // Of the points as good as the best within noise, a machine runs the fastest blade: it
+    // spreads the same layer in less time.
+    if let Some(speed) = parameters.iter().position(|n| n == "blade_speed") {
+        if let Some(best) = ranked.first().map(|b| b.1) {
+            let tied = ranked
+                .iter()
+                .take_while(|(_, r, _)| {
+                    whole(r) == whole(best)
+                        && best.answer.value - r.answer.value
+                            <= 2.0 * (se(best).powi(2) + se(r).powi(2)).sqrt()
+                })
+                .count();
+            let fastest =
+                (0..tied).max_by(|&i, &j| ranked[i].0.values[speed].total_cmp(&ranked[j].0.values[speed]));
+            if let Some(i) = fastest {
+                let first = ranked.remove(i);
+                ranked.insert(0, first);
+            }
+        }
+    }
     let recommended: Vec<Recommended> = ranked
         .iter()
         .take(LISTED)
         .map(|(p, r, _)| Recommended {
             index: p.index,
             parameters: parameters.iter().cloned().zip(p.values.iter().copied()).collect(),
-            answer: crate::outcome::PointAnswer {
-                se: Some(r.answer.se.unwrap_or(r.answer.value / (r.mfr_particles.max(1) as f64).sqrt())),
-                ..r.answer
-            },
+            answer: crate::outcome::PointAnswer { se: Some(se(r)), ..r.answer },
             layer: r.layer,
             detail: layout.and_then(|l| l.answer_detail(r)),
         })
@@ -533,6 +556,18 @@ mod tests {
                 mfr_se: Some(0.002),
             }
         };
+        // Two points the same within noise: the faster blade first, whichever is denser.
+        let tied = vec![point(0, 0.426, 0.95), point(1, 0.425, 0.95), point(2, 0.40, 0.95)];
+        let advice = advise(
+            &["blade_speed".to_string()],
+            &tied,
+            &[],
+            Some(crate::scenes::lookup("layers").unwrap()),
+            "p",
+        );
+        let order: Vec<usize> = advice.recommended.iter().map(|r| r.index).collect();
+        assert_eq!(order, [1, 0, 2], "the faster of the tied first; the distinct one after");
+        assert_eq!(advice.best_is_distinct, Some(false));
         let points = vec![point(0, 0.46, 0.84), point(1, 0.39, 0.77)];
         let layout = crate::scenes::lookup("layers").unwrap();
         let advice = advise(&["blade_speed".to_string()], &points, &[], Some(layout), "steady-layer packing");
