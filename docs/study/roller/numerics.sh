@@ -6,9 +6,9 @@
 # 0.165), each beside the same point at the defaults. Shortened further than run.sh to be
 # affordable beside other work: a 10 D plate (the tool's least; run.sh's 20 D, the shipped 40 D)
 # and 3 passes (run.sh's 4), so the figures are passes 2–3. Each case is `label ratio segments
-# rayleigh_fraction seed`, the most needed first — the last two, the defaults at a second seed,
+# rayleigh_fraction seed`, the most needed first — then the defaults at a second seed, which
 # measure how far two realisations of the same numerics differ, the scale a change of the
-# numerics is read against; resumable as run.sh is (a recorded case is skipped,
+# numerics is read against, and the halved step at ratio 2 again at that seed; resumable as run.sh is (a recorded case is skipped,
 # a case cut short goes on from its last finished pass, its run directory under $RUNS). Run from
 # the repository's root with target/release/sweep built (or SWEEP=path):
 #   OUT=docs/study/roller/record/numerics nice -n 10 bash docs/study/roller/numerics.sh [label]
@@ -28,7 +28,8 @@ r2-s64 2 64 0.33 1
 r4-s256 4 256 0.33 1
 r2-s256 2 256 0.33 1
 r2-seed2 2 128 0.33 2
-r4-seed2 4 128 0.33 2"
+r4-seed2 4 128 0.33 2
+r2-dt2-seed2 2 128 0.165 2"
 want=${1:-}
 while read -r label ratio segments fraction seed; do
   [ -n "$want" ] && [ "$want" != "$label" ] && continue
