@@ -558,7 +558,7 @@ mod tests {
             parameters: BTreeMap::from([("blade_speed".to_string(), 2.0)]),
             answer: crate::outcome::PointAnswer::mfr(mfr),
             mfr_flux: mfr,
-            mfr_particles: 100,
+            answer_particles: 100,
             vx,
             particles: 10,
             steps: 10,

@@ -490,7 +490,7 @@ fn print_flow(r: &demsweep::outcome::RunResult, scene: &demsweep::scene::Scene) 
     println!(
         "MFR        {:.4}{se}  ({} particles; flux cross-check {:.4}, {})",
         r.answer.value,
-        r.mfr_particles,
+        r.answer_particles,
         r.mfr_flux,
         if r.steady { "steady" } else { "NOT steady" }
     );

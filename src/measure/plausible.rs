@@ -80,7 +80,7 @@ pub enum Implausible {
     #[error("{what} = {}: expected {expected}", shown(*.value))]
     Value { what: String, value: f64, expected: String },
     /// A window that counted more particles than the pile holds.
-    #[error("mfr_particles = {counted}: more than the {particles} particles of the pile")]
+    #[error("answer_particles = {counted}: more than the {particles} particles of the pile")]
     Counted { counted: usize, particles: usize },
     /// A particle of a dump frame, where it was: `step 100, particle 7 at x = 10 mm, z = 2 mm:
     /// mass = 0: expected a finite mass > 0`.
@@ -170,9 +170,9 @@ pub fn check_result(r: &RunResult, measures: Measures) -> Result<(), Implausible
         check_within("mfr_flux", r.mfr_flux.abs(), mfr_max)
             .map_err(|_| bad("mfr_flux", r.mfr_flux, &within))?;
     }
-    for (i, w) in r.mfr_windows.iter().enumerate() {
-        check_within(&format!("mfr_windows[{i}]"), w.abs(), mfr_max)
-            .map_err(|_| bad(&format!("mfr_windows[{i}]"), *w, &within))?;
+    for (i, w) in r.answer_windows.iter().enumerate() {
+        check_within(&format!("answer_windows[{i}]"), w.abs(), mfr_max)
+            .map_err(|_| bad(&format!("answer_windows[{i}]"), *w, &within))?;
     }
     if flux && !(r.steady_p.is_finite() && (0.0..=1.0).contains(&r.steady_p)) {
         return Err(bad("steady_p", r.steady_p, "a p-value in [0, 1]"));
@@ -198,8 +198,8 @@ pub fn check_result(r: &RunResult, measures: Measures) -> Result<(), Implausible
     }
     // A held heap (steady_state) is topped up as it deposits, so its window can count more
     // particles than the heap holds at once; a pile of its own cannot.
-    if r.steady_state.is_none() && r.mfr_particles > r.particles {
-        return Err(Implausible::Counted { counted: r.mfr_particles, particles: r.particles });
+    if r.steady_state.is_none() && r.answer_particles > r.particles {
+        return Err(Implausible::Counted { counted: r.answer_particles, particles: r.particles });
     }
     for (what, v) in [("simulated_time", r.simulated_time), ("wall_time", r.wall_time)] {
         if !(v.is_finite() && v >= 0.0) {
@@ -343,7 +343,7 @@ mod tests {
             answer: PointAnswer::mfr(mfr),
             mfr_flux: f64::NAN,
             steady_p: f64::NAN,
-            mfr_windows: vec![0.4, 1.14],
+            answer_windows: vec![0.4, 1.14],
             ..RunResult::default()
         };
         let passes = Measures { flow: true, flux: false, depth: 2.14 };
@@ -354,7 +354,7 @@ mod tests {
         assert!(check_result(&r(0.74 * 2.2), passes).is_err(), "beyond the packing bound over the depth");
         // Nothing flows: its NaN answer is not checked.
         let heap = Measures { flow: false, flux: false, depth: 1.0 };
-        assert!(check_result(&RunResult { mfr_windows: Vec::new(), ..r(f64::NAN) }, heap).is_ok());
+        assert!(check_result(&RunResult { answer_windows: Vec::new(), ..r(f64::NAN) }, heap).is_ok());
         // A flow's result still needs its flux.
         let flow = RunResult { answer: PointAnswer::mfr(0.3), mfr_flux: f64::NAN, ..RunResult::default() };
         assert!(check_result(&flow, Measures::FLOW).unwrap_err().to_string().contains("mfr_flux"));

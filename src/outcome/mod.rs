@@ -45,14 +45,21 @@ pub struct RunResult {
     /// The same from the flux of particles past the blade's front face (cross-check).
     #[serde(default = "not_measured", skip_serializing_if = "is_not_measured")]
     pub mfr_flux: f64,
-    /// Particles counted in the answer: its counting noise is about 1/√n relative.
-    pub mfr_particles: usize,
+    /// Particles counted in the answer (a flow's crossings of its window, a layers point's
+    /// deposits over all its passes): its counting noise is about 1/√n relative. Written as
+    /// `mfr_particles` before December 2026, and read under that name too.
+    #[serde(alias = "mfr_particles")]
+    pub answer_particles: usize,
     /// The steady-state measurement: block series, transient, batches, trend, heap, stop.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub steady_state: Option<Box<crate::outcome::steady::SteadyState>>,
-    /// MFR over consecutive sub-windows of the measurement window.
-    pub mfr_windows: Vec<f64>,
-    /// False when the sub-window MFRs show the flow had not reached a steady state.
+    /// The answer over consecutive parts of the measurement: a flow's MFR over sub-windows of
+    /// its window (four), a layers point's relative density or packing pass by pass, none for
+    /// a pour. Written as `mfr_windows` before December 2026, and read under that name too.
+    #[serde(alias = "mfr_windows")]
+    pub answer_windows: Vec<f64>,
+    /// False when the measurement had not reached a steady state (a flow's sub-windows, a
+    /// layers point's passes).
     pub steady: bool,
     /// Two-sided p-value of the steadiness test (the window's halves, counting noise); NaN and
     /// absent where nothing flows.
@@ -157,9 +164,9 @@ impl Default for RunResult {
             parameters: BTreeMap::new(),
             answer: PointAnswer::default(),
             mfr_flux: 0.0,
-            mfr_particles: 0,
+            answer_particles: 0,
             steady_state: None,
-            mfr_windows: Vec::new(),
+            answer_windows: Vec::new(),
             steady: true,
             steady_p: 1.0,
             vx: Vec::new(),
@@ -346,6 +353,7 @@ mod tests {
         );
         let fused: RunResult = serde_json::from_str(&old("fused", 0.52)).unwrap();
         assert_eq!(fused.answer.kind, AnswerKind::SteadyPacking);
+        assert_eq!((loose.answer_windows.as_slice(), loose.answer_particles), ([0.5, 0.57].as_slice(), 1200));
         // Written again under its own name, and read back the same.
         let json = serde_json::to_value(&loose).unwrap();
         assert!(json.get("mfr").is_none() && json.get("mfr_se").is_none(), "{json}");
@@ -357,6 +365,50 @@ mod tests {
         assert_eq!(again.answer, loose.answer);
         assert_eq!(serde_json::to_value(&again).unwrap(), json);
         assert_eq!(serde_json::to_value(&fused).unwrap()["steady_packing"].as_f64(), Some(0.52));
+    }
+
+    #[test]
+    fn a_recorded_layers_result_with_mfr_keys_reads_its_passes_and_count_under_their_own_names() {
+        // A real result.json, as the layers layout wrote it on 7 December 2026 before its
+        // quantities had their own names (docs/study/layers/record/machine-lattice/a2900f7b…/
+        // result.json at commit ce70714d, copied whole): a fused bed's steady packing as `mfr`,
+        // its per-pass packings as `mfr_windows`, the particles of its 11 passes as
+        // `mfr_particles`.
+        let text = include_str!("../../tests/data/layers-result-before-answer-names.json");
+        let old: serde_json::Value = serde_json::from_str(text).unwrap();
+        assert!(
+            old.get("mfr_windows").is_some() && old.get("answer_windows").is_none(),
+            "not the old format"
+        );
+        let r: RunResult = serde_json::from_str(text).unwrap();
+        assert_eq!(
+            r.answer,
+            PointAnswer {
+                kind: AnswerKind::SteadyPacking,
+                value: 0.17737717229934943,
+                se: Some(0.0036150069293106424)
+            }
+        );
+        let passes = &r.layers.as_ref().expect("its passes").passes;
+        assert_eq!(r.answer_windows, passes.iter().map(|p| p.packing).collect::<Vec<_>>());
+        assert_eq!((r.answer_windows.len(), r.answer_windows[0]), (11, 0.13696732712213172));
+        assert_eq!(r.answer_particles, 1968);
+        assert_eq!(r.answer_particles, passes.iter().map(|p| p.particles).sum::<usize>());
+        // Written again under the new names only, and read back the same.
+        let json = serde_json::to_value(&r).unwrap();
+        for gone in ["mfr", "mfr_se", "mfr_windows", "mfr_particles"] {
+            assert!(json.get(gone).is_none(), "{gone} written again");
+        }
+        assert_eq!(json["answer_windows"], old["mfr_windows"]);
+        assert_eq!(json["answer_particles"], old["mfr_particles"]);
+        // (Compared as written: its NaNs, the flux and the p-value it does not measure, are
+        // equal to nothing.)
+        let again = serde_json::from_value::<RunResult>(json.clone()).unwrap();
+        assert_eq!(
+            (again.answer, &again.answer_windows, again.answer_particles),
+            (r.answer, &r.answer_windows, 1968)
+        );
+        assert_eq!(serde_json::to_value(&again).unwrap(), json);
     }
 
     #[test]

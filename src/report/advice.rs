@@ -165,7 +165,7 @@ pub fn advise(
         .collect();
     // Its standard error where the run measured one, else its counting noise.
     let se = |r: &crate::outcome::RunResult| {
-        r.answer.se.unwrap_or(r.answer.value / (r.mfr_particles.max(1) as f64).sqrt())
+        r.answer.se.unwrap_or(r.answer.value / (r.answer_particles.max(1) as f64).sqrt())
     };
     // A process engineer wants the plate covered before a denser patchy layer.
     let whole = |r: &crate::outcome::RunResult| r.layer.is_some_and(|l| l.covered_fraction >= FULL_COVER);

@@ -169,10 +169,10 @@ impl PointPage {
             let _ = writeln!(
                 t,
                 "  MFR              {:.4}{se} (–), from {} particle crossings",
-                r.answer.value, r.mfr_particles
+                r.answer.value, r.answer_particles
             );
             let _ = writeln!(t, "  MFR (flux check) {:.4} (–)", r.mfr_flux);
-            let w: Vec<String> = r.mfr_windows.iter().map(|v| format!("{v:.4}")).collect();
+            let w: Vec<String> = r.answer_windows.iter().map(|v| format!("{v:.4}")).collect();
             let _ = writeln!(t, "  sub-window MFR   {}", w.join(", "));
             let _ = writeln!(
                 t,

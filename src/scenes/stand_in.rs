@@ -162,7 +162,7 @@ pub fn flow(point: &mut StandInPoint) -> RunResult {
         // The model's own noise: what a seed-to-seed repeat would scatter by.
         answer: PointAnswer { se: Some(flow.mean_mfr() * MFR_NOISE), ..PointAnswer::mfr(mfr) },
         mfr_flux: mfr,
-        mfr_windows: vec![mfr; 4],
+        answer_windows: vec![mfr; 4],
         vx: vx.into_iter().map(Some).collect(),
         ..RunResult::default()
     }

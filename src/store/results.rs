@@ -36,7 +36,8 @@ impl PointStatus {
 ///
 /// Columns: index, the swept parameters, the fixed ones (every other catalogue parameter, the
 /// same on every row, so a row says the whole point), status (`done`, `failed`, `pending`, `screened`),
-/// failure (class), mfr (0 when screened), mfr_flux, mfr_particles, steady, vx_1..vx_12 (m/s,
+/// failure (class), mfr (the answer; 0 when screened), mfr_flux, mfr_particles (the result's
+/// `answer_particles`, under the name it had beside `mfr`), steady, vx_1..vx_12 (m/s,
 /// empty for an empty layer), runtime_s, hash, quality (of the v_x profile, [`crate::measure::quality`];
 /// empty unless done), screen (`closed` for a point the screen closes, `verification` for one of
 /// its verification sample, empty for an open point), mfr_se (the standard error of MFR, from
@@ -83,7 +84,7 @@ pub fn write_results(
                     String::new(),
                     r.answer.value.to_string(),
                     r.mfr_flux.to_string(),
-                    r.mfr_particles.to_string(),
+                    r.answer_particles.to_string(),
                     r.steady.to_string(),
                 ]);
                 row.extend(

@@ -365,7 +365,7 @@ fn a_result_whose_fixed_parameter_is_not_the_sweep_s_or_missing_is_not_counted_a
 
 #[test]
 fn a_huge_number_in_a_result_is_named_in_a_few_characters() {
-    damaged_result(&|v| v["mfr_windows"][0] = 1e300.into(), "mfr_windows[0] = 1e300: expected");
+    damaged_result(&|v| v["answer_windows"][0] = 1e300.into(), "answer_windows[0] = 1e300: expected");
 }
 
 #[test]

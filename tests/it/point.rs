@@ -54,7 +54,7 @@ const THESIS_GAP4: Measured = Measured { mean: 0.1233, sd: 0.0111 };
 
 fn assert_open_case(r: &Value, m: &Measured, what: &str) {
     let (mfr, flux) = (r["mfr"].as_f64().unwrap(), r["mfr_flux"].as_f64().unwrap());
-    let n = r["mfr_particles"].as_u64().unwrap() as f64;
+    let n = r["answer_particles"].as_u64().unwrap() as f64;
     assert!(mfr > 0.0, "{what}: MFR {mfr}");
     assert_measured(mfr, 0.0, m, what);
     let tolerance = FLUX_AGREEMENT.max(3.0 / n.sqrt());
@@ -74,7 +74,7 @@ fn gap_of_two_diameters_flows_and_fills_the_profile() {
         assert!(v > 0.0 && v < 1.6 * 1.5, "v_x {v}");
     }
     // The rear-face count behind the MFR is large enough to mean something.
-    assert!(r["mfr_particles"].as_u64().unwrap() >= 20, "{}", r["mfr_particles"]);
+    assert!(r["answer_particles"].as_u64().unwrap() >= 20, "{}", r["answer_particles"]);
     assert!(r["engine_version"].as_str().unwrap().contains("LIGGGHTS"));
 }
 
@@ -103,7 +103,7 @@ fn thesis_corners_run_without_errors_or_lost_atoms() {
             // none, as the pile's seed has it. Whatever passed is counted alike by the deposit
             // and the flux, and stays near what the seeds measured.
             let what = format!("D = {d}, gap = {gap}");
-            let (flux, n) = (r["mfr_flux"].as_f64().unwrap(), r["mfr_particles"].as_u64().unwrap() as f64);
+            let (flux, n) = (r["mfr_flux"].as_f64().unwrap(), r["answer_particles"].as_u64().unwrap() as f64);
             assert_measured(mfr, 0.0, &D1_GAP1, &what);
             if mfr == 0.0 {
                 assert_eq!(flux, 0.0, "{what}: nothing deposited, yet a flux {flux}");

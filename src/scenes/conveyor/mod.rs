@@ -502,7 +502,7 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
     // The steady window in quarters (the moving-blade scenes' sub-windows, for the same readers).
     let w = &st.state.block_mfr[st.state.transient_blocks..];
     let quarter = w.len().div_ceil(4).max(1);
-    let mfr_windows = w.chunks(quarter).map(|c| c.iter().sum::<f64>() / c.len() as f64).collect();
+    let answer_windows = w.chunks(quarter).map(|c| c.iter().sum::<f64>() / c.len() as f64).collect();
     let steps = blocks.last().map(|b| b.step).unwrap_or(0);
     let strip = crate::engine::dump::read_dump(run.run_dir.join(STRIP_DUMP), &COLUMNS)
         .ok()
@@ -514,10 +514,10 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         parameters: run.parameters.clone(),
         answer: PointAnswer { se: Some(st.mfr_se), ..PointAnswer::mfr(st.mfr) },
         mfr_flux: st.mfr_deleted,
-        mfr_particles: st.particles,
+        answer_particles: st.particles,
         steady_state: Some(Box::new(st.state)),
         vx_se: st.vx_se,
-        mfr_windows,
+        answer_windows,
         steady: st.unsteady.is_none(),
         steady_p: 1.0,
         vx: st.vx,

@@ -506,8 +506,8 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         parameters: run.parameters.clone(),
         answer: series.answer(),
         mfr_flux: f64::NAN,
-        mfr_particles: series.passes.iter().map(|p| p.particles).sum(),
-        mfr_windows: series
+        answer_particles: series.passes.iter().map(|p| p.particles).sum(),
+        answer_windows: series
             .passes
             .iter()
             .map(|p| if plan.fused { p.packing } else { p.relative_density })

@@ -145,8 +145,8 @@ fn series_result(point: &StandInPoint, plan: &Plan, passes: Vec<PassRecord>, fir
     RunResult {
         answer: series.answer(),
         mfr_flux: f64::NAN,
-        mfr_particles: series.passes.iter().map(|p| p.particles).sum(),
-        mfr_windows: series.passes.iter().map(answer).collect(),
+        answer_particles: series.passes.iter().map(|p| p.particles).sum(),
+        answer_windows: series.passes.iter().map(answer).collect(),
         steady,
         steady_p: f64::NAN,
         vx: vec![None; VX_LAYERS],

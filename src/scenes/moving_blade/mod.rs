@@ -430,10 +430,10 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         parameters: run.parameters.clone(),
         answer: PointAnswer::mfr(m.mfr),
         mfr_flux: m.mfr_flux,
-        mfr_particles: m.mfr_particles,
+        answer_particles: m.mfr_particles,
         steady_state: None,
         vx_se: Vec::new(),
-        mfr_windows: m.mfr_windows,
+        answer_windows: m.mfr_windows,
         steady: m.steady,
         steady_p: m.steady_p,
         vx: m.vx,
@@ -452,7 +452,7 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
             "MFR not steady over the window: halves differ beyond counting noise (p = {:.2e} < {}), sub-window MFR {:?}",
             result.steady_p,
             metrics::STEADY_ALPHA,
-            result.mfr_windows.iter().map(|v| (v * 1e3).round() / 1e3).collect::<Vec<_>>()
+            result.answer_windows.iter().map(|v| (v * 1e3).round() / 1e3).collect::<Vec<_>>()
         );
         return Err(Rejected::measured(FailureClass::Unsteady, reason, result));
     }

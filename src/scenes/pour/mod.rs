@@ -373,9 +373,9 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         parameters: run.parameters.clone(),
         answer: PointAnswer::none(),
         mfr_flux: f64::NAN,
-        mfr_particles: 0,
+        answer_particles: 0,
         steady_state: None,
-        mfr_windows: Vec::new(),
+        answer_windows: Vec::new(),
         // The heap came to rest (a heap still moving fails as not-settled).
         steady: true,
         steady_p: f64::NAN,
