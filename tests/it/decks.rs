@@ -12,10 +12,10 @@ use sha2::{Digest, Sha256};
 use crate::support::{self, ok, points, repo, text};
 
 /// Lines of a shipped sweep file replaced to make a case: (from, to).
-type Edits = &'static [(&'static str, &'static str)];
+pub(crate) type Edits = &'static [(&'static str, &'static str)];
 
 /// The sweep files rendered: (case, shipped file, the edits turning it into the case).
-const CASES: &[(&str, &str, Edits)] = &[
+pub(crate) const CASES: &[(&str, &str, Edits)] = &[
     ("quick", "sweeps/quick.toml", &[]),
     ("quick-gated", "sweeps/quick.toml", support::QUICK_AS_GATED),
     ("quick-powder-bed", "sweeps/quick.toml", &[("substrate = \"rough\"", "substrate = \"powder\"")]),

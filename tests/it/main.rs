@@ -52,5 +52,7 @@ mod report;
 mod answer;
 mod hostile;
 
-// How the code is laid out: the layering of src/ that docs/architecture.md states.
+// How the code is laid out: the layering of src/ that docs/architecture.md states, and its steps
+// for adding a layout.
+mod adding_a_layout;
 mod architecture;
