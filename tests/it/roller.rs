@@ -209,7 +209,8 @@ fn a_short_roller_run_spreads_layers_and_ends_with_a_steady_layer() {
     assert!((steady - mean).abs() <= 1e-12 * mean, "{steady} against the steady passes' {mean}");
     // The powder it sent over its top: measured in every pass (none of it is negative), the
     // steady figure the steady passes' mean.
-    let kept: Vec<f64> = passes[from - 1..].iter().map(|p| p["roller"]["ejected_kg_per_m"].as_f64().unwrap()).collect();
+    let kept: Vec<f64> =
+        passes[from - 1..].iter().map(|p| p["roller"]["ejected_kg_per_m"].as_f64().unwrap()).collect();
     assert!(passes.iter().all(|p| p["roller"]["ejected_kg_per_m"].as_f64().is_some_and(|e| e >= 0.0)), "{r}");
     let mean = kept.iter().sum::<f64>() / kept.len() as f64;
     let steady = layers["roller"]["mean"]["ejected_kg_per_m"].as_f64().unwrap();
@@ -260,7 +261,9 @@ fn the_powder_sent_over_the_roller_is_the_mass_whose_centres_cross_its_top_line_
                 z - 1e-3
             );
         }
-        if let Some(k) = line.strip_prefix("print \"demsweep: ejected ").and_then(|r| r.split_whitespace().next()) {
+        if let Some(k) =
+            line.strip_prefix("print \"demsweep: ejected ").and_then(|r| r.split_whitespace().next())
+        {
             cut += &format!("undump band{k}\n");
         }
     }
@@ -299,15 +302,24 @@ fn the_powder_sent_over_the_roller_is_the_mass_whose_centres_cross_its_top_line_
             }
         }
         let truth: f64 = crossed.values().sum();
-        assert_eq!(count, crossed.len(), "pass {k}: the deck counted {count}, the positions show {}", crossed.len());
+        assert_eq!(
+            count,
+            crossed.len(),
+            "pass {k}: the deck counted {count}, the positions show {}",
+            crossed.len()
+        );
         assert!((mass - truth).abs() <= 1e-9 * truth.max(1e-30), "pass {k}: {mass} kg against {truth} kg");
-        eprintln!("pass {k}: {count} particles, {mass:.4e} kg over the roller (the positions: {}, {truth:.4e} kg)", crossed.len());
+        eprintln!(
+            "pass {k}: {count} particles, {mass:.4e} kg over the roller (the positions: {}, {truth:.4e} kg)",
+            crossed.len()
+        );
         thrown += count;
     }
     assert!(thrown > 0, "nothing went over the roller: a test of nothing\n{log}");
 
     // The result reads the same lines, per metre of the slice's width (the box's y extent).
-    let domain: Vec<&str> = input.lines().find(|l| l.starts_with("region domain")).unwrap().split_whitespace().collect();
+    let domain: Vec<&str> =
+        input.lines().find(|l| l.starts_with("region domain")).unwrap().split_whitespace().collect();
     let depth: f64 = domain[6].parse::<f64>().unwrap() - domain[5].parse::<f64>().unwrap();
     let read = demsweep::scenes::layers::measure::parse_ejected(&log, depth);
     for ((k, per_m), (j, mass, _)) in read.iter().zip(ejected_lines(&log)) {
@@ -395,11 +407,20 @@ fn a_roller_s_bad_radius_or_ratio_and_a_ratio_without_a_roller_are_refused_in_on
     // The roller's mesh: a count of segments out of range, or one for a blade.
     let sweep = with(&dir, swept, "5", "roller");
     for n in ["8", "5000"] {
-        let toml = std::fs::read_to_string(&sweep).unwrap().replace("[scene]\n", &format!("[scene]\nroller_segments = {n}\n"));
+        let toml = std::fs::read_to_string(&sweep)
+            .unwrap()
+            .replace("[scene]\n", &format!("[scene]\nroller_segments = {n}\n"));
         let file = support::write_file(&dir.join("segments.toml"), &toml);
-        refused(&dir, &file, "blade_speed=0.5", &["scene.roller_segments", &format!("{n}: "), "from 16 to 4096"]);
+        refused(
+            &dir,
+            &file,
+            "blade_speed=0.5",
+            &["scene.roller_segments", &format!("{n}: "), "from 16 to 4096"],
+        );
     }
-    let toml = std::fs::read_to_string(with(&dir, "", "5", "round")).unwrap().replace("[scene]\n", "[scene]\nroller_segments = 64\n");
+    let toml = std::fs::read_to_string(with(&dir, "", "5", "round"))
+        .unwrap()
+        .replace("[scene]\n", "[scene]\nroller_segments = 64\n");
     let file = support::write_file(&dir.join("segments.toml"), &toml);
     refused(&dir, &file, "blade_speed=0.5", &["scene.roller_segments", "64: ", "blade_profile = \"roller\""]);
     // A ratio of 0 set on a blade is the default, not a roller's: nothing to refuse.

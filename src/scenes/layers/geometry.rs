@@ -161,7 +161,8 @@ pub fn over_stl(s: &Scene, plan: &Plan) -> String {
     for i in 0..nx {
         let (xa, xb) = (x0 + (x1 - x0) * i as f64 / nx as f64, x0 + (x1 - x0) * (i + 1) as f64 / nx as f64);
         for j in 0..ny {
-            let (ya, yb) = (y0 + (y1 - y0) * j as f64 / ny as f64, y0 + (y1 - y0) * (j + 1) as f64 / ny as f64);
+            let (ya, yb) =
+                (y0 + (y1 - y0) * j as f64 / ny as f64, y0 + (y1 - y0) * (j + 1) as f64 / ny as f64);
             let (p00, p10, p11, p01) = ([xa, ya, 0.0], [xb, ya, 0.0], [xb, yb, 0.0], [xa, yb, 0.0]);
             for tri in [[p00, p10, p11], [p00, p11, p01]] {
                 facet(&mut out, [0.0, 0.0, 1.0], tri);

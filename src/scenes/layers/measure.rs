@@ -339,11 +339,7 @@ fn roller_steady(kept: &[PassRecord]) -> Option<RollerSteady> {
         of(|l| l.pushing_power_w_per_m),
     );
     // Measured in every kept pass, or not at all (a result from before it was).
-    let ejected = loads
-        .iter()
-        .map(|l| l.ejected_kg_per_m)
-        .collect::<Option<Vec<f64>>>()
-        .map(|e| mean_se(&e));
+    let ejected = loads.iter().map(|l| l.ejected_kg_per_m).collect::<Option<Vec<f64>>>().map(|e| mean_se(&e));
     let load = |pick: fn((f64, f64)) -> f64| RollerLoad {
         torque_nm_per_m: pick(torque),
         turning_power_w_per_m: pick(turning),
@@ -491,7 +487,8 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         }
     }
     for (k, ejected) in parse_ejected(&run.run.log, scene.depth) {
-        if let Some(load) = k.checked_sub(1).and_then(|i| records.get_mut(i)).and_then(|p| p.roller.as_mut()) {
+        if let Some(load) = k.checked_sub(1).and_then(|i| records.get_mut(i)).and_then(|p| p.roller.as_mut())
+        {
             load.ejected_kg_per_m = Some(ejected);
         }
     }

@@ -651,8 +651,11 @@ fn the_roller_is_a_whole_circle_about_its_axis_turning_at_minus_its_ratio_over_i
     // of scene.roller_segments' polygon (128 by default).
     let corners = |sc: &Scene| {
         let stl = Layers.mesh(sc);
-        let v: std::collections::HashSet<String> =
-            stl.lines().filter_map(|l| l.trim().strip_prefix("vertex")).map(|l| l.split_whitespace().step_by(2).collect()).collect();
+        let v: std::collections::HashSet<String> = stl
+            .lines()
+            .filter_map(|l| l.trim().strip_prefix("vertex"))
+            .map(|l| l.split_whitespace().step_by(2).collect())
+            .collect();
         v.len()
     };
     let fine = crate::scenes::build(&v, &SceneSettings { roller_segments: 256, ..s.clone() }).unwrap();
