@@ -95,17 +95,6 @@ fn module_file(src: &Path, path: &[&str]) -> Option<PathBuf> {
     [dir.with_extension("rs"), dir.join("mod.rs")].into_iter().find(|f| f.is_file())
 }
 
-fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    for entry in std::fs::read_dir(dir).unwrap() {
-        let path = entry.unwrap().path();
-        if path.is_dir() {
-            rust_files(&path, out);
-        } else if path.extension().is_some_and(|e| e == "rs") {
-            out.push(path);
-        }
-    }
-}
-
 /// Why a Rust path the document names (`scene::own::LayoutData`, `Scene::new`, `Layout`) does
 /// not resolve in `src/`, if it does not.
 fn unresolved(src: &Path, sources: &[(PathBuf, String)], path: &str) -> Option<String> {
@@ -163,7 +152,7 @@ fn step_problems(root: &Path, doc: &str) -> Vec<String> {
         }
     }
     let mut paths = Vec::new();
-    rust_files(&src, &mut paths);
+    crate::architecture::rust_files(&src, &mut paths);
     let sources: Vec<(PathBuf, String)> = paths.into_iter().map(|p| (p.clone(), read(&p))).collect();
     for span in spans(section) {
         // A placeholder (`src/scenes/NAME/`) or a command line is not a name to check.
@@ -218,7 +207,7 @@ fn the_step_check_fails_on_a_missing_method_a_method_out_of_place_and_a_name_tha
 }
 
 /// The folders of `src/scenes/` (each a layout's, or a family's).
-fn layout_folders(root: &Path) -> Vec<String> {
+pub(crate) fn layout_folders(root: &Path) -> Vec<String> {
     let mut folders: Vec<String> = std::fs::read_dir(root.join("src/scenes"))
         .unwrap()
         .map(|e| e.unwrap().path())
@@ -252,7 +241,7 @@ fn every_layout_folder_is_registered_and_has_what_the_steps_say() {
     for folder in &folders {
         let dir = root.join("src/scenes").join(folder);
         let mut files = Vec::new();
-        rust_files(&dir, &mut files);
+        crate::architecture::rust_files(&dir, &mut files);
         let text: String = files.iter().map(|f| read(f)).collect();
         let mine = format!("src/scenes/{folder}/");
         let mut lacks = |what: &str, has: bool| {

@@ -29,7 +29,8 @@ fn table() -> BTreeMap<String, usize> {
     rows
 }
 
-fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+/// Every `.rs` file under `dir`.
+pub(crate) fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     for entry in std::fs::read_dir(dir).unwrap() {
         let path = entry.unwrap().path();
         if path.is_dir() {
@@ -299,13 +300,7 @@ fn the_layout_name_test_sees_a_comparison_and_a_reach_into_a_folder() {
 fn no_production_line_outside_the_scene_folders_names_a_layout() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let names = demsweep::scenes::names();
-    let mut folders: Vec<String> = std::fs::read_dir(src.join("scenes"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.is_dir())
-        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
-        .collect();
-    folders.sort();
+    let folders = crate::adding_a_layout::layout_folders(Path::new(env!("CARGO_MANIFEST_DIR")));
     assert!(folders.len() >= 3 && names.len() >= 4, "layouts {names:?}, folders {folders:?}");
     let mut paths = Vec::new();
     rust_files(&src, &mut paths);

@@ -77,13 +77,7 @@ fn the_roller_travels_and_turns_as_a_cylinder_whose_surface_runs_at_its_speed_ra
          print \"reference point ${{refx}} ${{refy}} ${{refz}}\"\n",
         n - 1
     );
-    std::fs::write(deck.join("in.cut"), cut).unwrap();
-    let out = Command::new("liggghts")
-        .args(["-in", "in.cut", "-log", "log.cut"])
-        .current_dir(&deck)
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "LIGGGHTS failed: {}", support::text(&out.stdout));
+    let (said, _) = run_cut(&deck, &cut);
     // The last dump of each (the first is the setup's).
     let last = |ext: &str| {
         let mut files: Vec<(u64, PathBuf)> = std::fs::read_dir(&deck)
@@ -130,7 +124,6 @@ fn the_roller_travels_and_turns_as_a_cylinder_whose_surface_runs_at_its_speed_ra
     }
     // The torque the roller's mesh sums is about its reference point: carried with the axis by
     // the travel, and on it, so the turn about the axis leaves it there.
-    let said = support::text(&out.stdout);
     let reference: Vec<f64> = said
         .lines()
         .find_map(|l| l.strip_prefix("reference point "))
@@ -268,14 +261,7 @@ fn the_powder_sent_over_the_roller_is_the_mass_whose_centres_cross_its_top_line_
         }
     }
     assert_eq!(planes.len(), 2, "the deck counts in {} passes:\n{input}", planes.len());
-    std::fs::write(deck.join("in.cut"), cut).unwrap();
-    let out = Command::new("liggghts")
-        .args(["-in", "in.cut", "-log", "log.cut"])
-        .current_dir(&deck)
-        .output()
-        .unwrap();
-    let log = std::fs::read_to_string(deck.join("log.cut")).unwrap_or_default();
-    assert!(out.status.success(), "LIGGGHTS failed: {}", support::text(&out.stdout));
+    let (_, log) = run_cut(&deck, &cut);
     let counted = ejected_lines(&log);
     assert_eq!(counted.len(), 2, "{log}");
     let mut thrown = 0;
@@ -426,4 +412,18 @@ fn a_roller_s_bad_radius_or_ratio_and_a_ratio_without_a_roller_are_refused_in_on
     // A ratio of 0 set on a blade is the default, not a roller's: nothing to refuse.
     let sweep = with(&dir, "roller_speed_ratio = 0", "2.5", "round");
     support::ok(&dir, &["render", support::p(&sweep), "--set", "blade_speed=0.5", "--out", "d0"]);
+}
+
+/// Run `cut` (a point's deck cut short) as `in.cut` in `deck` through LIGGGHTS: its screen
+/// output and its log.
+fn run_cut(deck: &Path, cut: &str) -> (String, String) {
+    std::fs::write(deck.join("in.cut"), cut).unwrap();
+    let out = Command::new("liggghts")
+        .args(["-in", "in.cut", "-log", "log.cut"])
+        .current_dir(deck)
+        .output()
+        .unwrap();
+    let said = support::text(&out.stdout);
+    assert!(out.status.success(), "LIGGGHTS failed: {said}");
+    (said, std::fs::read_to_string(deck.join("log.cut")).unwrap_or_default())
 }

@@ -75,21 +75,31 @@ impl SpaceHook for Seen {
     }
 }
 
+/// The 3 × 3 lattice of `s` run into `out` by `exec`, two at a time, with what each batch saw.
+fn run_lattice3<E: demsweep::run::pool::Executor>(
+    s: &demsweep::sweep::Sweep,
+    out: &std::path::Path,
+    exec: &E,
+) -> (demsweep::run::Summary, Seen) {
+    let mut seen = Seen::default();
+    let sum = run::start(
+        SweepDir::new(s, lattice3(), out),
+        exec,
+        &support::quiet(2),
+        &mut seen,
+        &CancelToken::new(),
+    )
+    .unwrap();
+    (sum, seen)
+}
+
 #[test]
 fn a_verified_screen_skips_the_closed_points_and_counts_them_as_zero() {
     let tmp = tempfile::tempdir().unwrap();
     let s = fake_sweep(tmp.path(), "screen_sample = 0.0\nscreen_sample_min = 1");
     let out = tmp.path().join("out");
     let exec = screened_exec();
-    let mut seen = Seen::default();
-    let sum = run::start(
-        SweepDir::new(&s, lattice3(), &out),
-        &exec,
-        &support::quiet(2),
-        &mut seen,
-        &CancelToken::new(),
-    )
-    .unwrap();
+    let (sum, seen) = run_lattice3(&s, &out, &exec);
     assert_eq!((sum.done, sum.screened, sum.failed, sum.pending, sum.exit_code()), (7, 2, 0, 0, 0));
     assert_eq!(sum.screen.verdict, Verdict::Verified);
     assert_eq!((sum.screen.closed, sum.screen.sample, sum.screen.ran, sum.screen.skipped), (3, 1, 1, 2));
@@ -148,15 +158,7 @@ fn a_verification_run_with_mfr_above_zero_refutes_the_screen_and_every_closed_po
     let s = fake_sweep(tmp.path(), "screen_sample = 0.0\nscreen_sample_min = 1");
     let out = tmp.path().join("out");
     let exec = FakeExecutor::new(|_, _| Behaviour::Succeed(20 * MS)).with_closed(closed);
-    let mut seen = Seen::default();
-    let sum = run::start(
-        SweepDir::new(&s, lattice3(), &out),
-        &exec,
-        &support::quiet(2),
-        &mut seen,
-        &CancelToken::new(),
-    )
-    .unwrap();
+    let (sum, seen) = run_lattice3(&s, &out, &exec);
     assert_eq!((sum.done, sum.screened, sum.pending), (9, 0, 0));
     assert_eq!(sum.screen.verdict, Verdict::Refuted);
     assert_eq!((sum.screen.closed, sum.screen.ran, sum.screen.skipped), (3, 3, 0));
