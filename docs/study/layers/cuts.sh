@@ -4,7 +4,9 @@
 #   machine — sweeps/ti64-layers.toml at 50 µm and 0.1 m/s (the shipped file, no hand-set key);
 #   PS1     — sweeps/layers-gaboriault.toml at 0.1 m/s, Gaboriault et al.'s PS1 (the file's own
 #             friction 0.20, rolling 0.10 and 4.667e-4 J/m², docs/study/layers/twenty.sh);
-#   single  — sweeps/ti64-machine.toml's single layer at 0.08 m/s, for the cost ratio.
+#   single  — sweeps/ti64-machine.toml's single layer at 0.08 m/s, for the cost ratio;
+#   machine-plate80, machine-plate160 — the machine point on a plate of 80 or 160 mean
+#             diameters (`plate_diameters`; the shipped 40 D), its numerical bound.
 # The binary is $SWEEP (one built per cut, e.g. /tmp/sweep-A); LABEL names it in the records;
 # SEED=n runs every scene at another seed (`seed = n`, the label's records -seedn).
 # Each run keeps its directory under runs/cuts/<label>-<scene>/, so an interrupted study goes on
@@ -37,6 +39,11 @@ done
 for scene in "$@"; do
   case $scene in
     machine) file=ti64-layers set=layer_thickness=0.05,blade_speed=0.1 ;;
+    machine-plate*) file=ti64-layers set=layer_thickness=0.05,blade_speed=0.1
+      plate=${scene#machine-plate}
+      sed -e "s/^\[scene\]$/[scene]\nplate_diameters = $plate.0/" "$tmp/$file.toml" > "$tmp/$scene.toml"
+      grep -q "^plate_diameters = $plate.0$" "$tmp/$scene.toml"
+      file=$scene ;;
     PS1) file=layers-gaboriault set=blade_speed=0.1,friction=0.20,rolling_friction=0.10,surface_energy=4.667e-4 ;;
     single) file=ti64-machine set=blade_speed=0.08 ;;
     *) echo "unknown scene $scene" >&2; exit 2 ;;
