@@ -22,7 +22,8 @@ use demsweep::sweep::{Sweep, SweepError};
 ///
 /// Turns a sweep file (TOML) into a design — a regular lattice or scrambled Halton points —,
 /// renders one LIGGGHTS deck per point, runs them as a job pool, and reads the mass flow ratio
-/// (MFR) and the v_x profile in front of the blade from the dumps.
+/// (MFR) and the v_x profile in front of the blade from the dumps — or, layer after layer, the
+/// steady layer's relative density or packing.
 ///
 /// Exit codes: 0 success; 1 a sweep finished but some runs failed; 2 bad input (nothing on disk
 /// changed); 3 engine failure; 4 internal error; 130 interrupted (the directory is resumable).
@@ -35,10 +36,11 @@ pub struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run nested lattices (e.g. 5^d, 6^d, ...) until the MFR statistics converge; a point shared
-    /// by two levels runs once.
+    /// Run nested lattices (e.g. 5^d, 6^d, ...) until the answer's statistics converge; a point
+    /// shared by two levels runs once.
     ///
-    /// Each level is one space; after each, the MFR statistics are compared with the previous
+    /// The answer is MFR, or a layers sweep's steady layer (relative density or packing). Each
+    /// level is one space; after each, the answer's statistics are compared with the previous
     /// level's ([convergence] rule, or the flags below). Once the rule holds no new runs start.
     /// Ends by writing the report (as `sweep report`) and printing the verdict, naming the level.
     /// Points where nothing can pass under the blade are screened as MFR = 0 once a sample of
@@ -48,10 +50,11 @@ enum Command {
   sweep lattice my.toml --levels 3,5,9 --out runs/lat   # nested 3^d, 5^d, 9^d"
     )]
     Lattice(sweep::LatticeArgs),
-    /// Run scrambled-Halton points in batches of --step up to --max, stopping once the MFR
+    /// Run scrambled-Halton points in batches of --step up to --max, stopping once the answer's
     /// statistics converge.
     ///
-    /// Each prefix (step, 2·step, ...) is one space; after each, the MFR statistics are compared
+    /// The answer is MFR, or a layers sweep's steady layer (relative density or packing). Each
+    /// prefix (step, 2·step, ...) is one space; after each, the answer's statistics are compared
     /// with the previous prefix's ([convergence] rule, or the flags below). Once the rule holds no
     /// new runs start. Ends by writing the report (as `sweep report`) and printing the verdict.
     /// A larger --max on a converged directory extends it and judges again past its old extent.
@@ -64,11 +67,11 @@ enum Command {
     )]
     Lds(sweep::LdsArgs),
     /// Run a sequential design: a scrambled-Halton first batch, then batches placed where the
-    /// emulator says the MFR statistics are least known, until they are known.
+    /// emulator says the answer's statistics are least known, until they are known.
     ///
     /// After each batch a Gaussian-process emulator (each run's own SE as its noise; a jammed
-    /// run's zero read as the floor of the flow, not a value) gives the four statistics of MFR
-    /// over the space with 95% intervals from its posterior; the rule
+    /// run's zero read as the floor of the flow, not a value) gives the four statistics of the
+    /// answer (MFR, or a layers sweep's steady layer) over the space with 95% intervals from its posterior; the rule
     /// ([convergence], or the flags below) judges them batch to batch, and once it holds no new
     /// runs start. The next batch is the set of candidates that most reduces the statistics'
     /// posterior variance, each over its scale (docs/statistics.md "Adaptive design");

@@ -94,6 +94,8 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
             "spaces": c.spaces,
             "wall_time": format!("{:.0}", a.timing.wall_time_s),
             "core_seconds": format!("{:.0}", a.timing.core_seconds),
+            "cpu_seconds": format!("{:.0}", a.timing.cpu_seconds),
+            "runs_without_cpu": a.timing.runs_without_cpu,
         },
         "screen": a.screen.sentence(),
         "m": if measured { measured_sections(a, figures) } else { Value::Null },

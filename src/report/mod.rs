@@ -368,7 +368,7 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
         screen,
         statistics,
         counts,
-        timing: timing::of(dir),
+        timing: timing::of(dir, &done.iter().map(|(_, r, _)| *r).collect::<Vec<_>>()),
         spaces,
         sensitivity,
         sensitivity_reliable,
