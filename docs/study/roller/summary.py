@@ -39,7 +39,7 @@ def thrown(run_dir):
     counts = {}
     for deck in sorted(run_dir.glob("in.pass.*")):
         k = int(deck.suffix[1:])
-        tip = re.search(rf"^fix blade{k} .* move 0 0 (\S+)$", deck.read_text(), re.M)
+        tip = re.search(rf"^fix blade{k} .* move 0 0 (\S+)", deck.read_text(), re.M)
         dump = run_dir / f"dump.layer.{k}"
         if not tip or not dump.exists():
             continue
