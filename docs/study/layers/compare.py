@@ -41,6 +41,11 @@ SETS = [("twenty-PS1-plate24-freeze4-bury", "PS1"), ("twenty-PS2-plate24-freeze4
         ("twenty-PS3-plate24-freeze4-bury", "PS3")]
 EIGHT = [("PS1", "PS1, 8 passes"), ("PS2", "PS2, 8 passes"), ("PS3", "PS3, 8 passes")]
 VARIANTS = [("PS1-plate12", "PS1, plate halved (12 D)"), ("PS2-seed2", "PS2, seed 2")]
+# The plate's length for the 20 layers (issue 68's ladder towards their 10.4 mm L1): PS1 on the
+# same hold at 24 D (1.6 mm, SETS), 48 D (3.2 mm) and 96 D (6.4 mm), as far as each has run.
+PLATES = [("twenty-PS1-plate24-freeze4-bury", "PS1, 24 D (1.6 mm)"),
+          ("twenty-PS1-plate48-freeze4-bury", "PS1, 48 D (3.2 mm)"),
+          ("twenty-PS1-plate96-freeze4-bury", "PS1, 96 D (6.4 mm)")]
 
 
 def pass_of_layer(n):
@@ -207,6 +212,8 @@ def main_tables():
           "SD of that record's passes over layers 2–10); in brackets, combined SE from the experiment "
           "over the same layers.\n")
     table(SETS, rows)
+    print()
+    table(PLATES, rows)
     print()
     table(EIGHT, rows)
     print()
