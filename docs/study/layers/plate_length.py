@@ -73,7 +73,7 @@ def main():
         ax.set_title({"packing": "steady layer's packing", "depth µm": "powder under the blade's tip (µm)",
                       "cover": "covered fraction"}[k], fontsize=10)
         ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7.5, loc="lower left")
+    axes[0].legend(fontsize=7.5, loc="upper right")
     fig.suptitle("Ti-6Al-4V 15–45 µm, 50 µm layers, 0.1 m/s, fused bed: the steady layer against the plate's length "
                  "(± SE; the shipped 40 D is 1.24 mm)", fontsize=10.5)
     fig.tight_layout()
