@@ -15,7 +15,7 @@ ti64.sh write. Needs matplotlib.
   blade over the drop and the packing, per pass;
 - a Markdown table of each on stdout.
 """
-import glob, json, os, sys
+import glob, json, math, os, sys
 
 import matplotlib
 matplotlib.use("Agg")
@@ -252,7 +252,42 @@ def loose():
            "pass", "Ti-6Al-4V 45–106 µm (PS1) on a loose bed: the layer and the bed over passes", "loose.png")
 
 
+def plates():
+    """PS1's 20 layers on plates of 24, 48 and 96 D against the experiment, in step (compare.PLATES;
+    each plate once its run is recorded)."""
+    rows = compare.experiment()
+    layers = list(range(1, 21))
+    reps = [[rows[compare.row_of_layer(n)][i] for n in layers] for i in range(3)]
+    fig, ax = plt.subplots(figsize=(10, 4.6))
+    ax.fill_between(layers, [min(v) for v in zip(*reps)], [max(v) for v in zip(*reps)], color="0.6",
+                    label="experiment: 3 repeats, min–max")
+    ax.plot(layers, [sum(v) / 3 for v in zip(*reps)], color="black", marker="s", markersize=3, linewidth=0.8,
+            label="experiment: mean of the repeats")
+    colours = ["#fdae6b", "#e6550d", "#7f2704"]
+    for (record, label), c, dx in zip(compare.PLATES, colours, (-0.15, 0.0, 0.15)):
+        p = compare.load_passes(record)
+        if not p:
+            continue
+        values = compare.layer_values(p)
+        single = compare.record_groups(p)[1]["err"] * math.sqrt(compare.record_groups(p)[1]["n"])
+        ns = sorted(values)
+        ax.errorbar([n + dx for n in ns], [values[n] for n in ns], yerr=single, color=c, marker="o", markersize=4,
+                    linewidth=1.0, capsize=2, elinewidth=0.8, label=f"{label} (± one pass's SD)")
+    ax.set_xticks(layers)
+    ax.set_xlim(0.4, 20.6)
+    ax.set_ylim(0.3, 0.8)
+    ax.set_xlabel("their layer n  (our pass n + 1)")
+    ax.set_ylabel("layer relative density")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="lower right", ncol=2)
+    ax.set_title("PS1, 100 µm layers, 0.1 m/s, bed held 4 D under its top: the plate's length "
+                 "against Gaboriault et al. 2025's layers", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(os.path.join(HERE, "plates.png"), dpi=110)
+
+
 if __name__ == "__main__":
+    plates()
     gaboriault()
     loose()
     ti64()
