@@ -4,6 +4,8 @@ ti64.sh write. Needs matplotlib.
 
     python3 docs/study/layers/plot.py      # from the repository's root
 
+- plates.png: PS1's 20 layers on plates of 24, 48 and 96 D (those recorded) against the
+  experiment, in step;
 - gaboriault.png: Gaboriault et al.'s three repeats (min–max band, mean) and our PS1–PS3, in step
   (their layer n against our pass n + 1, compare.py), per layer and per layer group, and
   compare.py's aligned tables;
