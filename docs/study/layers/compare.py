@@ -46,6 +46,8 @@ VARIANTS = [("PS1-plate12", "PS1, plate halved (12 D)"), ("PS2-seed2", "PS2, see
 PLATES = [("twenty-PS1-plate24-freeze4-bury", "PS1, 24 D (1.6 mm)"),
           ("twenty-PS1-plate48-freeze4-bury", "PS1, 48 D (3.2 mm)"),
           ("twenty-PS1-plate96-freeze4-bury", "PS1, 96 D (6.4 mm)")]
+PLATES_PS2 = [("twenty-PS2-plate24-freeze4-bury", "PS2, 24 D (1.6 mm)"),
+              ("twenty-PS2-plate48-freeze4-bury", "PS2, 48 D (3.2 mm)")]
 
 
 def pass_of_layer(n):
@@ -214,6 +216,8 @@ def main_tables():
     table(SETS, rows)
     print()
     table(PLATES, rows)
+    print()
+    table(PLATES_PS2, rows)
     print()
     table(EIGHT, rows)
     print()
