@@ -40,6 +40,24 @@ def mean_se(values):
     return m, (statistics.stdev(values) / math.sqrt(len(values)) if len(values) > 1 else float("nan"))
 
 
+def logged_ejections(run_dir):
+    """{pass: (particles, kg/m)} a run sent over the roller's top, from its pass logs (none when
+    the run directory is not at hand)."""
+    out = {}
+    for log in sorted(run_dir.glob("log.pass.*")) if run_dir.is_dir() else []:
+        for k, m, n in re.findall(r"^demsweep: ejected (\d+) mass (\S+) count (\S+)", log.read_text(), re.M):
+            out[int(k)] = (int(float(n)), float(m))
+    return out
+
+
+def late_passes(path, first):
+    """A record, its result (or a failure's measured passes) and that result's passes from
+    `first` on."""
+    rec = json.loads(path.read_text())
+    r = rec.get("measured") or rec
+    return rec, r, [p for p in (r.get("layers") or {}).get("passes") or [] if p["k"] >= first]
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("record", nargs="?", default=str(HERE / "record" / "numerics"))
@@ -56,9 +74,8 @@ def main():
             label, k, n, m = line.split("\t")
             counts[(label, int(k))] = (int(n), float(m))
     for label in ORDER:
-        for log in sorted((runs / label).glob("log.pass.*")) if (runs / label).is_dir() else []:
-            for k, m, n in re.findall(r"^demsweep: ejected (\d+) mass (\S+) count (\S+)", log.read_text(), re.M):
-                counts[(label, int(k))] = (int(float(n)), float(m))
+        for k, over in logged_ejections(runs / label).items():
+            counts[(label, k)] = over
     if counts:
         with open(tsv, "w") as f:
             f.write("label\tpass\tparticles\tmass_kg\n")
@@ -69,10 +86,7 @@ def main():
         f = record / f"{label}.json"
         if not f.exists():
             continue
-        rec = json.loads(f.read_text())
-        r = rec.get("measured") or rec
-        passes = (r.get("layers") or {}).get("passes") or []
-        late = [p for p in passes if p["k"] >= args.first]
+        rec, r, late = late_passes(f, args.first)
         if not late:
             print(f"{label}: no passes measured ({rec.get('class')}: {rec.get('reason')})")
             continue

@@ -10,17 +10,15 @@ the CPU. Draws window.png; prints the Markdown table.
     python3 docs/study/roller/window.py [--from 3]
 """
 import argparse
-import json
 import math
 import os
-import re
 from pathlib import Path
 
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
-from numerics import MEASURES, mean_se
+from numerics import MEASURES, late_passes, logged_ejections, mean_se
 from summary import thrown
 
 HERE = Path(__file__).resolve().parent
@@ -43,9 +41,8 @@ def counts(runs):
         if not (runs / label).is_dir():
             continue
         flight = thrown(runs / label)
-        for log in sorted((runs / label).glob("log.pass.*")):
-            for k, m, n in re.findall(r"^demsweep: ejected (\d+) mass (\S+) count (\S+)", log.read_text(), re.M):
-                out[(label, int(k))] = (int(float(n)), float(m), flight.get(int(k), -1))
+        for k, (n, m) in logged_ejections(runs / label).items():
+            out[(label, k)] = (n, m, flight.get(k, -1))
     if out:
         with open(tsv, "w") as f:
             f.write("label\tpass\tparticles\tmass_kg\tin_flight\n")
@@ -64,9 +61,7 @@ def main():
         f = RECORD / f"roller-{r}.json"
         if not f.exists():
             continue
-        rec = json.loads(f.read_text())
-        res = rec.get("measured") or rec
-        late = [p for p in (res.get("layers") or {}).get("passes", []) if p["k"] >= args.first]
+        _, res, late = late_passes(f, args.first)
         if not late:
             continue
         cells = [mean_se([m(p) for p in late]) for _, m, _ in MEASURES]
