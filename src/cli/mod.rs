@@ -71,10 +71,11 @@ enum Command {
     ///
     /// After each batch a Gaussian-process emulator (each run's own SE as its noise; a jammed
     /// run's zero read as the floor of the flow, not a value) gives the four statistics of the
-    /// answer (MFR, or a layers sweep's steady layer) over the space with 95% intervals from its posterior; the rule
-    /// ([convergence], or the flags below) judges them batch to batch, and once it holds no new
-    /// runs start. The next batch is the set of candidates that most reduces the statistics'
-    /// posterior variance, each over its scale (docs/statistics.md "Adaptive design");
+    /// answer (MFR, or a layers sweep's steady layer) over the space with 95% intervals from its
+    /// posterior; the rule ([convergence], or the flags below) judges them batch to batch, and
+    /// once it holds no new runs start. The next batch is the set of candidates that most reduces
+    /// the statistics' posterior variance, each over its scale (docs/statistics.md "Adaptive
+    /// design");
     /// DIR/batches.csv says why each point was chosen. A seeded adapt with the same results
     /// plans the same points; `sweep resume DIR` continues it. Ends by writing the report.
     /// On a cluster: `--plan`, then `sweep submit DIR` runs each batch as an array job and

@@ -11,16 +11,16 @@ use crate::scene::Scene;
 
 use super::Plan;
 
-/// A scene whose choice is under this share of the value a move was measured against carries the
-/// move: the box rounds its depth to whole lattice spacings, so a 12 D domain may be 11.9 D.
+/// A scene whose choice is under this share of a move's `applies_below` carries the move: the box
+/// rounds its depth to whole lattice spacings, so a 12 D domain may be 11.9 D.
 const SHORT_OF: f64 = 0.9;
 
-/// One choice's measured move: what it is, the value it was measured against (a scene short of
-/// it by more than [`SHORT_OF`] carries the move), and the move of the packing, of the depth under
-/// the blade (a fraction of it) and of the cover.
+/// One choice's measured move: what it is, the value of the choice up to which a scene carries it
+/// (the next value measured: a scene short of it by more than [`SHORT_OF`] carries the move), and
+/// the move of the packing, of the depth under the blade (a fraction of it) and of the cover.
 struct Measured {
     choice: &'static str,
-    against: f64,
+    applies_below: f64,
     packing: f64,
     depth_fraction: f64,
     covered: f64,
@@ -37,21 +37,21 @@ struct Measured {
 const PLATE: [Measured; 3] = [
     Measured {
         choice: "plate length 20 → 40 D",
-        against: 40.0,
+        applies_below: 40.0,
         packing: 0.020,
         depth_fraction: 0.15,
         covered: 0.04,
     },
     Measured {
         choice: "plate length 40 D against 160 D",
-        against: 80.0,
+        applies_below: 80.0,
         packing: 0.005,
         depth_fraction: 0.010,
         covered: 0.015,
     },
     Measured {
         choice: "plate length 80 D against 160 D",
-        against: 160.0,
+        applies_below: 160.0,
         packing: 0.007,
         depth_fraction: 0.016,
         covered: 0.022,
@@ -61,7 +61,7 @@ const PLATE: [Measured; 3] = [
 /// 2.5 % and the cover by 0.01.
 const DEPTH: Measured = Measured {
     choice: "periodic depth 6 → 12 D",
-    against: 12.0,
+    applies_below: 12.0,
     packing: 0.007,
     depth_fraction: 0.025,
     covered: 0.01,
@@ -70,7 +70,7 @@ const DEPTH: Measured = Measured {
 /// and the cover by 0.03 (converged in packing and depth).
 const TIMESTEP: Measured = Measured {
     choice: "timestep 0.33 → 0.165 Rayleigh times",
-    against: f64::INFINITY,
+    applies_below: f64::INFINITY,
     packing: 0.001,
     depth_fraction: 0.004,
     covered: 0.03,
@@ -86,11 +86,11 @@ pub fn of(scene: &Scene, plan: &Plan) -> NumericalError {
     let timestep = scene.timestep / scene.rayleigh_time;
     let mut terms = Vec::new();
     let mut unmeasured = Vec::new();
-    match PLATE.iter().find(|m| plate < m.against * SHORT_OF) {
+    match PLATE.iter().find(|m| plate < m.applies_below * SHORT_OF) {
         Some(m) => terms.push(m),
         None => unmeasured.push(format!("plate length beyond {plate:.0} D")),
     }
-    if depth < DEPTH.against * SHORT_OF {
+    if depth < DEPTH.applies_below * SHORT_OF {
         terms.push(&DEPTH);
     } else {
         unmeasured.push(format!("periodic depth beyond {depth:.0} D"));
