@@ -337,7 +337,8 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
             _ => None,
         })
         .collect();
-    let setup = Setup::of(&sweep, &manifest, dir, &done.iter().map(|(_, r, _)| *r).collect::<Vec<_>>());
+    let done_results: Vec<&RunResult> = done.iter().map(|(_, r, _)| *r).collect();
+    let setup = Setup::of(&sweep, &manifest, dir, &done_results);
     let layout = crate::scenes::lookup(&sweep.file.scene.layout);
     let advice = advice::advise(
         &manifest.parameters,
@@ -368,7 +369,7 @@ pub fn analyse(dir: &Path, criteria: &Criteria, boot: &Bootstrap) -> Result<Anal
         screen,
         statistics,
         counts,
-        timing: timing::of(dir, &done.iter().map(|(_, r, _)| *r).collect::<Vec<_>>()),
+        timing: timing::of(dir, &done_results),
         spaces,
         sensitivity,
         sensitivity_reliable,
