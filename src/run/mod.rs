@@ -217,8 +217,8 @@ fn continue_with(dir: &Path) -> String {
     format!("every finished run is kept; continue with `sweep resume {}`", crate::sys::shell::quote_path(dir))
 }
 
-/// `sweep resume DIR`: re-prepare the manifest's points, refuse if the identity or the decks
-/// changed (unless `--force`), and run what is not finished.
+/// `sweep resume DIR`: re-prepare the manifest's points, refuse if their decks changed (the
+/// engine, the template or the sweep file; unless `--force`), and run what is not finished.
 pub fn resume<E: Executor>(
     dir: &Path,
     exec: &E,
@@ -271,11 +271,14 @@ pub fn resume_share<E: Executor>(
     if !opts.force && changed > 0 {
         refuse_edited_sweep_toml(dir, &toml, changed, manifest.points.len())?;
     }
-    if !opts.force && (!diff.is_empty() || changed > 0) {
+    // A point's hash is its deck's, mesh's and engine's: when every point hashes as before, a
+    // changed template (a comment, a reordered block) or mesh version ran nothing differently,
+    // and the directory takes the new identity below.
+    if !opts.force && changed > 0 {
         let what = if diff.is_empty() {
             format!("{changed} of {} decks render differently", manifest.points.len())
         } else {
-            diff.join("; ")
+            format!("{}; {changed} of {} decks render differently", diff.join("; "), manifest.points.len())
         };
         let why = format!(
             "the engine or templates changed since the sweep started ({what}); \

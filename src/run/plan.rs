@@ -331,7 +331,8 @@ fn plain_io(e: &std::io::Error) -> String {
 }
 
 /// An existing directory may be run again with the same sweep, or extended: the same design
-/// kind and sweep apart from the design, the same identity, and its points a prefix of ours.
+/// kind and sweep apart from the design, and its points a prefix of ours (a changed engine or
+/// template is refused where it changes them).
 pub(super) fn check_extension(
     dir: &Path,
     old: &Manifest,
@@ -363,7 +364,10 @@ pub(super) fn check_extension(
         return Err(RunError::OutDir { dir: dir.to_path_buf(), why }.into());
     }
     let diff = identity_diff(&old.identity, &new.identity);
-    if !diff.is_empty() {
+    // A point's hash is its deck's, mesh's and engine's: a changed template that renders every
+    // point as before changes no run.
+    let same_runs = old.points.iter().zip(&new.points).all(|(a, b)| a.hash == b.hash);
+    if !diff.is_empty() && !same_runs {
         let why = format!(
             "the engine or templates changed since it was made ({}); choose another --out, \
              or `sweep resume {d} --force` to re-run its points",
