@@ -5,6 +5,9 @@
 #   PS1     — sweeps/layers-gaboriault.toml at 0.1 m/s, Gaboriault et al.'s PS1 (the file's own
 #             friction 0.20, rolling 0.10 and 4.667e-4 J/m², docs/study/layers/twenty.sh);
 #   single  — sweeps/ti64-machine.toml's single layer at 0.08 m/s, for the cost ratio;
+#   machine30, single30 — the layers point at 30 µm layers (0.1 m/s) and the single layer at a
+#             30 µm gap and 0.1 m/s, the ratio at the thin layer;
+#   machine-slow, single-slow — the same at 50 µm and 0.05 m/s, the ratio at the slow blade;
 #   machine-plate80, machine-plate160 — the machine point on a plate of 80 or 160 mean
 #             diameters (`plate_diameters`; the shipped 40 D), its numerical bound.
 # The binary is $SWEEP (one built per cut, e.g. /tmp/sweep-A); LABEL names it in the records;
@@ -44,6 +47,10 @@ for scene in "$@"; do
       sed -e "s/^\[scene\]$/[scene]\nplate_diameters = $plate.0/" "$tmp/$file.toml" > "$tmp/$scene.toml"
       grep -q "^plate_diameters = $plate.0$" "$tmp/$scene.toml"
       file=$scene ;;
+    machine30) file=ti64-layers set=layer_thickness=0.03,blade_speed=0.1 ;;
+    machine-slow) file=ti64-layers set=layer_thickness=0.05,blade_speed=0.05 ;;
+    single30) file=ti64-machine set=gap=0.03,blade_speed=0.1 ;;
+    single-slow) file=ti64-machine set=blade_speed=0.05 ;;
     PS1) file=layers-gaboriault set=blade_speed=0.1,friction=0.20,rolling_friction=0.10,surface_energy=4.667e-4 ;;
     single) file=ti64-machine set=blade_speed=0.08 ;;
     *) echo "unknown scene $scene" >&2; exit 2 ;;
