@@ -7,6 +7,7 @@ mod calibrate;
 mod cluster;
 mod contact;
 mod error;
+mod pass_watch;
 mod point;
 mod predict;
 mod stats;

@@ -4,6 +4,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use super::check_timestep;
+use super::pass_watch::PassWatch;
 use super::error::{flag, CliError};
 use clap::Args;
 use demsweep::error::Error;
@@ -246,6 +247,10 @@ pub(super) fn run_one(a: RunArgs) -> Result<(), Error> {
         None => "nothing is kept (no --out): the same command runs the point again".into(),
     });
     let cancel = demsweep::sys::process::CancelToken::new();
+    let watch = match (&ctx, &prepared) {
+        (Some(c), Some(p)) if !a.json => c.layout.by_pass(&p.scene).map(|by| PassWatch::start(&dir, &p.hash, by)),
+        _ => None,
+    };
     let outcome = match (&ctx, &prepared) {
         (Some(ctx), Some(p)) => point::execute(ctx, p, &dir, &cancel),
         _ => {
@@ -254,6 +259,8 @@ pub(super) fn run_one(a: RunArgs) -> Result<(), Error> {
             exec.execute(&exec.prepare(&values)?, &dir, &cancel)
         }
     };
+    // Its last pass said before the result.
+    drop(watch);
     match outcome {
         RunOutcome::Done(r) => {
             if a.json {

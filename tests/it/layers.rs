@@ -404,7 +404,11 @@ fn a_layers_point_killed_in_its_third_pass_goes_on_from_its_second_and_ends_as_a
     };
     let whole = dir.join("whole");
     let out = run(&whole);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    // A terminal is told each pass as it ends, in order.
+    let said: Vec<String> = err.lines().filter(|l| l.starts_with("pass ")).map(|l| l[..19].to_string()).collect();
+    assert_eq!(said, (1..=4).map(|k| format!("pass {k} of at most 4")).collect::<Vec<_>>(), "{err}");
     // Every pass is its own engine run, and only the last one's restart is kept.
     for k in 1..=4 {
         assert!(whole.join(format!("log.pass.{k}")).is_file(), "pass {k}'s log");
@@ -413,17 +417,8 @@ fn a_layers_point_killed_in_its_third_pass_goes_on_from_its_second_and_ends_as_a
 
     // Killed (SIGKILL, the whole process group) once pass 3's engine run has started.
     let cut = dir.join("cut");
-    kill_once(
-        support::sweep_bin().args([
-            "run",
-            support::p(&sweep),
-            "--set",
-            "blade_speed=0.5",
-            "--out",
-            support::p(&cut),
-        ]),
-        &cut.join("in.pass.3"),
-    );
+    let args = ["run", support::p(&sweep), "--set", "blade_speed=0.5", "--out", support::p(&cut)];
+    kill_once(support::sweep_bin().args(args), &cut.join("in.pass.3"));
     assert!(!cut.join("pass.3.json").exists() && cut.join("restart.pass.2").is_file());
     // The earlier attempt's passes are made to look 1,000 s long each: a point resumed gets its
     // whole timeout (600 s) again, as a new job gets its walltime, and does not fail at once.
@@ -438,7 +433,9 @@ fn a_layers_point_killed_in_its_third_pass_goes_on_from_its_second_and_ends_as_a
         .sum();
     // Run again: it goes on from pass 2's restart, passes 1 and 2 not run again.
     let out = run(&cut);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("going on from pass 2") && err.contains("pass 3 of at most 4") && !err.contains("pass 2 of"), "{err}");
     let first_log = std::fs::read_to_string(cut.join("log.pass.1")).unwrap();
     assert!(first_log.contains("demsweep: layer 1"), "pass 1's log kept");
     let r: Value = serde_json::from_str(&std::fs::read_to_string(cut.join("result.json")).unwrap()).unwrap();
