@@ -47,9 +47,7 @@ fn say_passes(dir: &Path, ran: usize, by: ByPass, stop: &AtomicBool) {
     if ran > 0 {
         eprintln!("going on from pass {ran} (the passes before it are kept)");
     } else {
-        eprintln!(
-            "{least} to {most} passes: from pass {least} on, the point stops once its layer is steady"
-        );
+        eprintln!("{least} to {most} passes: from pass {least} on, the point stops once its layer is steady");
     }
     let start = Instant::now();
     let mut k = ran + 1;
@@ -74,7 +72,13 @@ fn say_passes(dir: &Path, ran: usize, by: ByPass, stop: &AtomicBool) {
 fn pass_line(r: &PassRecord, most: usize, since: Duration) -> String {
     let cpu = r.cpu_time.map(|c| format!("{c:.0} CPU s")).unwrap_or_else(|| format!("{:.0} s", r.wall_time));
     let s = since.as_secs();
-    format!("pass {} of at most {most}: {cpu}, {}:{:02}:{:02} since the start", r.k, s / 3600, s / 60 % 60, s % 60)
+    format!(
+        "pass {} of at most {most}: {cpu}, {}:{:02}:{:02} since the start",
+        r.k,
+        s / 3600,
+        s / 60 % 60,
+        s % 60
+    )
 }
 
 #[cfg(test)]
@@ -89,6 +93,9 @@ mod tests {
             "pass 3 of at most 14: 61 CPU s, 3:12:05 since the start"
         );
         let r = PassRecord { cpu_time: None, ..r };
-        assert_eq!(pass_line(&r, 14, Duration::from_secs(59)), "pass 3 of at most 14: 70 s, 0:00:59 since the start");
+        assert_eq!(
+            pass_line(&r, 14, Duration::from_secs(59)),
+            "pass 3 of at most 14: 70 s, 0:00:59 since the start"
+        );
     }
 }

@@ -4,8 +4,8 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use super::check_timestep;
-use super::pass_watch::PassWatch;
 use super::error::{flag, CliError};
+use super::pass_watch::PassWatch;
 use clap::Args;
 use demsweep::error::Error;
 use demsweep::outcome::RunOutcome;
@@ -248,7 +248,9 @@ pub(super) fn run_one(a: RunArgs) -> Result<(), Error> {
     });
     let cancel = demsweep::sys::process::CancelToken::new();
     let watch = match (&ctx, &prepared) {
-        (Some(c), Some(p)) if !a.json => c.layout.by_pass(&p.scene).map(|by| PassWatch::start(&dir, &p.hash, by)),
+        (Some(c), Some(p)) if !a.json => {
+            c.layout.by_pass(&p.scene).map(|by| PassWatch::start(&dir, &p.hash, by))
+        }
         _ => None,
     };
     let outcome = match (&ctx, &prepared) {

@@ -106,7 +106,12 @@ pub fn status(dir: &Path) -> Result<StatusReport> {
                 r.running += 1;
                 if r.holders.len() < FIRST_FAILURES {
                     let h = store::short(&p.hash);
-                    r.holders.push(format!("point {} ({h}): {}", p.index, store::holders::describe(&c)));
+                    let passes = passes_done(&store, &p.hash);
+                    r.holders.push(format!(
+                        "point {} ({h}): {}{passes}",
+                        p.index,
+                        store::holders::describe(&c)
+                    ));
                 }
             }
             RunState::Interrupted(_) => {
@@ -135,6 +140,16 @@ pub fn status(dir: &Path) -> Result<StatusReport> {
         r.damaged.push(format!("{e}; `sweep resume` refuses to run until it is moved away"));
     }
     Ok(r)
+}
+
+/// ", 4 passes done" for a point run pass by pass (a layers point) that has finished some: it
+/// runs for hours, and a claim's age alone does not say how far it is.
+fn passes_done(store: &Store, hash: &str) -> String {
+    match crate::point::passes::finished_passes(&store.run_dir(hash), hash).map(|d| d.len()) {
+        Ok(1) => ", 1 pass done".into(),
+        Ok(n) if n > 1 => format!(", {n} passes done"),
+        _ => String::new(),
+    }
 }
 
 /// The verdict of the last report (`DIR/summary.json`, or a calibration's

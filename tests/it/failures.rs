@@ -269,9 +269,13 @@ fn a_deck_that_makes_liggghts_fail_is_reported_and_the_sweep_goes_on() {
     let o = output(support::sweep_bin().args(["resume", "-q"]).arg(&out));
     assert_eq!(o.status.code(), Some(1), "the two failed points stay failed: {}", stderr(&o));
     assert!(!stderr(&o).contains("changed"), "{}", stderr(&o));
-    let now: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("manifest.json")).unwrap()).unwrap();
+    let now: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("manifest.json")).unwrap()).unwrap();
     let was: serde_json::Value = serde_json::from_slice(&manifest).unwrap();
-    assert_ne!(now["identity"]["template_hash"], was["identity"]["template_hash"], "the new template recorded");
+    assert_ne!(
+        now["identity"]["template_hash"], was["identity"]["template_hash"],
+        "the new template recorded"
+    );
     assert_eq!(now["points"], was["points"], "the same points and runs");
     assert_eq!(attempts(&out).values().map(Vec::len).sum::<usize>(), 4, "nothing ran again");
 }

@@ -407,7 +407,8 @@ fn a_layers_point_killed_in_its_third_pass_goes_on_from_its_second_and_ends_as_a
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
     // A terminal is told each pass as it ends, in order.
-    let said: Vec<String> = err.lines().filter(|l| l.starts_with("pass ")).map(|l| l[..19].to_string()).collect();
+    let said: Vec<String> =
+        err.lines().filter(|l| l.starts_with("pass ")).map(|l| l[..19].to_string()).collect();
     assert_eq!(said, (1..=4).map(|k| format!("pass {k} of at most 4")).collect::<Vec<_>>(), "{err}");
     // Every pass is its own engine run, and only the last one's restart is kept.
     for k in 1..=4 {
@@ -435,7 +436,12 @@ fn a_layers_point_killed_in_its_third_pass_goes_on_from_its_second_and_ends_as_a
     let out = run(&cut);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
-    assert!(err.contains("going on from pass 2") && err.contains("pass 3 of at most 4") && !err.contains("pass 2 of"), "{err}");
+    assert!(
+        err.contains("going on from pass 2")
+            && err.contains("pass 3 of at most 4")
+            && !err.contains("pass 2 of"),
+        "{err}"
+    );
     let first_log = std::fs::read_to_string(cut.join("log.pass.1")).unwrap();
     assert!(first_log.contains("demsweep: layer 1"), "pass 1's log kept");
     let r: Value = serde_json::from_str(&std::fs::read_to_string(cut.join("result.json")).unwrap()).unwrap();

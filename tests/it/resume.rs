@@ -433,3 +433,35 @@ fn an_interrupted_bench_says_what_stopped_and_the_command_that_goes_on() {
         assert!(line.contains(p(&out)), "{bench}: names where its runs are: {line}");
     }
 }
+
+#[test]
+fn status_says_how_many_passes_a_running_layers_point_has_done() {
+    support::require_liggghts!("status_says_how_many_passes_a_running_layers_point_has_done");
+    use std::os::unix::process::CommandExt;
+    let (_tmp, dir) = support::cwd();
+    let extra = "layers = 4\nleast_layers = 4\n[design.lds]\nstep = 1\nmax = 1";
+    let toml = crate::layers::bed_file(&dir, "layers", "", extra);
+    let out = dir.join("out");
+    let mut child = support::sweep_bin()
+        .args(["lds", p(&toml), "--out", p(&out), "-q"])
+        .process_group(0)
+        .spawn()
+        .unwrap();
+    // Pass 2 starts once pass 1 is recorded with its restart.
+    let started = |k: usize| -> bool {
+        let runs = std::fs::read_dir(out.join("runs")).map(|d| d.flatten().map(|e| e.path()).collect());
+        runs.unwrap_or_else(|_| Vec::new())
+            .iter()
+            .any(|r: &std::path::PathBuf| r.join(format!("in.pass.{k}")).is_file())
+    };
+    wait_until("pass 2 to start", Duration::from_secs(600), || started(2));
+    let o = sweep(&["status", p(&out)]);
+    // SAFETY: kill(2) on the child's own process group.
+    unsafe { libc::kill(-(child.id() as i32), libc::SIGKILL) };
+    let _ = child.wait();
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    let line =
+        text.lines().find(|l| l.trim_start().starts_with("point 0 (")).unwrap_or_else(|| panic!("{text}"));
+    // Pass 2 may have ended too by the time status looked.
+    assert!(line.ends_with(", 1 pass done") || line.ends_with(", 2 passes done"), "{text}");
+}
