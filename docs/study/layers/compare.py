@@ -48,6 +48,17 @@ PLATES = [("twenty-PS1-plate24-freeze4-bury", "PS1, 24 D (1.6 mm)"),
           ("twenty-PS1-plate96-freeze4-bury", "PS1, 96 D (6.4 mm)")]
 PLATES_PS2 = [("twenty-PS2-plate24-freeze4-bury", "PS2, 24 D (1.6 mm)"),
               ("twenty-PS2-plate48-freeze4-bury", "PS2, 48 D (3.2 mm)")]
+PLATES_PS3 = [("twenty-PS3-plate24-freeze4-bury", "PS3, 24 D (1.6 mm)"),
+              ("twenty-PS3-plate48-freeze4-bury", "PS3, 48 D (3.2 mm)")]
+# The loose bed held 4 D under the top and shed beneath (SETS) against the whole bed moving, on
+# one deck (PS1, 24 D, 21 passes).
+HOLD = [("twenty-PS1-plate24-freeze4-bury", "PS1, held 4 D and shed"),
+        ("twenty-PS1-plate24-now", "PS1, the whole bed moving")]
+# The scene's numerical choices at PS1 (24 D, the 4 D hold): the timestep halved (0.33 → 0.165
+# Rayleigh times) and the periodic depth doubled (6 → 12 D), 11 passes each (their layers 1–10).
+NUMERICS = [("twenty-PS1-plate24-freeze4-bury", "PS1 as shipped"),
+            ("twenty-PS1-plate24-freeze4-passes11-bury-dt0.165", "timestep halved"),
+            ("twenty-PS1-plate24-freeze4-passes11-bury-depth12", "depth doubled (12 D)")]
 
 
 def pass_of_layer(n):
@@ -171,6 +182,32 @@ def table(labels, rows):
         print(f"\nThe experiment over layers {a}–{b} only: {mean(reps):.3f} ± {sd(reps):.3f} (SD of 3 repeats).")
 
 
+def moves(labels):
+    """Each record's group means against the first record's, over the layers both reach: the
+    move ± combined SE (how far a numerical choice or a cut moved the answer)."""
+    recs = [(name, load_passes(label)) for label, name in labels]
+    recs = [(n, layer_values(p)) for n, p in recs if p]
+    if len(recs) < 2:
+        return
+    base_name, base = recs[0]
+    print(f"| their layers | {base_name} | " + " | ".join(f"{n}: move (combined SE)" for n, _ in recs[1:]) + " |")
+    print("|---|---|" + "---|" * (len(recs) - 1))
+    for name, a, b in GROUPS[1:]:
+        cells = []
+        for _, v in recs[1:]:
+            both = [n for n in range(a, b + 1) if n in v and n in base]
+            if len(both) < 2:
+                cells.append("n/a")
+                continue
+            xs, ys = [v[n] for n in both], [base[n] for n in both]
+            se = math.sqrt(sd(xs) ** 2 / len(xs) + sd(ys) ** 2 / len(ys))
+            d = mean(xs) - mean(ys)
+            part = f", layers {both[0]}–{both[-1]}" if [both[0], both[-1]] != [a, b] else ""
+            cells.append(f"{mean(xs):.3f}, {d:+.3f} ± {se:.3f} ({d / se:+.1f}){part}")
+        ref = [base[n] for n in range(a, b + 1) if n in base]
+        print(f"| {name} | {mean(ref):.3f} ± {sd(ref) / math.sqrt(len(ref)):.3f} | " + " | ".join(cells) + " |")
+
+
 def self_test(shift):
     """The experiment's rows fed as our passes (row n − 1 → pass n + shift; pass 1 a baseline of
     0 when shift is 1); every group's mean must come back as the experiment's, exactly."""
@@ -218,6 +255,16 @@ def main_tables():
     table(PLATES, rows)
     print()
     table(PLATES_PS2, rows)
+    print()
+    table(PLATES_PS3, rows)
+    print()
+    table(HOLD, rows)
+    print()
+    moves(HOLD)
+    print()
+    table(NUMERICS, rows)
+    print()
+    moves(NUMERICS)
     print()
     table(EIGHT, rows)
     print()
