@@ -39,6 +39,9 @@ PLATEAU = (2, 10)
 # case that measure its numerical and seed error.
 SETS = [("twenty-PS1-plate24-freeze4-bury", "PS1"), ("twenty-PS2-plate24-freeze4-bury", "PS2"),
         ("twenty-PS3-plate24-freeze4-bury", "PS3")]
+# The same on the 48 D plate (3.2 mm): a pass's scatter halved.
+SETS48 = [("twenty-PS1-plate48-freeze4-bury", "PS1"), ("twenty-PS2-plate48-freeze4-bury", "PS2"),
+          ("twenty-PS3-plate48-freeze4-bury", "PS3")]
 EIGHT = [("PS1", "PS1, 8 passes"), ("PS2", "PS2, 8 passes"), ("PS3", "PS3, 8 passes")]
 VARIANTS = [("PS1-plate12", "PS1, plate halved (12 D)"), ("PS2-seed2", "PS2, seed 2")]
 # The plate's length for the 20 layers (issue 68's ladder towards their 10.4 mm L1): PS1 on the
@@ -251,6 +254,8 @@ def main_tables():
           "SD of that record's passes over layers 2–10); in brackets, combined SE from the experiment "
           "over the same layers.\n")
     table(SETS, rows)
+    print()
+    table(SETS48, rows)
     print()
     table(PLATES, rows)
     print()

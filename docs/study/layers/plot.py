@@ -37,9 +37,9 @@ def load(path):
     return (m.get("layers") if isinstance(m, dict) else None), j.get("reason") or j.get("failed") or "failed"
 
 
-def gaboriault():
+def gaboriault(sets=compare.SETS, plate="1.6 mm", name="gaboriault.png"):
     """Their layers against our passes, in step (compare.py: their layer n is our pass n + 1):
-    per layer, and per layer group as compare.py's table has it."""
+    per layer, and per layer group as compare.py's table has it, for the records `sets`."""
     rows = compare.experiment()
     layers = list(range(1, 21))  # their layers; row_of_layer finds each in their file
     reps = [[rows[compare.row_of_layer(n)][i] for n in layers] for i in range(3)]
@@ -54,7 +54,7 @@ def gaboriault():
     exp = compare.experiment_groups(rows)
     a2.errorbar([i - 0.27 for i in range(3)], [e["mean"] for e in exp], yerr=[e["sd"] for e in exp], color="black", marker="s",
                 linestyle="none", capsize=4, label="experiment: mean ± SD of the repeats")
-    for record, label in compare.SETS:
+    for record, label in sets:
         p = compare.load_passes(record)
         if not p:
             continue
@@ -97,11 +97,10 @@ def gaboriault():
     handles, labels = a2.get_legend_handles_labels()
     keep = {l: h for h, l in zip(handles, labels)}
     a2.legend(keep.values(), keep.keys(), fontsize=7.5, loc="upper left")
-    fig.suptitle("Ti-6Al-4V 45–106 µm, 100 µm layers, 0.1 m/s, 1.6 mm plate: Gaboriault et al. 2025's 20 layers "
+    fig.suptitle(f"Ti-6Al-4V 45–106 µm, 100 µm layers, 0.1 m/s, {plate} plate: Gaboriault et al. 2025's 20 layers "
                  "and ours, in step")
     fig.tight_layout()
-    fig.savefig(os.path.join(HERE, "gaboriault.png"), dpi=110)
-    compare.main_tables()
+    fig.savefig(os.path.join(HERE, name), dpi=110)
 
 
 VARIANTS = {"flat": "flat blade", "gamma0": "no cohesion", "halfdose": "half the dose", "depth12": "depth 12 D",
@@ -291,5 +290,7 @@ def plates():
 if __name__ == "__main__":
     plates()
     gaboriault()
+    gaboriault(compare.SETS48, "3.2 mm", "gaboriault-48.png")
+    compare.main_tables()
     loose()
     ti64()
