@@ -228,6 +228,7 @@ pub fn passes(
     grains: &[Vec<Grain>],
 ) -> Vec<PassRecord> {
     let d = scene.diameter;
+    let d_max = plan.feed.iter().map(|c| c.diameter).fold(0.0, f64::max);
     let area = plan.plate_area;
     let mut out = Vec::with_capacity(lines.len());
     // A warm-started fused bed's first pass lies on the solid it was given, not the plate.
@@ -241,7 +242,11 @@ pub fn passes(
             / (scene.material.density * area);
         let effective = tip - if plan.fused { floor_before } else { surface_before };
         let new = |g: &Grain| !ids_before.contains(&g.id);
-        let (top, covered) = surface(scene, plan, gs, floor_before, &new);
+        // The blade left nothing above its tip: a sphere whose centre is more than a largest
+        // diameter over it is in flight when the pass is measured (a bouncy powder's, thrown up
+        // as the blade is taken away, up to millimetres high), not part of the layer's surface.
+        let landed: Vec<Grain> = gs.iter().filter(|g| !(g.z > tip + d_max)).cloned().collect();
+        let (top, covered) = surface(scene, plan, &landed, floor_before, &new);
         let m = mean(&top);
         let roughness = (top.iter().map(|z| (z - m).powi(2)).sum::<f64>() / top.len() as f64).sqrt() / d;
         let volume = line.plate_mass / (scene.material.density * area);
