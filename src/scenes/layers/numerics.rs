@@ -76,6 +76,13 @@ const TIMESTEP: Measured = Measured {
     covered: 0.03,
 };
 
+/// What a loose bed's error leaves out: its terms are the fused machine point's. At Gaboriault et
+/// al.'s PS1 (a loose bed, docs/study/layers.md) the plate 24 → 48 D, the depth 6 → 12 D, the
+/// timestep halved and the bed held 4 D moved the relative density by −0.013 ± 0.026, +0.003 ±
+/// 0.033, −0.006 ± 0.056 and −0.032 ± 0.019: none resolved.
+const LOOSE_BED: &str =
+    "a loose bed's own moves (these are a fused bed's; at a loose one each moved the relative density by less than its 0.02–0.06 SE)";
+
 /// The numerical error of `scene`'s steady layer: each choice's measured move where the scene's
 /// choice is one that was measured (its root sum of squares, the choices taken as independent),
 /// and the choices whose move at this scene's value is not known.
@@ -99,6 +106,9 @@ pub fn of(scene: &Scene, plan: &Plan) -> NumericalError {
         terms.push(&TIMESTEP);
     } else {
         unmeasured.push(format!("timestep at {timestep:.2} Rayleigh times"));
+    }
+    if !plan.fused {
+        unmeasured.push(LOOSE_BED.into());
     }
     let rss = |f: &dyn Fn(&Measured) -> f64| terms.iter().map(|m| f(m).powi(2)).sum::<f64>().sqrt();
     NumericalError {
@@ -138,8 +148,13 @@ mod tests {
     use crate::scenes::layers::plan_of;
 
     fn error(plate: f64, depth: f64, fraction: f64) -> NumericalError {
+        error_on("fused", plate, depth, fraction)
+    }
+
+    fn error_on(bed: &str, plate: f64, depth: f64, fraction: f64) -> NumericalError {
         let s = SceneSettings {
             layout: "layers".into(),
+            bed: bed.into(),
             layers: 4,
             plate_diameters: plate,
             depth_diameters: depth,
@@ -179,5 +194,9 @@ mod tests {
         assert!(far.terms.is_empty() && far.packing == 0.0, "{far:?}");
         assert_eq!(far.unmeasured.len(), 3, "{:?}", far.unmeasured);
         assert!(far.unmeasured[0].contains("160 D"));
+        // A loose bed carries the same terms and says they are a fused bed's.
+        let loose = error_on("loose", 40.0, 6.0, 0.33);
+        assert_eq!((loose.packing, loose.terms.len()), (e.packing, 3));
+        assert_eq!(loose.unmeasured, [LOOSE_BED]);
     }
 }
