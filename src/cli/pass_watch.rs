@@ -8,7 +8,7 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use demsweep::point::passes::{finished_passes, pass_record, PassRecord};
+use demsweep::point::passes::{finished_passes, read_record, PassRecord};
 use demsweep::scenes::ByPass;
 
 /// How often the run directory is looked at: a pass takes tens of seconds at the least.
@@ -54,10 +54,7 @@ fn say_passes(dir: &Path, ran: usize, by: ByPass, stop: &AtomicBool) {
     while k <= most {
         // Read before the stop is looked at: the pass that ended as the point did is said too.
         let stopped = stop.load(Ordering::Relaxed);
-        let record = std::fs::read_to_string(dir.join(pass_record(k)))
-            .ok()
-            .and_then(|t| serde_json::from_str::<PassRecord>(&t).ok());
-        match record {
+        match read_record(dir, k) {
             Some(r) => {
                 eprintln!("{}", pass_line(&r, most, start.elapsed()));
                 k += 1;

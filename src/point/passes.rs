@@ -102,6 +102,11 @@ pub struct PassRecord {
     pub cpu_time: Option<f64>,
 }
 
+/// The record pass `k` left in `run_dir`, if it finished (and its record is whole).
+pub fn read_record(run_dir: &Path, k: usize) -> Option<PassRecord> {
+    std::fs::read_to_string(run_dir.join(pass_record(k))).ok().and_then(|t| serde_json::from_str(&t).ok())
+}
+
 /// The passes of a point already run in `run_dir` that it can go on from: every one from the
 /// first recorded with its log, the last with its restart. `Err`: a record there is another
 /// run's.
@@ -109,11 +114,7 @@ pub fn finished_passes(run_dir: &Path, hash: &str) -> Result<Vec<PassRecord>, St
     let mut done: Vec<PassRecord> = Vec::new();
     for k in 1.. {
         let path = run_dir.join(pass_record(k));
-        let Some(record) =
-            std::fs::read_to_string(&path).ok().and_then(|t| serde_json::from_str::<PassRecord>(&t).ok())
-        else {
-            break;
-        };
+        let Some(record) = read_record(run_dir, k) else { break };
         if record.hash != hash {
             return Err(format!(
                 "{} is run {}'s, not this point's ({hash}): remove the run directory to run the point again",

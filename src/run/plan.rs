@@ -378,7 +378,7 @@ pub(super) fn check_extension(
     // An adaptive design is planned a batch at a time: its first batch starts the points
     // already there.
     let grows = old.points.len() <= new.points.len() || new.design.is_adaptive();
-    let prefix = grows && old.points.iter().zip(&new.points).all(|(a, b)| a.hash == b.hash);
+    let prefix = grows && same_runs;
     if !prefix {
         let why = format!(
             "its {} points are not the first points of this design ({}); a design can \

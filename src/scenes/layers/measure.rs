@@ -161,13 +161,18 @@ pub fn roller_lines(r: &RollerSteady) -> Vec<String> {
     lines
 }
 
-/// The top surface over the plate's inner part: per grid cell the top of the highest sphere over
-/// it, or `floor` where none is. Returns (cells, covered cells of `mine`), `mine` selecting the
-/// spheres whose discs count as covering.
+/// The top surface over the plate's inner part that a pass whose blade's tip stood at `tip` left:
+/// per grid cell the top of the highest sphere over it, or `floor` where none is. Returns (cells,
+/// covered cells of `mine`), `mine` selecting the spheres whose discs count as covering.
+///
+/// The blade left nothing above its tip: a sphere whose centre is more than a largest diameter
+/// over it is in flight when the pass is measured (a bouncy powder's, thrown up as the blade is
+/// taken away, up to millimetres high), not part of the surface.
 fn surface(
     scene: &Scene,
     plan: &Plan,
     grains: &[Grain],
+    tip: f64,
     floor: f64,
     mine: &dyn Fn(&Grain) -> bool,
 ) -> (Vec<f64>, usize) {
@@ -179,7 +184,9 @@ fn surface(
     let (hx, hy) = ((x1 - x0) / nx as f64, scene.depth / ny as f64);
     let mut top = vec![floor; nx * ny];
     let mut covered = vec![false; nx * ny];
-    for g in grains {
+    let highest = tip + plan.max_diameter();
+    // (`!(>)`, not `<=`: where no tip is known, NaN, every sphere counts.)
+    for g in grains.iter().filter(|g| !(g.z > highest)) {
         let yi = g.y.rem_euclid(scene.depth);
         let (cx0, cx1) = (((g.x - g.r - x0) / hx).floor() as i64, ((g.x + g.r - x0) / hx).ceil() as i64);
         let (cy0, cy1) = (((yi - g.r) / hy).floor() as i64, ((yi + g.r) / hy).ceil() as i64);
@@ -228,7 +235,6 @@ pub fn passes(
     grains: &[Vec<Grain>],
 ) -> Vec<PassRecord> {
     let d = scene.diameter;
-    let d_max = plan.feed.iter().map(|c| c.diameter).fold(0.0, f64::max);
     let area = plan.plate_area;
     let mut out = Vec::with_capacity(lines.len());
     // A warm-started fused bed's first pass lies on the solid it was given, not the plate.
@@ -242,11 +248,7 @@ pub fn passes(
             / (scene.material.density * area);
         let effective = tip - if plan.fused { floor_before } else { surface_before };
         let new = |g: &Grain| !ids_before.contains(&g.id);
-        // The blade left nothing above its tip: a sphere whose centre is more than a largest
-        // diameter over it is in flight when the pass is measured (a bouncy powder's, thrown up
-        // as the blade is taken away, up to millimetres high), not part of the layer's surface.
-        let landed: Vec<Grain> = gs.iter().filter(|g| !(g.z > tip + d_max)).cloned().collect();
-        let (top, covered) = surface(scene, plan, &landed, floor_before, &new);
+        let (top, covered) = surface(scene, plan, gs, tip, floor_before, &new);
         let m = mean(&top);
         let roughness = (top.iter().map(|z| (z - m).powi(2)).sum::<f64>() / top.len() as f64).sqrt() / d;
         let volume = line.plate_mass / (scene.material.density * area);

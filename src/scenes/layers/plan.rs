@@ -191,6 +191,11 @@ impl Plan {
         }
     }
 
+    /// The largest diameter of the powder it doses.
+    pub fn max_diameter(&self) -> f64 {
+        self.feed.iter().map(|c| c.diameter).fold(0.0, f64::max)
+    }
+
     /// The platform's drop before pass `k` (from 1): the first includes the clearance.
     pub fn drop_before(&self, k: usize) -> f64 {
         if k == 1 {

@@ -600,8 +600,8 @@ fn a_loose_bed_is_held_still_below_its_freeze_depth_from_the_first_pass_whose_to
     }
     // And removes what lies a held skin of two largest diameters deeper, once that is above the
     // plate, at the pass's end.
-    let d_max = plan.feed.iter().map(|c| c.diameter).fold(0.0, f64::max);
-    assert!((plan.bury_depth - plan.freeze_depth - super::plan::BURY_SKIN_DIAMETERS * d_max).abs() < 1e-15);
+    let skin = super::plan::BURY_SKIN_DIAMETERS * plan.max_diameter();
+    assert!((plan.bury_depth - plan.freeze_depth - skin).abs() < 1e-15);
     let mut buried = 0;
     for p in &plan.passes[..8] {
         let cut = p.top - plan.bury_depth;
