@@ -21,7 +21,6 @@ use crate::bench::{opt, BenchError};
 use crate::error::{Error, Res, Result};
 use crate::outcome::{FailureClass, RunOutcome, RunResult};
 use crate::point::{self, PointContext};
-use crate::scene::settings::SceneSettings;
 use crate::sweep::Sweep;
 use crate::sys::process::CancelToken;
 
@@ -37,17 +36,15 @@ pub struct Variant {
 pub fn variants(sweep: &Sweep, presets: &[String], extra: &[String]) -> Result<Vec<Variant>> {
     let mut out: Vec<Variant> = Vec::new();
     for name in presets {
-        let preset = SceneSettings::preset(name).ok_or_else(|| {
+        let scene = crate::scenes::settings::with_knobs_of(&sweep.file.scene, name).map_err(|_| {
             let why = format!(
                 "not a fidelity preset; expected some of {}",
                 crate::scene::settings::FIDELITIES.join(", ")
             );
             BenchError::Flag { given: format!("--presets {name}"), why }
         })?;
-        let scene = sweep.file.scene.with_knobs_of(&preset);
         out.push(Variant { name: name.clone(), sweep: sweep.with_scene(scene)? });
     }
-    let fast = SceneSettings::preset("fast").expect("the fast preset exists");
     for spec in extra {
         let variant = |why: String| BenchError::Flag { given: format!("--variant {spec}"), why };
         let (name, sets) =
@@ -56,11 +53,13 @@ pub fn variants(sweep: &Sweep, presets: &[String], extra: &[String]) -> Result<V
         if name.is_empty() || out.iter().any(|v| v.name == name) {
             return Err(variant("expected a new, non-empty name".into()).into());
         }
-        let mut scene = sweep.file.scene.with_knobs_of(&fast);
+        let mut scene = crate::scenes::settings::with_knobs_of(&sweep.file.scene, "fast")
+            .map_err(|e| variant(e.to_string()))?;
         for set in sets.split(',').filter(|s| !s.trim().is_empty()) {
             let (k, v) =
                 set.split_once('=').ok_or_else(|| variant(format!("`{set}`: expected key=value")))?;
-            scene = scene.with_knob(k.trim(), v.trim()).map_err(|e| variant(e.to_string()))?;
+            scene = crate::scenes::settings::with_knob(&scene, k.trim(), v.trim())
+                .map_err(|e| variant(e.to_string()))?;
         }
         scene.fidelity = format!("fast+{name}");
         // Validation checks the preset's name; the variant's knobs are what it checks.
@@ -637,7 +636,8 @@ mod tests {
         let v =
             variants(&sweep, &["reference".into()], &["x:rayleigh_fraction=0.3,mesh_cells_across=2".into()])
                 .unwrap();
-        assert_eq!(v[0].sweep.file.scene, SceneSettings::preset("reference").unwrap());
+        let conveyor = crate::scenes::lookup("conveyor").unwrap();
+        assert_eq!(v[0].sweep.file.scene, crate::scenes::settings::preset(conveyor, "reference").unwrap());
         assert_eq!(v[1].sweep.file.scene.rayleigh_fraction, 0.3);
         assert_eq!(v[1].sweep.file.scene.mesh_cells_across, 2);
         for bad in ["x", "x:gap=1", "x:rayleigh_fraction=1.5", "x:depth_diameters=-1"] {

@@ -461,6 +461,7 @@ fn conclusions(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scenes::layers::settings::{with_own, LayersSettings};
 
     #[test]
     fn a_comparison_of_indices_holds_only_where_their_intervals_part() {
@@ -581,7 +582,7 @@ mod tests {
         );
         assert!(detail.contains("steady from pass 11"), "{detail}");
         let names = |bed: &str| {
-            let s = crate::scene::settings::SceneSettings { bed: bed.into(), ..Default::default() };
+            let s = with_own(LayersSettings::default().settings(), |l| l.bed = bed.into());
             layout.answer_name(&s)
         };
         assert_eq!(names("fused"), "steady-layer packing");

@@ -101,7 +101,10 @@ impl PointExecutor {
             return point::Start::default();
         };
         let sweep = &self.ctx.sweep;
-        let mfr_se_target = (settings.precision == "sweep")
+        let mfr_se_target = settings
+            .own
+            .keys()
+            .sweep_precision()
             .then(|| {
                 precision::read(sweep_dir).or_else(|| {
                     precision::settle(
@@ -115,8 +118,12 @@ impl PointExecutor {
             })
             .flatten()
             .map(|p| p.mfr_abs_se);
-        let neighbour =
-            settings.warm_start.then(|| self.finished.nearest(sweep, runs, &job.values, &job.hash)).flatten();
+        let neighbour = settings
+            .own
+            .keys()
+            .warm_start()
+            .then(|| self.finished.nearest(sweep, runs, &job.values, &job.hash))
+            .flatten();
         point::Start { neighbour, mfr_se_target }
     }
 }

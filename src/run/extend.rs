@@ -133,7 +133,9 @@ pub fn extend_sweep(
             return Err(refuse(why));
         }
     }
-    if let Some(p) = recorded_after(target, recorded.as_ref(), ctx.sweep.file.scene.precision == "sweep") {
+    if let Some(p) =
+        recorded_after(target, recorded.as_ref(), ctx.sweep.file.scene.own.keys().sweep_precision())
+    {
         crate::sys::atomic::write_json(&dir.join(PRECISION), &p)
             .map_err(|e| refuse(format!("cannot write {PRECISION}: {e}")))?;
     }

@@ -16,6 +16,7 @@ pub mod blade;
 pub mod cohesion;
 pub mod mesh;
 pub mod own;
+pub mod own_settings;
 pub mod params;
 pub mod passage;
 pub mod pile;

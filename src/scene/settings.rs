@@ -8,9 +8,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::hint;
 use crate::scene::cohesion::CohesionScaling;
+use crate::scene::own_settings::OwnSettings;
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields, default = "SceneSettings::fast")]
 pub struct SceneSettings {
     /// A path to a Tera template overriding the built-in `spreading.liggghts.tera`
     /// (relative to the sweep file).
@@ -30,59 +31,10 @@ pub struct SceneSettings {
     pub mesh_cells_across: usize,
     /// Domain depth across the blade (periodic y), in particle diameters.
     pub depth_diameters: f64,
-    /// Length of the MFR measurement window (blade travel), in diameters.
-    pub window_diameters: f64,
     /// Gated layout: the pile is at rest when its rms speed is below this fraction of √(g·D).
     pub rest_speed: f64,
-    /// Gated layout: the least settle before the rest criterion is first checked, in free-fall
-    /// times of the dose block (a lattice block is still for an instant before it collapses).
-    pub settle_min_falls: f64,
     /// Neighbour-list skin, in smallest diameters.
     pub skin_diameters: f64,
-    /// Interval of a dump of every per-particle column over the whole run, s (0: none; only the
-    /// window's snapshots of the columns the metrics read are written).
-    pub full_dump_every_s: f64,
-    /// Keep the blade going after the window to the end of the domain (the thesis's full
-    /// traverse) instead of stopping once the window is measured.
-    pub run_to_end: bool,
-    /// Conveyor layout: substrate travel per block of the deposit series, in diameters.
-    pub block_diameters: f64,
-    /// Conveyor layout: simulated time before the precision target is first checked, s (at
-    /// least 10 D of travel). Unset (the default): [`WARMUP_HEAP_FALLS`] × √(H/g), H = gap +
-    /// `heap_height`, the held heap's height ([`SceneSettings::warmup_for`]). The start-up
-    /// transient is a time, not a travel, and that time is the heap's: run long, MFR settles
-    /// within 3–6 √(H/g) at D 1–3 mm, heaps of 8–40 mm and 0.1–1.4 m/s (docs/study/recoater)
-    /// and at D 24–35 µm, heaps of 0.3–1 mm and 0.02–0.2 m/s, cohesive or not
-    /// (docs/study/warmup-um.md); 0.3 s at the thesis's heap, 0.04–0.07 s at a real powder's.
-    /// A set value wins. The blocks after it are judged by the stop rule's MSER truncation.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub warmup_s: Option<f64>,
-    /// Conveyor layout: the most travel after the warm-up, in diameters (the window's precision
-    /// is a number of blocks): where it ends the run before the precision target is met, the
-    /// point says so (`stop = "cap"`). The warm-up is never cut short by it.
-    pub window_cap_diameters: f64,
-    /// Conveyor layout: the window runs until the standard error of MFR is at most this
-    /// fraction of MFR ...
-    pub mfr_rel_se: f64,
-    /// ... or at most this absolute value (MFR near zero), whichever is reached first.
-    pub mfr_abs_se: f64,
-    /// Conveyor layout: the least number of blocks after the warm-up before the target can stop
-    /// the run.
-    pub min_window_blocks: usize,
-    /// Conveyor layout, in a sweep: start a point from the steady state a finished point near it
-    /// left (its heap mapped to this point's size, speed and gap), so that the transient it must
-    /// outlive is the difference between neighbours, not a heap starting from rest. A point with
-    /// no such neighbour starts cold. The run's hash does not depend on it.
-    pub warm_start: bool,
-    /// Conveyor layout: the least warm-up of a warm-started point, s (at least one block); its
-    /// warm-up is the cold one's times the neighbour's distance over 0.5, never less than 0.6 of
-    /// the cold one nor than this.
-    pub warm_warmup_s: f64,
-    /// Conveyor layout, in a sweep: `"sweep"` — once the first batch has finished, every later
-    /// point runs until the SE of its MFR is a tenth of the spread of MFR over that batch (what
-    /// the sweep's statistics need; `mfr_rel_se`/`mfr_abs_se` until then); `"fixed"` — always
-    /// `mfr_rel_se`/`mfr_abs_se` (the default when the file writes either).
-    pub precision: String,
     // What the point is.
     /// The scene's layout: `"conveyor"` (default: the blade's frame, a held heap, MFR in a
     /// steady state with its SE), `"gated"` (the dose settles at rest in a closed region on a
@@ -94,54 +46,14 @@ pub struct SceneSettings {
     pub substrate: String,
     /// Gated layout: longest settle, s; a pile still moving then fails the run (`not-settled`).
     pub settle_max_s: f64,
-    /// Gated layout: blade travel past the opened gate before the window starts, in diameters.
-    pub window_start_diameters: f64,
     /// Size of the heap in front of the blade, relative to the planned one (gated: gap + 10 D
     /// tall at 30° repose; thesis: the heap left at the end, gap + 6 D tall).
     pub supply_factor: f64,
-    /// Layers layout: passes of the blade, each onto the layers before it.
-    #[serde(skip_serializing_if = "is_default_layers")]
-    pub layers: usize,
-    /// Layers layout: `"loose"` (default: the layers before stay powder and are sheared again,
-    /// as in a spreading test or binder jetting) or `"fused"` (each layer consolidates to a solid
-    /// of its packing times its height before the next, as in laser or electron-beam fusion).
-    #[serde(skip_serializing_if = "is_loose")]
-    pub bed: String,
-    /// Layers layout, fused bed: the first passes search for the steady depth of powder under
-    /// the blade instead of building it up layer by layer — after each, the solid is set so that
-    /// the next pass meets its own depth times the layer thickness over its deposit; 0: every
-    /// pass is a layer on the one before, from the bare plate. Not set: a fused bed searches
-    /// for [`DEFAULT_SEARCH_PASSES`] passes (at most `layers` less six), a loose bed never.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub search_passes: Option<usize>,
-    /// Layers layout: the fewest passes before a point may stop on its steady layer; it runs
-    /// pass by pass until the steady rule holds or it reaches `layers`, the most. Not set: the
-    /// search's passes and [`crate::scenes::layers::STOP_KEPT_PASSES`] laid ones after them.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub least_layers: Option<usize>,
-    /// Layers layout: the blade's profile, `"flat"` (default: a box, the thesis's) or `"round"`
-    /// (a cylinder of `blade_radius_mm`, its lowest line the tip).
-    #[serde(skip_serializing_if = "is_flat")]
-    pub blade_profile: String,
-    /// Layers layout: radius of a round blade, mm.
-    #[serde(skip_serializing_if = "is_default_blade_radius")]
-    pub blade_radius_mm: f64,
-    /// Layers layout: height of the blade's tip above the machine's top surface (the level the
-    /// dose is fed at and the platform drops from), mm; 0: the blade grazes it.
-    #[serde(skip_serializing_if = "is_zero")]
-    pub blade_clearance_mm: f64,
-    /// Layers layout, a roller: segments of its circle's mesh (a numerical knob: the roller's
-    /// resolution; the round blade's angle a segment by default).
-    #[serde(skip_serializing_if = "is_default_roller_segments")]
-    pub roller_segments: usize,
-    /// Layers layout: length of the build plate along the travel, in diameters.
-    #[serde(skip_serializing_if = "is_default_plate")]
-    pub plate_diameters: f64,
-    /// Layers layout, loose bed: the bed deeper than this many diameters under the machine's
-    /// top surface, at rest and beyond the blade's reach, stops moving and its particles are not
-    /// searched against each other (0: the whole bed moves).
-    #[serde(skip_serializing_if = "is_zero")]
-    pub freeze_depth_diameters: f64,
+    /// The layout's own keys, of its type ([`crate::scene::own_settings`]): written into
+    /// `[scene]` beside these, read by `crate::scenes::settings::parse`, which gives them to the
+    /// layout (deserialising these settings alone leaves them the defaults of none).
+    #[serde(flatten, skip_deserializing)]
+    pub own: OwnSettings,
     /// Size distribution of the particles.
     pub size_distribution: SizeDistributionSpec,
     /// How the `surface_energy` parameter is carried to the deck's softened contact
@@ -164,10 +76,6 @@ pub struct SceneSettings {
     #[serde(skip)]
     pub vtk: bool,
 }
-
-/// The default warm-up in gravity times of the held heap, √(H/g) with H = gap + `heap_height`
-/// (docs/study/warmup-um.md): long runs at D 1–3 mm and 24–35 µm settle within it.
-pub const WARMUP_HEAP_FALLS: f64 = 6.5;
 
 /// The fidelity presets, fastest first.
 pub const FIDELITIES: [&str; 3] = ["fast", "reference", "thesis"];
@@ -199,7 +107,9 @@ pub const KNOBS: [&str; 21] = [
 ];
 
 impl SceneSettings {
-    /// The settings of a fidelity preset (docs/scene.md "Fidelity"; BENCHMARKS.md "Fidelity").
+    /// The keys every layout's settings hold at a fidelity preset (docs/scene.md "Fidelity";
+    /// BENCHMARKS.md "Fidelity"); a layout's own keys have their preset of it too
+    /// (`crate::scenes::settings::preset` gives the whole).
     ///
     /// - `fast` (default): the measured fastest settings whose MFR stays within the stated error
     ///   of `reference`.
@@ -209,7 +119,7 @@ impl SceneSettings {
     ///   1e-5 s step, every column dumped every 2,000 steps (0.02 s, Appendix A), the blade
     ///   driven to the end of the domain; every run settles its own pile.
     pub fn preset(fidelity: &str) -> Option<SceneSettings> {
-        let fast = SceneSettings::default();
+        let fast = SceneSettings::fast();
         match fidelity {
             "fast" => Some(fast),
             "reference" => Some(SceneSettings {
@@ -218,12 +128,8 @@ impl SceneSettings {
                 stiffness_factor: 1.0,
                 mesh_cells_across: 12,
                 depth_diameters: 12.0,
-                window_diameters: 80.0,
                 rest_speed: 0.005,
-                settle_min_falls: 2.0,
                 skin_diameters: 0.25,
-                warm_start: false,
-                precision: "fixed".into(),
                 ..fast
             }),
             "thesis" => Some(SceneSettings {
@@ -231,83 +137,11 @@ impl SceneSettings {
                 timestep_s: crate::scene::THESIS_TIMESTEP,
                 stiffness_factor: 1.0,
                 mesh_cells_across: 6,
-                settle_min_falls: 2.0,
                 skin_diameters: 0.25,
-                full_dump_every_s: 0.02,
-                run_to_end: true,
-                warm_start: false,
-                precision: "fixed".into(),
                 ..fast
             }),
             _ => None,
         }
-    }
-
-    /// These settings with every knob the file did not write (`written`: keys of `[scene]`)
-    /// taken from the preset named by `fidelity`.
-    pub fn resolve_preset(&self, written: &[String]) -> std::result::Result<SceneSettings, KnobError> {
-        let preset = SceneSettings::preset(&self.fidelity)
-            .ok_or_else(|| KnobError::UnknownFidelity { fidelity: self.fidelity.clone() })?;
-        let mut table = toml::Table::try_from(&preset)?;
-        let mine = toml::Table::try_from(self)?;
-        for key in written {
-            if let Some(v) = mine.get(key) {
-                table.insert(key.clone(), v.clone());
-            }
-        }
-        let mut resolved: SceneSettings = table.try_into()?;
-        resolved.force_bounds = self.force_bounds;
-        Ok(resolved)
-    }
-}
-
-impl SceneSettings {
-    /// These settings with every knob ([`KNOBS`]) and the fidelity's name taken from `preset`:
-    /// the same point computed another way.
-    pub fn with_knobs_of(&self, preset: &SceneSettings) -> SceneSettings {
-        let mut s = preset.clone();
-        s.template = self.template.clone();
-        s.layout = self.layout.clone();
-        s.substrate = self.substrate.clone();
-        s.settle_max_s = self.settle_max_s;
-        s.window_start_diameters = self.window_start_diameters;
-        s.supply_factor = self.supply_factor;
-        s.layers = self.layers;
-        s.bed = self.bed.clone();
-        s.search_passes = self.search_passes;
-        s.least_layers = self.least_layers;
-        s.blade_profile = self.blade_profile.clone();
-        s.blade_radius_mm = self.blade_radius_mm;
-        s.blade_clearance_mm = self.blade_clearance_mm;
-        s.plate_diameters = self.plate_diameters;
-        s.freeze_depth_diameters = self.freeze_depth_diameters;
-        s.size_distribution = self.size_distribution.clone();
-        s.cohesion_scaling = self.cohesion_scaling;
-        s.material_youngs_gpa = self.material_youngs_gpa;
-        s.vx_band_diameters = self.vx_band_diameters;
-        s.thesis_band = self.thesis_band;
-        s.seed = self.seed;
-        s.force_bounds = self.force_bounds;
-        s
-    }
-
-    /// These settings with `key = value` (TOML syntax) set, for a knob only.
-    pub fn with_knob(&self, key: &str, value: &str) -> std::result::Result<SceneSettings, KnobError> {
-        let (key, value) = (key.to_string(), value.to_string());
-        if !KNOBS.contains(&key.as_str()) {
-            return Err(KnobError::NotAKnob { key });
-        }
-        let Ok(parsed) = toml::from_str::<toml::Table>(&format!("{key} = {value}")) else {
-            return Err(KnobError::NotToml { key, value });
-        };
-        let mut table = toml::Table::try_from(self)?;
-        table.extend(parsed);
-        let mut s: SceneSettings = table.try_into().map_err(|e: toml::de::Error| {
-            let why = e.message().trim().to_string();
-            KnobError::Value { key, value, why }
-        })?;
-        s.force_bounds = self.force_bounds;
-        Ok(s)
     }
 }
 
@@ -337,23 +171,9 @@ pub(crate) fn quoted(names: &[&str]) -> String {
 }
 
 impl SceneSettings {
-    /// The conveyor's warm-up, s, for a held heap `heap_height` tall (m, gap included): the
-    /// set `warmup_s`, or [`WARMUP_HEAP_FALLS`] × √(H/g).
-    pub fn warmup_for(&self, heap_height: f64) -> f64 {
-        self.warmup_s.unwrap_or_else(|| WARMUP_HEAP_FALLS * (heap_height / crate::scene::GRAVITY).sqrt())
-    }
-}
-
-impl SceneSettings {
-    /// The defaults on the gated layout (the unit tests of that scene).
-    #[cfg(test)]
-    pub(crate) fn gated() -> SceneSettings {
-        SceneSettings { layout: "gated".into(), ..SceneSettings::default() }
-    }
-}
-
-impl Default for SceneSettings {
-    fn default() -> Self {
+    /// The fast preset of the keys every layout's settings hold, on the conveyor without its
+    /// own keys (`crate::scenes::settings::parse` gives a layout its own).
+    fn fast() -> SceneSettings {
         SceneSettings {
             template: None,
             fidelity: "fast".into(),
@@ -369,40 +189,13 @@ impl Default for SceneSettings {
             stiffness_factor: 1.0,
             mesh_cells_across: 1,
             depth_diameters: 6.0,
-            // 40 D: measured 2.8× less seed-to-seed spread than 20 D for 1.6× the CPU
-            // (BENCHMARKS.md "MFR noise").
-            window_diameters: 40.0,
             rest_speed: 0.01,
-            settle_min_falls: 2.0,
             skin_diameters: 0.5,
-            full_dump_every_s: 0.0,
-            run_to_end: false,
-            block_diameters: 5.0,
-            warmup_s: None,
-            window_cap_diameters: 600.0,
-            mfr_rel_se: 0.05,
-            mfr_abs_se: 0.005,
-            min_window_blocks: 8,
-            // Opt-in: at machine speeds a warm start left points 3–5 SE above long runs that
-            // a start from rest got right (BENCHMARKS.md "Warm start at machine speeds").
-            warm_start: false,
-            warm_warmup_s: 0.03,
-            precision: "sweep".into(),
             layout: "conveyor".into(),
             substrate: "rough".into(),
             settle_max_s: 1.0,
-            window_start_diameters: 30.0,
             supply_factor: 1.0,
-            layers: DEFAULT_LAYERS,
-            bed: "loose".into(),
-            search_passes: None,
-            least_layers: None,
-            blade_profile: "flat".into(),
-            blade_radius_mm: DEFAULT_BLADE_RADIUS_MM,
-            roller_segments: DEFAULT_ROLLER_SEGMENTS,
-            blade_clearance_mm: 0.0,
-            plate_diameters: DEFAULT_PLATE_DIAMETERS,
-            freeze_depth_diameters: 0.0,
+            own: OwnSettings::none(),
             size_distribution: SizeDistributionSpec::default(),
             cohesion_scaling: CohesionScaling::PullOff,
             material_youngs_gpa: 0.0,
@@ -413,42 +206,6 @@ impl Default for SceneSettings {
             vtk: false,
         }
     }
-}
-
-/// Layers layout: passes by default; enough for the steady layer of every case measured
-/// (docs/study/layers.md).
-pub const DEFAULT_LAYERS: usize = 10;
-/// Layers layout, fused bed: search passes by default (docs/study/layers.md: Ti-6Al-4V's depth
-/// came within 3 % of its steady value in six).
-pub const DEFAULT_SEARCH_PASSES: usize = 6;
-/// Layers layout: a round blade's radius by default, mm (Gaboriault et al. 2025's blade).
-pub const DEFAULT_BLADE_RADIUS_MM: f64 = 2.5;
-/// Segments of a roller's whole circle: the round blade's angle a segment (its 48 over 0.75 of a
-/// half circle); docs/study/roller.md "The roller's numerics" halves and doubles it.
-pub const DEFAULT_ROLLER_SEGMENTS: usize = 128;
-/// Layers layout: the build plate's length by default, in diameters.
-pub const DEFAULT_PLATE_DIAMETERS: f64 = 40.0;
-
-fn is_default_layers(n: &usize) -> bool {
-    *n == DEFAULT_LAYERS
-}
-fn is_loose(b: &str) -> bool {
-    b == "loose"
-}
-fn is_flat(p: &str) -> bool {
-    p == "flat"
-}
-fn is_default_blade_radius(r: &f64) -> bool {
-    *r == DEFAULT_BLADE_RADIUS_MM
-}
-fn is_zero(v: &f64) -> bool {
-    *v == 0.0
-}
-fn is_default_roller_segments(n: &usize) -> bool {
-    *n == DEFAULT_ROLLER_SEGMENTS
-}
-fn is_default_plate(v: &f64) -> bool {
-    *v == DEFAULT_PLATE_DIAMETERS
 }
 
 /// The particle size distribution, as written in the sweep file.

@@ -54,8 +54,10 @@ pub fn unread(settings: &SceneSettings) -> Option<UnreadSetting> {
     let (Ok(mine), Ok(preset)) = (toml::Table::try_from(settings), toml::Table::try_from(&preset)) else {
         return None;
     };
+    // The layout's own keys were judged as they were read (`super::settings::parse`).
+    let own = settings.own.table();
     mine.iter()
-        .filter(|(key, _)| !reads(settings, key))
+        .filter(|(key, _)| !own.contains_key(*key) && !reads(settings, key))
         .find(|(key, value)| preset.get(*key) != Some(*value))
         .map(|(key, value)| UnreadSetting {
             key: key.clone(),
@@ -80,6 +82,7 @@ mod tests {
 
     use super::*;
     use crate::scene::Base;
+    use crate::scenes::settings::{parse, SettingError};
     use crate::scenes::Layout;
 
     /// Each key some layout lists, set away from its default (valid where it is read).
@@ -129,18 +132,28 @@ mod tests {
         ("layers", "blade_radius_mm"),
     ];
 
-    fn settings(layout: &dyn Layout, change: Option<(&str, &str)>) -> SceneSettings {
-        let mut table = toml::Table::try_from(SceneSettings::default()).unwrap();
+    /// The layout's settings with `change` written, or why they cannot be read.
+    fn read(layout: &dyn Layout, change: Option<(&str, &str)>) -> Result<SceneSettings, SettingError> {
+        let mut table = toml::Table::new();
         table.insert("layout".into(), layout.name().into());
         if let Some((key, value)) = change {
             table.extend(toml::from_str::<toml::Table>(&format!("{key} = {value}")).unwrap());
         }
-        table.try_into().unwrap()
+        parse(&table)
     }
 
-    fn derived(layout: &dyn Layout, change: Option<(&str, &str)>) -> serde_json::Value {
-        let s = settings(layout, change);
-        serde_json::to_value(layout.derive(Base::new(&BTreeMap::new(), &s).unwrap(), &s)).unwrap()
+    fn settings(layout: &dyn Layout, change: Option<(&str, &str)>) -> SceneSettings {
+        read(layout, change).unwrap()
+    }
+
+    /// The layout's scene with `change` written; `None` where the key is another layout's own,
+    /// which its settings cannot hold (refused as it is read).
+    fn derived(layout: &dyn Layout, change: Option<(&str, &str)>) -> Option<serde_json::Value> {
+        let s = match read(layout, change) {
+            Err(SettingError::Unread(_)) => return None,
+            s => s.unwrap(),
+        };
+        Some(serde_json::to_value(layout.derive(Base::new(&BTreeMap::new(), &s).unwrap(), &s)).unwrap())
     }
 
     #[test]
@@ -165,9 +178,9 @@ mod tests {
     fn a_layout_derives_the_same_scene_whatever_a_key_it_does_not_list_is_set_to() {
         let mut bad = Vec::new();
         for layout in LAYOUTS {
-            let plain = derived(*layout, None);
+            let plain = derived(*layout, None).unwrap();
             for &(key, value) in CHANGED.iter().filter(|(k, _)| !layout.own_settings().contains(k)) {
-                let other = derived(*layout, Some((key, value)));
+                let Some(other) = derived(*layout, Some((key, value))) else { continue };
                 let fields: Vec<String> = plain
                     .as_object()
                     .unwrap()
@@ -191,7 +204,7 @@ mod tests {
         for layout in LAYOUTS {
             let plain = derived(*layout, None);
             for &(key, value) in CHANGED.iter().filter(|(k, _)| layout.own_settings().contains(k)) {
-                let changed = derived(*layout, Some((key, value))) != plain;
+                let changed = derived(*layout, Some((key, value))).unwrap() != plain.clone().unwrap();
                 if changed == READ_AT_RUN.contains(&(layout.name(), key)) {
                     bad.push(format!("{}: {key} = {value} changes its scene: {changed}", layout.name()));
                 }
@@ -203,15 +216,19 @@ mod tests {
     #[test]
     fn a_key_is_refused_where_its_layout_does_not_read_it_and_only_away_from_its_preset_value() {
         let conveyor = crate::scenes::lookup("conveyor").unwrap();
-        let fused = settings(conveyor, Some(("bed", "\"fused\"")));
-        let u = unread(&fused).unwrap();
-        assert_eq!((u.key.as_str(), u.value.as_str(), u.readers), ("bed", "\"fused\"", vec!["layers"]));
+        // Another layout's own key is refused as it is read ...
+        let Err(SettingError::Unread(u)) = read(conveyor, Some(("bed", "\"fused\""))) else {
+            panic!("a conveyor takes a fused bed")
+        };
+        assert_eq!((u.key.as_str(), u.value.as_str(), &u.readers), ("bed", "\"fused\"", &vec!["layers"]));
         assert_eq!(
-            unread(&fused).unwrap().to_string(),
+            u.to_string(),
             "\"fused\" is read only by the layers layout; this sweep's layout is conveyor (remove the key, or change the layout)"
         );
-        // The default, as a resolved sweep.toml writes every key, is no setting.
-        assert_eq!(unread(&settings(conveyor, Some(("bed", "\"loose\"")))), None);
+        // ... but at its default, as a resolved sweep.toml writes every key, it is no setting.
+        assert_eq!(settings(conveyor, Some(("bed", "\"loose\""))), SceneSettings::default());
+        // A key every layout's settings hold is refused by `unread`, where the layout does not
+        // read it.
         assert_eq!(unread(&settings(conveyor, Some(("block_diameters", "7.0")))), None);
         // A knob at the value of the file's preset is none either, at another it is.
         let layers = crate::scenes::lookup("layers").unwrap();
@@ -221,6 +238,9 @@ mod tests {
         reference.rest_speed = 0.01;
         let u = unread(&reference).unwrap();
         assert_eq!((u.key.as_str(), u.readers), ("rest_speed", vec!["gated", "pour"]));
-        assert!(unread(&settings(layers, Some(("window_cap_diameters", "800.0")))).is_some());
+        assert!(matches!(
+            read(layers, Some(("window_cap_diameters", "800.0"))),
+            Err(SettingError::Unread(_))
+        ));
     }
 }

@@ -13,6 +13,7 @@ pub mod layers;
 pub mod moving_blade;
 pub mod pour;
 pub mod quantity;
+pub mod settings;
 pub mod stand_in;
 #[cfg(test)]
 mod template_keys;
@@ -22,6 +23,7 @@ use std::path::{Path, PathBuf};
 
 use crate::engine::EngineRun;
 use crate::outcome::{AnswerKind, FailureClass, RunResult};
+use crate::scene::own_settings::OwnSettings;
 use crate::scene::settings::SceneSettings;
 use crate::scene::{params, plausible, Base, Scene, SceneError};
 pub use conveyor::warm::Warm;
@@ -223,6 +225,16 @@ pub trait Layout: Sync {
 
     /// Every number the deck and the measurement need, from the point's common part.
     fn derive(&self, base: Base, settings: &SceneSettings) -> Scene;
+
+    /// Its own `[scene]` keys as its type (`scene::own_settings::LayoutSettings`): the keys of
+    /// `own_settings()` that not every layout reads, `written` over the fidelity's preset;
+    /// default none (a layout that reads only keys every layout has).
+    fn own_keys(&self, _fidelity: &str, written: &toml::Table) -> Result<OwnSettings, toml::de::Error> {
+        match written.keys().next() {
+            None => Ok(OwnSettings::none()),
+            Some(key) => Err(serde::de::Error::custom(format!("unknown field `{key}`"))),
+        }
+    }
 
     /// The atoms the engine's log must keep to the end (None: the count varies by design).
     fn atoms_kept(&self, scene: &Scene) -> Option<u64>;

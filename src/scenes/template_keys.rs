@@ -5,8 +5,6 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use crate::scene::settings::SceneSettings;
-
 /// Keys a deck reads only inside a test that they are set (`{% if scene.own.extend %}`): absent
 /// from a scene where they are not.
 const ONLY_WHEN_SET: &[&str] = &["own.extend", "own.resume", "own.first_floor"];
@@ -36,7 +34,7 @@ fn keys(template: &str) -> BTreeSet<String> {
 #[test]
 fn every_key_a_built_in_deck_reads_is_a_key_of_its_layouts_scene() {
     for layout in super::LAYOUTS {
-        let settings = SceneSettings { layout: layout.name().into(), ..SceneSettings::default() };
+        let settings = super::settings::defaults(*layout);
         let scene = super::build(&BTreeMap::new(), &settings).unwrap();
         let context = serde_json::to_value(&scene).unwrap();
         let read = keys(layout.template().source);

@@ -31,7 +31,10 @@ pub struct SweepFile {
     pub design: DesignSettings,
     #[serde(default)]
     pub convergence: ConvergenceSettings,
-    #[serde(default)]
+    /// `[scene]`: the keys every layout reads and the layout's own, each from the fidelity's
+    /// preset where the file does not write it (read by the layouts,
+    /// [`crate::scenes::settings::parse`]).
+    #[serde(default, deserialize_with = "crate::scenes::settings::deserialize")]
     pub scene: SceneSettings,
     #[serde(default)]
     pub run: RunSettings,

@@ -17,7 +17,7 @@ pub use error::SweepError;
 pub use file::{
     AdaptSettings, DesignSettings, LdsSettings, RunSettings, Scale, SweepFile, DEFAULT_SEED, SWEEP_FORMAT,
 };
-use validate::{io_reason, toml_error, validate};
+use validate::{io_reason, scene_error, toml_error, validate};
 
 use std::path::{Path, PathBuf};
 
@@ -57,29 +57,13 @@ impl Sweep {
 
     /// Parse and validate; `path` is only used in messages and to resolve relative paths.
     pub fn parse(text: &str, path: &Path) -> Result<Sweep, SweepError> {
-        let mut file: SweepFile = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
-        // The preset fills the knobs the file leaves out (the file parsed, so this parses too).
         let raw: toml::Table = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
-        let written: Vec<String> = raw
-            .get("scene")
-            .and_then(|v| v.as_table())
-            .map(|t| t.keys().cloned().collect())
-            .unwrap_or_default();
         refuse_keys_of_mono(&raw, path)?;
-        file.scene = file.scene.resolve_preset(&written).map_err(|e| SweepError::Key {
-            path: path.to_path_buf(),
-            key: "scene.fidelity".into(),
-            why: e.to_string(),
-        })?;
+        // `[scene]` first, for its error's key and line (serde's would be the table's).
+        let scene = raw.get("scene").and_then(|v| v.as_table()).cloned().unwrap_or_default();
+        crate::scenes::settings::parse(&scene).map_err(|e| scene_error(path, text, &e))?;
+        let mut file: SweepFile = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
         include(&mut file, path)?;
-        // A target the user wrote is the one the points run to (where a layout runs to one).
-        let target_written = written.iter().any(|k| k == "mfr_rel_se" || k == "mfr_abs_se");
-        if target_written
-            && !written.iter().any(|k| k == "precision")
-            && crate::scenes::reads(&file.scene, "precision")
-        {
-            file.scene.precision = "fixed".into();
-        }
         let (swept, fixed) = validate(&file, path)?;
         Ok(Sweep { path: path.to_path_buf(), file, swept, fixed })
     }
@@ -250,17 +234,23 @@ mod preset_tests {
     #[test]
     fn a_preset_sets_the_knobs_the_file_leaves_out_and_the_file_wins_where_it_speaks() {
         let r = scene_of("fidelity = \"reference\"").unwrap();
-        assert_eq!(r, SceneSettings::preset("reference").unwrap());
-        // The reference is finer in every knob it changes.
+        let conveyor = crate::scenes::lookup("conveyor").unwrap();
+        assert_eq!(r, crate::scenes::settings::preset(conveyor, "reference").unwrap());
+        assert!(!r.own.keys().sweep_precision(), "every point to its own target at the reference");
+        // The reference is finer in every knob it changes, the layout's own as the others.
         let fast = SceneSettings::default();
-        assert!(r.rayleigh_fraction < fast.rayleigh_fraction);
-        assert!(r.depth_diameters > fast.depth_diameters && r.window_diameters > fast.window_diameters);
+        assert!(r.rayleigh_fraction < fast.rayleigh_fraction && r.depth_diameters > fast.depth_diameters);
         assert!(r.rest_speed < fast.rest_speed && r.stiffness_factor >= fast.stiffness_factor);
-        let mine = scene_of("fidelity = \"reference\"\ndepth_diameters = 5\nseed = 7").unwrap();
-        assert_eq!((mine.depth_diameters, mine.seed, mine.window_diameters), (5.0, 7, r.window_diameters));
-        let thesis = scene_of("fidelity = \"thesis\"").unwrap();
+        let window = |s: &SceneSettings| crate::scenes::moving_blade::own(s).window_diameters;
+        let gated = scene_of("layout = \"gated\"\nfidelity = \"reference\"").unwrap();
+        assert!(window(&gated) > window(&SceneSettings::gated()));
+        let mine =
+            scene_of("layout = \"gated\"\nfidelity = \"reference\"\ndepth_diameters = 5\nseed = 7").unwrap();
+        assert_eq!((mine.depth_diameters, mine.seed, window(&mine)), (5.0, 7, window(&gated)));
+        let thesis = scene_of("layout = \"thesis\"\nfidelity = \"thesis\"").unwrap();
         assert_eq!(thesis.timestep_s, crate::scene::THESIS_TIMESTEP);
-        assert!(thesis.run_to_end && thesis.full_dump_every_s > 0.0);
+        let keys = crate::scenes::moving_blade::own(&thesis);
+        assert!(keys.run_to_end && keys.full_dump_every_s > 0.0);
         assert_eq!(scene_of("").unwrap(), SceneSettings::default());
     }
 
@@ -288,7 +278,10 @@ mod preset_tests {
             let body = toml::to_string(&first.file).unwrap();
             let again = Sweep::parse(&body, Path::new("sweep.toml")).unwrap();
             assert_eq!(again.file.scene, first.file.scene, "{layout}, {fidelity}");
-            assert!(knob.is_empty() || again.file.scene.window_diameters == 30.0);
+            assert!(
+                knob.is_empty()
+                    || crate::scenes::moving_blade::own(&again.file.scene).window_diameters == 30.0
+            );
         }
     }
 
@@ -309,16 +302,19 @@ mod preset_tests {
     fn knobs_of_a_preset_replace_only_the_knobs() {
         let mine =
             SceneSettings { supply_factor: 1.5, seed: 3, depth_diameters: 4.0, ..SceneSettings::default() };
-        let r = mine.with_knobs_of(&SceneSettings::preset("reference").unwrap());
+        let r = crate::scenes::settings::with_knobs_of(&mine, "reference").unwrap();
+        assert!(
+            mine.own.keys().sweep_precision() && !r.own.keys().sweep_precision(),
+            "a knob of the layout's own"
+        );
         assert_eq!((r.supply_factor, r.seed, r.fidelity.as_str()), (1.5, 3, "reference"));
         assert_eq!(r.depth_diameters, 12.0);
-        let k = mine.with_knob("rayleigh_fraction", "0.3").unwrap();
+        let k = crate::scenes::settings::with_knob(&mine, "rayleigh_fraction", "0.3").unwrap();
         assert_eq!((k.rayleigh_fraction, k.supply_factor), (0.3, 1.5));
-        assert!(mine
-            .with_knob("supply_factor", "2")
+        assert!(crate::scenes::settings::with_knob(&mine, "supply_factor", "2")
             .unwrap_err()
             .to_string()
             .contains("not a numerical knob"));
-        assert!(mine.with_knob("run_to_end", "maybe").is_err());
+        assert!(crate::scenes::settings::with_knob(&SceneSettings::gated(), "run_to_end", "maybe").is_err());
     }
 }

@@ -33,13 +33,6 @@ pub(super) fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> SweepE
         .replace("expected u32", "expected a whole number ≥ 0");
     let mut extra = String::new();
     // serde's message: "unknown field `frction`, expected one of `a`, `b`".
-    if msg.starts_with("unknown field `heap_diameters`") {
-        let why = "replaced by the parameter heap_height, the heap's height above the \
-             blade tip in mm (e.g. `heap_height = 20` under [parameters]); heap_diameters × D keeps today's \
-             heap at that D: 10 at D = 2 mm is heap_height = 20";
-        let key = Some("scene.heap_diameters".to_string());
-        return SweepError::Syntax { path: path.to_path_buf(), line, key, why: why.into() };
-    }
     if let Some(rest) = msg.strip_prefix("unknown field `") {
         if let Some((word, tail)) = rest.split_once('`') {
             let candidates: Vec<&str> = tail.split('`').skip(1).step_by(2).collect();
@@ -48,6 +41,52 @@ pub(super) fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> SweepE
     }
     let key = start.and_then(|s| key_at(text, s));
     SweepError::Syntax { path: path.to_path_buf(), line, key, why: format!("{msg}{extra}") }
+}
+
+/// A `[scene]` table's error as the sweep file's: a key's value or name with its line, a key
+/// only other layouts read or a layout or preset that is none by its key.
+pub(super) fn scene_error(path: &Path, text: &str, e: &crate::scenes::settings::SettingError) -> SweepError {
+    use crate::scenes::settings::SettingError::*;
+    let (key, why) = (e.key(), e.why());
+    match e {
+        Unknown { key: k, .. } if k == "heap_diameters" => {
+            let why = "replaced by the parameter heap_height, the heap's height above the \
+                 blade tip in mm (e.g. `heap_height = 20` under [parameters]); heap_diameters × D keeps today's \
+                 heap at that D: 10 at D = 2 mm is heap_height = 20";
+            SweepError::Syntax {
+                path: path.to_path_buf(),
+                line: line_of(text, "scene", k),
+                key: Some(key),
+                why: why.into(),
+            }
+        }
+        Unknown { key: k, .. } | Value { key: k, .. } => {
+            let line = line_of(text, "scene", k);
+            let why = why
+                .replace("expected usize", "expected a whole number ≥ 0")
+                .replace("expected u64", "expected a whole number ≥ 0");
+            SweepError::Syntax { path: path.to_path_buf(), line, key: Some(key), why }
+        }
+        Unread(_) | Choice { .. } => SweepError::Key { path: path.to_path_buf(), key, why },
+    }
+}
+
+/// The line of `key = …` in `[table]` of `text` (the first, 1-based), if written so.
+fn line_of(text: &str, table: &str, key: &str) -> Option<usize> {
+    let mut here = String::new();
+    for (i, line) in text.lines().enumerate() {
+        let l = line.trim();
+        if l.starts_with('[') {
+            here = l.trim_matches(|c| c == '[' || c == ']').replace([' ', '"', '\''], "");
+            continue;
+        }
+        let Some((k, _)) = l.split_once('=') else { continue };
+        let k = k.trim().replace([' ', '"', '\''], "");
+        if (here == table && k == key) || (here.is_empty() && k == format!("{table}.{key}")) {
+            return Some(i + 1);
+        }
+    }
+    None
 }
 
 /// The dotted key whose `key = value` line holds byte `offset` of `text`, prefixed with the
@@ -282,24 +321,22 @@ pub(super) fn validate(file: &SweepFile, path: &Path) -> Result<Params, SweepErr
     for (k, v) in [
         ("scene.rest_speed", s.rest_speed),
         ("scene.settle_max_s", s.settle_max_s),
-        ("scene.window_start_diameters", s.window_start_diameters),
         ("scene.supply_factor", s.supply_factor),
         ("scene.rayleigh_fraction", s.rayleigh_fraction),
         ("scene.depth_diameters", s.depth_diameters),
-        ("scene.window_diameters", s.window_diameters),
         ("scene.vx_band_diameters", s.vx_band_diameters),
         ("scene.stiffness_factor", s.stiffness_factor),
-        ("scene.settle_min_falls", s.settle_min_falls),
         ("scene.skin_diameters", s.skin_diameters),
     ] {
         if !v.is_finite() || v <= 0.0 {
             return Err(bad(k, format!("{v}: expected a finite number > 0")));
         }
     }
-    for (k, v) in [("scene.timestep_s", s.timestep_s), ("scene.full_dump_every_s", s.full_dump_every_s)] {
-        if !v.is_finite() || v < 0.0 {
-            return Err(bad(k, format!("{v}: expected a finite number ≥ 0 (0: off)")));
-        }
+    if !s.timestep_s.is_finite() || s.timestep_s < 0.0 {
+        return Err(bad(
+            "scene.timestep_s",
+            format!("{}: expected a finite number ≥ 0 (0: off)", s.timestep_s),
+        ));
     }
     if s.stiffness_factor > 1.0 {
         return Err(bad(

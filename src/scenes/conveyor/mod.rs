@@ -4,6 +4,7 @@
 //! MFR is measured in a steady state with its standard error ([`crate::measure::steady`]).
 
 pub mod extend;
+pub mod settings;
 pub mod warm;
 
 use std::path::{Path, PathBuf};
@@ -18,6 +19,7 @@ use crate::outcome::{FailureClass, PointAnswer, RunResult, RESULT_FORMAT};
 use crate::scene::bed::Bed;
 use crate::scene::blade::Spreader;
 use crate::scene::own::LayoutData;
+use crate::scene::own_settings::OwnSettings;
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
 use crate::scene::substrate::Substrate;
@@ -28,9 +30,13 @@ use crate::scenes::moving_blade::{self, Dose};
 use crate::scenes::{
     BadSetting, BuiltinTemplate, Finished, HeldHeap, Layout, Rejected, SetupRows, WarmFiles,
 };
+pub use settings::{own, ConveyorSettings};
 
 /// The conveyor layout (registered in [`crate::scenes::LAYOUTS`]).
 pub struct Conveyor;
+
+/// The layout's name, its `[scene] layout`.
+pub const NAME: &str = "conveyor";
 
 /// Depth of a powder bed's solid, in diameters (at a packing of 0.55: about 2.6 D deep).
 const BED_THICKNESS: f64 = 2.0;
@@ -130,7 +136,7 @@ pub fn with_held(scene: Scene, change: impl FnOnce(&mut Held)) -> Scene {
 
 impl Layout for Conveyor {
     fn name(&self) -> &'static str {
-        "conveyor"
+        NAME
     }
 
     fn template(&self) -> BuiltinTemplate {
@@ -143,42 +149,45 @@ impl Layout for Conveyor {
     fn check_settings(&self, s: &SceneSettings) -> Result<(), BadSetting> {
         let bad = |key, why| Err(BadSetting { key, why });
         for (k, v) in [
-            ("scene.block_diameters", s.block_diameters),
-            ("scene.window_cap_diameters", s.window_cap_diameters),
+            ("scene.block_diameters", own(s).block_diameters),
+            ("scene.window_cap_diameters", own(s).window_cap_diameters),
         ] {
             if !(v.is_finite() && v > 0.0) {
                 return bad(k, format!("{v}: expected a positive number"));
             }
         }
         for (k, v) in [
-            ("scene.warmup_s", s.warmup_s.unwrap_or(0.0)),
-            ("scene.mfr_rel_se", s.mfr_rel_se),
-            ("scene.mfr_abs_se", s.mfr_abs_se),
+            ("scene.warmup_s", own(s).warmup_s.unwrap_or(0.0)),
+            ("scene.mfr_rel_se", own(s).mfr_rel_se),
+            ("scene.mfr_abs_se", own(s).mfr_abs_se),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return bad(k, format!("{v}: expected a number ≥ 0"));
             }
         }
-        if !["sweep", "fixed"].contains(&s.precision.as_str()) {
-            return bad("scene.precision", format!("\"{}\": expected \"sweep\" or \"fixed\"", s.precision));
+        if !["sweep", "fixed"].contains(&own(s).precision.as_str()) {
+            return bad(
+                "scene.precision",
+                format!("\"{}\": expected \"sweep\" or \"fixed\"", own(s).precision),
+            );
         }
         // MSER may drop up to half the window, and the trend over what is left needs 3 blocks.
-        if s.min_window_blocks < 5 {
+        if own(s).min_window_blocks < 5 {
             return bad(
                 "scene.min_window_blocks",
                 format!(
                     "{}: expected at least 5 (MSER may drop half of the blocks; the trend needs 3 left)",
-                    s.min_window_blocks
+                    own(s).min_window_blocks
                 ),
             );
         }
-        if (s.min_window_blocks as f64 + 1.0) * s.block_diameters > s.window_cap_diameters {
+        if (own(s).min_window_blocks as f64 + 1.0) * own(s).block_diameters > own(s).window_cap_diameters {
             return bad(
                 "scene.window_cap_diameters",
                 format!(
                     "{}: expected more than min_window_blocks × block_diameters = {}",
-                    s.window_cap_diameters,
-                    s.min_window_blocks as f64 * s.block_diameters
+                    own(s).window_cap_diameters,
+                    own(s).min_window_blocks as f64 * own(s).block_diameters
                 ),
             );
         }
@@ -187,6 +196,10 @@ impl Layout for Conveyor {
 
     fn derive(&self, base: Base, settings: &SceneSettings) -> Scene {
         derive(base, settings)
+    }
+
+    fn own_keys(&self, fidelity: &str, written: &toml::Table) -> Result<OwnSettings, toml::de::Error> {
+        ConveyorSettings::read(fidelity, written).map(OwnSettings::new)
     }
 
     fn own_settings(&self) -> Vec<&'static str> {
@@ -240,42 +253,42 @@ impl Layout for Conveyor {
     fn setup_rows(&self, sc: &SceneSettings) -> SetupRows {
         SetupRows {
             head: vec![
-                ("block of the deposit series, travel (D)", short(sc.block_diameters)),
+                ("block of the deposit series, travel (D)", short(own(sc).block_diameters)),
                 (
                     "warm-up (s)",
-                    match sc.warmup_s {
+                    match own(sc).warmup_s {
                         Some(w) => short(w),
                         None => format!(
                             "{} √(H/g), H = gap + heap_height (the held heap's fall time)",
-                            short(crate::scene::settings::WARMUP_HEAP_FALLS)
+                            short(settings::WARMUP_HEAP_FALLS)
                         ),
                     },
                 ),
                 (
                     "precision target: SE of MFR at most",
-                    match sc.precision.as_str() {
+                    match own(sc).precision.as_str() {
                         "sweep" => format!(
                             "{} × MFR or {} over the first batch, then σ·√(τ/3) (the sweep's precision; half of it in sweep adapt)",
-                            short(sc.mfr_rel_se),
-                            short(sc.mfr_abs_se)
+                            short(own(sc).mfr_rel_se),
+                            short(own(sc).mfr_abs_se)
                         ),
-                        _ => format!("{} × MFR or {}", short(sc.mfr_rel_se), short(sc.mfr_abs_se)),
+                        _ => format!("{} × MFR or {}", short(own(sc).mfr_rel_se), short(own(sc).mfr_abs_se)),
                     },
                 ),
                 (
                     "warm start",
-                    if sc.warm_start {
+                    if own(sc).warm_start {
                         format!(
                             "from the nearest finished point; warm-up the cold one's × distance/0.5, at least {} of it and {} s",
                             short(warm::LEAST_WARMUP_SHARE),
-                            short(sc.warm_warmup_s)
+                            short(own(sc).warm_warmup_s)
                         )
                     } else {
                         "no: every point from rest".into()
                     },
                 ),
-                ("least window (blocks)", sc.min_window_blocks.to_string()),
-                ("window cap, travel after the warm-up (D)", short(sc.window_cap_diameters)),
+                ("least window (blocks)", own(sc).min_window_blocks.to_string()),
+                ("window cap, travel after the warm-up (D)", short(own(sc).window_cap_diameters)),
             ],
             tail: Vec::new(),
         }
@@ -385,10 +398,10 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let spacing = s.depth / n_y as f64;
     let n_x = ((heap_x1 + 2.0 * d) / spacing).ceil() as usize;
     let x_hi = if powder_bed { heap_x1 + 2.0 * d } else { n_x as f64 * spacing };
-    let block_steps = ((settings.block_diameters * d / (v * dt)).ceil() as u64).max(1);
-    let blocks = |travel: f64| (travel / settings.block_diameters).ceil() as u64;
-    let warmup_blocks = blocks((settings.warmup_for(heap_height) * v).max(10.0 * d) / d);
-    let max_blocks = warmup_blocks + blocks(settings.window_cap_diameters);
+    let block_steps = ((own(settings).block_diameters * d / (v * dt)).ceil() as u64).max(1);
+    let blocks = |travel: f64| (travel / own(settings).block_diameters).ceil() as u64;
+    let warmup_blocks = blocks((own(settings).warmup_for(heap_height) * v).max(10.0 * d) / d);
+    let max_blocks = warmup_blocks + blocks(own(settings).window_cap_diameters);
     let blade_top = 2.0 * heap_height + 2.0 * d;
     let mean_volume = psd.mean_volume();
     let mass = heap_particles as f64 * s.material.density * mean_volume;
@@ -425,11 +438,11 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         block_steps,
         insert_every: (block_steps / 5).max(1),
         warmup_blocks,
-        min_window_blocks: settings.min_window_blocks as u64,
+        min_window_blocks: own(settings).min_window_blocks as u64,
         max_blocks,
         ideal_block_mass: s.material.density * s.depth * gap * v * dt * block_steps as f64,
-        mfr_rel_se: settings.mfr_rel_se,
-        mfr_abs_se: settings.mfr_abs_se,
+        mfr_rel_se: own(settings).mfr_rel_se,
+        mfr_abs_se: own(settings).mfr_abs_se,
         powder_bed,
         // Above the lattice's centres (a delete region takes every atom in it); a bed's deposit
         // sits in pockets down to its floor, and the deck deletes only the powder there.
@@ -438,9 +451,9 @@ fn derive(base: Base, settings: &SceneSettings) -> Scene {
         volume_limit,
         distribution_seed: prime_seed(s.seed, 0),
         insert_seed: prime_seed(s.seed, 1),
-        keep_state: settings.warm_start,
+        keep_state: own(settings).warm_start,
         warm_start: false,
-        warm_warmup_blocks: blocks((settings.warm_warmup_s * v / d).max(settings.block_diameters)),
+        warm_warmup_blocks: blocks((own(settings).warm_warmup_s * v / d).max(own(settings).block_diameters)),
         extend: None,
     };
     b.ramp_steps = 1;
@@ -541,7 +554,8 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
 mod tests {
     use std::collections::BTreeMap;
 
-    use crate::scene::settings::{SceneSettings, WARMUP_HEAP_FALLS};
+    use super::settings::{self, own, ConveyorSettings, WARMUP_HEAP_FALLS};
+    use crate::scene::settings::SceneSettings;
 
     fn scene(values: &[(&str, f64)], settings: &SceneSettings) -> crate::scene::Scene {
         let values: BTreeMap<String, f64> = values.iter().map(|(k, v)| (k.to_string(), *v)).collect();
@@ -566,8 +580,11 @@ mod tests {
         let rule = WARMUP_HEAP_FALLS * (0.02125f64 / crate::scene::GRAVITY).sqrt();
         assert!((rule..rule + block_s).contains(&warmup_s), "warm-up {warmup_s} s against {rule} s");
         let c = super::held(&sc);
-        let after = (c.max_blocks - c.warmup_blocks) as f64 * settings.block_diameters;
-        assert!((600.0..600.0 + settings.block_diameters).contains(&after), "{after} D after the warm-up");
+        let after = (c.max_blocks - c.warmup_blocks) as f64 * own(&settings).block_diameters;
+        assert!(
+            (600.0..600.0 + own(&settings).block_diameters).contains(&after),
+            "{after} D after the warm-up"
+        );
     }
 
     #[test]
@@ -590,7 +607,7 @@ mod tests {
         let (w4, block4) = warmup(&scene(&[um[0], um[1], ("heap_height", 4.3), um[3]], &settings));
         assert!(((2.0 * w - 2.0 * block_s)..(2.0 * w + block4)).contains(&w4), "{w} s → {w4} s");
         // A set warmup_s wins over the rule.
-        let set = SceneSettings { warmup_s: Some(0.005), ..SceneSettings::default() };
+        let set = settings::with_own(ConveyorSettings::default().settings(), |c| c.warmup_s = Some(0.005));
         let (w, block_s) = warmup(&scene(&um, &set));
         assert!((0.005..0.005 + block_s).contains(&w), "set 0.005 s: warm-up {w} s");
     }

@@ -19,9 +19,10 @@
 
 use std::fmt::Write;
 
+use super::settings::{own, DEFAULT_ROLLER_SEGMENTS};
 use super::{Plan, ROUND_ARC_SHARE};
 use crate::scene::mesh::box_stl;
-use crate::scene::settings::{SceneSettings, DEFAULT_ROLLER_SEGMENTS};
+use crate::scene::settings::SceneSettings;
 use crate::scene::Scene;
 use crate::scenes::BadSetting;
 
@@ -31,9 +32,9 @@ pub const ROLLER_SEGMENTS: (usize, usize) = (16, 4096);
 
 /// `scene.roller_segments`: within [`ROLLER_SEGMENTS`], and set only for a roller.
 pub fn check(s: &SceneSettings) -> Result<(), BadSetting> {
-    let n = s.roller_segments;
+    let n = own(s).roller_segments;
     let (least, most) = ROLLER_SEGMENTS;
-    if n != DEFAULT_ROLLER_SEGMENTS && s.blade_profile != "roller" {
+    if n != DEFAULT_ROLLER_SEGMENTS && own(s).blade_profile != "roller" {
         let why = format!("{n}: only a roller's circle is cut in segments; expected it only with blade_profile = \"roller\"");
         return Err(BadSetting { key: "scene.roller_segments", why });
     }

@@ -26,6 +26,7 @@ pub mod geometry;
 pub mod measure;
 pub mod numerics;
 mod plan;
+pub mod settings;
 pub mod stand_in;
 mod top_view;
 pub mod warm;
@@ -38,10 +39,15 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use crate::outcome::{AnswerKind, RunResult};
+use crate::scene::own_settings::OwnSettings;
 use crate::scene::plausible::short;
-use crate::scene::settings::{SceneSettings, DEFAULT_SEARCH_PASSES};
+use crate::scene::settings::SceneSettings;
 use crate::scene::{Base, Scene};
 use crate::scenes::{BadSetting, BuiltinTemplate, ByPass, Finished, Layout, Rejected, SetupRows};
+pub use settings::{own, LayersSettings, DEFAULT_SEARCH_PASSES};
+
+/// The layout's name, its `[scene] layout`.
+pub const NAME: &str = "layers";
 
 /// The least depth under the top surface a loose bed may be held still from, in diameters: the
 /// blade's tip stands about a layer under the top and moves the bed a few diameters below it.
@@ -85,7 +91,7 @@ pub const FUSED_DOSE_FACTOR: f64 = 4.0;
 
 /// Whether the settings ask for a fused bed.
 fn fused(s: &SceneSettings) -> bool {
-    Bed::parse(&s.bed) == Some(Bed::Fused)
+    Bed::parse(&own(s).bed) == Some(Bed::Fused)
 }
 
 /// The dose of one pass over what the plate's layer holds at [`crate::scene::LAYER_FRACTION_MAX`], before
@@ -178,7 +184,7 @@ impl Bed {
 
 impl Layout for Layers {
     fn name(&self) -> &'static str {
-        "layers"
+        NAME
     }
 
     fn template(&self) -> BuiltinTemplate {
@@ -186,108 +192,15 @@ impl Layout for Layers {
     }
 
     fn check_settings(&self, s: &SceneSettings) -> Result<(), BadSetting> {
-        if !(1..=MAX_LAYERS).contains(&s.layers) {
-            return Err(BadSetting {
-                key: "scene.layers",
-                why: format!("{}: expected a whole number of passes from 1 to {MAX_LAYERS}", s.layers),
-            });
-        }
-        if Bed::parse(&s.bed).is_none() {
-            return Err(BadSetting {
-                key: "scene.bed",
-                why: format!("\"{}\": expected \"loose\" or \"fused\"", s.bed),
-            });
-        }
-        let asked = s.search_passes.unwrap_or(0);
-        if asked > 0 && !fused(s) {
-            return Err(BadSetting {
-                key: "scene.search_passes",
-                why: format!(
-                    "{asked}: a search for the steady depth needs bed = \"fused\" (a loose bed's depth is the powder it keeps); expected 0"
-                ),
-            });
-        }
-        if asked > 0 && asked + MIN_STEADY_PASSES > s.layers {
-            return Err(BadSetting {
-                key: "scene.search_passes",
-                why: format!(
-                    "{asked}: expected at most scene.layers − {MIN_STEADY_PASSES} = {} (the steady layer needs {MIN_STEADY_PASSES} passes after the search)",
-                    s.layers.saturating_sub(MIN_STEADY_PASSES)
-                ),
-            });
-        }
-        if let Some(least) = s.least_layers {
-            if !(1..=s.layers).contains(&least) {
-                return Err(BadSetting {
-                    key: "scene.least_layers",
-                    why: format!(
-                        "{least}: expected a whole number of passes from 1 to scene.layers = {} (the most a point runs)",
-                        s.layers
-                    ),
-                });
-            }
-        }
-        if !matches!(s.blade_profile.as_str(), "flat" | "round" | "roller") {
-            return Err(BadSetting {
-                key: "scene.blade_profile",
-                why: format!("\"{}\": expected \"flat\", \"round\" or \"roller\"", s.blade_profile),
-            });
-        }
-        // Bounded above too: a radius of 1e155 mm overflowed the blade's mesh, 1e10 took minutes
-        // to mesh. A machine's blade or roller is millimetres to centimetres.
-        for (key, v, least, most) in [
-            ("scene.blade_radius_mm", s.blade_radius_mm, 0.0, MAX_BLADE_RADIUS_MM),
-            ("scene.blade_clearance_mm", s.blade_clearance_mm, 0.0, MAX_CLEARANCE_MM),
-            ("scene.plate_diameters", s.plate_diameters, 10.0, MAX_PLATE_DIAMETERS),
-            ("scene.supply_factor", s.supply_factor, 0.5, 100.0),
-            ("scene.freeze_depth_diameters", s.freeze_depth_diameters, 0.0, MAX_FREEZE_DEPTH_DIAMETERS),
-        ] {
-            let radius = key == "scene.blade_radius_mm";
-            let ok = v.is_finite() && v <= most && if radius { v > least } else { v >= least };
-            if !ok {
-                let lower = if radius { format!("above {least}") } else { format!("from {least}") };
-                return Err(BadSetting { key, why: format!("{v}: expected a number {lower} to {most}") });
-            }
-        }
-        geometry::check(s)?;
-        if s.blade_profile == "flat" && s.blade_radius_mm != crate::scene::settings::DEFAULT_BLADE_RADIUS_MM {
-            return Err(BadSetting {
-                key: "scene.blade_radius_mm",
-                why: format!(
-                    "{}: a flat blade has no radius; expected it only with blade_profile = \"round\" or \"roller\"",
-                    s.blade_radius_mm
-                ),
-            });
-        }
-        if s.freeze_depth_diameters > 0.0 && fused(s) {
-            return Err(BadSetting {
-                key: "scene.freeze_depth_diameters",
-                why: format!(
-                    "{}: a fused bed keeps no powder under its layers to hold still; expected it only with bed = \"loose\"",
-                    s.freeze_depth_diameters
-                ),
-            });
-        }
-        if s.freeze_depth_diameters > 0.0 && s.freeze_depth_diameters < MIN_FREEZE_DEPTH_DIAMETERS {
-            return Err(BadSetting {
-                key: "scene.freeze_depth_diameters",
-                why: format!(
-                    "{}: expected 0 (off) or at least {MIN_FREEZE_DEPTH_DIAMETERS} diameters, below the blade's reach",
-                    s.freeze_depth_diameters
-                ),
-            });
-        }
-        if s.substrate == "powder" {
-            return Err(BadSetting {
-                key: "scene.substrate",
-                why: "\"powder\": the layers layout spreads its own bed of the powder (scene.bed); expected \"smooth\" or \"rough\", which it ignores".into(),
-            });
-        }
-        Ok(())
+        settings::check(s)
     }
 
     fn derive(&self, base: Base, settings: &SceneSettings) -> Scene {
         derive(base, settings)
+    }
+
+    fn own_keys(&self, _fidelity: &str, written: &toml::Table) -> Result<OwnSettings, toml::de::Error> {
+        LayersSettings::read(written).map(OwnSettings::new)
     }
 
     fn own_settings(&self) -> Vec<&'static str> {
@@ -350,7 +263,7 @@ impl Layout for Layers {
 
     fn ignores(&self, settings: &SceneSettings, name: &str) -> Option<&'static str> {
         match name {
-            "roller_speed_ratio" if settings.blade_profile != "roller" => Some(
+            "roller_speed_ratio" if own(settings).blade_profile != "roller" => Some(
                 "turns no roller with this blade: only blade_profile = \"roller\" reads roller_speed_ratio",
             ),
             "gap" => Some("sets its blade layer_thickness (and scene.blade_clearance_mm) above the bed"),
@@ -362,31 +275,33 @@ impl Layout for Layers {
     fn setup_rows(&self, s: &SceneSettings) -> SetupRows {
         SetupRows {
             head: vec![
-                ("passes", s.layers.to_string()),
+                ("passes", own(s).layers.to_string()),
                 (
                     "bed",
                     if search_passes(s) > 0 {
                         match search_passes(s) {
-                            1 => format!("{}, the first pass a search for its steady depth", s.bed),
-                            n => format!("{}, the first {n} passes a search for its steady depth", s.bed),
+                            1 => format!("{}, the first pass a search for its steady depth", own(s).bed),
+                            n => {
+                                format!("{}, the first {n} passes a search for its steady depth", own(s).bed)
+                            }
                         }
                     } else {
-                        s.bed.clone()
+                        own(s).bed.clone()
                     },
                 ),
                 (
                     "blade profile",
-                    match s.blade_profile.as_str() {
-                        "round" => format!("round, radius {} mm", short(s.blade_radius_mm)),
+                    match own(s).blade_profile.as_str() {
+                        "round" => format!("round, radius {} mm", short(own(s).blade_radius_mm)),
                         "roller" => format!(
                             "roller, radius {} mm (roller_speed_ratio turns it)",
-                            short(s.blade_radius_mm)
+                            short(own(s).blade_radius_mm)
                         ),
                         _ => "flat".into(),
                     },
                 ),
-                ("blade clearance over the plate's drops (mm)", short(s.blade_clearance_mm)),
-                ("build plate length (D)", short(s.plate_diameters)),
+                ("blade clearance over the plate's drops (mm)", short(own(s).blade_clearance_mm)),
+                ("build plate length (D)", short(own(s).plate_diameters)),
                 ("dose (× the plate's layer)", short(dose_factor(s) * s.supply_factor)),
             ],
             tail: Vec::new(),
@@ -412,7 +327,7 @@ impl Layout for Layers {
 
     fn run_files(&self, s: &SceneSettings) -> Vec<String> {
         // One dump per pass; the log is the run's own.
-        (1..=s.layers.max(1)).map(measure::layer_dump).collect()
+        (1..=own(s).layers.max(1)).map(measure::layer_dump).collect()
     }
 
     fn by_pass(&self, scene: &Scene) -> Option<ByPass> {
@@ -655,7 +570,9 @@ pub fn search_passes(s: &SceneSettings) -> usize {
     if !fused(s) {
         return 0;
     }
-    s.search_passes.unwrap_or_else(|| DEFAULT_SEARCH_PASSES.min(s.layers.saturating_sub(MIN_LAID_PASSES)))
+    own(s)
+        .search_passes
+        .unwrap_or_else(|| DEFAULT_SEARCH_PASSES.min(own(s).layers.saturating_sub(MIN_LAID_PASSES)))
 }
 
 /// Largest round blade, mm.
@@ -681,7 +598,7 @@ pub const STOP_KEPT_PASSES: usize = 4;
 /// The fewest passes before a point may stop on its steady layer: as set, or the search's and
 /// [`STOP_KEPT_PASSES`] after it (never above the most, `layers`).
 pub fn least_passes(s: &SceneSettings) -> usize {
-    s.least_layers.unwrap_or(search_passes(s) + STOP_KEPT_PASSES).min(s.layers.max(1))
+    own(s).least_layers.unwrap_or(search_passes(s) + STOP_KEPT_PASSES).min(own(s).layers.max(1))
 }
 
 #[cfg(test)]

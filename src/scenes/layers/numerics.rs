@@ -146,21 +146,26 @@ mod tests {
     use super::*;
     use crate::scene::settings::SceneSettings;
     use crate::scenes::layers::plan_of;
+    use crate::scenes::layers::settings::{with_own, LayersSettings};
 
     fn error(plate: f64, depth: f64, fraction: f64) -> NumericalError {
         error_on("fused", plate, depth, fraction)
     }
 
     fn error_on(bed: &str, plate: f64, depth: f64, fraction: f64) -> NumericalError {
-        let s = SceneSettings {
-            layout: "layers".into(),
-            bed: bed.into(),
-            layers: 4,
-            plate_diameters: plate,
-            depth_diameters: depth,
-            rayleigh_fraction: fraction,
-            ..SceneSettings::default()
-        };
+        let s = with_own(
+            SceneSettings {
+                layout: "layers".into(),
+                depth_diameters: depth,
+                rayleigh_fraction: fraction,
+                ..LayersSettings::default().settings()
+            },
+            |l| {
+                l.bed = bed.into();
+                l.layers = 4;
+                l.plate_diameters = plate;
+            },
+        );
         let v: BTreeMap<String, f64> =
             [("diameter", 0.065), ("layer_thickness", 0.1), ("blade_speed", 0.1), ("density", 4386.0)]
                 .iter()

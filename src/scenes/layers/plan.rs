@@ -4,6 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::settings::own;
 use super::{
     dose_factor, fused, least_passes, search_passes, DOSE_FRACTION, DOSE_REST_SHARE, EXTEND_ROOM,
     FEED_OVER_PLATE, MAX_DOSE_SPEED, PIT_DIAMETERS, RAMP_DIAMETERS, ROUND_ARC_SHARE, SEARCH_MAX_DEPTH_LAYERS,
@@ -18,7 +19,7 @@ use crate::scene::{
 use crate::scenes::moving_blade::{self, Dose};
 
 fn default_roller_segments() -> usize {
-    crate::scene::settings::DEFAULT_ROLLER_SEGMENTS
+    super::settings::DEFAULT_ROLLER_SEGMENTS
 }
 
 /// One pass of the blade, as the deck runs it.
@@ -267,17 +268,20 @@ pub fn plan_of(scene: &Scene) -> Plan {
 /// the passes.
 pub(super) fn derive(base: Base, settings: &SceneSettings) -> Scene {
     let t = base.layer_thickness;
-    let clearance = settings.blade_clearance_mm * 1e-3;
+    let clearance = own(settings).blade_clearance_mm * 1e-3;
     let mut s = moving_blade::derive(base.clone(), settings, Dose::Free);
     let mut blade = moving_blade::spread(&s).spreader.blade.clone();
     let Base { psd, d, speed: v, timestep: dt, .. } = base;
     let fused = fused(settings);
-    let layers = settings.layers.max(1);
-    let plate_len = settings.plate_diameters.max(10.0) * d;
+    let layers = own(settings).layers.max(1);
+    let plate_len = own(settings).plate_diameters.max(10.0) * d;
     let feed_len = FEED_OVER_PLATE * plate_len;
-    let roller = settings.blade_profile == "roller";
-    let radius =
-        if roller || settings.blade_profile == "round" { settings.blade_radius_mm * 1e-3 } else { 0.0 };
+    let roller = own(settings).blade_profile == "roller";
+    let radius = if roller || own(settings).blade_profile == "round" {
+        own(settings).blade_radius_mm * 1e-3
+    } else {
+        0.0
+    };
     let roller_speed_ratio = if roller { base.roller_speed_ratio } else { 0.0 };
     // The blade's x extent about its lowest line: behind and ahead of it.
     let (behind, ahead) = if roller {
@@ -289,7 +293,7 @@ pub(super) fn derive(base: Base, settings: &SceneSettings) -> Scene {
         (0.0, d)
     };
     let d_max = psd.max_diameter();
-    let freeze_depth = if fused { 0.0 } else { settings.freeze_depth_diameters * d };
+    let freeze_depth = if fused { 0.0 } else { own(settings).freeze_depth_diameters * d };
     let platform_gap = platform_gap(radius, clearance, d_max);
     let tip_x0 = 0.5 * d + behind + d;
     let front0 = tip_x0 + ahead;
@@ -397,7 +401,7 @@ pub(super) fn derive(base: Base, settings: &SceneSettings) -> Scene {
         roller,
         roller_speed_ratio,
         roller_spin: if roller { -roller_speed_ratio / radius } else { 0.0 },
-        roller_segments: settings.roller_segments,
+        roller_segments: own(settings).roller_segments,
         tip_x0,
         travel,
         dose_x0,

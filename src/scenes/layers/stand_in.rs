@@ -172,14 +172,16 @@ mod tests {
     use std::collections::BTreeMap;
 
     use super::*;
-    use crate::scene::settings::SceneSettings;
+    use crate::scenes::layers::settings::{with_own, LayersSettings};
     use crate::scenes::layers::Layers;
     use crate::scenes::stand_in::Noise;
     use crate::scenes::Layout;
 
     fn result(bed: &str, layers: usize, values: &[(&str, f64)], hash: &str) -> Result<RunResult, Rejected> {
-        let settings =
-            SceneSettings { layout: "layers".into(), bed: bed.into(), layers, ..SceneSettings::default() };
+        let settings = with_own(LayersSettings::default().settings(), |l| {
+            l.bed = bed.into();
+            l.layers = layers;
+        });
         let values: BTreeMap<String, f64> = values.iter().map(|(k, v)| (k.to_string(), *v)).collect();
         let scene = crate::scenes::build(&values, &settings).unwrap();
         let parameters: BTreeMap<String, f64> = crate::scene::params::CATALOGUE

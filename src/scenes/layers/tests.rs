@@ -1,18 +1,14 @@
 use std::collections::BTreeMap;
 
 use super::measure::{parse_log, parse_solids, passes, steady_layer, Grain, PassLine};
+use super::settings::{with_own, LayersSettings};
 use super::*;
 use crate::scene::settings::SceneSettings;
 use crate::scene::{LAYER_FRACTION_MAX, MIN_INSERT_VOLUME};
 
 fn settings() -> SceneSettings {
-    SceneSettings {
-        layout: "layers".into(),
-        layers: 4,
-        plate_diameters: 20.0,
-        blade_clearance_mm: 0.05,
-        ..SceneSettings::default()
-    }
+    LayersSettings { layers: 4, plate_diameters: 20.0, blade_clearance_mm: 0.05, ..LayersSettings::default() }
+        .settings()
 }
 
 fn values(pairs: &[(&str, f64)]) -> BTreeMap<String, f64> {
@@ -65,12 +61,12 @@ fn the_blade_starts_once_the_dose_is_at_rest_and_at_the_latest_when_the_fixed_wa
 fn a_round_blade_rides_a_largest_diameter_over_the_feed_platform_and_the_wall() {
     // No clearance: the flat blade's tip runs on the top surface; the round blade's stands the
     // largest diameter (mono: the diameter) over it, the plate still k drops under the tip.
-    let flat = SceneSettings { blade_clearance_mm: 0.0, ..settings() };
-    let round = SceneSettings { blade_profile: "round".into(), ..flat.clone() };
+    let flat = with_own(settings(), |l| l.blade_clearance_mm = 0.0);
+    let round = with_own(flat.clone(), |l| l.blade_profile = "round".into());
     for (s, gap) in [(&flat, 0.0), (&round, 0.065e-3)] {
         let sc = scene(s);
         let plan = plan_of(&sc);
-        assert!((plan.platform_gap - gap).abs() < 1e-12, "{}: {}", s.blade_profile, plan.platform_gap);
+        assert!((plan.platform_gap - gap).abs() < 1e-12, "{}: {}", own(s).blade_profile, plan.platform_gap);
         for (k, p) in plan.passes.iter().enumerate() {
             assert!((p.tip - (k + 1) as f64 * 1e-4).abs() < 1e-12, "the tip stays k drops over the plate");
             assert!((p.tip - p.top - gap).abs() < 1e-12);
@@ -79,7 +75,7 @@ fn a_round_blade_rides_a_largest_diameter_over_the_feed_platform_and_the_wall() 
         assert!(plan.passes[0].top - plan.block_depth > sc.z_lo);
     }
     // A clearance of at least the largest diameter is kept as it is.
-    let wide = SceneSettings { blade_clearance_mm: 0.1, ..round };
+    let wide = with_own(round, |l| l.blade_clearance_mm = 0.1);
     assert!((plan_of(&scene(&wide)).platform_gap - 1e-4).abs() < 1e-12);
 }
 
@@ -137,37 +133,6 @@ fn a_run_s_files_are_the_dumps_of_its_passes_as_the_deck_writes_them() {
     let files = Layers.run_files(&settings());
     assert_eq!(files, ["dump.layer.1", "dump.layer.2", "dump.layer.3", "dump.layer.4"]);
     assert_eq!(files[2], measure::layer_dump(3));
-}
-
-#[test]
-fn a_bad_layer_count_bed_or_profile_is_refused_naming_its_key() {
-    let fused = |layers: usize, search_passes: usize| SceneSettings {
-        bed: "fused".into(),
-        layers,
-        search_passes: Some(search_passes),
-        ..settings()
-    };
-    let cases: [(SceneSettings, &str); 7] = [
-        // A loose bed keeps its powder: there is no depth to search for.
-        (SceneSettings { search_passes: Some(1), ..settings() }, "scene.search_passes"),
-        // The steady layer needs three passes after the search.
-        (fused(6, 4), "scene.search_passes"),
-        (SceneSettings { layers: 0, ..settings() }, "scene.layers"),
-        (SceneSettings { layers: 1000, ..settings() }, "scene.layers"),
-        (SceneSettings { bed: "sintered".into(), ..settings() }, "scene.bed"),
-        (SceneSettings { blade_profile: "wavy".into(), ..settings() }, "scene.blade_profile"),
-        (SceneSettings { blade_clearance_mm: -0.1, ..settings() }, "scene.blade_clearance_mm"),
-    ];
-    for (s, key) in cases {
-        let err = Layers.check_settings(&s).unwrap_err();
-        assert_eq!(err.key, key);
-        assert!(!err.why.contains('\n'));
-    }
-    assert!(Layers.check_settings(&settings()).is_ok());
-    assert!(Layers.check_settings(&fused(7, 4)).is_ok());
-    let v = values(&[("diameter", 0.065), ("layer_thickness", -0.05)]);
-    let err = crate::scenes::build(&v, &settings()).unwrap_err().to_string();
-    assert!(err.contains("layer_thickness") && err.contains("domain"), "{err}");
 }
 
 /// A square lattice of spheres of diameter `d` at height `z` over the plate's inner part, ids
@@ -311,7 +276,10 @@ fn the_steady_layer_starts_after_the_first_layers_transient() {
 
 #[test]
 fn the_round_blade_is_an_arc_whose_lowest_line_is_the_tip() {
-    let s = SceneSettings { blade_profile: "round".into(), blade_radius_mm: 1.0, ..settings() };
+    let s = with_own(settings(), |l| {
+        l.blade_profile = "round".into();
+        l.blade_radius_mm = 1.0;
+    });
     let sc = scene(&s);
     let plan = plan_of(&sc);
     let stl = Layers.mesh(&sc);
@@ -356,7 +324,11 @@ fn the_round_blade_is_an_arc_whose_lowest_line_is_the_tip() {
 
 #[test]
 fn a_fused_bed_s_search_sets_each_next_depth_to_its_own_times_the_drop_over_its_deposit() {
-    let s = SceneSettings { bed: "fused".into(), layers: 6, search_passes: Some(2), ..settings() };
+    let s = with_own(settings(), |l| {
+        l.bed = "fused".into();
+        l.layers = 6;
+        l.search_passes = Some(2);
+    });
     let sc = scene(&s);
     let plan = plan_of(&sc);
     assert_eq!(plan.search_passes, 2);
@@ -407,12 +379,11 @@ fn a_fused_bed_s_search_sets_each_next_depth_to_its_own_times_the_drop_over_its_
 
 #[test]
 fn a_fused_bed_whose_depth_still_grows_is_not_steady_though_its_packing_is() {
-    let plan = plan_of(&scene(&SceneSettings {
-        bed: "fused".into(),
-        layers: 8,
-        search_passes: Some(0),
-        ..settings()
-    }));
+    let plan = plan_of(&scene(&with_own(settings(), |l| {
+        l.bed = "fused".into();
+        l.layers = 8;
+        l.search_passes = Some(0);
+    })));
     // The packing settles at 0.225 by pass 4 while the depth still creeps toward the drop over
     // it (as Ti-6Al-4V on a round blade did, docs/study/layers.md).
     let packing = [0.39, 0.33, 0.29, 0.226, 0.224, 0.227, 0.225, 0.226];
@@ -437,12 +408,11 @@ fn a_fused_bed_whose_depth_still_grows_is_not_steady_though_its_packing_is() {
 
 #[test]
 fn a_fused_bed_that_leaves_less_than_the_drop_is_said_to_fall_behind() {
-    let plan = plan_of(&scene(&SceneSettings {
-        bed: "fused".into(),
-        layers: 8,
-        search_passes: Some(0),
-        ..settings()
-    }));
+    let plan = plan_of(&scene(&with_own(settings(), |l| {
+        l.bed = "fused".into();
+        l.layers = 8;
+        l.search_passes = Some(0);
+    })));
     // Each pass leaves 0.65 of the drop (the round blade at 0.2 m/s at 50 µm), the depth growing.
     let passes: Vec<_> = (0..8)
         .map(|i| crate::outcome::layers::PassRecord {
@@ -465,7 +435,12 @@ fn a_fused_bed_that_leaves_less_than_the_drop_is_said_to_fall_behind() {
 
 #[test]
 fn a_fused_bed_searches_by_default_as_far_as_its_passes_allow_and_a_loose_one_never() {
-    let fused = |layers: usize| SceneSettings { bed: "fused".into(), layers, ..settings() };
+    let fused = |layers: usize| {
+        with_own(settings(), |l| {
+            l.bed = "fused".into();
+            l.layers = layers;
+        })
+    };
     assert_eq!(search_passes(&fused(24)), DEFAULT_SEARCH_PASSES);
     assert_eq!(search_passes(&fused(14)), DEFAULT_SEARCH_PASSES);
     // Six laid passes are left after a default search: three for the steady layer and three
@@ -473,15 +448,15 @@ fn a_fused_bed_searches_by_default_as_far_as_its_passes_allow_and_a_loose_one_ne
     assert_eq!(search_passes(&fused(10)), 4);
     assert_eq!(search_passes(&fused(7)), 1);
     assert_eq!(search_passes(&fused(6)), 0);
-    assert_eq!(search_passes(&SceneSettings { search_passes: Some(0), ..fused(24) }), 0);
-    assert_eq!(search_passes(&SceneSettings { layers: 24, ..settings() }), 0);
+    assert_eq!(search_passes(&with_own(fused(24), |l| l.search_passes = Some(0))), 0);
+    assert_eq!(search_passes(&with_own(settings(), |l| l.layers = 24)), 0);
     assert!(Layers.check_settings(&fused(2)).is_ok());
 }
 
 #[test]
 fn a_fused_bed_s_dose_is_twice_a_loose_one_s_and_supply_factor_scales_both() {
     let dose = |bed: &str, supply: f64| {
-        let s = SceneSettings { bed: bed.into(), supply_factor: supply, ..settings() };
+        let s = with_own(SceneSettings { supply_factor: supply, ..settings() }, |l| l.bed = bed.into());
         plan_of(&scene(&s)).dose_particles as f64
     };
     // A steady fused pass must leave a whole drop of solid, a loose one about 0.6 of it.
@@ -539,12 +514,11 @@ fn a_trendless_layer_is_called_unsteady_at_the_rule_s_stated_rate() {
     }
     // The whole rule on a fused bed of 14 passes (6 searched) with no trend in either series,
     // each as correlated as the rule allows for: MSER's cut and two tests together (2.6 % here).
-    let plan = plan_of(&scene(&SceneSettings {
-        bed: "fused".into(),
-        layers: 14,
-        search_passes: Some(6),
-        ..settings()
-    }));
+    let plan = plan_of(&scene(&with_own(settings(), |l| {
+        l.bed = "fused".into();
+        l.layers = 14;
+        l.search_passes = Some(6);
+    })));
     let points = 4_000;
     let unsteady = (0..points)
         .filter(|_| {
@@ -566,15 +540,21 @@ fn a_trendless_layer_is_called_unsteady_at_the_rule_s_stated_rate() {
 #[test]
 fn a_loose_bed_is_held_still_below_its_freeze_depth_from_the_first_pass_whose_top_is_that_deep() {
     // Refused where it cannot mean anything: a fused bed, a depth inside the blade's reach.
-    let fused = SceneSettings { bed: "fused".into(), freeze_depth_diameters: 10.0, ..settings() };
+    let fused = with_own(settings(), |l| {
+        l.bed = "fused".into();
+        l.freeze_depth_diameters = 10.0;
+    });
     assert_eq!(Layers.check_settings(&fused).unwrap_err().key, "scene.freeze_depth_diameters");
     for bad in [1.0, -1.0, f64::NAN, 1e9] {
-        let s = SceneSettings { freeze_depth_diameters: bad, ..settings() };
+        let s = with_own(settings(), |l| l.freeze_depth_diameters = bad);
         let err = Layers.check_settings(&s).unwrap_err();
         assert_eq!(err.key, "scene.freeze_depth_diameters", "{bad}");
         assert!(!err.why.contains('\n'));
     }
-    let s = SceneSettings { layers: 8, freeze_depth_diameters: 3.0, ..settings() };
+    let s = with_own(settings(), |l| {
+        l.layers = 8;
+        l.freeze_depth_diameters = 3.0;
+    });
     assert!(Layers.check_settings(&s).is_ok());
     let sc = scene(&s);
     let plan = plan_of(&sc);
@@ -622,7 +602,7 @@ fn a_loose_bed_is_held_still_below_its_freeze_depth_from_the_first_pass_whose_to
     // Off (the default), the deck measures the powder as before.
     let off = tera.render("layers", &{
         let mut c = tera::Context::new();
-        c.insert("scene", &scene(&SceneSettings { layers: 8, ..settings() }));
+        c.insert("scene", &scene(&with_own(settings(), |l| l.layers = 8)));
         c
     });
     let off = off.unwrap();
@@ -631,7 +611,10 @@ fn a_loose_bed_is_held_still_below_its_freeze_depth_from_the_first_pass_whose_to
 
 #[test]
 fn the_roller_is_a_whole_circle_about_its_axis_turning_at_minus_its_ratio_over_its_radius() {
-    let s = SceneSettings { blade_profile: "roller".into(), blade_radius_mm: 1.0, ..settings() };
+    let s = with_own(settings(), |l| {
+        l.blade_profile = "roller".into();
+        l.blade_radius_mm = 1.0;
+    });
     let mut v =
         values(&[("diameter", 0.065), ("layer_thickness", 0.1), ("blade_speed", 0.1), ("density", 4386.0)]);
     v.insert("roller_speed_ratio".into(), 3.0);
@@ -657,7 +640,7 @@ fn the_roller_is_a_whole_circle_about_its_axis_turning_at_minus_its_ratio_over_i
             .collect();
         v.len()
     };
-    let fine = crate::scenes::build(&v, &SceneSettings { roller_segments: 256, ..s.clone() }).unwrap();
+    let fine = crate::scenes::build(&v, &with_own(s.clone(), |l| l.roller_segments = 256)).unwrap();
     assert_eq!((corners(&sc), corners(&fine)), (128, 256));
     let angles: Vec<f64> = Layers
         .mesh(&sc)
@@ -670,7 +653,7 @@ fn the_roller_is_a_whole_circle_about_its_axis_turning_at_minus_its_ratio_over_i
             z.atan2(x)
         })
         .collect();
-    let n = crate::scene::settings::DEFAULT_ROLLER_SEGMENTS;
+    let n = super::settings::DEFAULT_ROLLER_SEGMENTS;
     let step = 2.0 * std::f64::consts::PI / n as f64;
     for k in 0..n {
         let a = -std::f64::consts::PI + k as f64 * step;
@@ -687,10 +670,10 @@ fn the_roller_is_a_whole_circle_about_its_axis_turning_at_minus_its_ratio_over_i
         context.insert("scene", sc);
         tera.render("layers", &context).unwrap()
     };
-    assert_eq!(render(&sc).matches("rotate/variable").count(), s.layers);
+    assert_eq!(render(&sc).matches("rotate/variable").count(), own(&s).layers);
     v.insert("roller_speed_ratio".into(), 0.0);
     assert!(!render(&crate::scenes::build(&v, &s).unwrap()).contains("rotate/variable"));
-    let round = SceneSettings { blade_profile: "round".into(), ..s.clone() };
+    let round = with_own(s.clone(), |l| l.blade_profile = "round".into());
     assert!(crate::scenes::build(&v, &round).is_ok());
     v.insert("roller_speed_ratio".into(), 1.0);
     let err = crate::scenes::build(&v, &round).unwrap_err().to_string();

@@ -74,11 +74,13 @@ mod tests {
     use std::collections::BTreeMap;
 
     use super::*;
-    use crate::scene::settings::SceneSettings;
+    use crate::scenes::layers::settings::{with_own, LayersSettings};
 
     fn scene(bed: &str) -> Scene {
-        let settings =
-            SceneSettings { layout: "layers".into(), bed: bed.into(), layers: 4, ..SceneSettings::default() };
+        let settings = with_own(LayersSettings::default().settings(), |l| {
+            l.bed = bed.into();
+            l.layers = 4;
+        });
         let values: BTreeMap<String, f64> =
             [("diameter", 0.065), ("layer_thickness", 0.1), ("blade_speed", 0.1), ("density", 4386.0)]
                 .iter()

@@ -20,6 +20,7 @@ use crate::measure::plausible;
 use crate::outcome::{FailureClass, PointAnswer, RunResult, RESULT_FORMAT};
 use crate::scene::blade::{Blade, Settle, Spreader, Window};
 use crate::scene::own::{LayoutData, OwnData};
+use crate::scene::own_settings::OwnSettings;
 use crate::scene::pile::PileBlock;
 use crate::scene::plausible::short;
 use crate::scene::settings::SceneSettings;
@@ -29,6 +30,9 @@ use crate::scene::{
     THESIS_BAND,
 };
 use crate::scenes::{BadSetting, BuiltinTemplate, Finished, Layout, Rejected, SetupRows};
+
+pub mod settings;
+pub use settings::{own, SpreadSettings};
 
 /// Blade travel over which it accelerates from rest to full speed, in diameters. A blade that
 /// starts at full speed throws the particles touching it high into the air.
@@ -143,6 +147,7 @@ impl Layout for MovingBlade {
     }
 
     fn check_settings(&self, settings: &SceneSettings) -> Result<(), BadSetting> {
+        own(settings).check().map_err(|(key, why)| BadSetting { key, why })?;
         if settings.substrate == "powder" {
             return Err(BadSetting {
                 key: "scene.substrate",
@@ -154,6 +159,10 @@ impl Layout for MovingBlade {
 
     fn derive(&self, base: Base, settings: &SceneSettings) -> Scene {
         derive(base, settings, self.0)
+    }
+
+    fn own_keys(&self, fidelity: &str, written: &toml::Table) -> Result<OwnSettings, toml::de::Error> {
+        SpreadSettings::read(fidelity, written).map(OwnSettings::new)
     }
 
     fn own_settings(&self) -> Vec<&'static str> {
@@ -196,8 +205,8 @@ impl Layout for MovingBlade {
         SetupRows {
             head: vec![("heap size (× the planned heap)", short(s.supply_factor))],
             tail: vec![
-                ("window start, blade travel (D)", short(s.window_start_diameters)),
-                ("window length, blade travel (D)", short(s.window_diameters)),
+                ("window start, blade travel (D)", short(own(s).window_start_diameters)),
+                ("window length, blade travel (D)", short(own(s).window_diameters)),
                 ("rest speed (× √(g·D))", short(s.rest_speed)),
             ],
         }
@@ -217,6 +226,12 @@ pub enum Dose {
 
 /// The scene of a moving-blade point: the pile, the blade's travel, the window, the timing.
 pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
+    // The conveyor and the layers start from the thesis's scene without these keys: their preset.
+    let keys = settings
+        .own
+        .get::<SpreadSettings>()
+        .cloned()
+        .unwrap_or_else(|| SpreadSettings::preset(&settings.fidelity));
     let Base { psd, d, d_min, gap, speed, timestep, .. } = base.clone();
     let density = base.material.density;
     // Geometry in units of the mean diameter, so the particle count barely changes with D.
@@ -238,14 +253,14 @@ pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
     // measured +15 % at one point when a longer window's dose made the heap larger).
     let heap_height = gap + if gated { GATED_HEAP_DIAMETERS } else { 6.0 } * d;
     let heap_area = settings.supply_factor * heap_height.powi(2) / (2.0 * REPOSE_DEG.to_radians().tan());
-    let window = settings.window_diameters * d;
+    let window = keys.window_diameters * d;
     // Travel of the blade's front from its start to the window's start, for a block of
     // length `len` and height `height`. Gated: past the opened gate (the block's front) by
     // the development length. Thesis: past the settled pile's slump (about half its
     // height) and 5 D more.
     let approach_travel = |len: f64, height: f64| {
         if gated {
-            0.5 * d + len + settings.window_start_diameters * d
+            0.5 * d + len + keys.window_start_diameters * d
         } else {
             0.5 * d + len + 0.5 * height + 5.0 * d
         }
@@ -283,7 +298,7 @@ pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
     // rest: the thesis layout's fixed settle, and the gated layout's least settle before
     // the rest criterion is checked (a lattice block is briefly still before it collapses).
     let fall_time = 2.0 * (2.0 * pile_z1 / GRAVITY).sqrt();
-    let settle_time = if gated { 0.5 * settings.settle_min_falls * fall_time } else { fall_time + 0.02 };
+    let settle_time = if gated { 0.5 * keys.settle_min_falls * fall_time } else { fall_time + 0.02 };
 
     let intervals = (SUB_WINDOWS * SNAPSHOTS_PER_SUB_WINDOW) as f64;
     let dump_every = ((window_time / intervals) / timestep).ceil().max(1.0) as u64;
@@ -326,14 +341,14 @@ pub fn derive(base: Base, settings: &SceneSettings, dose: Dose) -> Scene {
     let total_steps = approach_steps + window_length_steps;
     // The thesis's full traverse: on after the window until the blade's front is two heap
     // heights from the far wall (the heap it pushes fills the rest).
-    let traverse_steps = if settings.run_to_end {
+    let traverse_steps = if keys.run_to_end {
         let travel = (3.0 * heap_height + 5.0 * d) - 2.0 * heap_height;
         (travel / (speed * timestep)).ceil() as u64
     } else {
         0
     };
-    let full_dump_every = if settings.full_dump_every_s > 0.0 {
-        (settings.full_dump_every_s / timestep).round().max(1.0) as u64
+    let full_dump_every = if keys.full_dump_every_s > 0.0 {
+        (keys.full_dump_every_s / timestep).round().max(1.0) as u64
     } else {
         0
     };
@@ -498,7 +513,7 @@ mod tests {
         let s = scene(&[("diameter", 1.0)]);
         let fraction = SceneSettings::gated().rayleigh_fraction;
         assert!((s.timestep - fraction * s.rayleigh_time).abs() < 1e-18);
-        let settings = SceneSettings::preset("thesis").unwrap();
+        let settings = crate::scenes::settings::preset(&super::THESIS, "thesis").unwrap();
         let t = crate::scenes::build(&BTreeMap::new(), &settings).unwrap();
         assert_eq!(t.timestep, THESIS_TIMESTEP);
     }
@@ -536,7 +551,7 @@ mod tests {
             // Window length is window_diameters·D (rounded up to whole snapshot intervals), at
             // full speed.
             let len = rear(t2) - rear(t1);
-            let w = SceneSettings::gated().window_diameters * s.diameter;
+            let w = own(&SceneSettings::gated()).window_diameters * s.diameter;
             assert!(len >= w && len < w + s.diameter, "{len}");
             // The blade is at full speed when the window opens.
             assert!(t1 >= blade.start_step() + blade.ramp_steps);

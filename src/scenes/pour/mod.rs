@@ -399,7 +399,7 @@ mod tests {
     fn pour(supply_factor: f64) -> Scene {
         let values =
             [("diameter".to_string(), 2.0), ("rolling_friction".to_string(), 0.2)].into_iter().collect();
-        let settings = SceneSettings { layout: "pour".into(), supply_factor, ..SceneSettings::default() };
+        let settings = SceneSettings { supply_factor, ..crate::scenes::settings::defaults(&Pour) };
         crate::scenes::build(&values, &settings).unwrap()
     }
 
@@ -497,7 +497,7 @@ mod tests {
 
     #[test]
     fn a_column_too_small_for_a_heap_is_refused_naming_the_key() {
-        let small = SceneSettings { layout: "pour".into(), supply_factor: 0.2, ..SceneSettings::default() };
+        let small = SceneSettings { supply_factor: 0.2, ..crate::scenes::settings::defaults(&Pour) };
         let e = Pour.check_settings(&small).unwrap_err();
         assert_eq!(e.key, "scene.supply_factor");
         assert!(e.why.contains("400 particles") && e.why.contains("at least 0.25"), "{}", e.why);
