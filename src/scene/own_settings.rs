@@ -14,6 +14,12 @@ use serde::Serialize;
 /// A layout's own `[scene]` keys, of its own type (serialised as its keys, deserialised by its
 /// layout, every key with its default).
 pub trait LayoutSettings: Any + fmt::Debug + Send + Sync + SettingsMechanics {
+    /// Its keys that are numerical knobs: how finely a point is computed, not what it is (a
+    /// fidelity preset may set them; `sweep bench fidelity --variant` may vary them).
+    fn knobs(&self) -> &'static [&'static str] {
+        &[]
+    }
+
     /// Whether a point of a sweep starts from the state a finished neighbour left
     /// (`warm_start`); default no.
     fn warm_start(&self) -> bool {

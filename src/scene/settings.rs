@@ -80,30 +80,17 @@ pub struct SceneSettings {
 /// The fidelity presets, fastest first.
 pub const FIDELITIES: [&str; 3] = ["fast", "reference", "thesis"];
 
-/// The numerical knobs a preset sets (field names of [`SceneSettings`]); everything else in
-/// `[scene]` says what the point is and is the same in every preset.
-pub const KNOBS: [&str; 21] = [
+/// The numerical knobs a preset sets of the keys every layout's settings hold (field names of
+/// [`SceneSettings`]; a layout's own keys name theirs, `LayoutSettings::knobs`); everything else
+/// in `[scene]` says what the point is and is the same in every preset.
+pub const KNOBS: [&str; 7] = [
     "rayleigh_fraction",
     "timestep_s",
     "stiffness_factor",
     "mesh_cells_across",
-    "roller_segments",
     "depth_diameters",
-    "window_diameters",
     "rest_speed",
-    "settle_min_falls",
     "skin_diameters",
-    "full_dump_every_s",
-    "run_to_end",
-    "block_diameters",
-    "warmup_s",
-    "window_cap_diameters",
-    "mfr_rel_se",
-    "mfr_abs_se",
-    "min_window_blocks",
-    "warm_start",
-    "warm_warmup_s",
-    "precision",
 ];
 
 impl SceneSettings {
@@ -156,9 +143,9 @@ pub enum KnobError {
     Write(#[from] toml::ser::Error),
     #[error(transparent)]
     Read(#[from] toml::de::Error),
-    /// Not one of [`KNOBS`].
-    #[error("`{key}` is not a numerical knob{}; knobs: {}", hint(.key, KNOBS), KNOBS.join(", "))]
-    NotAKnob { key: String },
+    /// Not one of the knobs of the settings' layout (`knobs`: [`KNOBS`] and its own).
+    #[error("`{key}` is not a numerical knob{}; knobs: {}", hint(.key, knobs.iter().copied()), knobs.join(", "))]
+    NotAKnob { key: String, knobs: Vec<&'static str> },
     #[error("{key} = {value}: not a TOML value")]
     NotToml { key: String, value: String },
     /// A value the knob cannot take; `why` is TOML's message.

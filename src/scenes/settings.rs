@@ -113,8 +113,9 @@ pub fn deserialize<'de, D: serde::Deserializer<'de>>(d: D) -> Result<SceneSettin
 /// These settings with `key = value` (TOML syntax) set, for a knob only.
 pub fn with_knob(settings: &SceneSettings, key: &str, value: &str) -> Result<SceneSettings, KnobError> {
     let (key, value) = (key.to_string(), value.to_string());
-    if !KNOBS.contains(&key.as_str()) {
-        return Err(KnobError::NotAKnob { key });
+    let knobs = knobs(settings);
+    if !knobs.contains(&key.as_str()) {
+        return Err(KnobError::NotAKnob { key, knobs });
     }
     let Ok(parsed) = toml::from_str::<toml::Table>(&format!("{key} = {value}")) else {
         return Err(KnobError::NotToml { key, value });
@@ -136,14 +137,19 @@ pub fn preset(layout: &dyn Layout, fidelity: &str) -> Option<SceneSettings> {
     parse(&written).ok()
 }
 
-/// These settings with every knob ([`KNOBS`]) and the fidelity's name taken from the preset
+/// The numerical knobs of `settings`: [`KNOBS`] and its layout's own.
+pub fn knobs(settings: &SceneSettings) -> Vec<&'static str> {
+    KNOBS.iter().chain(settings.own.keys().knobs()).copied().collect()
+}
+
+/// These settings with every knob ([`knobs`]) and the fidelity's name taken from the preset
 /// `fidelity` of their layout: the same point computed another way.
 pub fn with_knobs_of(settings: &SceneSettings, fidelity: &str) -> Result<SceneSettings, KnobError> {
     let unknown = || KnobError::UnknownFidelity { fidelity: fidelity.to_string() };
     let layout = lookup(&settings.layout).ok_or_else(unknown)?;
     let preset = toml::Table::try_from(preset(layout, fidelity).ok_or_else(unknown)?)?;
     let mut table = toml::Table::try_from(settings)?;
-    for key in KNOBS.iter().chain(&["fidelity"]) {
+    for key in knobs(settings).iter().chain(&["fidelity"]) {
         match preset.get(*key) {
             Some(v) => table.insert(key.to_string(), v.clone()),
             None => table.remove(*key),
@@ -273,6 +279,31 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A fidelity changes how finely a point is computed, never what it is: each layout's
+    /// presets differ from its fast one only in its knobs.
+    #[test]
+    fn a_layouts_presets_differ_only_in_its_knobs() {
+        for layout in LAYOUTS {
+            let fast = toml::Table::try_from(preset(*layout, "fast").unwrap()).unwrap();
+            for fidelity in crate::scene::settings::FIDELITIES {
+                let other = preset(*layout, fidelity).unwrap();
+                let knobs = knobs(&other);
+                for (key, value) in toml::Table::try_from(&other).unwrap() {
+                    let same = fast.get(&key) == Some(&value);
+                    assert!(
+                        same || key == "fidelity" || knobs.contains(&key.as_str()),
+                        "{}: {key}",
+                        layout.name()
+                    );
+                }
+            }
+        }
+        let gated = SceneSettings::gated();
+        assert!(with_knob(&gated, "window_diameters", "60").is_ok(), "a layout's own knob");
+        let e = with_knob(&SceneSettings::default(), "window_diameters", "60").unwrap_err().to_string();
+        assert!(e.contains("not a numerical knob") && e.contains("block_diameters"), "{e}");
     }
 
     #[test]

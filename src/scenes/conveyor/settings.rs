@@ -74,6 +74,20 @@ impl Default for ConveyorSettings {
 }
 
 impl LayoutSettings for ConveyorSettings {
+    fn knobs(&self) -> &'static [&'static str] {
+        &[
+            "block_diameters",
+            "warmup_s",
+            "window_cap_diameters",
+            "mfr_rel_se",
+            "mfr_abs_se",
+            "min_window_blocks",
+            "warm_start",
+            "warm_warmup_s",
+            "precision",
+        ]
+    }
+
     fn warm_start(&self) -> bool {
         self.warm_start
     }

@@ -87,6 +87,10 @@ impl Default for LayersSettings {
 }
 
 impl LayoutSettings for LayersSettings {
+    fn knobs(&self) -> &'static [&'static str] {
+        &["roller_segments", "warm_start"]
+    }
+
     fn warm_start(&self) -> bool {
         self.warm_start
     }

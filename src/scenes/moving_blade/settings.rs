@@ -39,7 +39,11 @@ impl Default for SpreadSettings {
     }
 }
 
-impl LayoutSettings for SpreadSettings {}
+impl LayoutSettings for SpreadSettings {
+    fn knobs(&self) -> &'static [&'static str] {
+        &["window_diameters", "settle_min_falls", "full_dump_every_s", "run_to_end"]
+    }
+}
 
 impl SpreadSettings {
     /// The keys of fidelity `fidelity`: a window twice as long at `reference`; the thesis's
