@@ -57,6 +57,9 @@ PLATES_PS3 = [("twenty-PS3-plate24-freeze4-bury", "PS3, 24 D (1.6 mm)"),
 # one deck (PS1, 24 D, 21 passes).
 HOLD = [("twenty-PS1-plate24-freeze4-bury", "PS1, held 4 D and shed"),
         ("twenty-PS1-plate24-now", "PS1, the whole bed moving")]
+# The same pair at a second seed (`seed = 2`: the doses' insertion seeds).
+HOLD2 = [("twenty-PS1-plate24-freeze4-bury-seed2", "PS1 seed 2, held 4 D and shed"),
+         ("twenty-PS1-plate24-now-seed2", "PS1 seed 2, the whole bed moving")]
 # The scene's numerical choices at PS1 (24 D, the 4 D hold): the timestep halved (0.33 → 0.165
 # Rayleigh times) and the periodic depth doubled (6 → 12 D), 11 passes each (their layers 1–10).
 NUMERICS = [("twenty-PS1-plate24-freeze4-bury", "PS1 as shipped"),
@@ -211,6 +214,30 @@ def moves(labels):
         print(f"| {name} | {mean(ref):.3f} ± {sd(ref) / math.sqrt(len(ref)):.3f} | " + " | ".join(cells) + " |")
 
 
+def steady_moves(pairs):
+    """The steady layer (the point's answer: its relative density ± SE over the passes MSER
+    keeps) of each (held, whole) pair, the whole bed's minus the held one's ± combined SE, and
+    the pairs pooled (inverse-variance)."""
+    ws, wd = 0.0, 0.0
+    for held, whole in pairs:
+        recs = []
+        for label in (held, whole):
+            path = os.path.join(HERE, "record", label + ".json")
+            if not os.path.exists(path):
+                break
+            j = json.load(open(path))
+            recs.append((j["relative_density"], j["relative_density_se"]))
+        if len(recs) < 2:
+            print(f"| {held} | not finished |")
+            continue
+        (h, hse), (w, wse) = recs
+        d, se = w - h, math.sqrt(hse ** 2 + wse ** 2)
+        ws, wd = ws + 1 / se ** 2, wd + d / se ** 2
+        print(f"| {whole} − {held} | {h:.3f} ± {hse:.3f} | {w:.3f} ± {wse:.3f} | {d:+.3f} ± {se:.3f} ({d / se:+.1f}) |")
+    if ws:
+        print(f"| pooled | | | {wd / ws:+.3f} ± {1 / math.sqrt(ws):.3f} ({wd / ws * math.sqrt(ws):+.1f}) |")
+
+
 def self_test(shift):
     """The experiment's rows fed as our passes (row n − 1 → pass n + shift; pass 1 a baseline of
     0 when shift is 1); every group's mean must come back as the experiment's, exactly."""
@@ -266,6 +293,13 @@ def main_tables():
     table(HOLD, rows)
     print()
     moves(HOLD)
+    print()
+    table(HOLD2, rows)
+    print()
+    moves(HOLD2)
+    print()
+    print("| the steady layer | held | whole | whole − held (combined SE) |\n|---|---|---|---|")
+    steady_moves([(HOLD[0][0], HOLD[1][0]), (HOLD2[0][0], HOLD2[1][0])])
     print()
     table(NUMERICS, rows)
     print()
