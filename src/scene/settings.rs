@@ -16,7 +16,7 @@ pub struct SceneSettings {
     /// A path to a Tera template overriding the built-in `spreading.liggghts.tera`
     /// (relative to the sweep file).
     pub template: Option<PathBuf>,
-    /// Fidelity preset (see [`FIDELITIES`] and [`SceneSettings::preset`]): it sets every
+    /// Fidelity preset (see [`FIDELITIES`] and [`SceneSettings::common_preset`]): it sets every
     /// numerical knob ([`KNOBS`]) the file does not set itself.
     pub fidelity: String,
     // The numerical knobs: how finely a point is computed, not what it is.
@@ -95,8 +95,8 @@ pub const KNOBS: [&str; 7] = [
 
 impl SceneSettings {
     /// The keys every layout's settings hold at a fidelity preset (docs/scene.md "Fidelity";
-    /// BENCHMARKS.md "Fidelity"); a layout's own keys have their preset of it too
-    /// (`crate::scenes::settings::preset` gives the whole).
+    /// BENCHMARKS.md "Fidelity"), without any layout's own keys: not the settings of a point
+    /// (`crate::scenes::settings::preset` gives a layout's whole preset).
     ///
     /// - `fast` (default): the measured fastest settings whose MFR stays within the stated error
     ///   of `reference`.
@@ -105,7 +105,7 @@ impl SceneSettings {
     /// - `thesis`: the thesis's way (the baseline every speed-up is quoted against): its fixed
     ///   1e-5 s step, every column dumped every 2,000 steps (0.02 s, Appendix A), the blade
     ///   driven to the end of the domain; every run settles its own pile.
-    pub fn preset(fidelity: &str) -> Option<SceneSettings> {
+    pub fn common_preset(fidelity: &str) -> Option<SceneSettings> {
         let fast = SceneSettings::fast();
         match fidelity {
             "fast" => Some(fast),

@@ -50,7 +50,7 @@ impl std::fmt::Display for UnreadSetting {
 /// no setting (as a catalogue parameter at its default is none, [`super::set_but_unread`]): a
 /// resolved `DIR/sweep.toml` writes every key, and is read as a sweep file too.
 pub fn unread(settings: &SceneSettings) -> Option<UnreadSetting> {
-    let preset = SceneSettings::preset(&settings.fidelity)?;
+    let preset = SceneSettings::common_preset(&settings.fidelity)?;
     let (Ok(mine), Ok(preset)) = (toml::Table::try_from(settings), toml::Table::try_from(&preset)) else {
         return None;
     };
@@ -232,7 +232,7 @@ mod tests {
         assert_eq!(unread(&settings(conveyor, Some(("block_diameters", "7.0")))), None);
         // A knob at the value of the file's preset is none either, at another it is.
         let layers = crate::scenes::lookup("layers").unwrap();
-        let mut reference = SceneSettings::preset("reference").unwrap();
+        let mut reference = SceneSettings::common_preset("reference").unwrap();
         reference.layout = "layers".into();
         assert_eq!(unread(&reference), None);
         reference.rest_speed = 0.01;

@@ -72,7 +72,7 @@ pub fn parse(written: &toml::Table) -> Result<SceneSettings, SettingError> {
         why: format!("\"{name}\": expected one of {}", quoted(&names())),
     })?;
     let fidelity = text("fidelity", "fast")?;
-    let preset = SceneSettings::preset(&fidelity).ok_or_else(|| SettingError::Choice {
+    let preset = SceneSettings::common_preset(&fidelity).ok_or_else(|| SettingError::Choice {
         key: "fidelity".into(),
         why: KnobError::UnknownFidelity { fidelity: fidelity.clone() }.to_string(),
     })?;
@@ -181,7 +181,7 @@ fn is_common(key: &str) -> bool {
 /// Every key some layout reads, for the "did you mean" of an unknown one.
 fn known_keys() -> Vec<String> {
     let mut keys: Vec<String> =
-        toml::Table::try_from(SceneSettings::preset("fast").expect("the fast preset"))
+        toml::Table::try_from(SceneSettings::common_preset("fast").expect("the fast preset"))
             .map(|t| t.keys().cloned().collect())
             .unwrap_or_default();
     keys.extend(KNOBS.iter().map(|k| k.to_string()));
