@@ -60,6 +60,9 @@ HOLD = [("twenty-PS1-plate24-freeze4-bury", "PS1, held 4 D and shed"),
 # The same pair at a second seed (`seed = 2`: the doses' insertion seeds).
 HOLD2 = [("twenty-PS1-plate24-freeze4-bury-seed2", "PS1 seed 2, held 4 D and shed"),
          ("twenty-PS1-plate24-now-seed2", "PS1 seed 2, the whole bed moving")]
+# ... and at a third (the whole bed's run had 11 of 21 passes when this was written).
+HOLD3 = [("twenty-PS1-plate24-freeze4-bury-seed3", "PS1 seed 3, held 4 D and shed"),
+         ("twenty-PS1-plate24-now-seed3", "PS1 seed 3, the whole bed moving")]
 # The scene's numerical choices at PS1 (24 D, the 4 D hold): the timestep halved (0.33 → 0.165
 # Rayleigh times) and the periodic depth doubled (6 → 12 D), 11 passes each (their layers 1–10).
 NUMERICS = [("twenty-PS1-plate24-freeze4-bury", "PS1 as shipped"),
@@ -299,7 +302,9 @@ def main_tables():
     moves(HOLD2)
     print()
     print("| the steady layer | held | whole | whole − held (combined SE) |\n|---|---|---|---|")
-    steady_moves([(HOLD[0][0], HOLD[1][0]), (HOLD2[0][0], HOLD2[1][0])])
+    table(HOLD3, rows)
+    print()
+    steady_moves([(HOLD[0][0], HOLD[1][0]), (HOLD2[0][0], HOLD2[1][0]), (HOLD3[0][0], HOLD3[1][0])])
     print()
     table(NUMERICS, rows)
     print()
