@@ -60,7 +60,7 @@ HOLD = [("twenty-PS1-plate24-freeze4-bury", "PS1, held 4 D and shed"),
 # The same pair at a second seed (`seed = 2`: the doses' insertion seeds).
 HOLD2 = [("twenty-PS1-plate24-freeze4-bury-seed2", "PS1 seed 2, held 4 D and shed"),
          ("twenty-PS1-plate24-now-seed2", "PS1 seed 2, the whole bed moving")]
-# ... and at a third (the whole bed's run had 11 of 21 passes when this was written).
+# ... and at a third (the whole bed's run had 15 of 21 passes at the stop).
 HOLD3 = [("twenty-PS1-plate24-freeze4-bury-seed3", "PS1 seed 3, held 4 D and shed"),
          ("twenty-PS1-plate24-now-seed3", "PS1 seed 3, the whole bed moving")]
 # The scene's numerical choices at PS1 (24 D, the 4 D hold): the timestep halved (0.33 → 0.165
