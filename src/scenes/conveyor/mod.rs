@@ -554,7 +554,7 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
 mod tests {
     use std::collections::BTreeMap;
 
-    use super::settings::{self, own, ConveyorSettings, WARMUP_HEAP_FALLS};
+    use super::settings::{own, ConveyorSettings, WARMUP_HEAP_FALLS};
     use crate::scene::settings::SceneSettings;
 
     fn scene(values: &[(&str, f64)], settings: &SceneSettings) -> crate::scene::Scene {
@@ -607,7 +607,7 @@ mod tests {
         let (w4, block4) = warmup(&scene(&[um[0], um[1], ("heap_height", 4.3), um[3]], &settings));
         assert!(((2.0 * w - 2.0 * block_s)..(2.0 * w + block4)).contains(&w4), "{w} s → {w4} s");
         // A set warmup_s wins over the rule.
-        let set = settings::with_own(ConveyorSettings::default().settings(), |c| c.warmup_s = Some(0.005));
+        let set = ConveyorSettings { warmup_s: Some(0.005), ..ConveyorSettings::default() }.settings();
         let (w, block_s) = warmup(&scene(&um, &set));
         assert!((0.005..0.005 + block_s).contains(&w), "set 0.005 s: warm-up {w} s");
     }

@@ -137,9 +137,3 @@ impl ConveyorSettings {
 pub fn own(s: &SceneSettings) -> &ConveyorSettings {
     s.own.get().expect("a conveyor point's settings hold the conveyor layout's keys")
 }
-
-/// `s` with its conveyor keys as `change` leaves them.
-pub fn with_own(mut s: SceneSettings, change: impl FnOnce(&mut ConveyorSettings)) -> SceneSettings {
-    change(s.own.get_mut().expect("a conveyor point's settings hold the conveyor layout's keys"));
-    s
-}

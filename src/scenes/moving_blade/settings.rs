@@ -89,9 +89,3 @@ impl SpreadSettings {
 pub fn own(s: &SceneSettings) -> &SpreadSettings {
     s.own.get().expect("a moving-blade point's settings hold the moving-blade layouts' keys")
 }
-
-/// `s` with its moving-blade keys as `change` leaves them.
-pub fn with_own(mut s: SceneSettings, change: impl FnOnce(&mut SpreadSettings)) -> SceneSettings {
-    change(s.own.get_mut().expect("a moving-blade point's settings hold the moving-blade layouts' keys"));
-    s
-}
