@@ -4,9 +4,8 @@
 //! into a number: it carries its class (which decides the retry policy) and a one-line reason.
 
 pub mod answer;
-pub mod heap;
 pub mod layer;
-pub mod layers;
+pub mod own_result;
 pub mod steady;
 
 use std::collections::BTreeMap;
@@ -14,6 +13,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 pub use answer::{AnswerKind, PointAnswer};
+pub use own_result::OwnResult;
 
 /// Version of `result.json` / `failure.json`.
 pub const RESULT_FORMAT: u32 = 1;
@@ -25,8 +25,8 @@ pub const VX_LAYERS: usize = 12;
 
 /// The result of a completed run: `result.json`.
 ///
-/// Read through [`RunResult`]'s own `Deserialize`, which reads an older layers result's answer
-/// (written as `mfr`) as the steady layer's quantity it is.
+/// Read through [`RunResult`]'s own `Deserialize`, which reads an older answer written as `mfr`
+/// as the quantity the layout's own result says it is (a layers run's steady layer).
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(remote = "Self")]
 pub struct RunResult {
@@ -87,12 +87,10 @@ pub struct RunResult {
     /// Its standard error (MFR's, scaled alike).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub layer_packing_se: Option<f64>,
-    /// Layer after layer (layers layout): every pass and the steady layer (absent elsewhere).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub layers: Option<Box<crate::outcome::layers::LayerSeries>>,
-    /// The heap a pour left at rest: its angle of repose and packing (absent elsewhere).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub heap: Option<crate::outcome::heap::Heap>,
+    /// What only the run's layout measures, under its own key ([`own_result`]): a layers
+    /// run's passes and steady layer (`layers`), a pour's heap (`heap`); nothing elsewhere.
+    #[serde(flatten)]
+    pub own: OwnResult,
     /// The powder's sizes, for a size distribution (absent for one size).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sizes: Option<SizeSummary>,
@@ -132,8 +130,8 @@ impl<'de> Deserialize<'de> for RunResult {
         let mut r = RunResult::deserialize(d)?;
         // Before its answer had its own name, a layers result wrote it as `mfr` beside the
         // steady layer it came from.
-        if let (AnswerKind::Mfr, Some(l)) = (r.answer.kind, &r.layers) {
-            r.answer = r.answer.as_kind(l.answer_kind());
+        if let (AnswerKind::Mfr, Some(kind)) = (r.answer.kind, r.own.result().and_then(|o| o.answer_kind())) {
+            r.answer = r.answer.as_kind(kind);
         }
         Ok(r)
     }
@@ -176,8 +174,7 @@ impl Default for RunResult {
             layer_thickness: None,
             layer_packing: None,
             layer_packing_se: None,
-            layers: None,
-            heap: None,
+            own: OwnResult::none(),
             sizes: None,
             settle_steps: 0,
             steps: 0,
@@ -365,50 +362,6 @@ mod tests {
         assert_eq!(again.answer, loose.answer);
         assert_eq!(serde_json::to_value(&again).unwrap(), json);
         assert_eq!(serde_json::to_value(&fused).unwrap()["steady_packing"].as_f64(), Some(0.52));
-    }
-
-    #[test]
-    fn a_recorded_layers_result_with_mfr_keys_reads_its_passes_and_count_under_their_own_names() {
-        // A real result.json, as the layers layout wrote it on 7 December 2026 before its
-        // quantities had their own names (docs/study/layers/record/machine-lattice/a2900f7b…/
-        // result.json at commit ce70714d, copied whole): a fused bed's steady packing as `mfr`,
-        // its per-pass packings as `mfr_windows`, the particles of its 11 passes as
-        // `mfr_particles`.
-        let text = include_str!("../../tests/data/layers-result-before-answer-names.json");
-        let old: serde_json::Value = serde_json::from_str(text).unwrap();
-        assert!(
-            old.get("mfr_windows").is_some() && old.get("answer_windows").is_none(),
-            "not the old format"
-        );
-        let r: RunResult = serde_json::from_str(text).unwrap();
-        assert_eq!(
-            r.answer,
-            PointAnswer {
-                kind: AnswerKind::SteadyPacking,
-                value: 0.17737717229934943,
-                se: Some(0.0036150069293106424)
-            }
-        );
-        let passes = &r.layers.as_ref().expect("its passes").passes;
-        assert_eq!(r.answer_windows, passes.iter().map(|p| p.packing).collect::<Vec<_>>());
-        assert_eq!((r.answer_windows.len(), r.answer_windows[0]), (11, 0.13696732712213172));
-        assert_eq!(r.answer_particles, 1968);
-        assert_eq!(r.answer_particles, passes.iter().map(|p| p.particles).sum::<usize>());
-        // Written again under the new names only, and read back the same.
-        let json = serde_json::to_value(&r).unwrap();
-        for gone in ["mfr", "mfr_se", "mfr_windows", "mfr_particles"] {
-            assert!(json.get(gone).is_none(), "{gone} written again");
-        }
-        assert_eq!(json["answer_windows"], old["mfr_windows"]);
-        assert_eq!(json["answer_particles"], old["mfr_particles"]);
-        // (Compared as written: its NaNs, the flux and the p-value it does not measure, are
-        // equal to nothing.)
-        let again = serde_json::from_value::<RunResult>(json.clone()).unwrap();
-        assert_eq!(
-            (again.answer, &again.answer_windows, again.answer_particles),
-            (r.answer, &r.answer_windows, 1968)
-        );
-        assert_eq!(serde_json::to_value(&again).unwrap(), json);
     }
 
     #[test]

@@ -513,7 +513,7 @@ mod tests {
 
     #[test]
     fn a_layers_point_is_recommended_by_its_steady_layer_with_the_powder_under_the_blade() {
-        use crate::outcome::layers::LayerSeries;
+        use crate::scenes::layers::result::LayerSeries;
         // A layers point measures no CV along the travel (NaN): it is not thereby uneven.
         let point = |index: usize, packing: f64, covered: f64| {
             let series = LayerSeries {
@@ -546,7 +546,7 @@ mod tests {
                     height_d: 3.4,
                     particles: 400,
                 }),
-                layers: Some(Box::new(series)),
+                own: crate::outcome::OwnResult::new(series),
                 ..crate::outcome::RunResult::default()
             };
             PointRow {

@@ -13,6 +13,7 @@ pub mod layers;
 pub mod moving_blade;
 pub mod pour;
 pub mod quantity;
+mod results;
 pub mod settings;
 pub mod stand_in;
 #[cfg(test)]

@@ -539,8 +539,7 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         layer_thickness: Some(scene.layer_thickness(blade)),
         layer_packing: Some(scene.layer_packing(blade, st.mfr)),
         layer_packing_se: Some(scene.layer_packing(blade, st.mfr_se)),
-        layers: None,
-        heap: None,
+        own: crate::outcome::OwnResult::none(),
         settle_steps: 0,
         ..run.record(steps)
     };

@@ -38,13 +38,13 @@
 use std::collections::HashSet;
 use std::path::Path;
 
+use super::result::{LayerSeries, PassRecord, RollerLoad, RollerSteady};
 use super::{
     plan_of, Plan, FUSED_DEPTH_LAG1, FUSED_PACKING_LAG1, MIN_STEADY_PASSES, STOP_KEPT_PASSES,
     TREND_FALSE_ALARM,
 };
 use crate::engine::dump::read_dump;
 use crate::measure::steady::{ar1_se_factor, mser, student_quantile, trend_z};
-use crate::outcome::layers::{LayerSeries, PassRecord, RollerLoad, RollerSteady};
 use crate::outcome::{FailureClass, RunResult, RESULT_FORMAT, VX_LAYERS};
 use crate::scene::Scene;
 use crate::scenes::{Finished, Rejected};
@@ -532,7 +532,7 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         layer_thickness: Some(series.effective_thickness_m),
         layer_packing: Some(series.packing),
         layer_packing_se: Some(series.packing_se),
-        layers: Some(Box::new(series.clone())),
+        own: crate::outcome::OwnResult::new(series.clone()),
         ..run.record(steps)
     };
     let kept = series.passes.len() + 1 - series.steady_from;

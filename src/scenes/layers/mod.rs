@@ -26,6 +26,7 @@ pub mod geometry;
 pub mod measure;
 pub mod numerics;
 mod plan;
+pub mod result;
 pub mod settings;
 pub mod stand_in;
 mod top_view;
@@ -241,12 +242,12 @@ impl Layout for Layers {
         // The answer and its windows are the passes' packing or relative density (deposit over
         // the drop): at most the packing bound times the powder under the blade over the drop.
         // No flux past the blade and no steadiness p-value: the passes are the test.
-        let depth = r.layers.as_ref().map_or(1.0, |l| {
+        let depth = result::series(r).map_or(1.0, |l| {
             l.passes.iter().map(|p| p.effective_thickness_m / l.layer_thickness_m).fold(1.0, f64::max)
         });
         crate::measure::plausible::check_result(
             r,
-            crate::measure::plausible::Measures { flow: true, flux: r.layers.is_none(), depth },
+            crate::measure::plausible::Measures { flow: true, flux: result::series(r).is_none(), depth },
         )
     }
 
@@ -416,7 +417,7 @@ impl Layout for Layers {
     }
 
     fn answer_detail(&self, r: &RunResult) -> Option<String> {
-        let l = r.layers.as_ref()?;
+        let l = result::series(r)?;
         Some(format!(
             // To 0.1 µm: a steady depth's SE is often under a micrometre, and "± 0" says nothing.
             "{:.1} ± {:.1} µm of powder under the blade ({:.1} × the layer thickness), steady from pass {} of {}{}",
@@ -441,7 +442,7 @@ impl Layout for Layers {
     }
 
     fn result_values(&self, r: &RunResult) -> Vec<String> {
-        let Some(l) = r.layers.as_ref() else { return vec![String::new(); RESULT_COLUMNS.len()] };
+        let Some(l) = result::series(r) else { return vec![String::new(); RESULT_COLUMNS.len()] };
         let um = |m: f64| m * 1e6;
         let e = l.numerical_error.as_ref();
         let values = [
@@ -467,7 +468,7 @@ impl Layout for Layers {
     }
 
     fn pass_series(&self, r: &RunResult) -> Option<crate::scenes::figures::PassSeries> {
-        let l = r.layers.as_ref()?;
+        let l = result::series(r)?;
         Some(top_view::pass_series(l, l.bed == "fused"))
     }
 
@@ -477,11 +478,11 @@ impl Layout for Layers {
         run_dir: &Path,
         r: &RunResult,
     ) -> Option<Result<crate::scenes::figures::TopView, String>> {
-        Some(top_view::top_view(scene, run_dir, r.layers.as_ref()?.passes.len()))
+        Some(top_view::top_view(scene, run_dir, result::series(r)?.passes.len()))
     }
 
     fn result_lines(&self, r: &RunResult) -> Option<Vec<String>> {
-        let l = r.layers.as_ref()?;
+        let l = result::series(r)?;
         let mut lines = vec![format!(
             "steady layer     from pass {} of {}{}: packing {:.3} ± {:.3}, relative density {:.3} ± {:.3}",
             l.steady_from,
@@ -542,7 +543,7 @@ pub const CALIBRATION_TARGETS: &[crate::scenes::quantity::Quantity] = &[
     crate::scenes::quantity::Quantity {
         name: "relative_density",
         unit: "-",
-        read: |r| r.layers.as_ref().map(|l| (l.relative_density, Some(l.relative_density_se))),
+        read: |r| result::series(r).map(|l| (l.relative_density, Some(l.relative_density_se))),
         repeats: 1,
         // Deposit over the drop: about 1 on a fused bed, which keeps the whole drop; a pass may
         // leave more than the drop, never twice it at the packing of spheres.
@@ -552,7 +553,7 @@ pub const CALIBRATION_TARGETS: &[crate::scenes::quantity::Quantity] = &[
     crate::scenes::quantity::Quantity {
         name: "steady_packing",
         unit: "-",
-        read: |r| r.layers.as_ref().map(|l| (l.packing, Some(l.packing_se))),
+        read: |r| result::series(r).map(|l| (l.packing, Some(l.packing_se))),
         repeats: 1,
         possible: (0.0, crate::measure::plausible::PACKING_MAX),
         lo_possible: true,

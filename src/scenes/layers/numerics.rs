@@ -6,7 +6,7 @@
 //! scene's choices may stand from the answer of a longer plate, a wider domain, a finer step.
 //! Measured at one point: elsewhere it is the same choices' size, not a bound.
 
-use crate::outcome::layers::{NumericalError, NumericalTerm};
+use super::result::{NumericalError, NumericalTerm};
 use crate::scene::Scene;
 
 use super::Plan;

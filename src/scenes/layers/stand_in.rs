@@ -13,9 +13,9 @@
 //! passes from the first whose noiseless depth is within [`STEADY_WITHIN`] of its limit; a point
 //! with fewer than [`MIN_STEADY_PASSES`] of them is not steady, as a real run would not be.
 
+use super::result::{LayerSeries, PassRecord};
 use super::{plan_of, Plan, MIN_STEADY_PASSES};
 use crate::outcome::layer::Layer;
-use crate::outcome::layers::{LayerSeries, PassRecord};
 use crate::outcome::{FailureClass, RunResult, VX_LAYERS};
 use crate::scenes::stand_in::StandInPoint;
 use crate::scenes::Rejected;
@@ -162,7 +162,7 @@ fn series_result(point: &StandInPoint, plan: &Plan, passes: Vec<PassRecord>, fir
         layer_thickness: Some(series.effective_thickness_m),
         layer_packing: Some(series.packing),
         layer_packing_se: Some(series.packing_se),
-        layers: Some(Box::new(series)),
+        own: crate::outcome::OwnResult::new(series),
         ..RunResult::default()
     }
 }
@@ -196,13 +196,13 @@ mod tests {
         let values = [("layer_thickness", 3.0), ("blade_speed", 0.1), ("friction", 0.5)];
         for hash in ["a", "b", "c"] {
             let fused = result("fused", 14, &values, hash).unwrap();
-            let l = fused.layers.as_ref().unwrap();
+            let l = super::super::result::series(&fused).unwrap();
             assert!(fused.steady && l.steady_from > 1, "{l:?}");
             assert!((l.relative_density - 1.0).abs() < 0.05, "{l:?}");
             assert_eq!(fused.answer.value, l.packing);
             Layers.check_result(&fused).unwrap();
             let loose = result("loose", 8, &values, hash).unwrap();
-            let l = loose.layers.as_ref().unwrap();
+            let l = super::super::result::series(&loose).unwrap();
             assert!(loose.steady && (l.relative_density - l.packing).abs() < 0.1 * l.packing, "{l:?}");
             assert_eq!(loose.answer.value, l.relative_density);
             Layers.check_result(&loose).unwrap();
@@ -215,7 +215,7 @@ mod tests {
         assert_eq!(e.class, FailureClass::Unsteady);
         assert!(e.reason.contains("fewer than 3 passes"), "{}", e.reason);
         let r = e.measured.unwrap();
-        assert!(!r.steady && !r.layers.unwrap().steady);
+        assert!(!r.steady && !super::super::result::series(&r).unwrap().steady);
     }
 
     #[test]

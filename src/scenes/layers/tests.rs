@@ -226,7 +226,7 @@ fn the_powder_sent_over_a_roller_is_read_per_metre_and_an_old_result_reads_witho
     let log = "demsweep: ejected 1 mass 3e-09 count 12\ndemsweep: ejected 2 mass\ndemsweep: ejected 3 mass 0 count 0\n";
     assert_eq!(super::measure::parse_ejected(log, 0.002), vec![(1, 1.5e-6), (3, 0.0)]);
     let old = r#"{"torque_nm_per_m": 1e-6, "turning_power_w_per_m": 1e-4, "push_n_per_m": 1e-3, "pushing_power_w_per_m": 1e-4}"#;
-    let load: crate::outcome::layers::RollerLoad = serde_json::from_str(old).unwrap();
+    let load: crate::scenes::layers::result::RollerLoad = serde_json::from_str(old).unwrap();
     assert_eq!(load.ejected_kg_per_m, None);
     assert!(!serde_json::to_string(&load).unwrap().contains("ejected"));
 }
@@ -242,8 +242,8 @@ fn the_held_bed_a_pass_removes_is_counted_on_the_plate_of_every_later_pass() {
     assert_eq!(mass, [1.0e-6, 1.5e-6 + 2.5e-7, 1.75e-6 + 2.5e-7 + 1.0e-7]);
 }
 
-fn record(k: usize, y: f64) -> crate::outcome::layers::PassRecord {
-    crate::outcome::layers::PassRecord {
+fn record(k: usize, y: f64) -> crate::scenes::layers::result::PassRecord {
+    crate::scenes::layers::result::PassRecord {
         search: false,
         k,
         deposit_m: y * 1e-4,
@@ -390,7 +390,7 @@ fn a_fused_bed_whose_depth_still_grows_is_not_steady_though_its_packing_is() {
     let depth: [f64; 8] = [50.0, 128.0, 152.0, 194.0, 203.0, 207.0, 211.0, 214.0];
     let passes = |grow: bool| {
         (0..8)
-            .map(|i| crate::outcome::layers::PassRecord {
+            .map(|i| crate::scenes::layers::result::PassRecord {
                 effective_thickness_m: if grow { depth[i] } else { depth[i].min(203.0) } * 1e-6,
                 // Each pass keeps the drop: the bed keeps pace, only its depth trends.
                 relative_density: 1.0,
@@ -415,7 +415,7 @@ fn a_fused_bed_that_leaves_less_than_the_drop_is_said_to_fall_behind() {
     })));
     // Each pass leaves 0.65 of the drop (the round blade at 0.2 m/s at 50 µm), the depth growing.
     let passes: Vec<_> = (0..8)
-        .map(|i| crate::outcome::layers::PassRecord {
+        .map(|i| crate::scenes::layers::result::PassRecord {
             relative_density: 0.645 + 0.01 * (i % 2) as f64,
             effective_thickness_m: (1000.0 + 17.0 * i as f64) * 1e-6,
             ..record(i + 1, 0.03)
@@ -524,7 +524,7 @@ fn a_trendless_layer_is_called_unsteady_at_the_rule_s_stated_rate() {
         .filter(|_| {
             let (p, d) = (ar1(14, FUSED_PACKING_LAG1), ar1(14, FUSED_DEPTH_LAG1));
             let recs = (0..14)
-                .map(|i| crate::outcome::layers::PassRecord {
+                .map(|i| crate::scenes::layers::result::PassRecord {
                     search: i < 6,
                     effective_thickness_m: (130.0 + 0.4 * d[i]) * 1e-6,
                     ..record(i + 1, 0.37 + 0.004 * p[i])

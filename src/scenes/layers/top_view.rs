@@ -6,7 +6,7 @@ use std::path::Path;
 
 use super::measure::{layer_dump, read_grains};
 use super::plan_of;
-use crate::outcome::layers::LayerSeries;
+use super::result::LayerSeries;
 use crate::scene::Scene;
 use crate::scenes::figures::{Disc, PassSeries, TopView};
 

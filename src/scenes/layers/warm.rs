@@ -40,7 +40,7 @@ pub fn start(from_dir: &Path, to: &Scene) -> Result<Warm, ColdStart> {
         .ok()
         .and_then(|t| serde_json::from_str(&t).ok())
         .ok_or(ColdStart::NoSteadyLayer)?;
-    let l = from.layers.filter(|l| l.steady).ok_or(ColdStart::NoSteadyLayer)?;
+    let l = super::result::series(&from).filter(|l| l.steady).ok_or(ColdStart::NoSteadyLayer)?;
     let ratio = l.effective_thickness_m / l.layer_thickness_m;
     if !ratio.is_finite() || ratio <= 0.0 {
         return Err(ColdStart::NoSteadyLayer);

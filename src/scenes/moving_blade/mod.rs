@@ -457,8 +457,7 @@ pub fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         layer_thickness: Some(scene.layer_thickness(blade)),
         layer_packing: Some(scene.layer_packing(blade, m.mfr)),
         layer_packing_se: None,
-        layers: None,
-        heap: None,
+        own: crate::outcome::OwnResult::none(),
         settle_steps,
         ..run.record(steps)
     };

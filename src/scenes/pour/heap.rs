@@ -8,7 +8,7 @@
 //! around the axis under the surface, from the particles whose centres lie in it (unbiased for
 //! a random packing away from walls, so the cylinder starts one diameter above the plate).
 
-use crate::outcome::heap::Heap;
+use super::result::Heap;
 use crate::scenes::quantity::Quantity;
 
 /// What a calibration can fit a pour to: the heap's angle of repose, its packing, and the
@@ -17,7 +17,7 @@ pub const CALIBRATION_TARGETS: &[Quantity] = &[
     Quantity {
         name: "angle_of_repose",
         unit: "°",
-        read: |r| r.heap.as_ref().map(|h| (h.angle_deg, Some(h.angle_se_deg).filter(|s| *s > 0.0))),
+        read: |r| super::result::heap(r).map(|h| (h.angle_deg, Some(h.angle_se_deg).filter(|s| *s > 0.0))),
         repeats: 2,
         possible: (0.0, 90.0),
         lo_possible: false,
@@ -25,7 +25,7 @@ pub const CALIBRATION_TARGETS: &[Quantity] = &[
     Quantity {
         name: "bulk_packing",
         unit: "-",
-        read: |r| r.heap.as_ref().map(|h| (h.packing, None)),
+        read: |r| super::result::heap(r).map(|h| (h.packing, None)),
         repeats: 2,
         // Spheres pack no denser than π/√18 (face-centred cubic).
         possible: (0.0, 0.7405),
@@ -38,7 +38,7 @@ pub const CALIBRATION_TARGETS: &[Quantity] = &[
         unit: "g/cm³",
         read: |r| {
             let density = r.parameters.get("density")?;
-            r.heap.as_ref().map(|h| (h.packing * density / 1000.0, None))
+            super::result::heap(r).map(|h| (h.packing * density / 1000.0, None))
         },
         repeats: 2,
         // The heap's packing (at most 0.7405) times the densest material (25,000 kg/m³).

@@ -26,6 +26,7 @@
 
 pub mod geometry;
 pub mod heap;
+pub mod result;
 pub mod stand_in;
 
 use crate::engine::dump::read_dump;
@@ -210,7 +211,7 @@ impl Layout for Pour {
     }
 
     fn result_values(&self, r: &RunResult) -> Vec<String> {
-        match &r.heap {
+        match result::heap(r) {
             Some(h) => [h.angle_deg, h.angle_se_deg, h.packing, h.height_mm].map(|v| v.to_string()).to_vec(),
             None => vec![String::new(); 4],
         }
@@ -234,7 +235,7 @@ impl Layout for Pour {
 
     fn check_result(&self, r: &RunResult) -> Result<(), crate::measure::plausible::Implausible> {
         // Nothing flows in a heap: its flow's numbers are NaN (not measured).
-        let flow = !(r.heap.is_some() && r.answer.value.is_nan());
+        let flow = !(result::heap(r).is_some() && r.answer.value.is_nan());
         crate::measure::plausible::check_result(
             r,
             crate::measure::plausible::Measures { flow, flux: flow, depth: 1.0 },
@@ -246,7 +247,7 @@ impl Layout for Pour {
     }
 
     fn result_lines(&self, r: &RunResult) -> Option<Vec<String>> {
-        let h = r.heap.as_ref()?;
+        let h = result::heap(r)?;
         let sectors: Vec<String> = h.sector_angles_deg.iter().map(|a| format!("{a:.1}")).collect();
         Some(vec![
             format!(
@@ -385,8 +386,7 @@ fn measure(run: &Finished) -> Result<RunResult, Rejected> {
         vx_se: Vec::new(),
         particles: scene.particles,
         layer: None,
-        layers: None,
-        heap: Some(heap),
+        own: crate::outcome::OwnResult::new(heap),
         settle_steps: steps,
         ..run.record(steps)
     })

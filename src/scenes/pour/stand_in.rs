@@ -4,7 +4,7 @@
 //! parameters that made its targets. Nothing flows: its MFR and v_x are not measured.
 
 use super::heap::SECTORS;
-use crate::outcome::heap::Heap;
+use super::result::Heap;
 use crate::outcome::{PointAnswer, RunResult, VX_LAYERS};
 use crate::scenes::stand_in::{Noise, StandInPoint};
 
@@ -93,7 +93,7 @@ pub fn heap(point: &mut StandInPoint) -> RunResult {
     RunResult {
         answer: PointAnswer::none(),
         mfr_flux: f64::NAN,
-        heap: Some(pour.model(point.scene.particles, &mut point.noise)),
+        own: crate::outcome::OwnResult::new(pour.model(point.scene.particles, &mut point.noise)),
         particles: point.scene.particles,
         vx: vec![None; VX_LAYERS],
         ..RunResult::default()

@@ -1,7 +1,10 @@
-//! Layer after layer, as result.json stores it (docs/layers.md defines each measure;
-//! [`crate::scenes::layers`] measures them).
+//! Layer after layer: a layers run's own result, `result.json`'s `layers` record
+//! (docs/layers.md defines each measure; [`super::measure`] measures them).
 
 use serde::{Deserialize, Serialize};
+
+use crate::outcome::own_result::LayoutResult;
+use crate::outcome::{AnswerKind, PointAnswer, RunResult};
 
 /// What one pass of the blade left on the build plate.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -14,24 +17,24 @@ pub struct PassRecord {
     pub search: bool,
     /// Solid volume the pass added to the plate over the plate's area, m: the deposit as a
     /// height of solid.
-    #[serde(deserialize_with = "super::nan_if_null")]
+    #[serde(deserialize_with = "crate::outcome::nan_if_null")]
     pub deposit_m: f64,
     /// The deposit over the platform's drop before the pass (Gaboriault et al. 2025's layer
     /// relative density; the first pass's drop includes the blade's clearance).
-    #[serde(deserialize_with = "super::nan_if_null")]
+    #[serde(deserialize_with = "crate::outcome::nan_if_null")]
     pub relative_density: f64,
     /// The powder's depth under the blade's tip: the tip's height over the bed's mean top
     /// surface before the pass (loose) or over the solid's top (fused), m.
-    #[serde(deserialize_with = "super::nan_if_null")]
+    #[serde(deserialize_with = "crate::outcome::nan_if_null")]
     pub effective_thickness_m: f64,
     /// The deposit over that depth: the packing of the layer the blade left.
-    #[serde(deserialize_with = "super::nan_if_null")]
+    #[serde(deserialize_with = "crate::outcome::nan_if_null")]
     pub packing: f64,
     /// Share of the plate's area under this pass's own particles.
-    #[serde(deserialize_with = "super::nan_if_null")]
+    #[serde(deserialize_with = "crate::outcome::nan_if_null")]
     pub covered_fraction: f64,
     /// RMS of the bed's top surface about its mean after the pass, in D.
-    #[serde(deserialize_with = "super::nan_if_null")]
+    #[serde(deserialize_with = "crate::outcome::nan_if_null")]
     pub roughness_d: f64,
     /// Solid volume on the plate over its area and the height of everything laid so far (loose:
     /// the bed's relative density; fused: the solid, 1 by construction, not stored).
@@ -88,21 +91,21 @@ pub struct LayerSeries {
     /// left.
     pub steady: bool,
     /// The steady layer's means and standard errors over the steady passes.
-    #[serde(deserialize_with = "super::nan_if_null")]
+    #[serde(deserialize_with = "crate::outcome::nan_if_null")]
     pub packing: f64,
-    #[serde(deserialize_with = "super::nan_if_null")]
+    #[serde(deserialize_with = "crate::outcome::nan_if_null")]
     pub packing_se: f64,
-    #[serde(deserialize_with = "super::nan_if_null")]
+    #[serde(deserialize_with = "crate::outcome::nan_if_null")]
     pub relative_density: f64,
-    #[serde(deserialize_with = "super::nan_if_null")]
+    #[serde(deserialize_with = "crate::outcome::nan_if_null")]
     pub relative_density_se: f64,
-    #[serde(deserialize_with = "super::nan_if_null")]
+    #[serde(deserialize_with = "crate::outcome::nan_if_null")]
     pub effective_thickness_m: f64,
-    #[serde(deserialize_with = "super::nan_if_null")]
+    #[serde(deserialize_with = "crate::outcome::nan_if_null")]
     pub effective_thickness_se_m: f64,
-    #[serde(deserialize_with = "super::nan_if_null")]
+    #[serde(deserialize_with = "crate::outcome::nan_if_null")]
     pub covered_fraction: f64,
-    #[serde(deserialize_with = "super::nan_if_null")]
+    #[serde(deserialize_with = "crate::outcome::nan_if_null")]
     pub roughness_d: f64,
     /// How far the scene's numerical choices may move the steady layer, beside its SE (not in
     /// it): `None` in a result written before it was stated.
@@ -113,24 +116,42 @@ pub struct LayerSeries {
     pub roller: Option<RollerSteady>,
 }
 
+impl LayoutResult for LayerSeries {
+    fn key(&self) -> &'static str {
+        KEY
+    }
+
+    fn answer_kind(&self) -> Option<AnswerKind> {
+        Some(LayerSeries::answer_kind(self))
+    }
+}
+
+/// The key of [`LayerSeries`] in `result.json`.
+pub const KEY: &str = "layers";
+
+/// A layers run's passes and steady layer (`None` for a run of another layout).
+pub fn series(r: &RunResult) -> Option<&LayerSeries> {
+    r.own.get()
+}
+
 impl LayerSeries {
     /// What the point answers with: the steady layer's relative density on a loose bed, its
     /// packing on a fused one (whose relative density is the whole drop by construction).
-    pub fn answer_kind(&self) -> super::AnswerKind {
+    pub fn answer_kind(&self) -> AnswerKind {
         if self.bed == "fused" {
-            super::AnswerKind::SteadyPacking
+            AnswerKind::SteadyPacking
         } else {
-            super::AnswerKind::RelativeDensity
+            AnswerKind::RelativeDensity
         }
     }
 
     /// The steady layer's answer with its standard error.
-    pub fn answer(&self) -> super::PointAnswer {
+    pub fn answer(&self) -> PointAnswer {
         let (value, se) = match self.answer_kind() {
-            super::AnswerKind::SteadyPacking => (self.packing, self.packing_se),
+            AnswerKind::SteadyPacking => (self.packing, self.packing_se),
             _ => (self.relative_density, self.relative_density_se),
         };
-        super::PointAnswer { kind: self.answer_kind(), value, se: Some(se) }
+        PointAnswer { kind: self.answer_kind(), value, se: Some(se) }
     }
 }
 

@@ -1,6 +1,24 @@
-//! The heap a pour leaves at rest (`result.json`'s `heap` record).
+//! The heap a pour leaves at rest: a pour's own result, `result.json`'s `heap` record
+//! ([`super::heap`] measures it).
 
 use serde::{Deserialize, Serialize};
+
+use crate::outcome::own_result::LayoutResult;
+use crate::outcome::RunResult;
+
+/// The key of [`Heap`] in `result.json`.
+pub const KEY: &str = "heap";
+
+/// A pour's heap (`None` for a run of another layout, or a pour that left none).
+pub fn heap(r: &RunResult) -> Option<&Heap> {
+    r.own.get()
+}
+
+impl LayoutResult for Heap {
+    fn key(&self) -> &'static str {
+        KEY
+    }
+}
 
 /// A heap's angle of repose, from a straight-line fit of its surface height against the radius
 /// in each azimuthal sector, and its bulk packing.
