@@ -65,6 +65,14 @@ HOLD3 = [("twenty-PS1-plate24-freeze4-bury-seed3", "PS1 seed 3, held 4 D and she
          ("twenty-PS1-plate24-now-seed3", "PS1 seed 3, the whole bed moving")]
 # The scene's numerical choices at PS1 (24 D, the 4 D hold): the timestep halved (0.33 → 0.165
 # Rayleigh times) and the periodic depth doubled (6 → 12 D), 11 passes each (their layers 1–10).
+# Each set at three seeds on the study's bed (24 D, held 4 D; `seed = 2` and `3`: seeds.sh),
+# pooled per group (inverse variance over the seeds' group means, each ± its SE).
+SEEDS = [("PS1", ["twenty-PS1-plate24-freeze4-bury", "twenty-PS1-plate24-freeze4-bury-seed2",
+                  "twenty-PS1-plate24-freeze4-bury-seed3"]),
+         ("PS2", ["twenty-PS2-plate24-freeze4-bury", "twenty-PS2-plate24-freeze4-bury-seed2",
+                  "twenty-PS2-plate24-freeze4-bury-seed3"]),
+         ("PS3", ["twenty-PS3-plate24-freeze4-bury", "twenty-PS3-plate24-freeze4-bury-seed2",
+                  "twenty-PS3-plate24-freeze4-bury-seed3"])]
 NUMERICS = [("twenty-PS1-plate24-freeze4-bury", "PS1 as shipped"),
             ("twenty-PS1-plate24-freeze4-passes11-bury-dt0.165", "timestep halved"),
             ("twenty-PS1-plate24-freeze4-passes11-bury-depth12", "depth doubled (12 D)")]
@@ -241,6 +249,59 @@ def steady_moves(pairs):
         print(f"| pooled | | | {wd / ws:+.3f} ± {1 / math.sqrt(ws):.3f} ({wd / ws * math.sqrt(ws):+.1f}) |")
 
 
+def pooled_groups(labels):
+    """Per group: the inverse-variance mean of the records' group means (each ± its SE, a
+    single layer's ± one pass's SD), and how many records were pooled; None where none ran."""
+    recs = [record_groups(p) for p in map(load_passes, labels) if p]
+    out = []
+    for i, (name, a, b) in enumerate(GROUPS):
+        gs = [g[i] for g in recs if g[i]["layers"] == [a, b]]
+        if not gs:
+            out.append(None)
+            continue
+        w = sum(1 / g["err"] ** 2 for g in gs)
+        out.append({"mean": sum(g["mean"] / g["err"] ** 2 for g in gs) / w, "err": 1 / math.sqrt(w), "n": len(gs)})
+    return out
+
+
+def pooled_table(sets, rows):
+    """Each set's group means pooled over its seeds against the experiment (combined SE), then
+    each pair of sets' difference."""
+    exp = experiment_groups(rows)
+    pooled = [(name, pooled_groups(labels)) for name, labels in sets]
+    print("| their layers | our passes | experiment, mean ± SD of 3 repeats | "
+          + " | ".join(f"{n} (seeds pooled)" for n, _ in pooled) + " |")
+    print("|---|---|---|" + "---|" * len(pooled))
+    for i, e in enumerate(exp):
+        a, b = e["layers"]
+        ps = f"{pass_of_layer(a)}" if a == b else f"{pass_of_layer(a)}–{pass_of_layer(b)}"
+        exp_se = e["sd"] / math.sqrt(3)
+        cells = []
+        for _, g in pooled:
+            if g[i] is None:
+                cells.append("n/a")
+                continue
+            z = (g[i]["mean"] - e["mean"]) / math.sqrt(g[i]["err"] ** 2 + exp_se ** 2)
+            cells.append(f"{g[i]['mean']:.3f} ± {g[i]['err']:.3f}, {g[i]['n']} seed{'s' if g[i]['n'] > 1 else ''} ({z:+.1f})")
+        print(f"| {e['group']} | {ps} | {e['mean']:.3f} ± {e['sd']:.3f} | " + " | ".join(cells) + " |")
+    print()
+    print("| their layers | " + " | ".join(f"{x} − {y}" for (x, _), (y, _) in pairs(pooled)) + " |")
+    print("|---|" + "---|" * len(pairs(pooled)))
+    for i, e in enumerate(exp):
+        cells = []
+        for (_, gx), (_, gy) in pairs(pooled):
+            if gx[i] is None or gy[i] is None:
+                cells.append("n/a")
+                continue
+            d, se = gx[i]["mean"] - gy[i]["mean"], math.hypot(gx[i]["err"], gy[i]["err"])
+            cells.append(f"{d:+.3f} ± {se:.3f} ({d / se:+.1f})")
+        print(f"| {e['group']} | " + " | ".join(cells) + " |")
+
+
+def pairs(xs):
+    return [(xs[j], xs[i]) for i in range(len(xs)) for j in range(i + 1, len(xs))]
+
+
 def self_test(shift):
     """The experiment's rows fed as our passes (row n − 1 → pass n + shift; pass 1 a baseline of
     0 when shift is 1); every group's mean must come back as the experiment's, exactly."""
@@ -285,6 +346,8 @@ def main_tables():
           "over the same layers.\n")
     table(SETS, rows)
     print()
+    pooled_table(SEEDS, rows)
+    print()
     table(SETS48, rows)
     print()
     table(PLATES, rows)
@@ -301,9 +364,11 @@ def main_tables():
     print()
     moves(HOLD2)
     print()
-    print("| the steady layer | held | whole | whole − held (combined SE) |\n|---|---|---|---|")
     table(HOLD3, rows)
     print()
+    moves(HOLD3)
+    print()
+    print("| the steady layer | held | whole | whole − held (combined SE) |\n|---|---|---|---|")
     steady_moves([(HOLD[0][0], HOLD[1][0]), (HOLD2[0][0], HOLD2[1][0]), (HOLD3[0][0], HOLD3[1][0])])
     print()
     table(NUMERICS, rows)
