@@ -103,6 +103,59 @@ def gaboriault(sets=compare.SETS, plate="1.6 mm", name="gaboriault.png"):
     fig.savefig(os.path.join(HERE, name), dpi=110)
 
 
+def gaboriault_seeds(name="gaboriault-seeds.png"):
+    """The three sets at their seeds (compare.SEEDS), in step: per layer the seeds' mean ± its SE
+    (their SD / √n; one pass's SD where one seed has run), per group the seeds pooled."""
+    rows = compare.experiment()
+    layers = list(range(1, 21))
+    reps = [[rows[compare.row_of_layer(n)][i] for n in layers] for i in range(3)]
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12.5, 5.0), gridspec_kw={"width_ratios": [2.3, 1]})
+    a1.fill_between(layers, [min(v) for v in zip(*reps)], [max(v) for v in zip(*reps)], color="0.6",
+                    label="experiment: 3 repeats, min–max")
+    a1.plot(layers, [sum(v) / 3 for v in zip(*reps)], color="black", marker="s", markersize=3,
+            linewidth=0.8, label="experiment: mean of the repeats")
+    exp = compare.experiment_groups(rows)
+    a2.errorbar([i - 0.27 for i in range(3)], [e["mean"] for e in exp], yerr=[e["sd"] for e in exp], color="black",
+                marker="s", linestyle="none", capsize=4, label="experiment: mean ± SD of the repeats")
+    colours = {"PS1": "#e6550d", "PS2": "#3182bd", "PS3": "#31a354"}
+    offsets = {"PS1": -0.18, "PS2": 0.0, "PS3": 0.18}
+    for label, records in compare.SEEDS:
+        runs = [compare.layer_values(p) for p in map(compare.load_passes, records) if p]
+        if not runs:
+            continue
+        c, dx = colours[label], offsets[label]
+        single = compare.record_groups(compare.load_passes(records[0]))[0]["err"]
+        ns = [n for n in layers if all(n in r for r in runs)]
+        ys = [compare.mean([r[n] for r in runs]) for n in ns]
+        es = [compare.sd([r[n] for r in runs]) / math.sqrt(len(runs)) if len(runs) > 1 else single for n in ns]
+        a1.errorbar([n + dx for n in ns], ys, yerr=es, color=c, marker="o", markersize=4.5, linewidth=1.0, capsize=2,
+                    elinewidth=0.8, label=f"{label}: mean of {len(runs)} seeds ± SE" if len(runs) > 1 else f"{label}: 1 seed ± one pass's SD")
+        for i, g in enumerate(compare.pooled_groups(records)):
+            if g is not None:
+                a2.errorbar([i + 0.06 + 0.8 * dx], [g["mean"]], yerr=[g["err"]], color=c, marker="o",
+                            linestyle="none", capsize=4, label=f"{label}, seeds pooled ± SE")
+    a1.set_xticks(layers)
+    a1.set_xlim(0.4, 20.6)
+    a1.set_xlabel("their layer n  (our pass n + 1)")
+    a1.set_ylabel("layer relative density (deposit / 100 µm drop)")
+    a1.set_ylim(0.25, 0.85)
+    a1.grid(alpha=0.3)
+    a1.legend(fontsize=7.5, loc="upper left", ncol=2)
+    a2.set_xticks(range(3))
+    a2.set_xticklabels([f"layer {e['group']}" if e["group"] == "1" else f"layers {e['group']}" for e in exp])
+    a2.set_xlim(-0.5, 2.5)
+    a2.set_ylim(0.25, 0.85)
+    a2.set_ylabel("mean over the group")
+    a2.grid(alpha=0.3)
+    handles, labels = a2.get_legend_handles_labels()
+    keep = {l: h for h, l in zip(handles, labels)}
+    a2.legend(keep.values(), keep.keys(), fontsize=7.5, loc="upper left")
+    fig.suptitle("Ti-6Al-4V 45–106 µm, 100 µm layers, 0.1 m/s, 1.6 mm plate held 4 D deep: Gaboriault et al. "
+                 "2025's 20 layers and ours over seeds, in step")
+    fig.tight_layout()
+    fig.savefig(os.path.join(HERE, name), dpi=110)
+
+
 VARIANTS = {"flat": "flat blade", "gamma0": "no cohesion", "halfdose": "half the dose", "depth12": "depth 12 D",
             "dt0.165": "timestep halved", "plate20": "plate 20 D", "plate80": "plate 80 D", "seed2": "seed 2",
             "back": "the blade's back cut (0.1 D)"}
@@ -291,6 +344,7 @@ if __name__ == "__main__":
     plates()
     gaboriault()
     gaboriault(compare.SETS48, "3.2 mm", "gaboriault-48.png")
+    gaboriault_seeds()
     compare.main_tables()
     loose()
     ti64()
