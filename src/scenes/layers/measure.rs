@@ -185,8 +185,8 @@ fn surface(
     let mut top = vec![floor; nx * ny];
     let mut covered = vec![false; nx * ny];
     let highest = tip + plan.max_diameter();
-    // (`!(>)`, not `<=`: where no tip is known, NaN, every sphere counts.)
-    for g in grains.iter().filter(|g| !(g.z > highest)) {
+    // Not above it, not `<=`: where no tip is known, NaN, every sphere counts.
+    for g in grains.iter().filter(|g| g.z.partial_cmp(&highest) != Some(std::cmp::Ordering::Greater)) {
         let yi = g.y.rem_euclid(scene.depth);
         let (cx0, cx1) = (((g.x - g.r - x0) / hx).floor() as i64, ((g.x + g.r - x0) / hx).ceil() as i64);
         let (cy0, cy1) = (((yi - g.r) / hy).floor() as i64, ((yi + g.r) / hy).ceil() as i64);
