@@ -73,6 +73,11 @@ SEEDS = [("PS1", ["twenty-PS1-plate24-freeze4-bury", "twenty-PS1-plate24-freeze4
                   "twenty-PS2-plate24-freeze4-bury-seed3"]),
          ("PS3", ["twenty-PS3-plate24-freeze4-bury", "twenty-PS3-plate24-freeze4-bury-seed2",
                   "twenty-PS3-plate24-freeze4-bury-seed3"])]
+# The same on the whole bed moving (no hold: the hold reads the steady layer 0.027 ± 0.012 low,
+# three seeds pooled), as far as each set has run (`TAG=now twenty.sh PSn`, `seed = 2`, `3`).
+SEEDS_WHOLE = [("PS1", ["twenty-PS1-plate24-now", "twenty-PS1-plate24-now-seed2", "twenty-PS1-plate24-now-seed3"]),
+               ("PS2", ["twenty-PS2-plate24-now"]),
+               ("PS3", ["twenty-PS3-plate24-now"])]
 NUMERICS = [("twenty-PS1-plate24-freeze4-bury", "PS1 as shipped"),
             ("twenty-PS1-plate24-freeze4-passes11-bury-dt0.165", "timestep halved"),
             ("twenty-PS1-plate24-freeze4-passes11-bury-depth12", "depth doubled (12 D)")]
@@ -347,6 +352,8 @@ def main_tables():
     table(SETS, rows)
     print()
     pooled_table(SEEDS, rows)
+    print()
+    pooled_table(SEEDS_WHOLE, rows)
     print()
     table(SETS48, rows)
     print()
