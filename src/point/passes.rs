@@ -258,6 +258,17 @@ pub fn execute(
             let f = RunFailure::of(&p.hash, FailureClass::Unparsable, reason, String::new(), run.wall_time);
             return RunOutcome::Failed(f);
         }
+        // LIGGGHTS stopped from outside may end without an error and without the pass's restart
+        // (it writes `restart_forced_*` instead): the pass did not end, and is not recorded, so
+        // the point goes on from the pass before it.
+        if !run_dir.join(pass_restart(k)).is_file() {
+            let why = format!(
+                "pass {k}: LIGGGHTS ended without writing {} (stopped from outside?); the point goes on from pass {} when run again",
+                pass_restart(k),
+                k - 1
+            );
+            return fail(FailureClass::Signalled, why, String::new(), spent(&done) + run.wall_time);
+        }
         let record = PassRecord { hash: p.hash.clone(), k, wall_time: run.wall_time, cpu_time: run.cpu_time };
         let kept = std::fs::rename(run_dir.join(LOG), run_dir.join(pass_log(k)))
             .and_then(|_| write_json(&run_dir.join(pass_record(k)), &record));
@@ -356,4 +367,44 @@ fn measure(
         engine_version: &ctx.engine.version,
         earlier: &earlier,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `dir` holding passes 1..=n of run `hash` as a finished pass leaves them, the last one's
+    /// restart kept.
+    fn passes_in(dir: &Path, hash: &str, n: usize) {
+        for k in 1..=n {
+            let record = PassRecord { hash: hash.into(), k, wall_time: 1.0, cpu_time: Some(1.0) };
+            write_json(&dir.join(pass_record(k)), &record).unwrap();
+            std::fs::write(dir.join(pass_log(k)), "log").unwrap();
+        }
+        std::fs::write(dir.join(pass_restart(n)), "restart").unwrap();
+    }
+
+    #[test]
+    fn a_point_goes_on_from_its_last_pass_with_a_restart_and_starts_again_without_one() {
+        let dir = tempfile::tempdir().unwrap();
+        passes_in(dir.path(), "h", 3);
+        assert_eq!(finished_passes(dir.path(), "h").unwrap().len(), 3);
+        // A pass whose log was never kept is not finished: the passes stop before it, and the
+        // restart of the pass before was removed once the later one ended.
+        std::fs::remove_file(dir.path().join(pass_log(3))).unwrap();
+        assert!(finished_passes(dir.path(), "h").unwrap().is_empty());
+        // The last pass's restart lost (a copy without its largest files): run again from pass 1.
+        let dir = tempfile::tempdir().unwrap();
+        passes_in(dir.path(), "h", 2);
+        std::fs::remove_file(dir.path().join(pass_restart(2))).unwrap();
+        assert!(finished_passes(dir.path(), "h").unwrap().is_empty());
+    }
+
+    #[test]
+    fn another_runs_pass_record_is_refused_naming_its_file() {
+        let dir = tempfile::tempdir().unwrap();
+        passes_in(dir.path(), "other", 1);
+        let why = finished_passes(dir.path(), "mine").unwrap_err();
+        assert!(why.contains("pass.1.json") && why.contains("other") && why.contains("mine"), "{why}");
+    }
 }

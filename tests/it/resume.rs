@@ -465,3 +465,61 @@ fn status_says_how_many_passes_a_running_layers_point_has_done() {
     // Pass 2 may have ended too by the time status looked.
     assert!(line.ends_with(", 1 pass done") || line.ends_with(", 2 passes done"), "{text}");
 }
+
+/// LIGGGHTS stopped from outside can end a pass without an error and without writing the
+/// pass's restart (it writes `restart_forced_*` instead). Such a pass is not recorded as
+/// finished: the point fails as signalled, keeps the pass before's restart, and goes on from
+/// there when run again — it does not start pass 3 from a restart that is not there.
+#[test]
+fn a_pass_that_ends_without_its_restart_is_not_recorded_and_the_point_goes_on_from_the_pass_before() {
+    support::require_liggghts!(
+        "a_pass_that_ends_without_its_restart_is_not_recorded_and_the_point_goes_on_from_the_pass_before"
+    );
+    let (_tmp, dir) = support::cwd();
+    let sweep = crate::layers::bed_file(&dir, "layers", "", "layers = 4\nleast_layers = 4");
+    // A `liggghts` first on PATH that runs the real one, and after pass 2's first run removes the
+    // restart it wrote, as a stop from outside leaves it.
+    let bin = dir.join("bin");
+    std::fs::create_dir_all(&bin).unwrap();
+    let real = std::env::split_paths(&std::env::var_os("PATH").unwrap())
+        .map(|d| d.join("liggghts"))
+        .find(|f| f.is_file())
+        .unwrap();
+    let marker = dir.join("stopped-once");
+    support::write_file(
+        &bin.join("liggghts"),
+        &format!(
+            "#!/bin/sh\n{} \"$@\"\nstatus=$?\nif [ \"$2\" = in.pass.2 ] && [ ! -e {m} ]; then touch {m}; rm -f restart.pass.2; fi\nexit $status\n",
+            real.display(),
+            m = marker.display()
+        ),
+    );
+    std::process::Command::new("chmod").args(["+x", p(&bin.join("liggghts"))]).status().unwrap();
+    let path = std::env::join_paths(
+        std::iter::once(bin.clone()).chain(std::env::split_paths(&std::env::var_os("PATH").unwrap())),
+    )
+    .unwrap();
+    let out = dir.join("point");
+    let run = || {
+        support::sweep_bin()
+            .env("PATH", &path)
+            .args(["run", p(&sweep), "--set", "blade_speed=0.5", "--out", p(&out)])
+            .output()
+            .unwrap()
+    };
+    let first = run();
+    let err = stderr(&first);
+    assert!(!first.status.success(), "{err}");
+    assert!(err.contains("pass 2: LIGGGHTS ended without writing restart.pass.2"), "{err}");
+    assert!(!out.join("pass.2.json").exists(), "pass 2 recorded as finished");
+    assert!(out.join("pass.1.json").is_file() && out.join("restart.pass.1").is_file(), "pass 1 kept");
+
+    let again = run();
+    let err = stderr(&again);
+    assert!(again.status.success(), "{err}");
+    let said: Vec<&str> = err.lines().filter(|l| l.starts_with("pass ")).collect();
+    assert!(said.first().is_some_and(|l| l.starts_with("pass 2 of at most 4")), "went on from pass 1: {err}");
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("result.json")).unwrap()).unwrap();
+    assert_eq!(r["layers"]["passes"].as_array().map(Vec::len), Some(4), "{r}");
+}
