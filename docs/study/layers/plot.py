@@ -37,28 +37,58 @@ def load(path):
     return (m.get("layers") if isinstance(m, dict) else None), j.get("reason") or j.get("failed") or "failed"
 
 
-def gaboriault(sets=compare.SETS, plate="1.6 mm", name="gaboriault.png"):
-    """Their layers against our passes, in step (compare.py: their layer n is our pass n + 1):
-    per layer, and per layer group as compare.py's table has it, for the records `sets`."""
+# Each property set's colour, and its offset along the layers so that error bars do not overlap.
+COLOURS = {"PS1": "#e6550d", "PS2": "#3182bd", "PS3": "#31a354"}
+OFFSETS = {"PS1": -0.18, "PS2": 0.0, "PS3": 0.18}
+
+
+def experiment_panels():
+    """A figure of two panels with the experiment drawn: per layer its three repeats (min–max as
+    a band, their mean as a line), per layer group their mean ± SD. Returns the figure, both
+    panels and the experiment's groups."""
     rows = compare.experiment()
     layers = list(range(1, 21))  # their layers; row_of_layer finds each in their file
     reps = [[rows[compare.row_of_layer(n)][i] for n in layers] for i in range(3)]
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(12.5, 5.0), gridspec_kw={"width_ratios": [2.3, 1]})
-    # The three repeats: their min–max as a band, their mean as a line.
     a1.fill_between(layers, [min(v) for v in zip(*reps)], [max(v) for v in zip(*reps)], color="0.6",
                     label="experiment: 3 repeats, min–max")
     a1.plot(layers, [sum(v) / 3 for v in zip(*reps)], color="black", marker="s", markersize=3,
             linewidth=0.8, label="experiment: mean of the repeats")
-    colours = {"PS1": "#e6550d", "PS2": "#3182bd", "PS3": "#31a354"}
-    offsets = {"PS1": -0.18, "PS2": 0.0, "PS3": 0.18}
     exp = compare.experiment_groups(rows)
-    a2.errorbar([i - 0.27 for i in range(3)], [e["mean"] for e in exp], yerr=[e["sd"] for e in exp], color="black", marker="s",
-                linestyle="none", capsize=4, label="experiment: mean ± SD of the repeats")
+    a2.errorbar([i - 0.27 for i in range(3)], [e["mean"] for e in exp], yerr=[e["sd"] for e in exp], color="black",
+                marker="s", linestyle="none", capsize=4, label="experiment: mean ± SD of the repeats")
+    return fig, a1, a2, exp
+
+
+def finish_panels(fig, a1, a2, exp, title, name):
+    """The two panels' axes, legends and title; the figure written to `name` beside this script."""
+    a1.set_ylabel("layer relative density (deposit / 100 µm drop)")
+    a1.set_ylim(0.25, 0.85)
+    a1.grid(alpha=0.3)
+    a1.legend(fontsize=7.5, loc="upper left", ncol=2)
+    a2.set_xticks(range(3))
+    a2.set_xticklabels([f"layer {e['group']}" if e["group"] == "1" else f"layers {e['group']}" for e in exp])
+    a2.set_xlim(-0.5, 2.5)
+    a2.set_ylim(0.25, 0.85)
+    a2.set_ylabel("mean over the group")
+    a2.grid(alpha=0.3)
+    handles, labels = a2.get_legend_handles_labels()
+    keep = {l: h for h, l in zip(handles, labels)}
+    a2.legend(keep.values(), keep.keys(), fontsize=7.5, loc="upper left")
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(os.path.join(HERE, name), dpi=110)
+
+
+def gaboriault(sets=compare.SETS, plate="1.6 mm", name="gaboriault.png"):
+    """Their layers against our passes, in step (compare.py: their layer n is our pass n + 1):
+    per layer, and per layer group as compare.py's table has it, for the records `sets`."""
+    fig, a1, a2, exp = experiment_panels()
     for record, label in sets:
         p = compare.load_passes(record)
         if not p:
             continue
-        c, dx = colours[label], offsets[label]
+        c, dx = COLOURS[label], OFFSETS[label]
         values = compare.layer_values(p)
         groups = compare.record_groups(p)
         # A single pass's error: the SD of the record's passes over layers 2–10.
@@ -84,46 +114,20 @@ def gaboriault(sets=compare.SETS, plate="1.6 mm", name="gaboriault.png"):
     top = a1.secondary_xaxis("top", functions=(lambda x: x + 1, lambda x: x - 1))
     top.set_xticks(range(1, 22, 2))
     top.set_xlabel("our pass")
-    a1.set_ylabel("layer relative density (deposit / 100 µm drop)")
-    a1.set_ylim(0.25, 0.85)
-    a1.grid(alpha=0.3)
-    a1.legend(fontsize=7.5, loc="upper left", ncol=2)
-    a2.set_xticks(range(3))
-    a2.set_xticklabels([f"layer {e['group']}" if e["group"] == "1" else f"layers {e['group']}" for e in exp])
-    a2.set_xlim(-0.5, 2.5)
-    a2.set_ylim(0.25, 0.85)
-    a2.set_ylabel("mean over the group")
-    a2.grid(alpha=0.3)
-    handles, labels = a2.get_legend_handles_labels()
-    keep = {l: h for h, l in zip(handles, labels)}
-    a2.legend(keep.values(), keep.keys(), fontsize=7.5, loc="upper left")
-    fig.suptitle(f"Ti-6Al-4V 45–106 µm, 100 µm layers, 0.1 m/s, {plate} plate: Gaboriault et al. 2025's 20 layers "
-                 "and ours, in step")
-    fig.tight_layout()
-    fig.savefig(os.path.join(HERE, name), dpi=110)
+    finish_panels(fig, a1, a2, exp, f"Ti-6Al-4V 45–106 µm, 100 µm layers, 0.1 m/s, {plate} plate: Gaboriault et "
+                  "al. 2025's 20 layers and ours, in step", name)
 
 
 def gaboriault_seeds(seeds=compare.SEEDS, bed="held 4 D deep", name="gaboriault-seeds.png"):
     """The three sets at their seeds (compare.SEEDS: the held bed; SEEDS_WHOLE: the whole), in step: per layer the seeds' mean ± its SE
     (their SD / √n; one pass's SD where one seed has run), per group the seeds pooled."""
-    rows = compare.experiment()
+    fig, a1, a2, exp = experiment_panels()
     layers = list(range(1, 21))
-    reps = [[rows[compare.row_of_layer(n)][i] for n in layers] for i in range(3)]
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12.5, 5.0), gridspec_kw={"width_ratios": [2.3, 1]})
-    a1.fill_between(layers, [min(v) for v in zip(*reps)], [max(v) for v in zip(*reps)], color="0.6",
-                    label="experiment: 3 repeats, min–max")
-    a1.plot(layers, [sum(v) / 3 for v in zip(*reps)], color="black", marker="s", markersize=3,
-            linewidth=0.8, label="experiment: mean of the repeats")
-    exp = compare.experiment_groups(rows)
-    a2.errorbar([i - 0.27 for i in range(3)], [e["mean"] for e in exp], yerr=[e["sd"] for e in exp], color="black",
-                marker="s", linestyle="none", capsize=4, label="experiment: mean ± SD of the repeats")
-    colours = {"PS1": "#e6550d", "PS2": "#3182bd", "PS3": "#31a354"}
-    offsets = {"PS1": -0.18, "PS2": 0.0, "PS3": 0.18}
     for label, records in seeds:
         runs = [compare.layer_values(p) for p in map(compare.load_passes, records) if p]
         if not runs:
             continue
-        c, dx = colours[label], offsets[label]
+        c, dx = COLOURS[label], OFFSETS[label]
         single = compare.record_groups(compare.load_passes(records[0]))[0]["err"]
         ns = [n for n in layers if all(n in r for r in runs)]
         ys = [compare.mean([r[n] for r in runs]) for n in ns]
@@ -137,23 +141,8 @@ def gaboriault_seeds(seeds=compare.SEEDS, bed="held 4 D deep", name="gaboriault-
     a1.set_xticks(layers)
     a1.set_xlim(0.4, 20.6)
     a1.set_xlabel("their layer n  (our pass n + 1)")
-    a1.set_ylabel("layer relative density (deposit / 100 µm drop)")
-    a1.set_ylim(0.25, 0.85)
-    a1.grid(alpha=0.3)
-    a1.legend(fontsize=7.5, loc="upper left", ncol=2)
-    a2.set_xticks(range(3))
-    a2.set_xticklabels([f"layer {e['group']}" if e["group"] == "1" else f"layers {e['group']}" for e in exp])
-    a2.set_xlim(-0.5, 2.5)
-    a2.set_ylim(0.25, 0.85)
-    a2.set_ylabel("mean over the group")
-    a2.grid(alpha=0.3)
-    handles, labels = a2.get_legend_handles_labels()
-    keep = {l: h for h, l in zip(handles, labels)}
-    a2.legend(keep.values(), keep.keys(), fontsize=7.5, loc="upper left")
-    fig.suptitle(f"Ti-6Al-4V 45–106 µm, 100 µm layers, 0.1 m/s, 1.6 mm plate, {bed}: Gaboriault et al. "
-                 "2025's 20 layers and ours over seeds, in step")
-    fig.tight_layout()
-    fig.savefig(os.path.join(HERE, name), dpi=110)
+    finish_panels(fig, a1, a2, exp, f"Ti-6Al-4V 45–106 µm, 100 µm layers, 0.1 m/s, 1.6 mm plate, {bed}: "
+                  "Gaboriault et al. 2025's 20 layers and ours over seeds, in step", name)
 
 
 VARIANTS = {"flat": "flat blade", "gamma0": "no cohesion", "halfdose": "half the dose", "depth12": "depth 12 D",
