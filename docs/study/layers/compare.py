@@ -78,6 +78,10 @@ SEEDS = [("PS1", ["twenty-PS1-plate24-freeze4-bury", "twenty-PS1-plate24-freeze4
 SEEDS_WHOLE = [("PS1", ["twenty-PS1-plate24-now", "twenty-PS1-plate24-now-seed2", "twenty-PS1-plate24-now-seed3"]),
                ("PS2", ["twenty-PS2-plate24-now"]),
                ("PS3", ["twenty-PS3-plate24-now"])]
+# The loose bed's dose doubled (`supply_factor = 2`, 11 passes: their layers 1–10) against the
+# whole bed's seed 1 over the same layers: does a pass run short of powder?
+SUPPLY = [("twenty-PS1-plate24-now", "PS1 whole bed, seed 1"),
+          ("twenty-PS1-plate24-passes11-now-supply2", "PS1 whole bed, the dose doubled")]
 NUMERICS = [("twenty-PS1-plate24-freeze4-bury", "PS1 as shipped"),
             ("twenty-PS1-plate24-freeze4-passes11-bury-dt0.165", "timestep halved"),
             ("twenty-PS1-plate24-freeze4-passes11-bury-depth12", "depth doubled (12 D)")]
@@ -377,6 +381,10 @@ def main_tables():
     print()
     print("| the steady layer | held | whole | whole − held (combined SE) |\n|---|---|---|---|")
     steady_moves([(HOLD[0][0], HOLD[1][0]), (HOLD2[0][0], HOLD2[1][0]), (HOLD3[0][0], HOLD3[1][0])])
+    print()
+    table(SUPPLY, rows)
+    print()
+    moves(SUPPLY)
     print()
     table(NUMERICS, rows)
     print()
