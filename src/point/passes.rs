@@ -227,7 +227,8 @@ pub fn execute(
         });
         let pass = match ctx
             .layout
-            .pass_scene(scene, k, before.as_ref().map(|(r, l)| (r.as_str(), l.as_str())))
+            .ready_pass(scene, k, run_dir)
+            .and_then(|_| ctx.layout.pass_scene(scene, k, before.as_ref().map(|(r, l)| (r.as_str(), l.as_str()))))
             .map_err(|e| e.to_string())
             .and_then(|s| ctx.template.render(&s).map_err(|e| e.to_string()))
         {

@@ -388,6 +388,12 @@ pub trait Layout: Sync {
         Ok(scene.clone())
     }
 
+    /// Ready `run_dir` for pass `k` of `scene`: files its deck reads that earlier passes' output
+    /// makes. `Err` says what is missing.
+    fn ready_pass(&self, _scene: &Scene, _k: usize, _run_dir: &std::path::Path) -> Result<(), String> {
+        Ok(())
+    }
+
     /// `to` started again from the warm start it recorded (`data`, the [`Warm`]'s), when a point
     /// run by the pass resumes.
     fn warm_again(&self, _to: &Scene, _data: &str) -> Result<Scene, String> {

@@ -384,7 +384,7 @@ plate_diameters = 10
 }
 
 /// The passes' records of a point's run directory, and its result.
-fn passes_of(dir: &Path) -> Vec<Value> {
+pub(crate) fn passes_of(dir: &Path) -> Vec<Value> {
     let r: Value = serde_json::from_str(&std::fs::read_to_string(dir.join("result.json")).unwrap()).unwrap();
     r["layers"]["passes"].as_array().unwrap().clone()
 }
@@ -523,7 +523,7 @@ fn measured_passes(run: &Path) -> Vec<Value> {
 }
 
 /// Run `cmd` in its own process group and SIGKILL the group once `file` exists.
-fn kill_once(cmd: &mut std::process::Command, file: &Path) {
+pub(crate) fn kill_once(cmd: &mut std::process::Command, file: &Path) {
     use std::os::unix::process::CommandExt;
     let mut child = cmd.process_group(0).spawn().unwrap();
     let deadline = std::time::Instant::now() + std::time::Duration::from_secs(600);

@@ -33,6 +33,7 @@ mod contact;
 mod decks;
 mod dump;
 mod fidelity;
+mod laid;
 mod layers;
 mod point;
 mod pour;

@@ -11,7 +11,8 @@
 #   machine-plate80, machine-plate160 — the machine point on a plate of 80 or 160 mean
 #             diameters (`plate_diameters`; the shipped 40 D), its numerical bound.
 # The binary is $SWEEP (one built per cut, e.g. /tmp/sweep-A); LABEL names it in the records;
-# SEED=n runs every scene at another seed (`seed = n`, the label's records -seedn).
+# SEED=n runs every scene at another seed (`seed = n`, the label's records -seedn); KEY="name =
+# value" adds that [scene] key to the layers files (a cut that is a key: name it in LABEL).
 # Each run keeps its directory under runs/cuts/<label>-<scene>/, so an interrupted study goes on
 # from each point's last pass (run it again); the passes' records (pass.k.json: clocks) go to
 # record/cuts/<label>-<scene>/ and the result to record/cuts/<label>-<scene>.json.
@@ -34,6 +35,10 @@ for f in ti64-layers layers-gaboriault ti64-machine; do
     sed -e 's/^\[scene\]$/[run]\ntimeout_s = 40000\n\n[scene]/' "sweeps/$f.toml" > "$tmp/$f.toml"
   fi
   grep -q '^timeout_s = 40000$' "$tmp/$f.toml"
+  if [ -n "${KEY:-}" ] && [ "$f" != ti64-machine ]; then
+    sed -i -e "s/^\[scene\]$/[scene]\n$KEY/" "$tmp/$f.toml"
+    grep -qx "$KEY" "$tmp/$f.toml"
+  fi
   if [ -n "$seed" ]; then
     sed -i -e "s/^\[scene\]$/[scene]\nseed = $seed/" "$tmp/$f.toml"
     grep -q "^seed = $seed$" "$tmp/$f.toml"

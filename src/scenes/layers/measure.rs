@@ -247,7 +247,10 @@ pub fn passes(
         let deposit = if plan.fused { line.plate_mass } else { line.plate_mass - mass_before }
             / (scene.material.density * area);
         let effective = tip - if plan.fused { floor_before } else { surface_before };
-        let new = |g: &Grain| !ids_before.contains(&g.id);
+        // A fused bed's plate holds only this pass's particles (the last pass's became solid and
+        // were deleted, renumbering every ID left: delete_atoms.cpp's `compress`); a loose bed's
+        // new particles are those whose IDs the last pass's dump did not hold.
+        let new = |g: &Grain| plan.fused || !ids_before.contains(&g.id);
         let (top, covered) = surface(scene, plan, gs, tip, floor_before, &new);
         let m = mean(&top);
         let roughness = (top.iter().map(|z| (z - m).powi(2)).sum::<f64>() / top.len() as f64).sqrt() / d;

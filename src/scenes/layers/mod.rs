@@ -23,6 +23,7 @@
 //! passes after an MSER truncation of the point's measure, with their mean and SE.
 
 pub mod geometry;
+pub mod laid;
 pub mod measure;
 pub mod numerics;
 mod plan;
@@ -220,6 +221,7 @@ impl Layout for Layers {
             "plate_diameters",
             "freeze_depth_diameters",
             "warm_start",
+            "laid_dose",
             "mesh_cells_across",
             "depth_diameters",
         ]
@@ -398,8 +400,16 @@ impl Layout for Layers {
         with_plan(scene, plan)
     }
 
+    fn ready_pass(&self, scene: &Scene, k: usize, run_dir: &Path) -> Result<(), String> {
+        if plan_of(scene).laid_dose && k > laid::TEMPLATE_PASS {
+            laid::ready(run_dir)?;
+        }
+        Ok(())
+    }
+
     fn pass_files(&self, from: usize, to: usize) -> Vec<String> {
-        (from..=to).map(measure::layer_dump).collect()
+        let dose = (from <= laid::TEMPLATE_PASS).then_some([laid::DOSE_DUMP, laid::LAID_DOSE]);
+        (from..=to).map(measure::layer_dump).chain(dose.into_iter().flatten().map(String::from)).collect()
     }
 
     fn pile(&self, _scene: &Scene) -> String {

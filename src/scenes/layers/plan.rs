@@ -150,6 +150,10 @@ pub struct Plan {
     /// particle that moves.
     #[serde(default)]
     pub bury_depth: f64,
+    /// From the third pass on, every dose is pass 2's as it lay at rest, laid again (read from
+    /// [`super::laid::LAID_DOSE`]) instead of inserted to fall.
+    #[serde(default)]
+    pub laid_dose: bool,
     pub feed: Vec<FeedClass>,
     pub volume_limit: f64,
     pub distribution_seed: u64,
@@ -431,6 +435,7 @@ pub(super) fn derive(base: Base, settings: &SceneSettings) -> Scene {
         freeze_depth,
         bury_depth: if freeze_depth > 0.0 { freeze_depth + BURY_SKIN_DIAMETERS * d_max } else { 0.0 },
         passes,
+        laid_dose: own(settings).laid_dose,
         feed,
         volume_limit,
         distribution_seed: prime_seed(settings.seed, 0),

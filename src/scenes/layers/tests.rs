@@ -367,6 +367,14 @@ fn a_fused_bed_s_search_sets_each_next_depth_to_its_own_times_the_drop_over_its_
     let grains: Vec<Vec<Grain>> =
         (0..6).map(|k| lattice(&sc, &plan, d, 0.5 * d, 1 + 10_000 * k as u64)).collect();
     let recs = passes(&sc, &plan, &lines, &solids, &grains);
+    // The deck renumbers every ID left after a fused pass (delete_atoms compresses them): the
+    // same IDs in every pass's dump are each pass's own particles all the same.
+    let same_ids: Vec<Vec<Grain>> = (0..6).map(|_| layer.clone()).collect();
+    let renumbered = passes(&sc, &plan, &lines, &solids, &same_ids);
+    for (a, b) in recs.iter().zip(&renumbered) {
+        assert_eq!((a.particles, a.covered_fraction), (b.particles, b.covered_fraction), "pass {}", a.k);
+    }
+    assert_eq!(renumbered[3].particles, layer.len());
     assert!((recs[1].effective_thickness_m - (plan.passes[1].tip + 2.5e-4)).abs() < 1e-15);
     assert!((recs[2].effective_thickness_m - (plan.passes[2].tip + 1e-4)).abs() < 1e-15);
     // After the search the solid rises by the deposit.

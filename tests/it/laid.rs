@@ -1,0 +1,90 @@
+//! Laid doses (`scene.laid_dose`) through the real LIGGGHTS: the dose pass 2 let come to rest in
+//! front of the blade, laid again a layer higher before every later pass.
+
+use std::path::Path;
+
+use crate::layers::{bed_file, kill_once, passes_of};
+use crate::support;
+
+/// The rows of a LIGGGHTS dump: its columns as numbers.
+fn dump_rows(file: &Path) -> Vec<Vec<f64>> {
+    let text = std::fs::read_to_string(file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+    let mut lines = text.lines().skip_while(|l| !l.starts_with("ITEM: ATOMS"));
+    lines.next();
+    lines.map(|l| l.split_whitespace().map(|x| x.parse().unwrap()).collect()).collect()
+}
+
+/// The numbers after `key` on the log's lines that start with `start`, in order.
+fn logged(log: &str, start: &str, key: &str) -> Vec<f64> {
+    log.lines()
+        .filter(|l| l.starts_with(start))
+        .filter_map(|l| l.split(key).nth(1)?.split_whitespace().next()?.parse().ok())
+        .collect()
+}
+
+#[test]
+fn a_laid_dose_is_pass_2_s_at_rest_laid_a_layer_higher_each_pass_and_a_killed_point_lays_the_same() {
+    support::require_liggghts!(
+        "a_laid_dose_is_pass_2_s_at_rest_laid_a_layer_higher_each_pass_and_a_killed_point_lays_the_same"
+    );
+    let (_tmp, dir) = support::cwd();
+    let sweep = bed_file(&dir, "laid", "", "layers = 5\nleast_layers = 5\nlaid_dose = true");
+    let args = |out: &Path| {
+        ["run", support::p(&sweep), "--set", "blade_speed=0.5", "--out", support::p(out)].map(String::from)
+    };
+    let whole = dir.join("whole");
+    let out = support::sweep_bin().args(args(&whole)).output().unwrap();
+    assert!(out.status.success(), "{}", support::stderr(&out));
+
+    // Pass 2's dose as it lay, and its copy with IDs no atom of the run holds.
+    let dose = dump_rows(&whole.join("dump.dose"));
+    let laid = dump_rows(&whole.join("dose.laid"));
+    assert!(dose.len() > 100, "pass 2's dose: {} atoms", dose.len());
+    assert_eq!(laid.len(), dose.len());
+    for (d, l) in dose.iter().zip(&laid) {
+        assert_eq!(l[0], d[0] + 1e9);
+        assert_eq!(l[1..], d[1..]);
+    }
+    let log = |k: usize| std::fs::read_to_string(whole.join(format!("log.pass.{k}"))).unwrap();
+    for k in 3..=5 {
+        // Every atom of it is added (none matched an atom of the bed) and every later pass's
+        // dose stands a layer (3 mm) higher than the one before, as it was laid.
+        let l = log(k);
+        assert!(l.contains(&format!("{} atoms added", dose.len())) && l.contains("0 atoms replaced"), "pass {k}");
+        assert!(!l.contains("insert/pack"), "pass {k} inserts no dose");
+    }
+    let top = |k: usize| logged(&log(k), "demsweep: pass", "at z")[0];
+    for k in 4..=5 {
+        let rise = top(k) - top(k - 1);
+        assert!((rise - 3e-3).abs() < 0.2 * 2e-3, "pass {k}'s dose rose {rise} m over pass {}'s", k - 1);
+    }
+    // The step goes on across the passes (read_dump sets it to the dump's: the deck sets it back).
+    let steps: Vec<f64> = (1..=5).flat_map(|k| logged(&log(k), "demsweep: layer ", "step")).collect();
+    assert_eq!(steps.len(), 5);
+    assert!(steps.windows(2).all(|w| w[1] > w[0]), "steps {steps:?}");
+    let passes = passes_of(&whole);
+    assert_eq!(passes.len(), 5);
+    for p in &passes {
+        assert!(p["particles"].as_u64().unwrap() > 0, "the pass deposited nothing: {p}");
+    }
+
+    // SIGKILL in pass 4, run again: it lays the same dose and ends where the whole run did.
+    let cut = dir.join("cut");
+    kill_once(support::sweep_bin().args(args(&cut)), &cut.join("in.pass.4"));
+    assert!(cut.join("dose.laid").is_file() && !cut.join("pass.4.json").exists());
+    let out = support::sweep_bin().args(args(&cut)).output().unwrap();
+    assert!(out.status.success(), "{}", support::stderr(&out));
+    assert_eq!(passes_of(&cut), passes, "an interrupted point ends where an uninterrupted one does");
+
+    // Without pass 2's dump the point cannot lay a dose: it says which file it needed.
+    let lost = dir.join("lost");
+    kill_once(support::sweep_bin().args(args(&lost)), &lost.join("in.pass.3"));
+    // (Pass 3's deck is written once pass 2 is recorded.)
+    assert!(lost.join("pass.2.json").is_file());
+    for f in ["dump.dose", "dose.laid"] {
+        let _ = std::fs::remove_file(lost.join(f));
+    }
+    let out = support::sweep_bin().args(args(&lost)).output().unwrap();
+    let err = support::stderr(&out);
+    assert!(!out.status.success() && err.contains("dump.dose") && err.contains("pass 3"), "{err}");
+}
