@@ -228,7 +228,9 @@ pub fn execute(
         let pass = match ctx
             .layout
             .ready_pass(scene, k, run_dir)
-            .and_then(|_| ctx.layout.pass_scene(scene, k, before.as_ref().map(|(r, l)| (r.as_str(), l.as_str()))))
+            .and_then(|_| {
+                ctx.layout.pass_scene(scene, k, before.as_ref().map(|(r, l)| (r.as_str(), l.as_str())))
+            })
             .map_err(|e| e.to_string())
             .and_then(|s| ctx.template.render(&s).map_err(|e| e.to_string()))
         {

@@ -18,7 +18,7 @@ fn dump_rows(file: &Path) -> Vec<Vec<f64>> {
 fn logged(log: &str, start: &str, key: &str) -> Vec<f64> {
     log.lines()
         .filter(|l| l.starts_with(start))
-        .filter_map(|l| l.split(key).nth(1)?.split_whitespace().next()?.parse().ok())
+        .filter_map(|l| l.split(key).nth(1)?.split_whitespace().next()?.trim_end_matches(',').parse().ok())
         .collect()
 }
 
@@ -50,7 +50,10 @@ fn a_laid_dose_is_pass_2_s_at_rest_laid_a_layer_higher_each_pass_and_a_killed_po
         // Every atom of it is added (none matched an atom of the bed) and every later pass's
         // dose stands a layer (3 mm) higher than the one before, as it was laid.
         let l = log(k);
-        assert!(l.contains(&format!("{} atoms added", dose.len())) && l.contains("0 atoms replaced"), "pass {k}");
+        assert!(
+            l.contains(&format!("{} atoms added", dose.len())) && l.contains("0 atoms replaced"),
+            "pass {k}"
+        );
         assert!(!l.contains("insert/pack"), "pass {k} inserts no dose");
     }
     let top = |k: usize| logged(&log(k), "demsweep: pass", "at z")[0];
@@ -87,4 +90,41 @@ fn a_laid_dose_is_pass_2_s_at_rest_laid_a_layer_higher_each_pass_and_a_killed_po
     let out = support::sweep_bin().args(args(&lost)).output().unwrap();
     let err = support::stderr(&out);
     assert!(!out.status.success() && err.contains("dump.dose") && err.contains("pass 3"), "{err}");
+}
+
+#[test]
+fn a_round_blade_starts_where_its_arc_clears_the_laid_dose_and_crosses_that_much_less() {
+    support::require_liggghts!(
+        "a_round_blade_starts_where_its_arc_clears_the_laid_dose_and_crosses_that_much_less"
+    );
+    let (_tmp, dir) = support::cwd();
+    // A large arc over a small dose: its front reaches far ahead of the lowest line, but at the
+    // dose's height far less.
+    let extra = "layers = 4\nleast_layers = 4\nlaid_dose = true\nblade_profile = \"round\"\n\
+                 blade_radius_mm = 20.0\nsupply_factor = 0.5";
+    let sweep = bed_file(&dir, "arc", "", extra);
+    let run = dir.join("run");
+    let out = support::sweep_bin()
+        .args(["run", support::p(&sweep), "--set", "blade_speed=0.5", "--out", support::p(&run)])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", support::stderr(&out));
+    let log = |k: usize| std::fs::read_to_string(run.join(format!("log.pass.{k}"))).unwrap();
+    let shifts: Vec<f64> = (3..=4).map(|k| logged(&log(k), "demsweep: blade", "starts")[0]).collect();
+    // The same dose laid a layer higher under a tip a layer higher: the same start, ahead of the
+    // first passes' by more than half a diameter (1 mm) and less than the arc's reach (18.5 mm).
+    assert!(shifts[0] > 1e-3 && shifts[0] < 18.5e-3, "{shifts:?}");
+    assert_eq!(shifts[0], shifts[1]);
+    // Its crossing is that much shorter: the steps from the blade's start to the layer's measure
+    // (the crossing and the same rest after it).
+    let steps = |k: usize| {
+        logged(&log(k), "demsweep: layer ", "step")[0] - logged(&log(k), "demsweep: pass", "step")[0]
+    };
+    let deck = std::fs::read_to_string(run.join("in.pass.2")).unwrap();
+    let dt: f64 = deck.lines().find_map(|l| l.strip_prefix("timestep")).unwrap().trim().parse().unwrap();
+    let saved = steps(2) - steps(3);
+    assert!((saved * 0.5 * dt - shifts[0]).abs() < 2.0 * 0.5 * dt, "{saved} steps saved for {} m", shifts[0]);
+    for p in passes_of(&run) {
+        assert!(p["particles"].as_u64().unwrap() > 0, "the pass deposited nothing: {p}");
+    }
 }

@@ -33,7 +33,10 @@ pub fn ready(run_dir: &Path) -> Result<(), String> {
     }
     let dump = run_dir.join(DOSE_DUMP);
     let text = std::fs::read_to_string(&dump).map_err(|e| {
-        format!("cannot read {} (pass {TEMPLATE_PASS}'s dose, laid again by every later pass): {e}", dump.display())
+        format!(
+            "cannot read {} (pass {TEMPLATE_PASS}'s dose, laid again by every later pass): {e}",
+            dump.display()
+        )
     })?;
     let copy = renumbered(&text).map_err(|why| format!("{}: {why}", dump.display()))?;
     write(&laid, copy.as_bytes()).map_err(|e| format!("cannot write {}: {e}", laid.display()))
@@ -66,7 +69,8 @@ pub fn renumbered(text: &str) -> Result<String, String> {
         out.push('\n');
     }
     for row in rows {
-        let (id, rest) = row.trim().split_once(' ').ok_or_else(|| format!("a row without columns: \"{row}\""))?;
+        let (id, rest) =
+            row.trim().split_once(' ').ok_or_else(|| format!("a row without columns: \"{row}\""))?;
         let id: u64 = id.parse().map_err(|_| format!("an ID that is not a whole number: \"{id}\""))?;
         out.push_str(&format!("{} {rest}\n", ID_OFFSET + id));
     }

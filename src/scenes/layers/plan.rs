@@ -80,6 +80,13 @@ pub struct Plan {
     /// Segments of the roller's circle (`scene.roller_segments`).
     #[serde(default = "default_roller_segments")]
     pub roller_segments: usize,
+    /// A round blade's arc (not a roller's): how high over its lowest line it reaches and how
+    /// far ahead of it there (0 for a flat blade or a roller). A laid dose's pass starts the blade
+    /// where the arc clears the dose's top (`laid_dose`).
+    #[serde(default)]
+    pub arc_height: f64,
+    #[serde(default)]
+    pub arc_ahead: f64,
     /// x of the blade's lowest line at the start (flat: its rear face), and its travel in a pass.
     pub tip_x0: f64,
     pub travel: f64,
@@ -406,6 +413,12 @@ pub(super) fn derive(base: Base, settings: &SceneSettings) -> Scene {
         roller_speed_ratio,
         roller_spin: if roller { -roller_speed_ratio / radius } else { 0.0 },
         roller_segments: own(settings).roller_segments,
+        arc_height: if radius > 0.0 && !roller {
+            radius * (1.0 - (0.5 * ROUND_ARC_SHARE * std::f64::consts::PI).cos())
+        } else {
+            0.0
+        },
+        arc_ahead: if radius > 0.0 && !roller { ahead } else { 0.0 },
         tip_x0,
         travel,
         dose_x0,
