@@ -114,7 +114,8 @@ fn a_round_blade_starts_where_its_arc_clears_the_laid_dose_and_crosses_that_much
     // The same dose laid a layer higher under a tip a layer higher: the same start, ahead of the
     // first passes' by more than half a diameter (1 mm) and less than the arc's reach (18.5 mm).
     assert!(shifts[0] > 1e-3 && shifts[0] < 18.5e-3, "{shifts:?}");
-    assert_eq!(shifts[0], shifts[1]);
+    // (Each pass nudges its dose by up to 2 nm: the start moves by as little.)
+    assert!((shifts[0] - shifts[1]).abs() < 1e-8, "{shifts:?}");
     // Its crossing is that much shorter: the steps from the blade's start to the layer's measure
     // (the crossing and the same rest after it).
     let steps = |k: usize| {
@@ -127,4 +128,32 @@ fn a_round_blade_starts_where_its_arc_clears_the_laid_dose_and_crosses_that_much
     for p in passes_of(&run) {
         assert!(p["particles"].as_u64().unwrap() > 0, "the pass deposited nothing: {p}");
     }
+}
+
+#[test]
+fn a_fused_bed_s_laid_passes_differ_from_each_other_though_the_dose_is_the_same() {
+    support::require_liggghts!(
+        "a_fused_bed_s_laid_passes_differ_from_each_other_though_the_dose_is_the_same"
+    );
+    let (_tmp, dir) = support::cwd();
+    // The same dose on the same flat solid: without a nudge of its own each pass repeated the
+    // one before to the last digit once the depth had settled (deposits 0.93 ± 0.00 of the
+    // drop over passes 4–6), leaving no scatter to measure the steady layer's SE from.
+    let extra = "bed = \"fused\"\nlayers = 6\nleast_layers = 6\nsearch_passes = 1\nblade_profile = \"round\"\nlaid_dose = true";
+    let sweep = bed_file(&dir, "fused", "", extra);
+    let run = dir.join("run");
+    let out = support::sweep_bin()
+        .args(["run", support::p(&sweep), "--set", "blade_speed=0.5", "--out", support::p(&run)])
+        .output()
+        .unwrap();
+    let measured = std::fs::read_to_string(run.join("result.json"))
+        .or_else(|_| std::fs::read_to_string(run.join("failure.json")))
+        .unwrap_or_else(|_| panic!("{}", support::stderr(&out)));
+    let v: serde_json::Value = serde_json::from_str(&measured).unwrap();
+    let layers = if v["layers"].is_null() { &v["measured"]["layers"] } else { &v["layers"] };
+    let deposits: Vec<f64> =
+        layers["passes"].as_array().unwrap().iter().map(|p| p["deposit_m"].as_f64().unwrap()).collect();
+    assert_eq!(deposits.len(), 6);
+    let laid = &deposits[2..];
+    assert!(laid.windows(2).all(|w| w[0] != w[1]), "laid passes repeat: {deposits:?}");
 }
