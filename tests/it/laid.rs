@@ -6,6 +6,10 @@ use std::path::Path;
 use crate::layers::{bed_file, kill_once, passes_of};
 use crate::support;
 
+/// For a bed whose passes were measured steady by their last with dropped doses: what its test
+/// tests is not the dose.
+pub(crate) const DROPPED: &str = "\nlaid_dose = false";
+
 /// The rows of a LIGGGHTS dump: its columns as numbers.
 fn dump_rows(file: &Path) -> Vec<Vec<f64>> {
     let text = std::fs::read_to_string(file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
