@@ -3,12 +3,18 @@
 
 use std::path::Path;
 
-use crate::layers::{bed_file, kill_once, passes_of};
+use crate::layers::{bed_file, kill_once, measured, passes_of};
 use crate::support;
 
 /// For a bed whose passes were measured steady by their last with dropped doses: what its test
 /// tests is not the dose.
 pub(crate) const DROPPED: &str = "\nlaid_dose = false";
+
+/// `sweep run` of `sweep`'s point at 0.5 m/s into `out`.
+fn run_at(sweep: &Path, out: &Path) -> std::process::Output {
+    let args = ["run", support::p(sweep), "--set", "blade_speed=0.5", "--out", support::p(out)];
+    support::sweep_bin().args(args).output().unwrap()
+}
 
 /// The rows of a LIGGGHTS dump: its columns as numbers.
 fn dump_rows(file: &Path) -> Vec<Vec<f64>> {
@@ -108,10 +114,7 @@ fn a_round_blade_starts_where_its_arc_clears_the_laid_dose_and_crosses_that_much
                  blade_radius_mm = 20.0\nsupply_factor = 0.5";
     let sweep = bed_file(&dir, "arc", "", extra);
     let run = dir.join("run");
-    let out = support::sweep_bin()
-        .args(["run", support::p(&sweep), "--set", "blade_speed=0.5", "--out", support::p(&run)])
-        .output()
-        .unwrap();
+    let out = run_at(&sweep, &run);
     assert!(out.status.success(), "{}", support::stderr(&out));
     let log = |k: usize| std::fs::read_to_string(run.join(format!("log.pass.{k}"))).unwrap();
     let shifts: Vec<f64> = (3..=4).map(|k| logged(&log(k), "demsweep: blade", "starts")[0]).collect();
@@ -146,15 +149,13 @@ fn a_fused_bed_s_laid_passes_differ_from_each_other_though_the_dose_is_the_same(
     let extra = "bed = \"fused\"\nlayers = 6\nleast_layers = 6\nsearch_passes = 1\nblade_profile = \"round\"\nlaid_dose = true";
     let sweep = bed_file(&dir, "fused", "", extra);
     let run = dir.join("run");
-    let out = support::sweep_bin()
-        .args(["run", support::p(&sweep), "--set", "blade_speed=0.5", "--out", support::p(&run)])
-        .output()
-        .unwrap();
-    let measured = std::fs::read_to_string(run.join("result.json"))
-        .or_else(|_| std::fs::read_to_string(run.join("failure.json")))
-        .unwrap_or_else(|_| panic!("{}", support::stderr(&out)));
-    let v: serde_json::Value = serde_json::from_str(&measured).unwrap();
-    let layers = if v["layers"].is_null() { &v["measured"]["layers"] } else { &v["layers"] };
+    let out = run_at(&sweep, &run);
+    assert!(
+        run.join("result.json").is_file() || run.join("failure.json").is_file(),
+        "{}",
+        support::stderr(&out)
+    );
+    let layers = &measured(&run)["layers"];
     let deposits: Vec<f64> =
         layers["passes"].as_array().unwrap().iter().map(|p| p["deposit_m"].as_f64().unwrap()).collect();
     assert_eq!(deposits.len(), 6);

@@ -505,7 +505,7 @@ fn a_layers_point_stops_once_its_steady_layer_holds_and_at_its_most_passes_other
 
 /// What a layers point measured, whether it ended steady (result.json) or not (failure.json's
 /// measure).
-fn measured(run: &Path) -> Value {
+pub(crate) fn measured(run: &Path) -> Value {
     let read = |f: &str| {
         std::fs::read_to_string(run.join(f)).ok().map(|t| serde_json::from_str::<Value>(&t).unwrap())
     };
