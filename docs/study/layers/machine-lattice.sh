@@ -10,13 +10,15 @@
 # only the held loose bed's and the roller's branches) makes `resume` refuse. These decks render
 # byte-identical on today's templates (the manifest's nine hashes unchanged under `--force`,
 # checked on a copy), so FORCE=1 resumes with today's binary and re-runs nothing finished; or
-# SWEEP=path to a binary built from 37635eeb.
+# SWEEP=path to a binary built from 37635eeb. TAG=word runs another lattice beside it, in
+# runs/machine-lattice-<word>/ and record/machine-lattice-<word>/ (the run of a later deck).
+#   TAG=laid JOBS=2 SWEEP=/tmp/sweep-lattice nice bash docs/study/layers/machine-lattice.sh
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 sweep=${SWEEP:-target/release/sweep}
 jobs=${JOBS:-1}   # 2 on a two-core machine to itself: the first two points start cold
-dir=runs/machine-lattice
-out=docs/study/layers/record/machine-lattice
+dir=runs/machine-lattice${TAG:+-$TAG}
+out=docs/study/layers/record/machine-lattice${TAG:+-$TAG}
 mkdir -p "$out"
 copy() {
   for run in "$dir"/runs/*/; do
