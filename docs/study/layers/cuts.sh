@@ -8,6 +8,7 @@
 #   machine30, single30 — the layers point at 30 µm layers (0.1 m/s) and the single layer at a
 #             30 µm gap and 0.1 m/s, the ratio at the thin layer;
 #   machine-slow, single-slow — the same at 50 µm and 0.05 m/s, the ratio at the slow blade;
+#   machine30-fast — the layers point at 30 µm and 0.2 m/s (the machine lattice's fastest corner);
 #   machine-plate80, machine-plate160 — the machine point on a plate of 80 or 160 mean
 #             diameters (`plate_diameters`; the shipped 40 D), its numerical bound.
 # The binary is $SWEEP (one built per cut, e.g. /tmp/sweep-A); LABEL names it in the records;
@@ -54,6 +55,7 @@ for scene in "$@"; do
       file=$scene ;;
     machine30) file=ti64-layers set=layer_thickness=0.03,blade_speed=0.1 ;;
     machine-slow) file=ti64-layers set=layer_thickness=0.05,blade_speed=0.05 ;;
+    machine30-fast) file=ti64-layers set=layer_thickness=0.03,blade_speed=0.2 ;;
     single30) file=ti64-machine set=gap=0.03,blade_speed=0.1 ;;
     single-slow) file=ti64-machine set=blade_speed=0.05 ;;
     PS1) file=layers-gaboriault set=blade_speed=0.1,friction=0.20,rolling_friction=0.10,surface_energy=4.667e-4 ;;
