@@ -119,7 +119,7 @@ mod tests {
         ("blade_clearance_mm", "0.1"),
         ("plate_diameters", "50.0"),
         ("freeze_depth_diameters", "5.0"),
-        ("laid_dose", "false"),
+        ("laid_dose", "true"),
     ];
 
     /// The keys a layout reads when it runs, not when it derives its scene: the precision a
