@@ -6,10 +6,6 @@ use std::path::Path;
 use crate::layers::{bed_file, kill_once, measured, passes_of};
 use crate::support;
 
-/// For a bed whose passes were measured steady by their last with dropped doses: what its test
-/// tests is not the dose.
-pub(crate) const DROPPED: &str = "\nlaid_dose = false";
-
 /// `sweep run` of `sweep`'s point at 0.5 m/s into `out`.
 fn run_at(sweep: &Path, out: &Path) -> std::process::Output {
     let args = ["run", support::p(sweep), "--set", "blade_speed=0.5", "--out", support::p(out)];

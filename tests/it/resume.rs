@@ -476,12 +476,7 @@ fn a_pass_that_ends_without_its_restart_is_not_recorded_and_the_point_goes_on_fr
         "a_pass_that_ends_without_its_restart_is_not_recorded_and_the_point_goes_on_from_the_pass_before"
     );
     let (_tmp, dir) = support::cwd();
-    let sweep = crate::layers::bed_file(
-        &dir,
-        "layers",
-        "",
-        &format!("layers = 4\nleast_layers = 4{}", crate::laid::DROPPED),
-    );
+    let sweep = crate::layers::bed_file(&dir, "layers", "", "layers = 4\nleast_layers = 4");
     // A `liggghts` first on PATH that runs the real one, and after pass 2's first run removes the
     // restart it wrote, as a stop from outside leaves it.
     let bin = dir.join("bin");
