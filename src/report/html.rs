@@ -74,6 +74,8 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
         "name": a.name,
         // What each point answers with: MFR, or the layout's own measure.
         "q": a.answer_name(),
+        // Points are ranked within their v_x class only where a run measures v_x (MFR sweeps).
+        "classed": a.answer_key() == "mfr",
         "description": a.description,
         "design": design,
         "parameter_list": a.parameters.iter().zip(&a.units).map(|(p, u)| format!("{p} ({u})")).collect::<Vec<_>>().join(", "),
