@@ -3,7 +3,7 @@
 # locates the steady depth"): for each record, the steady layer's depth and packing ± their SE as
 # recorded, the fixed point d* at which the least-squares line of each pass's deposit against the
 # depth it met (passes 2 on) keeps the drop, its SE by inverse prediction, the line's slope D',
-# and the SEs as the measure now states them (src/scenes/layers/measure.rs `fixed_point`: the
+# and the SEs as the measure now states them (src/scenes/layers/fixed_point.rs: the
 # depth's SE at least d*'s, the packing's at least packing × that over d*).
 #   python3 docs/study/layers/fixed_point.py docs/study/layers/record/cuts/*machine*.json
 import json, math, sys

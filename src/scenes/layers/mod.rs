@@ -22,6 +22,7 @@
 //! the tip, the layer's packing, the covered fraction and the roughness. The steady layer is the
 //! passes after an MSER truncation of the point's measure, with their mean and SE.
 
+pub mod fixed_point;
 pub mod geometry;
 pub mod laid;
 pub mod measure;
