@@ -76,8 +76,8 @@ SEEDS = [("PS1", ["twenty-PS1-plate24-freeze4-bury", "twenty-PS1-plate24-freeze4
 # The same on the whole bed moving (no hold: the hold reads the steady layer 0.027 ± 0.012 low,
 # three seeds pooled), as far as each set has run (`TAG=now twenty.sh PSn`, `seed = 2`, `3`).
 SEEDS_WHOLE = [("PS1", ["twenty-PS1-plate24-now", "twenty-PS1-plate24-now-seed2", "twenty-PS1-plate24-now-seed3"]),
-               ("PS2", ["twenty-PS2-plate24-now", "twenty-PS2-plate24-now-seed2"]),
-               ("PS3", ["twenty-PS3-plate24-now", "twenty-PS3-plate24-now-seed2"])]
+               ("PS2", ["twenty-PS2-plate24-now", "twenty-PS2-plate24-now-seed2", "twenty-PS2-plate24-now-seed3"]),
+               ("PS3", ["twenty-PS3-plate24-now", "twenty-PS3-plate24-now-seed2", "twenty-PS3-plate24-now-seed3"])]
 # The loose bed's dose doubled (`supply_factor = 2`, 11 passes: their layers 1–10) against the
 # whole bed's seed 1 over the same layers: does a pass run short of powder?
 SUPPLY = [("twenty-PS1-plate24-now", "PS1 whole bed, seed 1"),
