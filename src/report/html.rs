@@ -75,7 +75,7 @@ pub fn render(a: &Analysis, figures: &[Figure]) -> String {
         // What each point answers with: MFR, or the layout's own measure.
         "q": a.answer_name(),
         // Points are ranked within their v_x class only where a run measures v_x (MFR sweeps).
-        "classed": a.answer_key() == "mfr",
+        "classed": super::answer_kind(&a.setup.scene) == crate::outcome::AnswerKind::Mfr,
         "description": a.description,
         "design": design,
         "parameter_list": a.parameters.iter().zip(&a.units).map(|(p, u)| format!("{p} ({u})")).collect::<Vec<_>>().join(", "),

@@ -121,9 +121,7 @@ mod tests {
         for seed in 0..runs {
             let passes = bed(90.0, 6, 30.0, 12.0, 0.1, 2.0, 12, seed + 1)[1..].to_vec();
             let tail: Vec<f64> = passes[7..].iter().map(|p| p.effective_thickness_m).collect();
-            let m = tail.iter().sum::<f64>() / tail.len() as f64;
-            let sd = (tail.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (tail.len() - 1) as f64).sqrt();
-            let se = sd / (tail.len() as f64).sqrt();
+            let (m, se) = super::super::measure::mean_se(&tail);
             let se_ar1 =
                 se * crate::measure::steady::ar1_se_factor(tail.len(), super::super::FUSED_DEPTH_LAG1, false);
             let f = fixed_point(&passes, 30.0).unwrap();

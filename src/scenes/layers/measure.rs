@@ -216,7 +216,7 @@ fn mean(y: &[f64]) -> f64 {
 }
 
 /// Mean and SE (SD / √n, n − 1 divisor) of `y`.
-fn mean_se(y: &[f64]) -> (f64, f64) {
+pub(super) fn mean_se(y: &[f64]) -> (f64, f64) {
     let m = mean(y);
     if y.len() < 2 {
         return (m, f64::NAN);
@@ -318,9 +318,9 @@ pub fn series_from(
     let (relative_density, relative_density_se) = pick(&|p| p.relative_density, lag1.0);
     let (effective, mut effective_se) = pick(&|p| p.effective_thickness_m, lag1.1);
     // A fused bed's depth is known no better than the fixed point its passes locate.
-    if let Some(fixed) =
-        plan.fused.then(|| fixed_point(passes.get(1..).unwrap_or(&[]), plan.layer_thickness)).flatten()
-    {
+    let fixed =
+        if plan.fused { fixed_point(passes.get(1..).unwrap_or(&[]), plan.layer_thickness) } else { None };
+    if let Some(fixed) = fixed {
         effective_se = effective_se.max(fixed.se);
         packing_se = packing_se.max(packing * fixed.se / fixed.depth);
     }
